@@ -1,0 +1,1 @@
+"""Small, fast math for control loops: 3-vectors and quaternions as tuples, scalar helpers, filters."""

@@ -1,0 +1,194 @@
+"""Hamilton quaternions ``(w, x, y, z)`` as plain tuples.
+
+Convention (PX4's): ``q`` rotates a vector from the body frame (FRD) to the world frame (NED),
+``v_world = rotate(q, v_body)``. Euler angles are the 3-2-1 (yaw, pitch, roll) intrinsic sequence.
+"""
+
+from __future__ import annotations
+
+import math
+
+from stack.mathlib.vector import Vec3
+
+Quat = tuple[float, float, float, float]
+Mat3 = tuple[Vec3, Vec3, Vec3]
+
+IDENTITY: Quat = (1.0, 0.0, 0.0, 0.0)
+
+
+def mul(p: Quat, q: Quat) -> Quat:
+    """Hamilton product p ⊗ q."""
+    pw, px, py, pz = p
+    qw, qx, qy, qz = q
+    return (
+        pw * qw - px * qx - py * qy - pz * qz,
+        pw * qx + px * qw + py * qz - pz * qy,
+        pw * qy - px * qz + py * qw + pz * qx,
+        pw * qz + px * qy - py * qx + pz * qw,
+    )
+
+
+def conj(q: Quat) -> Quat:
+    return (q[0], -q[1], -q[2], -q[3])
+
+
+def inv(q: Quat) -> Quat:
+    n2 = q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]
+    return (q[0] / n2, -q[1] / n2, -q[2] / n2, -q[3] / n2)
+
+
+def norm(q: Quat) -> float:
+    return math.sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3])
+
+
+def normalized(q: Quat) -> Quat:
+    n = math.sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3])
+    return (q[0] / n, q[1] / n, q[2] / n, q[3] / n)
+
+
+def canonical(q: Quat) -> Quat:
+    """The representative with a non-negative scalar part (the first non-zero element positive)."""
+    for c in q:
+        if c > 0.0:
+            return q
+        if c < 0.0:
+            return (-q[0], -q[1], -q[2], -q[3])
+    return q
+
+
+def is_finite(q: Quat) -> bool:
+    return all(math.isfinite(c) for c in q)
+
+
+def rotate(q: Quat, v: Vec3) -> Vec3:
+    """Rotate v by q (body → world for an attitude quaternion)."""
+    w, x, y, z = q
+    vx, vy, vz = v
+    # t = 2 * (q_vec × v)
+    tx = 2.0 * (y * vz - z * vy)
+    ty = 2.0 * (z * vx - x * vz)
+    tz = 2.0 * (x * vy - y * vx)
+    return (
+        vx + w * tx + (y * tz - z * ty),
+        vy + w * ty + (z * tx - x * tz),
+        vz + w * tz + (x * ty - y * tx),
+    )
+
+
+def rotate_inv(q: Quat, v: Vec3) -> Vec3:
+    """Rotate v by the inverse of q (world → body for an attitude quaternion)."""
+    return rotate((q[0], -q[1], -q[2], -q[3]), v)
+
+
+def dcm_z(q: Quat) -> Vec3:
+    """Third column of the rotation matrix: the body z axis expressed in the world frame."""
+    w, x, y, z = q
+    return (2.0 * (w * y + x * z), 2.0 * (y * z - w * x), w * w - x * x - y * y + z * z)
+
+
+def to_dcm(q: Quat) -> Mat3:
+    """Rotation matrix (rows) R such that v_world = R · v_body."""
+    w, x, y, z = q
+    ww, xx, yy, zz = w * w, x * x, y * y, z * z
+    return (
+        (ww + xx - yy - zz, 2.0 * (x * y - w * z), 2.0 * (w * y + x * z)),
+        (2.0 * (x * y + w * z), ww - xx + yy - zz, 2.0 * (y * z - w * x)),
+        (2.0 * (x * z - w * y), 2.0 * (w * x + y * z), ww - xx - yy + zz),
+    )
+
+
+def from_dcm(r: Mat3) -> Quat:
+    """Quaternion from a rotation matrix (Shepperd's method, numerically robust)."""
+    tr = r[0][0] + r[1][1] + r[2][2]
+    if tr > 0.0:
+        s = math.sqrt(tr + 1.0) * 2.0
+        q = (0.25 * s, (r[2][1] - r[1][2]) / s, (r[0][2] - r[2][0]) / s, (r[1][0] - r[0][1]) / s)
+    elif r[0][0] > r[1][1] and r[0][0] > r[2][2]:
+        s = math.sqrt(1.0 + r[0][0] - r[1][1] - r[2][2]) * 2.0
+        q = ((r[2][1] - r[1][2]) / s, 0.25 * s, (r[0][1] + r[1][0]) / s, (r[0][2] + r[2][0]) / s)
+    elif r[1][1] > r[2][2]:
+        s = math.sqrt(1.0 + r[1][1] - r[0][0] - r[2][2]) * 2.0
+        q = ((r[0][2] - r[2][0]) / s, (r[0][1] + r[1][0]) / s, 0.25 * s, (r[1][2] + r[2][1]) / s)
+    else:
+        s = math.sqrt(1.0 + r[2][2] - r[0][0] - r[1][1]) * 2.0
+        q = ((r[1][0] - r[0][1]) / s, (r[0][2] + r[2][0]) / s, (r[1][2] + r[2][1]) / s, 0.25 * s)
+    return canonical(normalized(q))
+
+
+def from_euler(roll: float, pitch: float, yaw: float) -> Quat:
+    """3-2-1 Euler angles (rad) to quaternion."""
+    cr, sr = math.cos(roll * 0.5), math.sin(roll * 0.5)
+    cp, sp = math.cos(pitch * 0.5), math.sin(pitch * 0.5)
+    cy, sy = math.cos(yaw * 0.5), math.sin(yaw * 0.5)
+    return (
+        cr * cp * cy + sr * sp * sy,
+        sr * cp * cy - cr * sp * sy,
+        cr * sp * cy + sr * cp * sy,
+        cr * cp * sy - sr * sp * cy,
+    )
+
+
+def to_euler(q: Quat) -> Vec3:
+    """Quaternion to 3-2-1 Euler angles (roll, pitch, yaw) in rad."""
+    w, x, y, z = q
+    roll = math.atan2(2.0 * (w * x + y * z), 1.0 - 2.0 * (x * x + y * y))
+    s = 2.0 * (w * y - z * x)
+    pitch = math.copysign(math.pi / 2.0, s) if abs(s) >= 1.0 else math.asin(s)
+    yaw = math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
+    return (roll, pitch, yaw)
+
+
+def yaw(q: Quat) -> float:
+    w, x, y, z = q
+    return math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
+
+
+def from_axis_angle(axis: Vec3, angle: float) -> Quat:
+    """Rotation of ``angle`` rad about the unit vector ``axis``."""
+    s = math.sin(angle * 0.5)
+    return (math.cos(angle * 0.5), axis[0] * s, axis[1] * s, axis[2] * s)
+
+
+def from_rotation_vector(v: Vec3) -> Quat:
+    """Exponential map: rotation about v/|v| by |v| rad."""
+    angle = math.sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2])
+    if angle < 1e-10:
+        return normalized((1.0, 0.5 * v[0], 0.5 * v[1], 0.5 * v[2]))
+    s = math.sin(angle * 0.5) / angle
+    return (math.cos(angle * 0.5), v[0] * s, v[1] * s, v[2] * s)
+
+
+def to_rotation_vector(q: Quat) -> Vec3:
+    """Logarithmic map: axis × angle (rad) of the canonical form of q."""
+    w, x, y, z = canonical(q)
+    n = math.sqrt(x * x + y * y + z * z)
+    if n < 1e-10:
+        return (2.0 * x, 2.0 * y, 2.0 * z)
+    angle = 2.0 * math.atan2(n, w)
+    return (x / n * angle, y / n * angle, z / n * angle)
+
+
+def from_two_vectors(src: Vec3, dst: Vec3) -> Quat:
+    """Shortest rotation taking the direction of src onto the direction of dst."""
+    cr = (src[1] * dst[2] - src[2] * dst[1], src[2] * dst[0] - src[0] * dst[2], src[0] * dst[1] - src[1] * dst[0])
+    dt = src[0] * dst[0] + src[1] * dst[1] + src[2] * dst[2]
+    ns = math.sqrt(src[0] ** 2 + src[1] ** 2 + src[2] ** 2)
+    nd = math.sqrt(dst[0] ** 2 + dst[1] ** 2 + dst[2] ** 2)
+    w = dt + ns * nd
+    if w < 1e-9 * ns * nd:
+        # Opposite directions: rotate by pi about any axis orthogonal to src.
+        if abs(src[0]) > abs(src[2]):
+            return normalized((0.0, -src[1], src[0], 0.0))
+        return normalized((0.0, 0.0, -src[2], src[1]))
+    return normalized((w, cr[0], cr[1], cr[2]))
+
+
+def integrate(q: Quat, omega_body: Vec3, dt: float) -> Quat:
+    """Propagate an attitude by a constant body rate over dt (exact for constant rate)."""
+    return normalized(mul(q, from_rotation_vector((omega_body[0] * dt, omega_body[1] * dt, omega_body[2] * dt))))
+
+
+def angle_between(p: Quat, q: Quat) -> float:
+    """Smallest rotation angle (rad) taking p to q."""
+    d = abs(p[0] * q[0] + p[1] * q[1] + p[2] * q[2] + p[3] * q[3])
+    return 2.0 * math.acos(min(1.0, d))
