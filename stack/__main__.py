@@ -1,0 +1,3 @@
+from stack.cli.app import main
+
+main()

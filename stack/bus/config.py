@@ -1,0 +1,72 @@
+"""Zenoh session configuration with safe defaults.
+
+By default every session is a peer listening on 127.0.0.1 only, with multicast scouting off; it
+connects to one rendezvous endpoint (the supervisor's) and gossip over that session meshes the
+peers directly. A profile may instead name router endpoints, so modules on several hosts form one
+stack through an ordinary Zenoh router.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import asdict, dataclass, field
+
+import zenoh
+
+LOOPBACK_ANY_PORT = "tcp/127.0.0.1:0"
+
+
+@dataclass(frozen=True)
+class BusConfig:
+    mode: str = "peer"
+    connect: tuple[str, ...] = ()
+    listen: tuple[str, ...] = (LOOPBACK_ANY_PORT,)
+    # Zenoh's low-latency transport saves ~25 % per hop; every session of a stack must agree on it.
+    low_latency: bool = True
+    lease_ms: int = 3000
+    extra: dict[str, object] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        if self.mode not in ("peer", "client", "router"):
+            raise ValueError(f"bus.mode must be 'peer', 'client' or 'router', not '{self.mode}'")
+
+    def with_connect(self, endpoints: tuple[str, ...]) -> BusConfig:
+        return BusConfig(self.mode, endpoints, self.listen, self.low_latency, self.lease_ms, dict(self.extra))
+
+    def with_listen(self, endpoints: tuple[str, ...]) -> BusConfig:
+        return BusConfig(self.mode, self.connect, endpoints, self.low_latency, self.lease_ms, dict(self.extra))
+
+    def to_json(self) -> str:
+        return json.dumps(asdict(self))
+
+    @staticmethod
+    def from_json(text: str) -> BusConfig:
+        d = json.loads(text)
+        return BusConfig(
+            mode=d["mode"],
+            connect=tuple(d["connect"]),
+            listen=tuple(d["listen"]),
+            low_latency=d["low_latency"],
+            lease_ms=d["lease_ms"],
+            extra=d.get("extra", {}),
+        )
+
+    def zenoh_config(self, name: str) -> zenoh.Config:
+        conf = zenoh.Config()
+        conf.insert_json5("mode", json.dumps(self.mode))
+        conf.insert_json5("scouting/multicast/enabled", "false")
+        conf.insert_json5("scouting/gossip/enabled", "true")
+        conf.insert_json5("scouting/delay", "100")
+        conf.insert_json5("listen/endpoints", json.dumps(list(self.listen)))
+        conf.insert_json5("connect/endpoints", json.dumps(list(self.connect)))
+        conf.insert_json5(
+            "connect/retry", json.dumps({"period_init_ms": 50, "period_max_ms": 1000, "period_increase_factor": 2})
+        )
+        conf.insert_json5("transport/link/tx/lease", str(self.lease_ms))
+        if self.low_latency:
+            conf.insert_json5("transport/unicast/lowlatency", "true")
+            conf.insert_json5("transport/unicast/qos/enabled", "false")
+        conf.insert_json5("metadata", json.dumps({"name": name}))
+        for key, value in self.extra.items():
+            conf.insert_json5(key, json.dumps(value))
+        return conf

@@ -1,0 +1,112 @@
+"""Zenoh key layout.
+
+Flight topics:      ``stack/<vehicle>/<topic>/<instance>``
+Runtime internals:  ``stack/<vehicle>/@<area>/...`` — Zenoh never matches an ``@`` chunk with a
+wildcard, so ``stack/<vehicle>/**`` (what a recorder or a bridge subscribes to) sees topics only.
+
+The graph lives in liveliness tokens, so listing topics needs no central registry:
+``stack/<vehicle>/@graph/<module>/<pub|sub>/<topic>/<instance>/<Type>/<fingerprint>``.
+"""
+
+from __future__ import annotations
+
+import re
+
+ROOT = "stack"
+_NAME = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_\-]*$")
+
+
+def check_name(kind: str, name: str) -> str:
+    """Names become key chunks: letters, digits, '_' and '-' only."""
+    if not _NAME.match(name):
+        raise ValueError(f"invalid {kind} name '{name}': use letters, digits, '_' and '-' only")
+    return name
+
+
+def vehicle_root(vehicle: str) -> str:
+    return f"{ROOT}/{vehicle}"
+
+
+def topic_key(vehicle: str, topic: str, instance: int = 0) -> str:
+    return f"{ROOT}/{vehicle}/{topic}/{instance}"
+
+
+def topic_suffix(topic: str, instance: int = 0) -> str:
+    """The per-vehicle part of a topic key, used to name topics inside the lockstep protocol."""
+    return f"{topic}/{instance}"
+
+
+def all_topics(vehicle: str) -> str:
+    return f"{ROOT}/{vehicle}/*/*"
+
+
+def parse_topic_key(key: str) -> tuple[str, str, int] | None:
+    """``stack/<vehicle>/<topic>/<instance>`` → (vehicle, topic, instance), or None."""
+    parts = key.split("/")
+    if len(parts) != 4 or parts[0] != ROOT or parts[2].startswith("@"):
+        return None
+    try:
+        return parts[1], parts[2], int(parts[3])
+    except ValueError:
+        return None
+
+
+def graph_token(vehicle: str, module: str, role: str, topic: str, instance: int, type_name: str, fp: int) -> str:
+    return f"{ROOT}/{vehicle}/@graph/{module}/{role}/{topic}/{instance}/{type_name}/{fp:016x}"
+
+
+def graph_query(vehicle: str) -> str:
+    return f"{ROOT}/{vehicle}/@graph/**"
+
+
+def alive_token(vehicle: str, module: str, pid: int) -> str:
+    return f"{ROOT}/{vehicle}/@alive/{module}/{pid}"
+
+
+def alive_query(vehicle: str) -> str:
+    return f"{ROOT}/{vehicle}/@alive/**"
+
+
+def heartbeat_key(vehicle: str, module: str) -> str:
+    return f"{ROOT}/{vehicle}/@heartbeat/{module}"
+
+
+def heartbeat_all(vehicle: str) -> str:
+    return f"{ROOT}/{vehicle}/@heartbeat/*"
+
+
+def param_key(vehicle: str, module: str) -> str:
+    return f"{ROOT}/{vehicle}/@param/{module}"
+
+
+def param_all(vehicle: str) -> str:
+    return f"{ROOT}/{vehicle}/@param/*"
+
+
+def lockstep_clock_key(vehicle: str) -> str:
+    return f"{ROOT}/{vehicle}/@lockstep/clock"
+
+
+def lockstep_ack_key(vehicle: str) -> str:
+    return f"{ROOT}/{vehicle}/@lockstep/ack"
+
+
+def lockstep_member_token(vehicle: str, member: str, publisher_id: int, trigger: str) -> str:
+    """``trigger`` is ``topic/<name>/<instance>`` or ``timer/<period_us>``."""
+    return f"{ROOT}/{vehicle}/@lockstep/member/{member}/{publisher_id}/{trigger}"
+
+
+def lockstep_member_query(vehicle: str) -> str:
+    return f"{ROOT}/{vehicle}/@lockstep/member/**"
+
+
+def synced_token(vehicle: str, module: str) -> str:
+    return f"{ROOT}/{vehicle}/@synced/{module}"
+
+
+def synced_query(vehicle: str) -> str:
+    return f"{ROOT}/{vehicle}/@synced/*"
+
+
+def supervisor_key(vehicle: str, what: str) -> str:
+    return f"{ROOT}/{vehicle}/@supervisor/{what}"

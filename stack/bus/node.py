@@ -1,0 +1,110 @@
+"""A participant on the bus: one Zenoh session, its publishers and subscribers, and its graph tokens."""
+
+from __future__ import annotations
+
+import os
+import random
+import time
+import zlib
+from collections.abc import Callable
+
+import zenoh
+
+from stack.bus import keys
+from stack.bus.config import BusConfig
+from stack.bus.topics import TELEMETRY_TOPICS, TopicPublisher, TopicSubscriber
+from stack.msg.registry import fingerprint, message_type
+
+
+def wall_clock_us() -> int:
+    """Monotonic time in µs, comparable between processes on one host (PX4's hrt_absolute_time)."""
+    return time.clock_gettime_ns(time.CLOCK_MONOTONIC) // 1000
+
+
+def stable_publisher_id(vehicle: str, name: str) -> int:
+    """Publisher ids derived from names are the same in every run, which lockstep ordering relies on."""
+    return zlib.crc32(f"{vehicle}/{name}".encode()) or 1
+
+
+class Node:
+    """Owns a Zenoh session. Always close it (``with Node(...)``): zenoh-python can hang at exit otherwise."""
+
+    def __init__(
+        self,
+        bus: BusConfig,
+        vehicle: str,
+        name: str,
+        *,
+        stable_id: bool = True,
+        clock: Callable[[], int] = wall_clock_us,
+        session: zenoh.Session | None = None,
+    ) -> None:
+        self.vehicle = keys.check_name("vehicle", vehicle)
+        self.name = keys.check_name("module", name)
+        self.publisher_id = stable_publisher_id(vehicle, name) if stable_id else random.getrandbits(32) | 1
+        self.now_us = clock
+        self.header_flags = 0
+        self.seq = 0
+        self.touched: set[TopicPublisher] = set()
+        self.publishers: list[TopicPublisher] = []
+        self.subscribers: list[TopicSubscriber] = []
+        self._tokens: list[zenoh.LivelinessToken] = []
+        self._owns_session = session is None
+        self.session = session if session is not None else zenoh.open(bus.zenoh_config(name))
+
+    def __enter__(self) -> Node:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    def on_published(self, pub: TopicPublisher) -> None:
+        self.touched.add(pub)
+
+    def publisher(
+        self, topic: str, instance: int = 0, *, reliable: bool | None = None, announce: bool = True
+    ) -> TopicPublisher:
+        msg_type = message_type(topic)
+        if reliable is None:
+            reliable = topic not in TELEMETRY_TOPICS
+        pub = TopicPublisher(self, topic, instance, msg_type, reliable)
+        self.publishers.append(pub)
+        if announce:
+            self._announce("pub", topic, instance)
+        return pub
+
+    def subscriber(
+        self, topic: str, instance: int = 0, *, capacity: int = 256, keep_last: bool = False, announce: bool = True
+    ) -> TopicSubscriber:
+        sub = TopicSubscriber(self, topic, instance, message_type(topic), capacity, keep_last)
+        self.subscribers.append(sub)
+        if announce:
+            self._announce("sub", topic, instance)
+        return sub
+
+    def _announce(self, role: str, topic: str, instance: int) -> None:
+        msg_type = message_type(topic)
+        key = keys.graph_token(self.vehicle, self.name, role, topic, instance, msg_type.__name__, fingerprint(msg_type))
+        self.declare_token(key)
+
+    def declare_token(self, key: str) -> zenoh.LivelinessToken:
+        token = self.session.liveliness().declare_token(key)
+        self._tokens.append(token)
+        return token
+
+    def close(self) -> None:
+        if self.session.is_closed():
+            return
+        for token in self._tokens:
+            token.undeclare()
+        for sub in self.subscribers:
+            sub.undeclare()
+        for pub in self.publishers:
+            pub.undeclare()
+        self._tokens.clear()
+        if self._owns_session:
+            self.session.close()
+
+
+def pid_tag() -> str:
+    return f"{os.uname().nodename}:{os.getpid()}"

@@ -1,0 +1,116 @@
+"""The ``stack`` command."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import time
+
+import psutil
+import typer
+
+from stack.bus import keys
+from stack.cli import param, topic
+from stack.cli.common import EndpointOption, JsonOption, VehicleOption, connect, fail, print_table, query_json
+from stack.supervisor import state as run_state
+from stack.supervisor.profile import DEFAULT_PROFILE, ProfileError, load_profile
+from stack.supervisor.supervisor import Supervisor, UpOptions
+
+app = typer.Typer(
+    help="stack: a PX4-shaped multicopter autopilot, one process per module, uORB topics over Zenoh.",
+    no_args_is_help=True,
+    add_completion=False,
+)
+app.add_typer(topic.app, name="topic")
+app.add_typer(param.app, name="param")
+
+
+@app.command()
+def up(
+    profile: str = typer.Argument(DEFAULT_PROFILE, help="Launch profile: a name in launch/ or a path"),
+    duration: float | None = typer.Option(None, "--duration", "-d", help="Stop after this many seconds"),
+    realtime: bool = typer.Option(False, "--realtime", help="Pace the simulator to the wall clock (no lockstep)"),
+    log_level: str = typer.Option("INFO", help="Log level of the modules"),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help="Do not echo module logs (they are still written)"),
+) -> None:
+    """Start a stack from a launch profile and supervise it until Ctrl-C, SIGTERM or --duration."""
+    try:
+        prof = load_profile(profile, flags={"realtime": realtime})
+    except ProfileError as e:
+        fail(str(e), code=2)
+    for running in run_state.running_stacks():
+        if running["vehicle"] == prof.vehicle:
+            fail(f"a stack for vehicle '{prof.vehicle}' is already running (pid {running['pid']}); `stack down` first")
+    run_dir = run_state.new_run_dir(prof.name, prof.vehicle)
+    supervisor = Supervisor(prof, UpOptions(duration=duration, log_level=log_level, echo_logs=not quiet), run_dir)
+    raise typer.Exit(supervisor.run())
+
+
+@app.command()
+def down(
+    vehicle: str | None = VehicleOption,
+    timeout: float = typer.Option(30.0, help="Seconds to wait for the stack to stop"),
+) -> None:
+    """Stop a running stack (its supervisor stops the modules in reverse order)."""
+    stacks = [s for s in run_state.running_stacks() if vehicle is None or s["vehicle"] == vehicle]
+    if not stacks:
+        fail("no running stack found")
+    for s in stacks:
+        pid = int(s["pid"])
+        os.kill(pid, signal.SIGTERM)
+        typer.echo(f"stopping stack '{s['vehicle']}' (supervisor pid {pid})")
+        try:
+            psutil.Process(pid).wait(timeout)
+        except psutil.NoSuchProcess:
+            pass
+        except psutil.TimeoutExpired:
+            fail(f"stack '{s['vehicle']}' did not stop within {timeout:g} s")
+    typer.echo("stopped")
+
+
+@app.command()
+def status(
+    vehicle: str | None = VehicleOption,
+    endpoint: str | None = EndpointOption,
+    as_json: bool = JsonOption,
+) -> None:
+    """Each module's state, pid, CPU, memory, restarts, trigger rate and counters."""
+    with connect(vehicle, endpoint) as node:
+        answers = query_json(node.session, keys.supervisor_key(node.vehicle, "status"))
+    if not answers:
+        fail("the supervisor did not answer")
+    report = answers[0]
+    if as_json:
+        typer.echo(json.dumps(report))
+        return
+    mode = "lockstep" if report["lockstep"] else "real time"
+    typer.echo(f"vehicle '{report['vehicle']}', profile {report['profile']} ({mode})")
+    rows = []
+    for m in report["modules"]:
+        rows.append(
+            (
+                m["module"],
+                m["state"],
+                m["pid"] or "-",
+                f"{m.get('cpu_percent', 0.0):.1f}",
+                f"{m.get('rss_bytes', 0) / 2**20:.0f}M",
+                m["restarts"],
+                f"{m.get('trigger_rate_hz', 0.0):.1f}",
+                m.get("runs", 0),
+                m.get("msgs_in", 0),
+                m.get("msgs_out", 0),
+                m.get("decode_errors", 0) + m.get("schema_errors", 0) + m.get("rejected", 0),
+                f"{m.get('loop_avg_us', 0.0):.0f}/{m.get('loop_max_us', 0.0):.0f}",
+            )
+        )
+    print_table(
+        ("MODULE", "STATE", "PID", "CPU%", "MEM", "RESTARTS", "RATE", "RUNS", "IN", "OUT", "ERR", "LOOP us"), rows
+    )
+    sim_times = [m.get("sim_time_us", 0) for m in report["modules"]]
+    if report["lockstep"] and any(sim_times):
+        typer.echo(f"simulated time {max(sim_times) / 1e6:.3f} s at {time.strftime('%H:%M:%S')}")
+
+
+def main() -> None:
+    app()

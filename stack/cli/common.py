@@ -1,0 +1,88 @@
+"""What every CLI command needs: finding the running stack, opening a session, printing tables."""
+
+from __future__ import annotations
+
+import json
+import math
+import sys
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
+from typing import NoReturn
+
+import msgspec
+import typer
+import zenoh
+
+from stack.bus.config import BusConfig
+from stack.bus.node import Node
+from stack.supervisor import state as run_state
+
+VehicleOption = typer.Option(None, "--vehicle", "-v", help="Vehicle namespace (default: the running stack's)")
+EndpointOption = typer.Option(
+    None, "--endpoint", "-e", envvar="STACK_ENDPOINT", help="Zenoh endpoint of the stack (default: from stack up)"
+)
+JsonOption = typer.Option(False, "--json", help="Machine-readable JSON output")
+
+
+def fail(message: str, code: int = 1) -> NoReturn:
+    typer.echo(f"error: {message}", err=True)
+    raise typer.Exit(code)
+
+
+def find_stack(vehicle: str | None, endpoint: str | None) -> tuple[str, BusConfig]:
+    """The vehicle and bus settings to reach a running stack."""
+    if endpoint:
+        return vehicle or "v1", BusConfig(connect=(endpoint,))
+    stacks = run_state.running_stacks()
+    if vehicle is not None:
+        stacks = [s for s in stacks if s["vehicle"] == vehicle]
+    if not stacks:
+        which = f" for vehicle '{vehicle}'" if vehicle else ""
+        fail(f"no running stack found{which} (start one with `stack up`, or pass --endpoint)")
+    if len(stacks) > 1:
+        names = ", ".join(str(s["vehicle"]) for s in stacks)
+        fail(f"several stacks are running ({names}): choose one with --vehicle")
+    found = stacks[0]
+    bus = BusConfig.from_json(json.dumps(found["bus"]))
+    return str(found["vehicle"]), BusConfig(
+        mode="peer", connect=(str(found["endpoint"]),), low_latency=bus.low_latency, lease_ms=bus.lease_ms
+    )
+
+
+@contextmanager
+def connect(vehicle: str | None, endpoint: str | None, name: str = "cli") -> Iterator[Node]:
+    vehicle, bus = find_stack(vehicle, endpoint)
+    with Node(bus, vehicle, name, stable_id=False) as node:
+        yield node
+
+
+def query_json(session: zenoh.Session, key: str, payload: dict | None = None, timeout: float = 2.0) -> list[dict]:
+    replies = session.get(key, payload=json.dumps(payload) if payload is not None else None, timeout=timeout)
+    out = []
+    for reply in replies:
+        if reply.ok is not None:
+            out.append(json.loads(reply.ok.payload.to_string()))
+    return out
+
+
+def to_jsonable(obj: object) -> object:
+    """Builtins for JSON output; NaN and infinities become null (JSON has no NaN)."""
+    return msgspec.json.decode(msgspec.json.encode(obj))
+
+
+def format_value(value: object) -> str:
+    if isinstance(value, float):
+        if math.isnan(value):
+            return "nan"
+        return f"{value:.6g}"
+    if isinstance(value, tuple | list):
+        return "[" + ", ".join(format_value(v) for v in value) + "]"
+    return str(value)
+
+
+def print_table(headers: Sequence[str], rows: Sequence[Sequence[object]]) -> None:
+    cells = [[str(h) for h in headers]] + [[str(c) for c in row] for row in rows]
+    widths = [max(len(r[i]) for r in cells) for i in range(len(headers))]
+    for r in cells:
+        sys.stdout.write("  ".join(c.ljust(w) for c, w in zip(r, widths, strict=True)).rstrip() + "\n")
+    sys.stdout.flush()

@@ -1,0 +1,360 @@
+"""``stack topic``: list, echo, hz, pub, info — PX4's ``uorb top`` and ``listener`` for a running stack."""
+
+from __future__ import annotations
+
+import itertools
+import json
+import math
+import queue
+import statistics
+import time
+from dataclasses import dataclass
+
+import msgspec
+import typer
+import zenoh
+
+from stack.bus import keys
+from stack.bus.node import Node
+from stack.bus.topics import HEADER, Received
+from stack.cli.common import (
+    EndpointOption,
+    JsonOption,
+    VehicleOption,
+    connect,
+    fail,
+    format_value,
+    print_table,
+    to_jsonable,
+)
+from stack.cli.graph import read_graph
+from stack.msg.base import Message
+from stack.msg.registry import TOPICS, UnknownTopic, fingerprint, message_type, schema_text
+
+app = typer.Typer(help="Inspect and publish topics (like PX4's listener and uorb top).", no_args_is_help=True)
+
+
+def _topic_type(topic: str) -> type[Message]:
+    try:
+        return message_type(topic)
+    except UnknownTopic as e:
+        fail(str(e))
+
+
+@dataclass
+class _Traffic:
+    count: int = 0
+    size: int = 0
+
+
+def _measure(session: zenoh.Session, vehicle: str, window: float) -> dict[tuple[str, int], _Traffic]:
+    traffic: dict[tuple[str, int], _Traffic] = {}
+
+    def on_sample(sample: zenoh.Sample) -> None:
+        parsed = keys.parse_topic_key(str(sample.key_expr))
+        if parsed is None:
+            return
+        t = traffic.setdefault((parsed[1], parsed[2]), _Traffic())
+        t.count += 1
+        t.size = len(sample.payload)
+
+    sub = session.declare_subscriber(keys.all_topics(vehicle), on_sample)
+    time.sleep(window)
+    sub.undeclare()
+    return traffic
+
+
+@app.command("list")
+def list_topics(
+    window: float = typer.Option(1.0, help="Seconds to measure rates over"),
+    all_: bool = typer.Option(False, "--all", "-a", help="Also list catalogue topics nobody uses"),
+    vehicle: str | None = VehicleOption,
+    endpoint: str | None = EndpointOption,
+    as_json: bool = JsonOption,
+) -> None:
+    """Topics with type, instance, publishers, subscribers, rate and message size (like `uorb top -1`)."""
+    with connect(vehicle, endpoint) as node:
+        graph = read_graph(node.session, node.vehicle)
+        traffic = _measure(node.session, node.vehicle, window)
+    rows = []
+    names = set(graph) | set(traffic)
+    if all_:
+        names |= {(t, 0) for t in TOPICS}
+    for topic, inst in sorted(names):
+        g = graph.get((topic, inst))
+        tr = traffic.get((topic, inst), _Traffic())
+        type_name = g.type_name if g else (TOPICS[topic].__name__ if topic in TOPICS else "?")
+        rows.append(
+            {
+                "topic": topic,
+                "type": type_name,
+                "instance": inst,
+                "publishers": g.publishers if g else [],
+                "subscribers": g.subscribers if g else [],
+                "rate_hz": tr.count / window,
+                "size_bytes": tr.size,
+            }
+        )
+    if as_json:
+        typer.echo(json.dumps(rows))
+        return
+    total = sum(r["rate_hz"] for r in rows)
+    typer.echo(f"topics: {len(rows)}, total publications: {total:.0f}/s (measured over {window:g} s)")
+    print_table(
+        ("TOPIC", "TYPE", "INST", "#PUB", "#SUB", "RATE", "SIZE", "PUBLISHERS"),
+        [
+            (
+                r["topic"],
+                r["type"],
+                r["instance"],
+                len(r["publishers"]),
+                len(r["subscribers"]),
+                f"{r['rate_hz']:.1f}",
+                r["size_bytes"],
+                ",".join(r["publishers"]),
+            )
+            for r in rows
+        ],
+    )
+
+
+def _subscribe(node: Node, topic: str, instance: int) -> tuple[zenoh.Subscriber, queue.Queue[Received]]:
+    msg_type = _topic_type(topic)
+    decoder = msgspec.msgpack.Decoder(msg_type)
+    expected = fingerprint(msg_type)
+    q: queue.Queue[Received] = queue.Queue()
+    warned = []
+
+    def on_sample(sample: zenoh.Sample) -> None:
+        att = sample.attachment
+        if att is None or len(att) != HEADER.size:
+            return
+        fp, pub, seq, t, _flags = HEADER.unpack(att.to_bytes())
+        if fp != expected:
+            if not warned:
+                warned.append(1)
+                typer.echo(
+                    f"warning: {topic} publisher {pub:08x} uses schema {fp:016x}, this build has {expected:016x};"
+                    " its messages are not shown",
+                    err=True,
+                )
+            return
+        try:
+            q.put((t, pub, seq, decoder.decode(sample.payload.to_bytes())))
+        except msgspec.DecodeError as e:
+            typer.echo(f"warning: malformed {topic} message dropped: {e}", err=True)
+
+    return node.session.declare_subscriber(keys.topic_key(node.vehicle, topic, instance), on_sample), q
+
+
+@app.command()
+def echo(
+    topic: str,
+    count: int = typer.Option(0, "-n", "--count", help="Print N messages then exit (0: until Ctrl-C)"),
+    instance: int = typer.Option(0, "--instance", "-i"),
+    field: str | None = typer.Option(None, "--field", "-f", help="Print only this field"),
+    timeout: float = typer.Option(5.0, help="Give up after this many seconds without a message"),
+    vehicle: str | None = VehicleOption,
+    endpoint: str | None = EndpointOption,
+    as_json: bool = JsonOption,
+) -> None:
+    """Print messages of a topic as they arrive (like PX4's `listener`)."""
+    msg_type = _topic_type(topic)
+    if field is not None and field not in msg_type.__struct_fields__:
+        fail(f"{msg_type.__name__} has no field '{field}' (fields: {', '.join(msg_type.__struct_fields__)})")
+    with connect(vehicle, endpoint) as node:
+        sub, q = _subscribe(node, topic, instance)
+        shown = 0
+        try:
+            while count == 0 or shown < count:
+                try:
+                    _, _, _, msg = q.get(timeout=timeout)
+                except queue.Empty:
+                    fail(f"waited {timeout:g} s without a message on {topic} (instance {instance})")
+                shown += 1
+                _print_message(topic, instance, msg, field, as_json, shown)
+        finally:
+            sub.undeclare()
+
+
+def _print_message(topic: str, instance: int, msg: Message, field: str | None, as_json: bool, n: int) -> None:
+    data = msgspec.structs.asdict(msg)
+    if field is not None:
+        value = data[field]
+        typer.echo(json.dumps(to_jsonable(value)) if as_json else format_value(value))
+        return
+    if as_json:
+        typer.echo(json.dumps(to_jsonable(data)))
+        return
+    typer.echo(f"TOPIC: {topic} instance {instance} #{n}  [{type(msg).__name__}]")
+    for name, value in data.items():
+        extra = f"  ({value / 1e6:.6f} s)" if name.startswith("timestamp") and isinstance(value, int) else ""
+        typer.echo(f"    {name}: {format_value(value)}{extra}")
+
+
+@app.command()
+def hz(
+    topic: str,
+    window: int = typer.Option(100, help="Number of most recent intervals the statistics use"),
+    duration: float = typer.Option(0.0, help="Stop after this many seconds (0: until Ctrl-C)"),
+    instance: int = typer.Option(0, "--instance", "-i"),
+    vehicle: str | None = VehicleOption,
+    endpoint: str | None = EndpointOption,
+    as_json: bool = JsonOption,
+) -> None:
+    """Publication rate of a topic, with min/max/std of the intervals, printed every second."""
+    _topic_type(topic)
+    with connect(vehicle, endpoint) as node:
+        sub, q = _subscribe(node, topic, instance)
+        arrivals: list[float] = []
+        stamps: list[int] = []
+        start = time.monotonic()
+        next_print = start + 1.0
+        try:
+            while duration == 0 or time.monotonic() - start < duration:
+                try:
+                    _, _, _, msg = q.get(timeout=0.05)
+                    arrivals.append(time.monotonic())
+                    stamps.append(msg.timestamp)
+                    del arrivals[: -window - 1], stamps[: -window - 1]
+                except queue.Empty:
+                    pass
+                if time.monotonic() >= next_print:
+                    next_print += 1.0
+                    _print_rate(topic, arrivals, stamps, as_json)
+        finally:
+            sub.undeclare()
+
+
+def _print_rate(topic: str, arrivals: list[float], stamps: list[int], as_json: bool) -> None:
+    if len(arrivals) < 2:
+        typer.echo(json.dumps({"topic": topic, "rate_hz": 0.0}) if as_json else f"{topic}: no new messages")
+        return
+    dts = [b - a for a, b in itertools.pairwise(arrivals)]
+    span = arrivals[-1] - arrivals[0]
+    rate = len(dts) / span if span > 0 else math.inf
+    stamp_span = (stamps[-1] - stamps[0]) / 1e6
+    msg_rate = len(dts) / stamp_span if stamp_span > 0 else math.nan
+    stats = {
+        "topic": topic,
+        "rate_hz": rate,
+        "rate_by_timestamp_hz": msg_rate,
+        "min_s": min(dts),
+        "max_s": max(dts),
+        "std_s": statistics.pstdev(dts),
+        "window": len(dts),
+    }
+    if as_json:
+        typer.echo(json.dumps(to_jsonable(stats)))
+    else:
+        typer.echo(
+            f"{topic}: average rate {rate:.2f} Hz (by message timestamps {msg_rate:.2f} Hz)  "
+            f"min {min(dts) * 1e3:.2f} ms  max {max(dts) * 1e3:.2f} ms  std {stats['std_s'] * 1e3:.2f} ms  "
+            f"window {len(dts)}"
+        )
+
+
+def parse_message(topic: str, text: str) -> Message:
+    """A message from JSON field values, checked against the topic's schema. Raises ValueError."""
+    msg_type = message_type(topic)
+    try:
+        data = json.loads(text)
+    except json.JSONDecodeError as e:
+        raise ValueError(f"not valid JSON: {e}") from None
+    if not isinstance(data, dict):
+        raise ValueError("expected a JSON object of field values, e.g. '{\"roll\": 0.1}'")
+    fields = msgspec.structs.fields(msg_type)
+    checker = msgspec.defstruct(
+        f"{msg_type.__name__}Fields",
+        [(f.name, f.type, f.default) for f in fields],
+        forbid_unknown_fields=True,
+    )
+    try:
+        checked = msgspec.convert(data, checker)
+    except msgspec.ValidationError as e:
+        raise ValueError(f"{msg_type.__name__}: {e}".replace("$.", "")) from None
+    return msg_type(**msgspec.structs.asdict(checked))
+
+
+@app.command()
+def pub(
+    topic: str,
+    values: str = typer.Argument(..., help="Field values as JSON, e.g. '{\"roll\": 0.1}'"),
+    rate: float = typer.Option(0.0, "--rate", "-r", help="Publish repeatedly at this rate [Hz] until Ctrl-C"),
+    count: int = typer.Option(0, "--count", "-n", help="With --rate: stop after N messages"),
+    instance: int = typer.Option(0, "--instance", "-i"),
+    wait: float = typer.Option(1.0, help="Seconds to wait for a subscriber before publishing"),
+    vehicle: str | None = VehicleOption,
+    endpoint: str | None = EndpointOption,
+) -> None:
+    """Publish a message, checked against the topic's schema (a wrong field or type publishes nothing)."""
+    _topic_type(topic)
+    try:
+        template = parse_message(topic, values)
+    except ValueError as e:
+        fail(str(e), code=2)
+    with connect(vehicle, endpoint) as node:
+        publisher = node.publisher(topic, instance)
+        deadline = time.monotonic() + wait
+        while not publisher.matching() and time.monotonic() < deadline:
+            time.sleep(0.01)
+        if not publisher.matching():
+            typer.echo(f"warning: no subscriber for {topic} (instance {instance})", err=True)
+        sent = 0
+        period = 1.0 / rate if rate > 0 else 0.0
+        next_time = time.monotonic()
+        while True:
+            publisher.publish(msgspec.structs.replace(template))
+            sent += 1
+            if rate <= 0 or (count and sent >= count):
+                break
+            next_time += period
+            time.sleep(max(0.0, next_time - time.monotonic()))
+        time.sleep(0.1)  # let Zenoh flush before the session closes
+    typer.echo(f"published {sent} message{'s' if sent != 1 else ''} on {topic}")
+
+
+@app.command()
+def info(
+    topic: str,
+    vehicle: str | None = VehicleOption,
+    endpoint: str | None = EndpointOption,
+    as_json: bool = JsonOption,
+) -> None:
+    """A topic's type, schema (fields, types, defaults), fingerprint, publishers and subscribers."""
+    msg_type = _topic_type(topic)
+    schema = [
+        {"name": f.name, "type": str(f.type).replace("typing.", ""), "default": to_jsonable(f.default)}
+        for f in msgspec.structs.fields(msg_type)
+    ]
+    result: dict[str, object] = {
+        "topic": topic,
+        "type": msg_type.__name__,
+        "fingerprint": f"{fingerprint(msg_type):016x}",
+        "doc": (msg_type.__doc__ or "").strip(),
+        "fields": schema,
+        "schema": schema_text(msg_type),
+    }
+    with connect(vehicle, endpoint) as node:
+        graph = read_graph(node.session, node.vehicle)
+    instances = sorted(inst for (t, inst) in graph if t == topic)
+    result["instances"] = [
+        {
+            "instance": inst,
+            "publishers": graph[(topic, inst)].publishers,
+            "subscribers": graph[(topic, inst)].subscribers,
+            "fingerprints": sorted(graph[(topic, inst)].fingerprints),
+        }
+        for inst in instances
+    ]
+    if as_json:
+        typer.echo(json.dumps(result))
+        return
+    typer.echo(f"{topic}: {result['type']}  fingerprint {result['fingerprint']}")
+    if result["doc"]:
+        typer.echo(f"  {result['doc']}")
+    for inst in result["instances"]:
+        typer.echo(f"  instance {inst['instance']}: publishers {inst['publishers']}, subscribers {inst['subscribers']}")
+        if len(inst["fingerprints"]) > 1 or result["fingerprint"] not in inst["fingerprints"]:
+            typer.echo(f"    WARNING: schema fingerprints on the bus: {inst['fingerprints']}")
+    print_table(("FIELD", "TYPE", "DEFAULT"), [(f["name"], f["type"], f["default"]) for f in schema])

@@ -1,0 +1,57 @@
+"""Messages the runtime itself exchanges: module heartbeats and the lockstep protocol.
+
+They travel under ``@``-prefixed keys (see :mod:`stack.bus.keys`), which Zenoh wildcards never
+match, so recorders and topic listings see flight topics only.
+"""
+
+from __future__ import annotations
+
+import msgspec
+
+from stack.msg.base import Message
+
+
+class ModuleHeartbeat(Message):
+    """A module's presence and counters, published about once a second (wall time)."""
+
+    module: str = ""
+    pid: int = 0
+    host: str = ""
+    state: str = ""
+    trigger: str = ""
+    runs: int = 0
+    msgs_in: int = 0
+    msgs_out: int = 0
+    decode_errors: int = 0
+    schema_errors: int = 0
+    rejected: int = 0
+    loop_avg_us: float = 0.0
+    loop_max_us: float = 0.0
+    trigger_rate_hz: float = 0.0
+    cpu_percent: float = 0.0
+    rss_bytes: int = 0
+    sim_time_us: int = 0
+
+
+class LockstepClock(Message):
+    """One lockstep step: the new time and the cumulative publication counts of the previous step.
+
+    ``counts`` lists ``(publisher_id, topic_key, total)`` for every (publisher, topic) whose total
+    changed since the previous clock; subscribers wait until they hold that many messages before
+    they act at this time, so what every module sees is independent of process scheduling.
+    ``members`` lists the publisher ids of the modules expected to act (and acknowledge) at this step.
+    """
+
+    step: int = 0
+    counts: list[tuple[int, str, int]] = msgspec.field(default_factory=list)
+    members: list[int] = msgspec.field(default_factory=list)
+
+
+class LockstepAck(Message):
+    """A member finished one run at ``timestamp``; ``published`` holds its new per-topic totals."""
+
+    member: str = ""
+    publisher_id: int = 0
+    trigger_publisher: int = 0
+    trigger_topic: str = ""
+    published: list[tuple[str, int]] = msgspec.field(default_factory=list)

@@ -1,0 +1,96 @@
+"""The setpoint chain from trajectory to torque (PX4 ``TrajectorySetpoint`` ... ``VehicleThrustSetpoint``)."""
+
+from __future__ import annotations
+
+from stack.msg.base import F3, F4, NAN, NAN3, Q_IDENTITY, ZERO3, Message
+
+
+class TrajectorySetpoint(Message):
+    """Position/velocity/acceleration setpoint in NED; NaN components are not controlled."""
+
+    position: F3 = NAN3
+    velocity: F3 = NAN3
+    acceleration: F3 = NAN3
+    jerk: F3 = NAN3
+    yaw: float = NAN
+    yawspeed: float = NAN
+
+
+class VehicleLocalPositionSetpoint(Message):
+    """What the position controller is tracking and commanding (telemetry)."""
+
+    x: float = NAN
+    y: float = NAN
+    z: float = NAN
+    vx: float = NAN
+    vy: float = NAN
+    vz: float = NAN
+    acceleration: F3 = NAN3
+    thrust: F3 = NAN3
+    yaw: float = NAN
+    yawspeed: float = NAN
+
+
+class VehicleAttitudeSetpoint(Message):
+    """Desired attitude (body FRD → NED) and normalised body thrust (multicopter: (0, 0, −collective))."""
+
+    yaw_sp_move_rate: float = NAN
+    q_d: F4 = Q_IDENTITY
+    thrust_body: F3 = ZERO3
+
+
+class VehicleRatesSetpoint(Message):
+    """Desired body rates [rad/s]; NaN on an axis holds the current rate."""
+
+    roll: float = 0.0
+    pitch: float = 0.0
+    yaw: float = 0.0
+    thrust_body: F3 = ZERO3
+    reset_integral: bool = False
+
+
+class VehicleTorqueSetpoint(Message):
+    """Normalised torque about body x, y, z."""
+
+    timestamp_sample: int = 0
+    xyz: F3 = ZERO3
+
+
+class VehicleThrustSetpoint(Message):
+    """Normalised thrust in body frame, each in [−1, 1]; multicopter thrust is negative z."""
+
+    timestamp_sample: int = 0
+    xyz: F3 = ZERO3
+
+
+class RateCtrlStatus(Message):
+    """Rate-controller integrator states (normalised torque)."""
+
+    rollspeed_integ: float = 0.0
+    pitchspeed_integ: float = 0.0
+    yawspeed_integ: float = 0.0
+
+
+class ManualControlSetpoint(Message):
+    """Pilot sticks in [−1, 1]: throttle −1 is minimum, pitch +1 is nose down, yaw + is clockwise."""
+
+    SOURCE_UNKNOWN = 0
+    SOURCE_RC = 1
+    SOURCE_MAVLINK_0 = 2
+
+    timestamp_sample: int = 0
+    valid: bool = False
+    data_source: int = 0
+    roll: float = 0.0
+    pitch: float = 0.0
+    yaw: float = 0.0
+    throttle: float = -1.0
+    flaps: float = 0.0
+    aux1: float = 0.0
+    aux2: float = 0.0
+    aux3: float = 0.0
+    aux4: float = 0.0
+    aux5: float = 0.0
+    aux6: float = 0.0
+    sticks_moving: bool = False
+    buttons: int = 0

@@ -1,0 +1,161 @@
+"""System state and commands (PX4 ``VehicleStatus``, ``VehicleControlMode``, ``VehicleCommand``...)."""
+
+from __future__ import annotations
+
+from stack.msg.base import NAN, Message
+
+
+class VehicleControlMode(Message):
+    """Which loops run, set by the commander from the navigation state; the controllers obey it."""
+
+    flag_armed: bool = False
+    flag_multicopter_position_control_enabled: bool = False
+    flag_control_manual_enabled: bool = False
+    flag_control_auto_enabled: bool = False
+    flag_control_offboard_enabled: bool = False
+    flag_control_position_enabled: bool = False
+    flag_control_velocity_enabled: bool = False
+    flag_control_altitude_enabled: bool = False
+    flag_control_climb_rate_enabled: bool = False
+    flag_control_acceleration_enabled: bool = False
+    flag_control_attitude_enabled: bool = False
+    flag_control_rates_enabled: bool = False
+    flag_control_allocation_enabled: bool = False
+    flag_control_termination_enabled: bool = False
+    source_id: int = 0
+    # Seed 000's rattitude mode (removed from PX4 in 2021, kept here): sticks beyond MC_RATT_TH command rates.
+    flag_control_rattitude_enabled: bool = False
+
+
+class VehicleStatus(Message):
+    """Arming and navigation state (PX4 ``VehicleStatus`` v2, the fields a multicopter uses)."""
+
+    ARMING_STATE_DISARMED = 1
+    ARMING_STATE_ARMED = 2
+
+    NAVIGATION_STATE_MANUAL = 0
+    NAVIGATION_STATE_ALTCTL = 1
+    NAVIGATION_STATE_POSCTL = 2
+    NAVIGATION_STATE_AUTO_MISSION = 3
+    NAVIGATION_STATE_AUTO_LOITER = 4
+    NAVIGATION_STATE_AUTO_RTL = 5
+    NAVIGATION_STATE_ACRO = 10
+    NAVIGATION_STATE_DESCEND = 12
+    NAVIGATION_STATE_TERMINATION = 13
+    NAVIGATION_STATE_OFFBOARD = 14
+    NAVIGATION_STATE_STAB = 15
+    NAVIGATION_STATE_AUTO_TAKEOFF = 17
+    NAVIGATION_STATE_AUTO_LAND = 18
+    # Not in current PX4 (removed with rattitude); a free number outside PX4's used range.
+    NAVIGATION_STATE_RATTITUDE = 31
+
+    VEHICLE_TYPE_ROTARY_WING = 1
+
+    timestamp_sample: int = 0
+    armed_time: int = 0
+    takeoff_time: int = 0
+    arming_state: int = ARMING_STATE_DISARMED
+    latest_arming_reason: int = 0
+    latest_disarming_reason: int = 0
+    nav_state_timestamp: int = 0
+    nav_state_user_intention: int = NAVIGATION_STATE_MANUAL
+    nav_state: int = NAVIGATION_STATE_MANUAL
+    executor_in_charge: int = 0
+    valid_nav_states_mask: int = 0
+    can_set_nav_states_mask: int = 0
+    failure_detector_status: int = 0
+    hil_state: int = 0
+    vehicle_type: int = VEHICLE_TYPE_ROTARY_WING
+    failsafe: bool = False
+    failsafe_and_user_took_over: bool = False
+    failsafe_defer_state: int = 0
+    gcs_connection_lost: bool = False
+    gcs_connection_lost_counter: int = 0
+    high_latency_data_link_lost: bool = False
+    system_type: int = 2
+    system_id: int = 1
+    component_id: int = 1
+    safety_button_available: bool = False
+    safety_off: bool = True
+    power_input_valid: bool = True
+    usb_connected: bool = False
+    pre_flight_checks_pass: bool = False
+
+
+class ActuatorArmed(Message):
+    """Arming state as the output drivers see it."""
+
+    armed: bool = False
+    prearmed: bool = False
+    ready_to_arm: bool = False
+    lockdown: bool = False
+    kill: bool = False
+    termination: bool = False
+    in_esc_calibration_mode: bool = False
+
+
+class VehicleCommand(Message):
+    """A MAVLink-style command (MAV_CMD ids); params 5 and 6 are float64 for latitude/longitude."""
+
+    VEHICLE_CMD_NAV_WAYPOINT = 16
+    VEHICLE_CMD_NAV_LOITER_UNLIM = 17
+    VEHICLE_CMD_NAV_RETURN_TO_LAUNCH = 20
+    VEHICLE_CMD_NAV_LAND = 21
+    VEHICLE_CMD_NAV_TAKEOFF = 22
+    VEHICLE_CMD_DO_SET_MODE = 176
+    VEHICLE_CMD_DO_FLIGHTTERMINATION = 185
+    VEHICLE_CMD_DO_REPOSITION = 192
+    VEHICLE_CMD_MISSION_START = 300
+    VEHICLE_CMD_COMPONENT_ARM_DISARM = 400
+    ARMING_ACTION_DISARM = 0
+    ARMING_ACTION_ARM = 1
+    ARM_FORCE_MAGIC = 21196
+
+    param1: float = NAN
+    param2: float = NAN
+    param3: float = NAN
+    param4: float = NAN
+    param5: float = NAN
+    param6: float = NAN
+    param7: float = NAN
+    command: int = 0
+    target_system: int = 1
+    target_component: int = 1
+    source_system: int = 255
+    source_component: int = 0
+    confirmation: int = 0
+    from_external: bool = True
+
+
+class VehicleCommandAck(Message):
+    """The answer to a ``vehicle_command``; ``reason`` (our addition) says why in words."""
+
+    VEHICLE_CMD_RESULT_ACCEPTED = 0
+    VEHICLE_CMD_RESULT_TEMPORARILY_REJECTED = 1
+    VEHICLE_CMD_RESULT_DENIED = 2
+    VEHICLE_CMD_RESULT_UNSUPPORTED = 3
+    VEHICLE_CMD_RESULT_FAILED = 4
+    VEHICLE_CMD_RESULT_IN_PROGRESS = 5
+    VEHICLE_CMD_RESULT_CANCELLED = 6
+
+    command: int = 0
+    result: int = 0
+    result_param1: int = 0
+    result_param2: int = 0
+    target_system: int = 0
+    target_component: int = 0
+    from_external: bool = False
+    reason: str = ""
+
+
+class ParameterUpdate(Message):
+    """Published whenever a parameter value changes (``instance`` counts notifications)."""
+
+    instance: int = 0
+    get_count: int = 0
+    set_count: int = 0
+    find_count: int = 0
+    export_count: int = 0
+    active: int = 0
+    changed: int = 0
+    custom_default: int = 0

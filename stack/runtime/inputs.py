@@ -1,0 +1,94 @@
+"""A module's view of one subscribed topic: the latest value, or a queue of every message.
+
+In lockstep the view is made deterministic. A module acting at time ``t`` because of a trigger
+message from publisher ``P`` sees:
+
+- every message a lockstep member published before ``t``;
+- the messages ``P`` published at ``t`` before the trigger (same publisher, lower sequence);
+- messages from outside the lockstep (a user's CLI command) as soon as they arrive.
+
+Messages other members publish at ``t`` wait for the next run. Which of them a module sees thus
+never depends on which process the scheduler ran first. In real time, everything received is seen.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from stack.bus.topics import Received, TopicSubscriber
+
+
+class InputBuffer:
+    __slots__ = ("_latest_key", "_new", "_pending", "_queue", "counts", "latest", "queue_mode", "sub")
+
+    def __init__(self, sub: TopicSubscriber, queue_mode: bool) -> None:
+        self.sub = sub
+        self.queue_mode = queue_mode
+        self.latest: Any = None
+        self._latest_key: tuple[int, int, int] = (-1, 0, 0)
+        self._new = False
+        self._pending: list[Received] = []
+        self._queue: list[tuple[tuple[int, int, int], Any]] = []
+        # Messages received per publisher id, for the lockstep barrier.
+        self.counts: dict[int, int] = {}
+
+    def pull(self) -> None:
+        """Move everything Zenoh has delivered into the pending list."""
+        poll = self.sub.poll
+        item = poll()
+        while item is not None:
+            self._pending.append(item)
+            self.counts[item[1]] = self.counts.get(item[1], 0) + 1
+            item = poll()
+
+    def promote_all(self) -> None:
+        """Real time: every received message becomes visible, in arrival order."""
+        if not self._pending:
+            return
+        if self.queue_mode:
+            # One shared key: the stable sort in take() then keeps arrival order.
+            self._queue.extend(((0, 0, 0), item[3]) for item in self._pending)
+        self.latest = self._pending[-1][3]
+        self._new = True
+        self._pending.clear()
+
+    def promote_visible(self, now: int, trigger_pub: int, trigger_seq: int, members: frozenset[int]) -> None:
+        """Lockstep: make visible exactly the messages the rules in the module docstring allow."""
+        if not self._pending:
+            return
+        waiting: list[Received] = []
+        for item in self._pending:
+            t, pub, seq, msg = item
+            if pub not in members:
+                self._accept((now, pub, seq), msg)
+            elif t < now or (pub == trigger_pub and seq < trigger_seq):
+                self._accept((t, pub, seq), msg)
+            else:
+                waiting.append(item)
+        self._pending = waiting
+
+    def _accept(self, key: tuple[int, int, int], msg: Any) -> None:
+        if self.queue_mode:
+            self._queue.append((key, msg))
+        if key >= self._latest_key:
+            self._latest_key = key
+            self.latest = msg
+            self._new = True
+
+    def update(self) -> Any:
+        """The latest message if it is new since the previous call, else None (PX4's ``update()``)."""
+        if self._new:
+            self._new = False
+            return self.latest
+        return None
+
+    def take(self) -> list[Any]:
+        """All messages that became visible since the previous call, oldest first."""
+        if not self._queue:
+            return []
+        if len(self._queue) > 1:
+            self._queue.sort(key=lambda entry: entry[0])
+        msgs = [msg for _, msg in self._queue]
+        self._queue.clear()
+        self._new = False
+        return msgs

@@ -1,0 +1,74 @@
+"""Process entry point of a module: ``python -m stack.runtime.main SPEC_FILE``.
+
+The supervisor writes the spec (JSON) into the run directory and starts one such process per
+module. SIGTERM and SIGINT unwind the loop so the Zenoh session is always closed; the process also
+asks the kernel to send it SIGTERM if the supervisor dies, so no module is ever orphaned.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import logging
+import os
+import signal
+import sys
+from pathlib import Path
+from types import FrameType
+
+from stack.runtime.lockstep import LockstepError
+from stack.runtime.params import ParamError
+from stack.runtime.runner import Runtime, Shutdown
+from stack.runtime.spec import ModuleSpec
+
+PR_SET_PDEATHSIG = 1
+_stopping = False
+
+
+def _on_signal(signum: int, frame: FrameType | None) -> None:
+    global _stopping
+    if _stopping:
+        return  # already unwinding; the supervisor escalates to SIGKILL if needed
+    _stopping = True
+    raise Shutdown(signal.Signals(signum).name)
+
+
+def _die_with_parent(parent_pid: int) -> None:
+    if parent_pid <= 0 or not sys.platform.startswith("linux"):
+        return
+    libc = ctypes.CDLL(None, use_errno=True)
+    libc.prctl(PR_SET_PDEATHSIG, signal.SIGTERM, 0, 0, 0)
+    if os.getppid() != parent_pid:
+        raise Shutdown("supervisor already gone")
+
+
+def main(argv: list[str] | None = None) -> int:
+    argv = sys.argv[1:] if argv is None else argv
+    if len(argv) != 1:
+        print("usage: python -m stack.runtime.main SPEC_FILE", file=sys.stderr)
+        return 2
+    spec = ModuleSpec.from_json(Path(argv[0]).read_text())
+    logging.basicConfig(
+        level=getattr(logging, spec.log_level.upper(), logging.INFO),
+        stream=sys.stderr,
+        format="%(levelname)-7s %(message)s",
+    )
+    signal.signal(signal.SIGTERM, _on_signal)
+    signal.signal(signal.SIGINT, _on_signal)
+    log = logging.getLogger(spec.name)
+    try:
+        _die_with_parent(spec.supervisor_pid)
+        Runtime(spec).run()
+    except Shutdown as stop:
+        log.info("stopped (%s)", stop)
+        return 0
+    except (LockstepError, ParamError, ValueError) as e:
+        log.error("%s", e)
+        return 1
+    except Exception:
+        log.exception("crashed")
+        return 1
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,138 @@
+"""The base class of every module, after PX4's work items.
+
+A module says what triggers it, what it reads and publishes, and which parameters and arguments
+it takes; the runtime does the rest (session, lockstep, parameters service, heartbeat, shutdown)::
+
+    class MulticopterRateControl(Module):
+        NAME = "mc_rate_control"
+        TRIGGER = Trigger("vehicle_angular_velocity")
+        DT_RANGE = (0.000125, 0.02)
+        PARAMS = (Param("MC_ROLLRATE_P", 0.15, 0.01, 0.5), ...)
+
+        def __init__(self, ctx):
+            super().__init__(ctx)
+            self.subscribe("vehicle_rates_setpoint")
+            self.advertise("vehicle_torque_setpoint")
+            self.control = RateControl(...)          # the plain algorithm class
+
+        def run(self, msg, dt):
+            sp = self.latest("vehicle_rates_setpoint")
+            ...
+            self.publish("vehicle_torque_setpoint", VehicleTorqueSetpoint(...))
+
+The algorithm itself is a plain class with no Zenoh in it; the module is thin glue.
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any, ClassVar
+
+from stack.runtime.params import Param, ParamError, ParamValue
+
+if TYPE_CHECKING:
+    from stack.runtime.runner import Runtime
+
+
+@dataclass(frozen=True)
+class Trigger:
+    """Run once per message published on this topic."""
+
+    topic: str
+    instance: int = 0
+
+
+@dataclass(frozen=True)
+class Timer:
+    """Run periodically (on simulated time in lockstep, on the wall clock otherwise)."""
+
+    hz: float
+
+    @property
+    def period_us(self) -> int:
+        return round(1e6 / self.hz)
+
+
+@dataclass(frozen=True)
+class Arg:
+    """A launch argument: configuration fixed for the life of the process (unlike a parameter)."""
+
+    name: str
+    default: ParamValue
+    doc: str = ""
+    choices: tuple[ParamValue, ...] = ()
+
+    def check(self, value: object) -> ParamValue:
+        try:
+            return Param(self.name, self.default, choices=self.choices).check(value)
+        except ParamError as e:
+            raise ParamError(str(e).replace(self.name, f"argument {self.name}", 1)) from None
+
+
+class Module:
+    NAME: ClassVar[str] = ""
+    DESCRIPTION: ClassVar[str] = ""
+    TRIGGER: ClassVar[Trigger | Timer | None] = None
+    PARAMS: ClassVar[tuple[Param, ...]] = ()
+    ARGS: ClassVar[tuple[Arg, ...]] = ()
+    # PX4 clamps each module's dt (px4.md §0); (min, max) in seconds.
+    DT_RANGE: ClassVar[tuple[float, float]] = (0.0002, 0.02)
+    # The lockstep coordinator (the simulator) drives time instead of following it.
+    LOCKSTEP_COORDINATOR: ClassVar[bool] = False
+
+    def __init__(self, rt: Runtime) -> None:
+        self.rt = rt
+        self.params = rt.params
+        self.args: dict[str, ParamValue] = rt.args
+        self.log = logging.getLogger(rt.name)
+
+    # -- declarations (call from __init__) -------------------------------------------------------
+
+    def subscribe(self, topic: str, instance: int = 0, *, queue: bool = False, capacity: int = 256) -> None:
+        """Read a topic: the latest value, or with ``queue=True`` every message (for commands)."""
+        self.rt.add_input(topic, instance, queue, capacity)
+
+    def advertise(self, topic: str, instance: int = 0, *, reliable: bool | None = None) -> None:
+        self.rt.add_output(topic, instance, reliable)
+
+    # -- use (from run) ----------------------------------------------------------------------------
+
+    def latest(self, topic: str, instance: int = 0) -> Any:
+        """The newest message visible now, or None if none has been received."""
+        return self.rt.inputs[(topic, instance)].latest
+
+    def update(self, topic: str, instance: int = 0) -> Any:
+        """The newest message if it arrived since the previous call, else None."""
+        return self.rt.inputs[(topic, instance)].update()
+
+    def take(self, topic: str, instance: int = 0) -> list[Any]:
+        """Every message that arrived since the previous call, oldest first (``queue=True`` inputs)."""
+        return self.rt.inputs[(topic, instance)].take()
+
+    def publish(self, topic: str, msg: Any, instance: int = 0) -> None:
+        self.rt.outputs[(topic, instance)].publish(msg, self.rt.now_us())
+
+    def now_us(self) -> int:
+        return self.rt.now_us()
+
+    def reject(self, what: str) -> None:
+        """Count and log an input the module refused (bad setpoint, out-of-range command...)."""
+        self.rt.rejected += 1
+        self.log.warning("rejected: %s", what)
+
+    # -- hooks -------------------------------------------------------------------------------------
+
+    def on_params_changed(self, changed: set[str]) -> None:
+        """Called between runs with the names of parameters that changed."""
+
+    def run(self, msg: Any, dt: float) -> None:
+        """One run: ``msg`` is the trigger message (None for timers); ``dt`` is clamped to DT_RANGE."""
+        raise NotImplementedError
+
+    def step_period_us(self) -> int:
+        """The lockstep coordinator's step (its simulated-time tick), in µs."""
+        raise NotImplementedError
+
+    def close(self) -> None:
+        """Release resources (the runtime closes the session itself)."""

@@ -1,0 +1,410 @@
+"""The runtime that drives one module in its own process.
+
+It opens the session, builds the module, serves its parameters, beats its heartbeat, follows or
+drives the lockstep, runs the module once per trigger message or timer tick, and shuts down
+cleanly, closing every Zenoh session (zenoh-python can hang at exit otherwise).
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import os
+import time
+from typing import Any
+
+import zenoh
+
+from stack.bus import keys
+from stack.bus.node import Node, wall_clock_us
+from stack.bus.topics import FLAG_LOCKSTEP_TIME, Received, TopicPublisher
+from stack.msg.system import ParameterUpdate
+from stack.runtime.inputs import InputBuffer
+from stack.runtime.lockstep import TIMER, LockstepCoordinator, LockstepMember, timer_due
+from stack.runtime.module import Module, Timer, Trigger
+from stack.runtime.params import ParamStore
+from stack.runtime.services import Heartbeat, ParamService
+from stack.runtime.spec import ModuleSpec, load_module_class, resolve_args
+
+log = logging.getLogger("stack.runtime")
+
+SYNC_TIMEOUT_S = 60.0
+LOCKSTEP_QUEUE = 1 << 14
+
+
+class Shutdown(BaseException):
+    """Raised by the SIGTERM/SIGINT handler to unwind the loop and close the session."""
+
+
+class Runtime:
+    def __init__(self, spec: ModuleSpec) -> None:
+        self.spec = spec
+        self.name = spec.name
+        self.module_cls = load_module_class(spec.module)
+        self.params = ParamStore(self.module_cls.PARAMS, spec.params)
+        self.args = resolve_args(self.module_cls.ARGS, spec.args)
+        self.lockstep = spec.lockstep
+        self.inputs: dict[tuple[str, int], InputBuffer] = {}
+        self.outputs: dict[tuple[str, int], TopicPublisher] = {}
+        self.state = "starting"
+        self.runs = 0
+        self.errors = 0
+        self.rejected = 0
+        self._now = 0
+        self._loop_sum = 0.0
+        self._loop_max = 0.0
+        self._loop_runs = 0
+        self._last_beat = time.monotonic()
+        self._param_instance = 0
+        self._trigger_buf: InputBuffer | None = None
+        self.node: Node
+        self.module: Module
+
+    # -- clock -------------------------------------------------------------------------------------
+
+    def now_us(self) -> int:
+        return self._now if self.lockstep else wall_clock_us()
+
+    # -- declarations used by Module -----------------------------------------------------------------
+
+    def add_input(self, topic: str, instance: int, queue: bool, capacity: int) -> None:
+        if self.lockstep:
+            sub = self.node.subscriber(topic, instance, capacity=max(capacity, LOCKSTEP_QUEUE))
+        elif queue:
+            sub = self.node.subscriber(topic, instance, capacity=capacity)
+        else:
+            sub = self.node.subscriber(topic, instance, capacity=4, keep_last=True)
+        self.inputs[(topic, instance)] = InputBuffer(sub, queue)
+
+    def add_output(self, topic: str, instance: int, reliable: bool | None) -> None:
+        self.outputs[(topic, instance)] = self.node.publisher(
+            topic, instance, reliable=True if self.lockstep else reliable
+        )
+
+    # -- lifecycle ---------------------------------------------------------------------------------
+
+    def run(self) -> None:
+        with Node(self.spec.bus, self.spec.vehicle, self.name, clock=self.now_us) as node:
+            self.node = node
+            if self.lockstep:
+                node.header_flags = FLAG_LOCKSTEP_TIME
+            services: list[Any] = []
+            lockstep_part: LockstepMember | LockstepCoordinator | None = None
+            try:
+                self._declare_trigger()
+                self.module = self.module_cls(self)
+                self._param_pub = node.publisher("parameter_update", reliable=False)
+                services.append(ParamService(node.session, node.vehicle, self.name, self.params))
+                services.append(Heartbeat(node.session, node.vehicle, self.name, self.snapshot))
+                lockstep_part = self._make_lockstep()
+                node.declare_token(keys.alive_token(node.vehicle, self.name, os.getpid()))
+                if self.lockstep:
+                    self._sync(lockstep_part if isinstance(lockstep_part, LockstepMember) else None)
+                self.state = "running"
+                log.info("%s ready (%s)", self.name, self.describe_trigger())
+                self._loop(lockstep_part)
+            finally:
+                self.state = "stopping"
+                module = getattr(self, "module", None)
+                if module is not None:
+                    module.close()
+                for service in services:
+                    service.close()
+                if lockstep_part is not None:
+                    lockstep_part.close()
+
+    def describe_trigger(self) -> str:
+        trigger = self.module_cls.TRIGGER
+        if self.module_cls.LOCKSTEP_COORDINATOR:
+            return "lockstep coordinator" if self.lockstep else "real-time clock"
+        if isinstance(trigger, Trigger):
+            return f"on {trigger.topic}"
+        if isinstance(trigger, Timer):
+            return f"every {trigger.period_us} us"
+        return "no trigger"
+
+    def _declare_trigger(self) -> None:
+        trigger = self.module_cls.TRIGGER
+        if not isinstance(trigger, Trigger):
+            return
+        if self.lockstep:
+            sub = self.node.subscriber(trigger.topic, trigger.instance, capacity=LOCKSTEP_QUEUE)
+        else:
+            sub = self.node.subscriber(trigger.topic, trigger.instance, capacity=4, keep_last=True)
+        self._trigger_buf = InputBuffer(sub, False)
+        self.inputs[(trigger.topic, trigger.instance)] = self._trigger_buf
+
+    def _data_inputs(self) -> list[InputBuffer]:
+        return [buf for buf in self.inputs.values() if buf is not self._trigger_buf]
+
+    def _make_lockstep(self) -> LockstepMember | LockstepCoordinator | None:
+        if not self.lockstep:
+            return None
+        cls = self.module_cls
+        if cls.LOCKSTEP_COORDINATOR:
+            return LockstepCoordinator(self.node, self._data_inputs(), self.spec.stall_timeout_s)
+        trigger = cls.TRIGGER
+        if isinstance(trigger, Trigger):
+            return LockstepMember(
+                self.node, self._data_inputs(), f"topic/{trigger.topic}/{trigger.instance}", follow_in_thread=True
+            )
+        if isinstance(trigger, Timer):
+            return LockstepMember(self.node, self._data_inputs(), f"timer/{trigger.period_us}", follow_in_thread=False)
+        return None
+
+    def _sync(self, member: LockstepMember | None = None) -> None:
+        """Before lockstep starts, see every module of the roster, so every publisher knows its subscribers.
+
+        A module declares its subscriptions before its alive token; once this module sees all alive
+        tokens, the links to all modules exist and their declarations have reached it.
+        """
+        self.state = "syncing"
+        node = self.node
+        deadline = time.monotonic() + SYNC_TIMEOUT_S
+        roster: dict[str, int] | None = None
+        while True:
+            if roster is None:
+                roster = query_roster(node.session, node.vehicle)
+            if roster is not None:
+                alive = alive_modules(node.session, node.vehicle)
+                if all(alive.get(name) == pid for name, pid in roster.items() if name != self.name):
+                    break
+            if time.monotonic() > deadline:
+                raise RuntimeError(
+                    "lockstep sync timed out: "
+                    + ("no supervisor roster" if roster is None else f"roster {roster}, alive {alive}")
+                )
+            time.sleep(0.02)
+        if member is not None:
+            member.register()
+        node.declare_token(keys.synced_token(node.vehicle, self.name))
+
+    # -- loops -----------------------------------------------------------------------------------------
+
+    def _loop(self, part: LockstepMember | LockstepCoordinator | None) -> None:
+        cls = self.module_cls
+        if isinstance(part, LockstepCoordinator):
+            self._loop_coordinator(part)
+        elif cls.LOCKSTEP_COORDINATOR:
+            self._loop_wall_timer(self.module.step_period_us())
+        elif isinstance(cls.TRIGGER, Trigger):
+            if isinstance(part, LockstepMember):
+                self._loop_lockstep_trigger(part)
+            else:
+                self._loop_wall_trigger()
+        elif isinstance(cls.TRIGGER, Timer):
+            if isinstance(part, LockstepMember):
+                self._loop_lockstep_timer(part, cls.TRIGGER.period_us)
+            else:
+                self._loop_wall_timer(cls.TRIGGER.period_us)
+        else:
+            raise RuntimeError(f"{cls.__name__} declares neither a trigger nor a timer")
+
+    def _loop_wall_trigger(self) -> None:
+        buf = self._trigger_buf
+        assert buf is not None
+        data = self._data_inputs()
+        last_sample = 0
+        while True:
+            item = buf.sub.recv()
+            self._take_trigger(buf, item)
+            for d in data:
+                d.pull()
+                d.promote_all()
+            last_sample = self._run(item[3], sample_time(item[3]), last_sample)
+
+    def _loop_wall_timer(self, period_us: int) -> None:
+        data = self._data_inputs()
+        next_due = wall_clock_us()
+        last = 0
+        while True:
+            delay = next_due - wall_clock_us()
+            if delay > 0:
+                time.sleep(delay / 1e6)
+            next_due += period_us
+            now = wall_clock_us()
+            if next_due < now:
+                next_due = now + period_us  # overran: skip missed ticks instead of bursting
+            for d in data:
+                d.pull()
+                d.promote_all()
+            last = self._run(None, now, last)
+
+    def _loop_lockstep_trigger(self, member: LockstepMember) -> None:
+        buf = self._trigger_buf
+        assert buf is not None
+        data = self._data_inputs()
+        suffix = buf.sub.suffix
+        touched = self.node.touched
+        last_sample = 0
+        while True:
+            item = buf.sub.recv()
+            t, pub, seq, msg = item
+            self._take_trigger(buf, item)
+            if t >= 0:
+                member.advance_to(t)
+                self._now = t
+            else:
+                self._now = member.now
+            member.barrier.wait()
+            members = member.members
+            now = self._now
+            trigger_pub = pub if t == now else -1
+            for d in data:
+                d.pull()
+                d.promote_visible(now, trigger_pub, seq, members)
+            last_sample = self._run(msg, sample_time(msg), last_sample)
+            member.ack(pub, suffix, touched)
+            touched.clear()
+
+    def _loop_lockstep_timer(self, member: LockstepMember, period_us: int) -> None:
+        data = self._data_inputs()
+        touched = self.node.touched
+        last_fire: int | None = None
+        last = 0
+        while True:
+            member.next_clock()
+            now = member.now
+            if not timer_due(now, last_fire, period_us):
+                continue
+            last_fire = now
+            self._now = now
+            member.barrier.wait()
+            members = member.members
+            for d in data:
+                d.pull()
+                d.promote_visible(now, -1, 0, members)
+            last = self._run(None, now, last)
+            member.ack(0, TIMER, touched)
+            touched.clear()
+
+    def _loop_coordinator(self, coordinator: LockstepCoordinator) -> None:
+        self._wait_for_synced_roster()
+        period = self.module.step_period_us()
+        data = self._data_inputs()
+        touched = self.node.touched
+        members = frozenset()
+        last = 0
+        while True:
+            coordinator.finish_step()
+            t = coordinator.now + period
+            members = frozenset((*coordinator.members, self.node.publisher_id))
+            for d in data:
+                d.pull()
+                d.promote_visible(t, -1, 0, members)
+            coordinator.begin_step(t)
+            self._now = t
+            last = self._run(None, t, last)
+            coordinator.account_own(touched)
+            touched.clear()
+
+    def _wait_for_synced_roster(self) -> None:
+        self.state = "waiting for modules"
+        deadline = time.monotonic() + SYNC_TIMEOUT_S
+        while True:
+            roster = query_roster(self.node.session, self.node.vehicle) or {}
+            synced = {
+                str(r.ok.key_expr).rsplit("/", 1)[-1]
+                for r in self.node.session.liveliness().get(keys.synced_query(self.node.vehicle), timeout=1.0)
+                if r.ok is not None
+            }
+            missing = sorted(set(roster) - synced - {self.name})
+            if roster and not missing:
+                break
+            if time.monotonic() > deadline:
+                raise RuntimeError(f"lockstep start timed out waiting for {', '.join(missing) or 'the roster'}")
+            time.sleep(0.02)
+        self.state = "running"
+        log.info("lockstep starting with %s", ", ".join(sorted(roster)))
+
+    # -- one run ---------------------------------------------------------------------------------------
+
+    def _take_trigger(self, buf: InputBuffer, item: Received) -> None:
+        buf.counts[item[1]] = buf.counts.get(item[1], 0) + 1
+        buf.latest = item[3]
+
+    def _run(self, msg: Any, sample_us: int, last_sample_us: int) -> int:
+        changed = self.params.take_changes()
+        if changed:
+            self._announce_param_change(changed)
+        lo, hi = self.module_cls.DT_RANGE
+        dt = (sample_us - last_sample_us) * 1e-6 if last_sample_us else hi
+        dt = lo if dt < lo else hi if dt > hi else dt
+        t0 = time.perf_counter()
+        try:
+            self.module.run(msg, dt)
+        except Exception:
+            self.errors += 1
+            if self.errors <= 10 or self.errors % 1000 == 0:
+                log.exception("%s: run failed (%d so far); the module carries on", self.name, self.errors)
+        elapsed = time.perf_counter() - t0
+        self.runs += 1
+        self._loop_sum += elapsed
+        self._loop_runs += 1
+        if elapsed > self._loop_max:
+            self._loop_max = elapsed
+        return sample_us
+
+    def _announce_param_change(self, changed: set[str]) -> None:
+        try:
+            self.module.on_params_changed(changed)
+        except Exception:
+            log.exception("%s: applying parameters %s failed", self.name, sorted(changed))
+        self._param_instance += 1
+        log.info("parameters changed: %s", ", ".join(f"{n}={self.params[n]}" for n in sorted(changed)))
+        self._param_pub.publish(
+            ParameterUpdate(instance=self._param_instance, set_count=self.params.set_count, changed=len(changed)),
+            self.now_us(),
+        )
+
+    # -- status --------------------------------------------------------------------------------------
+
+    def snapshot(self) -> dict[str, Any]:
+        now = time.monotonic()
+        span = max(now - self._last_beat, 1e-3)
+        runs = self._loop_runs
+        avg = self._loop_sum / runs * 1e6 if runs else 0.0
+        status = {
+            "state": self.state,
+            "trigger": self.describe_trigger(),
+            "runs": self.runs,
+            "msgs_in": sum(buf.sub.received for buf in self.inputs.values()),
+            "msgs_out": sum(p.count for p in self.outputs.values()),
+            "decode_errors": sum(buf.sub.decode_errors for buf in self.inputs.values()),
+            "schema_errors": sum(buf.sub.schema_errors for buf in self.inputs.values()),
+            "rejected": self.rejected + self.errors,
+            "loop_avg_us": avg,
+            "loop_max_us": self._loop_max * 1e6,
+            "trigger_rate_hz": runs / span,
+            "sim_time_us": self._now if self.lockstep else 0,
+        }
+        self._loop_sum = 0.0
+        self._loop_max = 0.0
+        self._loop_runs = 0
+        self._last_beat = now
+        return status
+
+
+def sample_time(msg: Any) -> int:
+    """The time a message's data refers to: ``timestamp_sample`` when it has one (PX4's dt source)."""
+    return getattr(msg, "timestamp_sample", 0) or msg.timestamp
+
+
+def query_roster(session: zenoh.Session, vehicle: str) -> dict[str, int] | None:
+    """The supervisor's list of started modules (name → pid), once all of them are up; else None."""
+    for reply in session.get(keys.supervisor_key(vehicle, "roster"), timeout=1.0):
+        if reply.ok is not None:
+            data = json.loads(reply.ok.payload.to_string())
+            if data.get("complete"):
+                return {str(k): int(v) for k, v in data["modules"].items()}
+    return None
+
+
+def alive_modules(session: zenoh.Session, vehicle: str) -> dict[str, int]:
+    """Modules whose alive token this session sees: name → pid."""
+    alive: dict[str, int] = {}
+    for reply in session.liveliness().get(keys.alive_query(vehicle), timeout=1.0):
+        if reply.ok is not None:
+            parts = str(reply.ok.key_expr).split("/")
+            alive[parts[-2]] = int(parts[-1])
+    return alive

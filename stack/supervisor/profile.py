@@ -1,0 +1,299 @@
+"""Launch profiles: TOML files that read like PX4's ``rc.mc_apps``.
+
+A profile lists the modules in start order, each with its parameters, arguments, start condition
+and restart policy, plus the vehicle namespace and bus settings. Everything is checked before any
+process starts; a problem is reported in one line naming the file, the key and what is wrong::
+
+    launch/sitl_quad.toml: module[3].params.MC_ROLLRATE_P: 0.9 is above the maximum 0.5
+"""
+
+from __future__ import annotations
+
+import ast
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from stack.bus import keys
+from stack.bus.config import BusConfig
+from stack.runtime.module import Module
+from stack.runtime.params import ParamError, ParamValue
+from stack.runtime.spec import load_module_class, resolve_args
+
+LAUNCH_DIR = Path(__file__).resolve().parents[2] / "launch"
+DEFAULT_PROFILE = "sitl_quad"
+RESTART_POLICIES = ("no", "on-failure", "always")
+FLAGS = ("lockstep", "realtime", "plot", "record")
+
+
+class ProfileError(ValueError):
+    """A launch profile was refused; the message names the file, the key and the problem."""
+
+
+@dataclass
+class ModuleEntry:
+    name: str
+    module: str
+    cls: type[Module]
+    params: dict[str, ParamValue]
+    args: dict[str, ParamValue]
+    condition: str
+    restart: str
+    max_restarts: int
+    critical: bool
+
+
+@dataclass
+class Profile:
+    path: Path
+    vehicle: str
+    description: str
+    lockstep: bool
+    seed: int
+    airframe: str
+    bus: BusConfig
+    port: int
+    stall_timeout_s: float = 10.0
+    modules: list[ModuleEntry] = field(default_factory=list)
+
+    @property
+    def name(self) -> str:
+        return self.path.stem
+
+
+def resolve_path(profile: str | Path) -> Path:
+    """A profile by name (``sitl_quad`` → launch/sitl_quad.toml) or by path."""
+    p = Path(profile)
+    if p.suffix == ".toml" or p.exists():
+        return p
+    return LAUNCH_DIR / f"{profile}.toml"
+
+
+def available_profiles() -> list[str]:
+    return sorted(p.stem for p in LAUNCH_DIR.glob("*.toml"))
+
+
+def load_profile(profile: str | Path, *, flags: dict[str, bool] | None = None) -> Profile:
+    """Read and check a profile. ``flags`` (realtime, plot, record) feed start conditions."""
+    path = resolve_path(profile)
+    return _Loader(path).load(flags or {})
+
+
+class _Loader:
+    def __init__(self, path: Path) -> None:
+        self.path = path
+
+    def fail(self, key: str, problem: str) -> ProfileError:
+        where = f"{self.path}: {key}: " if key else f"{self.path}: "
+        return ProfileError(where + problem)
+
+    def load(self, flags: dict[str, bool]) -> Profile:
+        if not self.path.exists():
+            known = ", ".join(available_profiles())
+            raise ProfileError(f"{self.path}: no such profile (available: {known})")
+        try:
+            doc = tomllib.loads(self.path.read_text())
+        except tomllib.TOMLDecodeError as e:
+            raise self.fail("", f"TOML syntax error: {e}") from None
+        self._only(doc, "", {"stack", "bus", "params", "module"})
+        stack = self._table(doc, "stack")
+        self._only(stack, "stack", {"vehicle", "description", "lockstep", "seed", "airframe", "stall_timeout_s"})
+        vehicle = self._get(stack, "stack", "vehicle", str, "v1")
+        try:
+            keys.check_name("vehicle", vehicle)
+        except ValueError as e:
+            raise self.fail("stack.vehicle", str(e)) from None
+        lockstep = self._get(stack, "stack", "lockstep", bool, True) and not flags.get("realtime", False)
+        airframe = self._get(stack, "stack", "airframe", str, "")
+        bus, port = self._bus(self._table(doc, "bus"))
+        profile = Profile(
+            path=self.path,
+            vehicle=vehicle,
+            description=self._get(stack, "stack", "description", str, ""),
+            lockstep=lockstep,
+            seed=self._get(stack, "stack", "seed", int, 1),
+            airframe=airframe,
+            bus=bus,
+            port=port,
+            stall_timeout_s=float(self._get(stack, "stack", "stall_timeout_s", float, 10.0)),
+        )
+        shared = self._airframe_params(airframe)
+        given_shared = self._table(doc, "params")
+        shared.update(given_shared)
+        entries = doc.get("module", [])
+        if not isinstance(entries, list) or not entries:
+            raise self.fail("module", "expected at least one [[module]] entry")
+        variables: dict[str, object] = {**flags, "lockstep": lockstep, "realtime": not lockstep}
+        names: set[str] = set()
+        declared: set[str] = set()
+        for i, entry in enumerate(entries):
+            module = self._module(i, entry, shared, variables)
+            declared.update(p.name for p in module.cls.PARAMS)
+            if module.name in names:
+                raise self.fail(f"module[{i}].name", f"'{module.name}' is used twice")
+            names.add(module.name)
+            if module.condition and not self._condition(f"module[{i}].condition", module.condition, variables, shared):
+                continue
+            profile.modules.append(module)
+        for name in given_shared:
+            if name not in declared:
+                raise self.fail(f"params.{name}", "no module of this profile has this parameter")
+        return profile
+
+    def _bus(self, table: dict) -> tuple[BusConfig, int]:
+        self._only(table, "bus", {"port", "connect", "listen", "mode", "low_latency", "lease_ms"})
+        port = self._get(table, "bus", "port", int, 0)
+        if not 0 <= port <= 65535:
+            raise self.fail("bus.port", f"{port} is not a TCP port")
+        connect = tuple(self._get(table, "bus", "connect", list, []))
+        listen = tuple(self._get(table, "bus", "listen", list, ["tcp/127.0.0.1:0"]))
+        for key, endpoints in (("bus.connect", connect), ("bus.listen", listen)):
+            for e in endpoints:
+                if not isinstance(e, str) or "/" not in e:
+                    raise self.fail(key, f"{e!r} is not a Zenoh endpoint like tcp/127.0.0.1:7447")
+        try:
+            bus = BusConfig(
+                mode=self._get(table, "bus", "mode", str, "peer"),
+                connect=connect,
+                listen=listen,
+                low_latency=self._get(table, "bus", "low_latency", bool, True),
+                lease_ms=self._get(table, "bus", "lease_ms", int, 3000),
+            )
+        except ValueError as e:
+            raise self.fail("bus.mode", str(e)) from None
+        return bus, port
+
+    def _airframe_params(self, airframe: str) -> dict[str, object]:
+        if not airframe:
+            return {}
+        from stack.sim.vehicle import load_vehicle
+
+        try:
+            model = load_vehicle(airframe)
+        except (ValueError, FileNotFoundError) as e:
+            raise self.fail("stack.airframe", str(e)) from None
+        return dict(model.airframe)
+
+    def _module(self, i: int, entry: object, shared: dict[str, object], variables: dict[str, object]) -> ModuleEntry:
+        where = f"module[{i}]"
+        if not isinstance(entry, dict):
+            raise self.fail(where, "expected a table")
+        self._only(
+            entry, where, {"name", "module", "params", "args", "condition", "restart", "max_restarts", "critical"}
+        )
+        ref = self._get(entry, where, "module", str, None)
+        if ref is None:
+            raise self.fail(f"{where}.module", "missing (which module to start)")
+        try:
+            cls = load_module_class(ref)
+        except ValueError as e:
+            raise self.fail(f"{where}.module", str(e)) from None
+        name = self._get(entry, where, "name", str, cls.NAME or ref)
+        try:
+            keys.check_name("module", name)
+        except ValueError as e:
+            raise self.fail(f"{where}.name", str(e)) from None
+        where = f"module[{i}] ({name})"
+        declared = {p.name: p for p in cls.PARAMS}
+        params: dict[str, ParamValue] = {}
+        for pname, value in shared.items():
+            if pname in declared:
+                params[pname] = self._check_param(f"params.{pname}", declared, pname, value)
+        for pname, value in self._table(entry, "params", where).items():
+            if pname not in declared:
+                raise self.fail(f"{where}.params.{pname}", f"{cls.NAME or ref} has no such parameter")
+            params[pname] = self._check_param(f"{where}.params.{pname}", declared, pname, value)
+        try:
+            args = resolve_args(cls.ARGS, self._table(entry, "args", where))
+        except ParamError as e:
+            raise self.fail(f"{where}.args", str(e)) from None
+        restart = self._get(entry, where, "restart", str, "no")
+        if restart not in RESTART_POLICIES:
+            raise self.fail(f"{where}.restart", f"'{restart}' is not one of {', '.join(RESTART_POLICIES)}")
+        max_restarts = self._get(entry, where, "max_restarts", int, 5)
+        if max_restarts < 0:
+            raise self.fail(f"{where}.max_restarts", "must be >= 0")
+        condition = self._get(entry, where, "condition", str, "")
+        if condition:
+            self._condition(f"{where}.condition", condition, variables, shared)
+        return ModuleEntry(
+            name=name,
+            module=ref,
+            cls=cls,
+            params=params,
+            args=args,
+            condition=condition,
+            restart=restart,
+            max_restarts=max_restarts,
+            critical=self._get(entry, where, "critical", bool, False),
+        )
+
+    def _check_param(self, key: str, declared: dict, name: str, value: object) -> ParamValue:
+        try:
+            return declared[name].check(value)
+        except ParamError as e:
+            raise self.fail(key, str(e).split(": ", 1)[-1]) from None
+
+    def _condition(self, key: str, text: str, variables: dict[str, object], params: dict[str, object]) -> bool:
+        """Evaluate a start condition: flags (plot, record, realtime, lockstep) and parameter comparisons."""
+        try:
+            tree = ast.parse(text, mode="eval")
+        except SyntaxError:
+            raise self.fail(key, f"cannot parse condition {text!r}") from None
+        return bool(self._eval(key, tree.body, {**params, **variables}))
+
+    def _eval(self, key: str, node: ast.expr, env: dict[str, object]) -> object:
+        if isinstance(node, ast.BoolOp):
+            values = [self._eval(key, v, env) for v in node.values]
+            return all(values) if isinstance(node.op, ast.And) else any(values)
+        if isinstance(node, ast.UnaryOp) and isinstance(node.op, ast.Not):
+            return not self._eval(key, node.operand, env)
+        if isinstance(node, ast.Compare) and len(node.ops) == 1:
+            left = self._eval(key, node.left, env)
+            right = self._eval(key, node.comparators[0], env)
+            ops = {
+                ast.Eq: "__eq__",
+                ast.NotEq: "__ne__",
+                ast.Lt: "__lt__",
+                ast.LtE: "__le__",
+                ast.Gt: "__gt__",
+                ast.GtE: "__ge__",
+            }
+            op = ops.get(type(node.ops[0]))
+            if op is None:
+                raise self.fail(key, "only ==, !=, <, <=, >, >= comparisons are allowed")
+            return getattr(left, op)(right) is True
+        if isinstance(node, ast.Name):
+            if node.id in env:
+                return env[node.id]
+            if node.id in FLAGS:
+                return False
+            raise self.fail(key, f"unknown name '{node.id}' (use a flag: {', '.join(FLAGS)}, or a set parameter)")
+        if isinstance(node, ast.Constant) and isinstance(node.value, int | float | str | bool):
+            return node.value
+        raise self.fail(key, "conditions may only use names, numbers, comparisons, and/or/not")
+
+    # -- small typed accessors -------------------------------------------------------------------------
+
+    def _only(self, table: dict, where: str, allowed: set[str]) -> None:
+        for k in table:
+            if k not in allowed:
+                prefix = f"{where}." if where else ""
+                raise self.fail(f"{prefix}{k}", f"unknown key (expected one of: {', '.join(sorted(allowed))})")
+
+    def _table(self, doc: dict, key: str, where: str = "") -> dict:
+        value = doc.get(key, {})
+        if not isinstance(value, dict):
+            raise self.fail(f"{where}.{key}" if where else key, "expected a table")
+        return value
+
+    def _get(self, table: dict, where: str, key: str, typ: type, default: object) -> object:
+        if key not in table:
+            return default
+        value = table[key]
+        ok = isinstance(value, typ) and not (typ is int and isinstance(value, bool))
+        if typ is float and isinstance(value, int) and not isinstance(value, bool):
+            ok = True
+        if not ok:
+            raise self.fail(f"{where}.{key}", f"expected {typ.__name__}, got {value!r}")
+        return value

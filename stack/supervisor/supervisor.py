@@ -1,0 +1,369 @@
+"""The supervisor behind ``stack up``: it starts a profile's modules as processes and watches them.
+
+Like PX4's rcS it starts the modules in order, each when the previous one reports ready. It is the
+bus rendezvous (a Zenoh peer listening on 127.0.0.1), publishes the roster lockstep waits for,
+answers ``stack status``, restarts crashed modules with backoff where the profile says so, and
+stops everything in reverse order on Ctrl-C, SIGTERM or ``--duration``, escalating to SIGKILL.
+No module outlives it: each asks the kernel for SIGTERM when its parent dies.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import os
+import signal
+import socket
+import subprocess
+import sys
+import threading
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import IO
+
+import msgspec
+import zenoh
+
+from stack.bus import keys
+from stack.bus.config import BusConfig
+from stack.msg.internal import ModuleHeartbeat
+from stack.runtime.spec import ModuleSpec
+from stack.supervisor import state as run_state
+from stack.supervisor.profile import ModuleEntry, Profile
+
+log = logging.getLogger("stack.supervisor")
+
+START_TIMEOUT_S = 60.0
+STOP_GRACE_S = 5.0
+BACKOFF_MAX_S = 10.0
+
+
+@dataclass
+class UpOptions:
+    duration: float | None = None
+    log_level: str = "INFO"
+    echo_logs: bool = True
+    extra_args: dict[str, dict[str, object]] = field(default_factory=dict)
+
+
+@dataclass
+class ModuleProcess:
+    entry: ModuleEntry
+    spec_path: Path
+    log_path: Path
+    proc: subprocess.Popen | None = None
+    state: str = "stopped"
+    restarts: int = 0
+    failures: int = 0
+    exit_code: int | None = None
+    restart_at: float | None = None
+    reader: threading.Thread | None = None
+
+    @property
+    def pid(self) -> int:
+        return self.proc.pid if self.proc is not None else 0
+
+
+class Supervisor:
+    def __init__(self, profile: Profile, options: UpOptions, run_dir: Path) -> None:
+        self.profile = profile
+        self.options = options
+        self.run_dir = run_dir
+        self.vehicle = profile.vehicle
+        self.port = profile.port or free_port()
+        self.endpoint = f"tcp/127.0.0.1:{self.port}"
+        self.module_bus = BusConfig(
+            mode=profile.bus.mode,
+            connect=(self.endpoint, *profile.bus.connect),
+            listen=profile.bus.listen,
+            low_latency=profile.bus.low_latency,
+            lease_ms=profile.bus.lease_ms,
+        )
+        self.modules = [
+            ModuleProcess(e, run_dir / f"{e.name}.spec.json", run_dir / f"{e.name}.log") for e in profile.modules
+        ]
+        self.roster_complete = False
+        self.failed = False
+        self._stop = threading.Event()
+        self._alive: dict[str, int] = {}
+        self._alive_changed = threading.Condition()
+        self._heartbeats: dict[str, ModuleHeartbeat] = {}
+        self._print_lock = threading.Lock()
+        self._hb_decoder = msgspec.msgpack.Decoder(ModuleHeartbeat)
+
+    # -- entry -------------------------------------------------------------------------------------
+
+    def run(self) -> int:
+        signal.signal(signal.SIGINT, self._on_signal)
+        signal.signal(signal.SIGTERM, self._on_signal)
+        bus = BusConfig(
+            mode="peer" if self.profile.bus.mode == "client" else self.profile.bus.mode,
+            connect=self.profile.bus.connect,
+            listen=(self.endpoint,),
+            low_latency=self.profile.bus.low_latency,
+            lease_ms=self.profile.bus.lease_ms,
+        )
+        session = zenoh.open(bus.zenoh_config("supervisor"))
+        entities = []
+        try:
+            entities = [
+                session.declare_queryable(keys.supervisor_key(self.vehicle, "roster"), self._on_roster_query),
+                session.declare_queryable(keys.supervisor_key(self.vehicle, "status"), self._on_status_query),
+                session.liveliness().declare_subscriber(keys.alive_query(self.vehicle), self._on_alive, history=True),
+                session.declare_subscriber(keys.heartbeat_all(self.vehicle), self._on_heartbeat),
+            ]
+            run_state.write_state(self.vehicle, self.state_record())
+            self._say(f"run directory {self.run_dir}")
+            self._say(f"bus rendezvous {self.endpoint}, vehicle '{self.vehicle}'")
+            if self._start_all():
+                self.roster_complete = True
+                self._say(f"all {len(self.modules)} modules up" + (" (lockstep)" if self.profile.lockstep else ""))
+                self._monitor()
+            else:
+                self.failed = True
+        finally:
+            self._stop_all()
+            for entity in entities:
+                entity.undeclare()
+            session.close()
+            run_state.remove_state(self.vehicle, os.getpid())
+        code = 1 if self.failed or any(m.failures for m in self.modules) else 0
+        self._say("stopped" + (" with failures" if code else ""))
+        return code
+
+    def state_record(self) -> dict[str, object]:
+        return {
+            "pid": os.getpid(),
+            "vehicle": self.vehicle,
+            "profile": str(self.profile.path),
+            "endpoint": self.endpoint,
+            "bus": json.loads(self.module_bus.to_json()),
+            "run_dir": str(self.run_dir),
+            "lockstep": self.profile.lockstep,
+            "started": time.time(),
+        }
+
+    def _on_signal(self, signum: int, frame: object) -> None:
+        if not self._stop.is_set():
+            self._say(f"{signal.Signals(signum).name}: stopping")
+        self._stop.set()
+
+    # -- starting ----------------------------------------------------------------------------------
+
+    def _start_all(self) -> bool:
+        for m in self.modules:
+            if self._stop.is_set():
+                return False
+            self._spawn(m)
+            if not self._wait_ready(m):
+                return False
+        return True
+
+    def _spec(self, m: ModuleProcess) -> ModuleSpec:
+        e = m.entry
+        args = {**e.args, **self.options.extra_args.get(e.name, {})}
+        return ModuleSpec(
+            name=e.name,
+            module=e.module,
+            vehicle=self.vehicle,
+            bus=self.module_bus,
+            params=e.params,
+            args=args,
+            lockstep=self.profile.lockstep,
+            seed=self.profile.seed,
+            log_level=self.options.log_level,
+            supervisor_pid=os.getpid(),
+            stall_timeout_s=self.profile.stall_timeout_s,
+            run_dir=str(self.run_dir),
+        )
+
+    def _spawn(self, m: ModuleProcess) -> None:
+        m.spec_path.write_text(self._spec(m).to_json())
+        env = {**os.environ, "PYTHONUNBUFFERED": "1", "STACK_RUN_DIR": str(self.run_dir)}
+        # fork+exec via posix_spawn/vfork (no Python code runs in the child before exec); own process
+        # group so a terminal Ctrl-C reaches the supervisor only and it can stop modules in order.
+        m.proc = subprocess.Popen(
+            [sys.executable, "-m", "stack.runtime.main", str(m.spec_path)],
+            stdin=subprocess.DEVNULL,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.STDOUT,
+            env=env,
+            process_group=0,
+        )
+        m.state = "starting"
+        m.exit_code = None
+        m.restart_at = None
+        log_file = m.log_path.open("a")
+        m.reader = threading.Thread(target=self._pump, args=(m.entry.name, m.proc.stdout, log_file), daemon=True)
+        m.reader.start()
+
+    def _wait_ready(self, m: ModuleProcess) -> bool:
+        deadline = time.monotonic() + START_TIMEOUT_S
+        with self._alive_changed:
+            while self._alive.get(m.entry.name) != m.pid:
+                if m.proc is not None and m.proc.poll() is not None:
+                    m.exit_code = m.proc.returncode
+                    m.state = "failed"
+                    m.failures += 1
+                    self._say(f"{m.entry.name} exited with code {m.exit_code} while starting (see {m.log_path})")
+                    return False
+                if time.monotonic() > deadline:
+                    m.state = "failed"
+                    m.failures += 1
+                    self._say(f"{m.entry.name} did not report ready within {START_TIMEOUT_S:.0f} s")
+                    return False
+                if self._stop.is_set():
+                    return False
+                self._alive_changed.wait(0.05)
+        m.state = "running"
+        return True
+
+    def _on_alive(self, sample: zenoh.Sample) -> None:
+        parts = str(sample.key_expr).split("/")
+        name, pid = parts[-2], int(parts[-1])
+        with self._alive_changed:
+            if sample.kind == zenoh.SampleKind.PUT:
+                self._alive[name] = pid
+            elif self._alive.get(name) == pid:
+                del self._alive[name]
+            self._alive_changed.notify_all()
+
+    def _on_heartbeat(self, sample: zenoh.Sample) -> None:
+        try:
+            hb = self._hb_decoder.decode(sample.payload.to_bytes())
+        except msgspec.DecodeError:
+            return
+        self._heartbeats[hb.module] = hb
+
+    # -- watching ----------------------------------------------------------------------------------
+
+    def _monitor(self) -> None:
+        deadline = None if self.options.duration is None else time.monotonic() + self.options.duration
+        while not self._stop.wait(0.05):
+            now = time.monotonic()
+            if deadline is not None and now >= deadline:
+                self._say(f"duration of {self.options.duration:g} s reached")
+                return
+            for m in self.modules:
+                if m.state == "running" and m.proc is not None and m.proc.poll() is not None:
+                    self._on_exit(m)
+                elif m.state == "restarting" and m.restart_at is not None and now >= m.restart_at:
+                    m.restarts += 1
+                    self._say(f"restarting {m.entry.name} (restart {m.restarts})")
+                    self._spawn(m)
+                    if not self._wait_ready(m):
+                        self._plan_restart_or_give_up(m)
+            for m in self.modules:
+                if m.entry.critical and m.state in ("failed", "exited"):
+                    self._say(f"critical module {m.entry.name} {m.state}: stopping the stack")
+                    return
+            if all(m.state in ("exited", "failed") for m in self.modules):
+                self._say("all modules have exited")
+                return
+
+    def _on_exit(self, m: ModuleProcess) -> None:
+        assert m.proc is not None
+        m.exit_code = m.proc.returncode
+        if m.exit_code == 0:
+            self._say(f"{m.entry.name} exited")
+        else:
+            m.failures += 1
+            self._say(f"{m.entry.name} failed with exit code {m.exit_code} (see {m.log_path})")
+        if m.entry.restart == "always" or (m.entry.restart == "on-failure" and m.exit_code != 0):
+            self._plan_restart_or_give_up(m)
+        else:
+            m.state = "exited" if m.exit_code == 0 else "failed"
+
+    def _plan_restart_or_give_up(self, m: ModuleProcess) -> None:
+        if m.restarts >= m.entry.max_restarts:
+            self._say(f"{m.entry.name}: giving up after {m.restarts} restarts")
+            m.state = "failed"
+            return
+        delay = min(0.5 * 2**m.restarts, BACKOFF_MAX_S)
+        m.state = "restarting"
+        m.restart_at = time.monotonic() + delay
+        self._say(f"{m.entry.name}: restart in {delay:.1f} s")
+
+    # -- stopping ----------------------------------------------------------------------------------
+
+    def _stop_all(self) -> None:
+        for m in reversed(self.modules):
+            proc = m.proc
+            if proc is None or proc.poll() is not None:
+                continue
+            m.state = "stopping"
+            try:
+                proc.send_signal(signal.SIGTERM)
+                proc.wait(timeout=STOP_GRACE_S)
+            except subprocess.TimeoutExpired:
+                self._say(f"{m.entry.name} did not stop within {STOP_GRACE_S:.0f} s: killing it")
+                proc.kill()
+                proc.wait()
+            m.exit_code = proc.returncode
+            if m.exit_code not in (0, -signal.SIGTERM, -signal.SIGKILL):
+                m.failures += 1
+                self._say(f"{m.entry.name} stopped with exit code {m.exit_code}")
+            m.state = "exited"
+        for m in self.modules:
+            if m.reader is not None:
+                m.reader.join(timeout=2.0)
+
+    # -- services ----------------------------------------------------------------------------------
+
+    def _on_roster_query(self, query: zenoh.Query) -> None:
+        modules = {m.entry.name: m.pid for m in self.modules if m.state == "running"}
+        reply = {"complete": self.roster_complete, "modules": modules}
+        query.reply(query.key_expr, json.dumps(reply))
+
+    def _on_status_query(self, query: zenoh.Query) -> None:
+        query.reply(query.key_expr, json.dumps(self.status()))
+
+    def status(self) -> dict[str, object]:
+        rows = []
+        for m in self.modules:
+            hb = self._heartbeats.get(m.entry.name)
+            row: dict[str, object] = {
+                "module": m.entry.name,
+                "type": m.entry.module,
+                "state": m.state,
+                "pid": m.pid,
+                "restarts": m.restarts,
+                "exit_code": m.exit_code,
+            }
+            if hb is not None:
+                row.update(msgspec.structs.asdict(hb))
+                row["module"] = m.entry.name
+                row["state"] = m.state if m.state != "running" else hb.state
+            rows.append(row)
+        return {
+            "vehicle": self.vehicle,
+            "profile": self.profile.name,
+            "lockstep": self.profile.lockstep,
+            "modules": rows,
+        }
+
+    # -- output ------------------------------------------------------------------------------------
+
+    def _pump(self, name: str, stream: IO[bytes], log_file: IO[str]) -> None:
+        prefix = f"[{name}] "
+        with log_file:
+            for raw in iter(stream.readline, b""):
+                line = raw.decode(errors="replace").rstrip()
+                log_file.write(f"{time.strftime('%H:%M:%S')} {line}\n")
+                log_file.flush()
+                if self.options.echo_logs:
+                    with self._print_lock:
+                        print(prefix + line, flush=True)
+
+    def _say(self, text: str) -> None:
+        with self._print_lock:
+            print(f"[stack] {text}", flush=True)
+        with (self.run_dir / "supervisor.log").open("a") as f:
+            f.write(f"{time.strftime('%H:%M:%S')} {text}\n")
+
+
+def free_port() -> int:
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
