@@ -87,3 +87,23 @@ class AlphaFilter:
     def reset(self, x: float) -> None:
         self.state = x
         self._initialised = True
+
+
+class SlewRate:
+    """Rate-of-change limiter (PX4 ``SlewRate``): the state moves toward each new value by at most
+    ``slew_rate · dt`` per update."""
+
+    __slots__ = ("slew_rate", "state")
+
+    def __init__(self, slew_rate: float, initial: float = 0.0) -> None:
+        self.slew_rate = slew_rate
+        self.state = initial
+
+    def set_forced_value(self, value: float) -> None:
+        self.state = value
+
+    def update(self, target: float, dt: float) -> float:
+        step = self.slew_rate * dt
+        delta = target - self.state
+        self.state += step if delta > step else -step if delta < -step else delta
+        return self.state
