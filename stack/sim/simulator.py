@@ -1,0 +1,295 @@
+"""The simulator core: plant, wind and sensors stepped on an exact integer-microsecond clock.
+
+:class:`Simulator` is what the simulator module wraps. One :meth:`Simulator.advance` moves time on
+by exactly one IMU period (an integer number of physics steps with the motor commands and the wind
+held) and returns the sensor samples that fell due at the new time: always an IMU sample, and a
+magnetometer, barometer or GPS sample when their own period has elapsed. This mirrors PX4 SIH's
+lockstep loop, where each simulator step publishes the IMU and the slower sensors at their rates.
+
+The accelerometer reads the mean specific force over the IMU period (the velocity change over the
+period, less gravity, in the body frame at the sample time), as PX4's delta-velocity integration
+delivers it; the gyro reads the body rates at the sample time.
+
+Randomness: every noise source (wind, IMU, magnetometer, barometer, GPS) draws from its own
+``random.Random`` seeded from ``f"{seed}/{name}"``, so the same seed gives the same run, sample for
+sample, and changing one sensor's configuration leaves the others' noise untouched.
+"""
+
+from __future__ import annotations
+
+import random
+from collections.abc import Sequence
+from pathlib import Path
+from typing import NamedTuple
+
+from stack.mathlib.geo import MapProjection
+from stack.mathlib.quaternion import IDENTITY, Quat, rotate_inv
+from stack.mathlib.vector import ZERO3, Vec3
+from stack.sim.physics import SIH_MAX_BODY_RATE, MulticopterPhysics
+from stack.sim.sensors import (
+    BarometerModel,
+    BaroParams,
+    BaroSample,
+    GpsModel,
+    GpsParams,
+    GpsSample,
+    ImuModel,
+    ImuParams,
+    ImuSample,
+    MagnetometerModel,
+    MagParams,
+    MagSample,
+)
+from stack.sim.vehicle import VehicleModel, load_vehicle
+from stack.sim.wind import WindModel, WindParams
+
+SIH_HOME = (47.397742, 8.545594, 489.4)  # SIH_LOC_LAT0 (deg), SIH_LOC_LON0 (deg), SIH_LOC_H0 (m AMSL)
+
+SensorSample = ImuSample | MagSample | BaroSample | GpsSample
+
+
+class GroundTruth(NamedTuple):
+    """True state for the ground-truth topic (field names follow ``SimGroundtruth``)."""
+
+    time_us: int
+    position: Vec3  # NED about home, m
+    velocity: Vec3  # NED, m/s
+    acceleration: Vec3  # NED, m/s² (mean over the last physics step)
+    q: Quat  # body FRD → NED
+    angular_velocity: Vec3  # FRD, rad/s
+    angular_acceleration: Vec3  # FRD, rad/s²
+    specific_force: Vec3  # FRD, m/s² (an ideal accelerometer)
+    lat: float  # deg
+    lon: float  # deg
+    alt: float  # m AMSL
+    on_ground: bool
+    wind: Vec3  # NED, m/s
+    motors: tuple[float, ...]  # motor states in [0, 1]
+
+
+def sensor_rng(seed: int, name: str) -> random.Random:
+    """The random stream of one noise source: a function of the run seed and the source's name only."""
+    return random.Random(f"{seed}/{name}")
+
+
+def _period_us(rate_hz: float, what: str) -> int:
+    if not rate_hz > 0.0:
+        raise ValueError(f"{what} must be > 0 Hz, got {rate_hz}")
+    period = round(1e6 / rate_hz)
+    if period < 1:
+        raise ValueError(f"{what} of {rate_hz} Hz is above 1 MHz")
+    return period
+
+
+class Simulator:
+    """A seeded multicopter simulation: physics, wind, IMU, magnetometer, barometer and GPS.
+
+    Parameters (rates in Hz; PX4 names where PX4 has one):
+
+    - ``model``: a :class:`VehicleModel` or a vehicle name/path for :func:`load_vehicle` (default the SIH quad).
+    - ``seed``: run seed; the same seed and inputs give identical samples.
+    - ``physics_rate_hz`` (1000): RK4 step rate; its period must be a whole number of µs.
+    - ``imu_rate_hz`` (250; PX4 SITL IMU_INTEG_RATE): the :meth:`advance` period; a whole multiple
+      of the physics period.
+    - ``mag_rate_hz`` (50), ``baro_rate_hz`` (20), ``gps_rate_hz`` (10): sampled at the first IMU tick
+      at or after each period, starting with the first tick; at most the IMU rate.
+    - ``home``: (lat deg, lon deg, alt m AMSL) of NED origin and ground (SIH_LOC_LAT0/LON0/H0).
+    - ``wind``, ``imu``, ``mag``, ``baro``, ``gps``: parameter sets (defaults: calm, see ``sensors``).
+    - ``max_body_rate``: body-rate clamp (rad/s, SIH 6π).
+
+    The wind is advanced once per :meth:`advance` and held over its physics steps.
+    """
+
+    __slots__ = (
+        "_baro",
+        "_baro_due",
+        "_baro_period",
+        "_gps",
+        "_gps_due",
+        "_gps_period",
+        "_home_alt",
+        "_imu",
+        "_imu_dt",
+        "_imu_period",
+        "_imu_rate",
+        "_mag",
+        "_mag_due",
+        "_mag_period",
+        "_physics_dt",
+        "_projection",
+        "_substeps",
+        "_time_us",
+        "_wind",
+        "home",
+        "model",
+        "physics",
+        "seed",
+    )
+
+    def __init__(
+        self,
+        model: VehicleModel | str | Path = "sih_quad",
+        seed: int = 0,
+        physics_rate_hz: float = 1000.0,
+        imu_rate_hz: float = 250.0,
+        mag_rate_hz: float = 50.0,
+        baro_rate_hz: float = 20.0,
+        gps_rate_hz: float = 10.0,
+        home: tuple[float, float, float] = SIH_HOME,
+        wind: WindParams | None = None,
+        imu: ImuParams | None = None,
+        mag: MagParams | None = None,
+        baro: BaroParams | None = None,
+        gps: GpsParams | None = None,
+        max_body_rate: float = SIH_MAX_BODY_RATE,
+    ) -> None:
+        self.model = model if isinstance(model, VehicleModel) else load_vehicle(model)
+        self.seed = seed
+        physics_period = _period_us(physics_rate_hz, "physics_rate_hz")
+        if abs(1e6 / physics_rate_hz - physics_period) > 1e-6:
+            raise ValueError(f"physics_rate_hz {physics_rate_hz} does not give a whole-µs period")
+        self._imu_period = _period_us(imu_rate_hz, "imu_rate_hz")
+        if abs(1e6 / imu_rate_hz - self._imu_period) > 1e-6 or self._imu_period % physics_period:
+            raise ValueError(
+                f"the IMU period (1/{imu_rate_hz} s) must be a whole multiple of the physics period "
+                f"({physics_period} µs)"
+            )
+        self._substeps = self._imu_period // physics_period
+        self._physics_dt = physics_period * 1e-6
+        self._imu_dt = self._imu_period * 1e-6
+        self._imu_rate = 1e6 / self._imu_period
+        self._mag_period = _period_us(mag_rate_hz, "mag_rate_hz")
+        self._baro_period = _period_us(baro_rate_hz, "baro_rate_hz")
+        self._gps_period = _period_us(gps_rate_hz, "gps_rate_hz")
+        for name, period in (("mag", self._mag_period), ("baro", self._baro_period), ("gps", self._gps_period)):
+            if period < self._imu_period:
+                raise ValueError(f"{name}_rate_hz must not exceed imu_rate_hz")
+        self.home = home
+        self._projection = MapProjection(home[0], home[1])
+        self._home_alt = home[2]
+        self.physics = MulticopterPhysics(self.model, max_body_rate=max_body_rate)
+        self._wind = WindModel(wind if wind is not None else WindParams(), sensor_rng(seed, "wind"))
+        self._imu = ImuModel(imu if imu is not None else ImuParams(), imu_rate_hz, sensor_rng(seed, "imu"))
+        self._mag = MagnetometerModel(mag if mag is not None else MagParams(), sensor_rng(seed, "mag"))
+        self._baro = BarometerModel(baro if baro is not None else BaroParams(), sensor_rng(seed, "baro"))
+        self._gps = GpsModel(gps if gps is not None else GpsParams(), gps_rate_hz, self._projection, home[2],
+                             sensor_rng(seed, "gps"))
+        self._time_us = 0
+        self._mag_due = self._baro_due = self._gps_due = self._imu_period
+
+    @property
+    def time_us(self) -> int:
+        """Simulated time (µs since start)."""
+        return self._time_us
+
+    @property
+    def imu_period_us(self) -> int:
+        return self._imu_period
+
+    @property
+    def imu(self) -> ImuModel:
+        return self._imu
+
+    @property
+    def magnetometer(self) -> MagnetometerModel:
+        return self._mag
+
+    @property
+    def wind(self) -> Vec3:
+        """The wind NED (m/s) acting over the current IMU period."""
+        return self._wind.wind
+
+    def advance(self, motor_commands: Sequence[float]) -> list[SensorSample]:
+        """Advance one IMU period with these motor commands ([0, 1] per rotor); return the samples due."""
+        wind = self._wind.update(self._imu_dt)
+        physics = self.physics
+        step = physics.step
+        dt = self._physics_dt
+        v0x, v0y, v0z = physics.velocity
+        for _ in range(self._substeps):
+            step(dt, motor_commands, wind)
+        t = self._time_us + self._imu_period
+        self._time_us = t
+        v1x, v1y, v1z = physics.velocity
+        rate = self._imu_rate
+        specific_force = rotate_inv(
+            physics.attitude, ((v1x - v0x) * rate, (v1y - v0y) * rate, (v1z - v0z) * rate - physics.gravity)
+        )
+        samples: list[SensorSample] = [self._imu.sample(t, physics.angular_velocity, specific_force)]
+        if t >= self._mag_due:
+            samples.append(self._mag.sample(t, physics.attitude))
+            self._mag_due = self._next_due(self._mag_due, self._mag_period, t)
+        if t >= self._baro_due:
+            samples.append(self._baro.sample(t, self._home_alt - physics.position[2]))
+            self._baro_due = self._next_due(self._baro_due, self._baro_period, t)
+        if t >= self._gps_due:
+            self._gps.measure(t, physics.position, physics.velocity)
+            self._gps_due = self._next_due(self._gps_due, self._gps_period, t)
+        gps = self._gps.pop_due(t)
+        while gps is not None:
+            samples.append(gps)
+            gps = self._gps.pop_due(t)
+        return samples
+
+    @staticmethod
+    def _next_due(due: int, period: int, now: int) -> int:
+        due += period
+        while due <= now:
+            due += period
+        return due
+
+    def truth(self) -> GroundTruth:
+        """Snapshot of the true state now, for the ground-truth topic."""
+        p = self.physics
+        north, east, down = p.position
+        lat, lon = self._projection.reproject(north, east)
+        return GroundTruth(
+            time_us=self._time_us,
+            position=p.position,
+            velocity=p.velocity,
+            acceleration=p.acceleration,
+            q=p.attitude,
+            angular_velocity=p.angular_velocity,
+            angular_acceleration=p.angular_acceleration,
+            specific_force=p.specific_force,
+            lat=lat,
+            lon=lon,
+            alt=self._home_alt - down,
+            on_ground=p.on_ground,
+            wind=self._wind.wind,
+            motors=p.motor_states,
+        )
+
+    # Failure injection and scenario control.
+
+    @property
+    def gps_enabled(self) -> bool:
+        return self._gps.enabled
+
+    def set_gps_enabled(self, enabled: bool) -> None:
+        """GPS on/off; while off, GPS samples report no fix (fix_type 0, NaN position)."""
+        self._gps.set_enabled(enabled)
+
+    @property
+    def wind_enabled(self) -> bool:
+        return self._wind.enabled
+
+    def set_wind_enabled(self, enabled: bool) -> None:
+        """Wind on/off; off means exactly zero wind."""
+        self._wind.set_enabled(enabled)
+
+    def reset_pose(
+        self,
+        position: Vec3 = ZERO3,
+        attitude: Quat = IDENTITY,
+        velocity: Vec3 = ZERO3,
+        angular_velocity: Vec3 = ZERO3,
+        motor_states: Sequence[float] | None = None,
+    ) -> None:
+        """Put the vehicle at a pose (NED m, body → NED quaternion) without touching the clock.
+
+        Motors are stopped unless ``motor_states`` is given; GPS measurements not yet published are dropped.
+        At or below z = 0 the vehicle is placed on the ground, level.
+        """
+        self.physics.reset(position, velocity, attitude, angular_velocity, motor_states)
+        self._gps.clear()

@@ -1,0 +1,120 @@
+"""Wind for the simulated plant: a mean wind plus gusts from a seeded Gauss–Markov process per axis.
+
+Each axis of the gust velocity is a first-order Gauss–Markov process (the simplest Dryden-like
+turbulence: exponential autocorrelation σ²·exp(−|t|/τ)), discretised exactly for any step:
+g ← exp(−dt/τ)·g + σ·√(1 − exp(−2·dt/τ))·N(0, 1). The process starts from its stationary
+distribution, so its statistics do not depend on how long the simulation has run.
+
+ArduPilot's SITL names the same figures SIM_WIND_SPD, SIM_WIND_DIR (the direction the wind comes
+from), SIM_WIND_DIR_Z and SIM_WIND_TURB; :meth:`WindParams.from_speed_direction` takes that form.
+"""
+
+from __future__ import annotations
+
+import math
+import random
+from dataclasses import dataclass
+
+from stack.mathlib.vector import ZERO3, Vec3
+
+
+@dataclass(frozen=True, slots=True)
+class WindParams:
+    """Wind figures.
+
+    ``mean_ned``: mean air velocity NED (m/s; the direction the air moves to).
+    ``gust_std_horizontal`` / ``gust_std_vertical``: gust standard deviation per axis (m/s, ≥ 0).
+    ``gust_time_constant``: gust correlation time τ (s, > 0).
+    ``enabled``: initial on/off state; off means exactly zero wind at no cost.
+    """
+
+    mean_ned: Vec3 = ZERO3
+    gust_std_horizontal: float = 0.0
+    gust_std_vertical: float = 0.0
+    gust_time_constant: float = 2.0
+    enabled: bool = True
+
+    def __post_init__(self) -> None:
+        if len(self.mean_ned) != 3 or not all(math.isfinite(c) for c in self.mean_ned):
+            raise ValueError("mean_ned must be 3 finite numbers")
+        object.__setattr__(self, "mean_ned", tuple(float(c) for c in self.mean_ned))
+        if not (self.gust_std_horizontal >= 0.0 and self.gust_std_vertical >= 0.0):
+            raise ValueError("gust standard deviations must be >= 0")
+        if not self.gust_time_constant > 0.0:
+            raise ValueError("gust_time_constant must be > 0")
+
+    @classmethod
+    def from_speed_direction(
+        cls, speed: float, direction_from_deg: float, vertical_speed: float = 0.0, **gusts: float
+    ) -> WindParams:
+        """Mean wind of ``speed`` m/s blowing *from* ``direction_from_deg`` (0 = north, 90 = east).
+
+        ``vertical_speed`` is positive down (NED). Gust figures pass through as keyword arguments.
+        """
+        heading = math.radians(direction_from_deg)
+        mean = (-speed * math.cos(heading), -speed * math.sin(heading), vertical_speed)
+        return cls(mean_ned=mean, **gusts)
+
+    @property
+    def is_calm(self) -> bool:
+        return self.mean_ned == ZERO3 and self.gust_std_horizontal == 0.0 and self.gust_std_vertical == 0.0
+
+
+class WindModel:
+    """Seeded wind process; :meth:`update` advances it and returns the wind NED (m/s)."""
+
+    __slots__ = ("_calm", "_dt", "_enabled", "_gust", "_phi", "_rng", "_scale", "_wind", "params")
+
+    def __init__(self, params: WindParams, rng: random.Random) -> None:
+        self.params = params
+        self._rng = rng
+        self._enabled = params.enabled
+        self._calm = params.is_calm
+        sigma = (params.gust_std_horizontal, params.gust_std_horizontal, params.gust_std_vertical)
+        self._gust = tuple(s * rng.gauss(0.0, 1.0) if s > 0.0 else 0.0 for s in sigma)
+        self._dt = -1.0
+        self._phi = 0.0
+        self._scale = ZERO3
+        self._wind = self._sum()
+
+    @property
+    def enabled(self) -> bool:
+        return self._enabled
+
+    def set_enabled(self, enabled: bool) -> None:
+        """Switch the wind on or off (off: zero wind, the gust process is frozen)."""
+        self._enabled = enabled
+        self._wind = self._sum()
+
+    @property
+    def wind(self) -> Vec3:
+        """The current wind NED (m/s)."""
+        return self._wind
+
+    def _sum(self) -> Vec3:
+        if not self._enabled:
+            return ZERO3
+        m, g = self.params.mean_ned, self._gust
+        return (m[0] + g[0], m[1] + g[1], m[2] + g[2])
+
+    def update(self, dt: float) -> Vec3:
+        """Advance the gusts by dt seconds and return the new wind NED (m/s)."""
+        if not self._enabled or self._calm:
+            return self._wind
+        p = self.params
+        if dt != self._dt:
+            self._phi = math.exp(-dt / p.gust_time_constant)
+            root = math.sqrt(1.0 - self._phi * self._phi)
+            self._scale = (p.gust_std_horizontal * root, p.gust_std_horizontal * root, p.gust_std_vertical * root)
+            self._dt = dt
+        phi = self._phi
+        gauss = self._rng.gauss
+        gn, ge, gd = self._gust
+        sn, se, sd = self._scale
+        self._gust = (
+            phi * gn + sn * gauss(0.0, 1.0) if sn else 0.0,
+            phi * ge + se * gauss(0.0, 1.0) if se else 0.0,
+            phi * gd + sd * gauss(0.0, 1.0) if sd else 0.0,
+        )
+        self._wind = self._sum()
+        return self._wind
