@@ -1,0 +1,233 @@
+"""Quaternion complementary filter for attitude (PX4 ``attitude_estimator_q``).
+
+Follows ``src/modules/attitude_estimator_q/attitude_estimator_q_main.cpp``: the gyro propagates the
+attitude, the accelerometer pulls the predicted down axis toward the measured gravity direction, the
+magnetometer pulls the heading toward magnetic north (plus declination), and the integral of both
+corrections estimates the gyro bias while the vehicle rotates slowly.
+
+Sign convention of the bias: PX4 stores the negated bias and adds it to the gyro. Here
+``gyro_bias`` is the physical additive bias (``measured = true + gyro_bias``), so consumers such as
+:class:`stack.estimator.angular_velocity.AngularVelocityFilter` subtract it.
+"""
+
+from __future__ import annotations
+
+import math
+
+from stack.mathlib import quaternion as quat
+from stack.mathlib import vector as vec
+from stack.mathlib.quaternion import Quat
+from stack.mathlib.scalar import CONSTANTS_ONE_G, constrain, wrap_pi
+from stack.mathlib.vector import Vec3
+
+DT_MIN_S = 1e-5
+DT_MAX_S = 0.02
+SPIN_RATE_BIAS_LIMIT = 0.175  # rad/s: above this the bias is not learned (10 deg/s)
+SPIN_RATE_MAG_BOOST = 0.873  # rad/s: above this (50 deg/s) the mag gain grows with the spin rate
+MAG_GAIN_BOOST_MAX = 10.0
+ACCEL_NORM_MIN_SQ = (0.9 * CONSTANTS_ONE_G) ** 2
+ACCEL_NORM_MAX_SQ = (1.1 * CONSTANTS_ONE_G) ** 2
+DEGENERATE_NORM = 1e-2  # accel [m/s²] or horizontal mag [G] too small to give a direction
+
+
+class AttitudeEstimatorQ:
+    """Attitude (body FRD → NED quaternion) and gyro bias from gyro, accelerometer and magnetometer.
+
+    Parameters (PX4 names, defaults, ranges):
+
+    - ``ATT_W_ACC`` 0.2 [0, 1]: accelerometer (tilt) correction weight, 1/s.
+    - ``ATT_W_MAG`` 0.1 [0, 1]: magnetometer (heading) correction weight, 1/s; 0 ignores the mag.
+    - ``ATT_W_GYRO_BIAS`` 0.1 [0, 1]: gyro bias learning weight, 1/s.
+    - ``ATT_BIAS_MAX`` 0.05 [0, 2] rad/s: limit of each gyro bias component.
+    - ``ATT_MAG_DECL`` 0 [-180, 180] deg: magnetic declination (east positive).
+    - ``ATT_ACC_COMP`` 0 {0, 1}: subtract the caller's kinematic acceleration from the accelerometer
+      and drop the 0.9–1.1 g gate.
+
+    Outputs: ``q`` (body FRD → NED), ``gyro_bias`` (additive, rad/s), ``rates`` (gyro minus bias of
+    the last step, rad/s) and ``initialised``.
+    """
+
+    __slots__ = (
+        "_mag",
+        "_mag_decl",
+        "_w_acc",
+        "_w_bias",
+        "_w_mag",
+        "acc_comp",
+        "bias_max",
+        "gyro_bias",
+        "initialised",
+        "q",
+        "rates",
+    )
+
+    def __init__(
+        self,
+        ATT_W_ACC: float = 0.2,
+        ATT_W_MAG: float = 0.1,
+        ATT_W_GYRO_BIAS: float = 0.1,
+        ATT_BIAS_MAX: float = 0.05,
+        ATT_MAG_DECL: float = 0.0,
+        ATT_ACC_COMP: int = 0,
+    ) -> None:
+        self.q: Quat = quat.IDENTITY
+        self.gyro_bias: Vec3 = vec.ZERO3
+        self.rates: Vec3 = vec.ZERO3
+        self.initialised = False
+        self._mag: Vec3 | None = None
+        self._mag_decl = 0.0
+        self.set_params(
+            ATT_W_ACC=ATT_W_ACC,
+            ATT_W_MAG=ATT_W_MAG,
+            ATT_W_GYRO_BIAS=ATT_W_GYRO_BIAS,
+            ATT_BIAS_MAX=ATT_BIAS_MAX,
+            ATT_MAG_DECL=ATT_MAG_DECL,
+            ATT_ACC_COMP=ATT_ACC_COMP,
+        )
+
+    def set_params(
+        self,
+        *,
+        ATT_W_ACC: float | None = None,
+        ATT_W_MAG: float | None = None,
+        ATT_W_GYRO_BIAS: float | None = None,
+        ATT_BIAS_MAX: float | None = None,
+        ATT_MAG_DECL: float | None = None,
+        ATT_ACC_COMP: int | None = None,
+    ) -> None:
+        """Apply the given parameters (None keeps the current value), clamped to their PX4 ranges.
+
+        A declination change rotates the current estimate at once, as PX4 does, so the heading
+        loop does not wind the gyro bias up while it catches up.
+        """
+        if ATT_W_ACC is not None:
+            self._w_acc = constrain(ATT_W_ACC, 0.0, 1.0)
+        if ATT_W_MAG is not None:
+            self._w_mag = constrain(ATT_W_MAG, 0.0, 1.0)
+        if ATT_W_GYRO_BIAS is not None:
+            self._w_bias = constrain(ATT_W_GYRO_BIAS, 0.0, 1.0)
+        if ATT_ACC_COMP is not None:
+            self.acc_comp = bool(ATT_ACC_COMP)
+        if ATT_BIAS_MAX is not None:
+            lim = self.bias_max = constrain(ATT_BIAS_MAX, 0.0, 2.0)
+            b = self.gyro_bias
+            self.gyro_bias = (constrain(b[0], -lim, lim), constrain(b[1], -lim, lim), constrain(b[2], -lim, lim))
+        if ATT_MAG_DECL is not None:
+            decl = math.radians(constrain(ATT_MAG_DECL, -180.0, 180.0))
+            if self.initialised and abs(decl - self._mag_decl) > 1e-4:
+                turn = quat.from_axis_angle((0.0, 0.0, 1.0), decl - self._mag_decl)
+                self.q = quat.normalized(quat.mul(turn, self.q))
+            self._mag_decl = decl
+
+    def reset(self, q: Quat | None = None) -> None:
+        """Forget the estimate. With ``q`` the filter restarts from that attitude; without it, it
+        re-initialises from the next accelerometer (and magnetometer) sample."""
+        self.gyro_bias = vec.ZERO3
+        self.rates = vec.ZERO3
+        if q is not None and quat.is_finite(q) and quat.norm(q) > 0.5:
+            self.q = quat.normalized(q)
+            self.initialised = True
+        else:
+            self.q = quat.IDENTITY
+            self.initialised = False
+
+    def update(
+        self,
+        dt: float,
+        gyro: Vec3,
+        accel: Vec3,
+        mag: Vec3 | None = None,
+        accel_compensation: Vec3 | None = None,
+    ) -> bool:
+        """Run one filter step; return True when ``q`` holds a valid, updated attitude.
+
+        Args:
+            dt: time since the previous IMU sample [s], clamped to [1e-5, 0.02] as PX4 does.
+            gyro: measured body rates [rad/s], FRD.
+            accel: measured specific force [m/s²], FRD (reads (0, 0, -g) at rest, level).
+            mag: a new magnetometer sample [G], FRD, or None. The latest sample keeps being used
+                on the IMU steps in between, as in PX4 where the mag is slower than the IMU.
+            accel_compensation: kinematic acceleration of the vehicle in NED [m/s²] (for example
+                the derivative of the GPS velocity); used only with ATT_ACC_COMP = 1.
+        """
+        spin_rate = vec.norm(gyro)
+        accel_norm_sq = vec.dot(accel, accel)
+        # Norms catch both non-finite components and magnitudes that overflow the arithmetic.
+        if not (math.isfinite(spin_rate) and math.isfinite(accel_norm_sq) and math.isfinite(dt)):
+            return False
+        if mag is not None and DEGENERATE_NORM < vec.norm(mag) < math.inf:
+            self._mag = mag
+        if accel_norm_sq < DEGENERATE_NORM * DEGENERATE_NORM:
+            return False
+        if not self.initialised:
+            return self._init_from_vectors(accel)
+        dt = constrain(dt, DT_MIN_S, DT_MAX_S)
+
+        q = self.q
+        corr = vec.ZERO3
+
+        if self._w_mag > 0.0 and self._mag is not None:
+            mag_earth = quat.rotate(q, self._mag)
+            mag_err = wrap_pi(math.atan2(mag_earth[1], mag_earth[0]) - self._mag_decl)
+            gain = self._w_mag
+            if spin_rate > SPIN_RATE_MAG_BOOST:
+                gain *= min(spin_rate / SPIN_RATE_MAG_BOOST, MAG_GAIN_BOOST_MAX)
+            # Yaw the estimate about the world down axis against the heading error.
+            corr = vec.scale(quat.rotate_inv(q, (0.0, 0.0, -mag_err)), gain)
+
+        if self.acc_comp or ACCEL_NORM_MIN_SQ < accel_norm_sq < ACCEL_NORM_MAX_SQ:
+            gravity_dir = accel
+            if self.acc_comp and accel_compensation is not None and vec.is_finite(accel_compensation):
+                gravity_dir = vec.sub(accel, quat.rotate_inv(q, accel_compensation))
+            w, x, y, z = q
+            down_in_body = (2.0 * (x * z - w * y), 2.0 * (y * z + w * x), w * w - x * x - y * y + z * z)
+            # The measured specific force points up (−down); k × f̂ turns the predicted down axis
+            # toward the measured one.
+            corr = vec.add(corr, vec.scale(vec.cross(down_in_body, vec.normalized(gravity_dir)), self._w_acc))
+
+        bias = self.gyro_bias
+        if spin_rate < SPIN_RATE_BIAS_LIMIT:
+            k = self._w_bias * dt
+            lim = self.bias_max
+            bias = (
+                constrain(bias[0] - corr[0] * k, -lim, lim),
+                constrain(bias[1] - corr[1] * k, -lim, lim),
+                constrain(bias[2] - corr[2] * k, -lim, lim),
+            )
+
+        rates = vec.sub(gyro, bias)
+        q_new = quat.integrate(q, vec.add(rates, corr), dt)
+        if not quat.is_finite(q_new):
+            self.gyro_bias = vec.ZERO3
+            self.rates = vec.ZERO3
+            return False
+        self.q = q_new
+        self.gyro_bias = bias
+        self.rates = rates
+        return True
+
+    def _init_from_vectors(self, accel: Vec3) -> bool:
+        """Attitude from gravity and magnetic north: rows of the body→NED matrix are N, E, D in body.
+
+        Without a magnetometer (ATT_W_MAG = 0) the body x axis projected on the horizontal plane is
+        taken as north, i.e. the filter starts at yaw 0.
+        """
+        use_mag = self._w_mag > 0.0
+        if use_mag and self._mag is None:
+            return False
+        down = vec.normalized(vec.neg(accel))
+        ref = self._mag if use_mag and self._mag is not None else (1.0, 0.0, 0.0)
+        north = vec.sub(ref, vec.scale(down, vec.dot(ref, down)))
+        if vec.norm(north) < DEGENERATE_NORM:
+            return False
+        north = vec.normalized(north)
+        east = vec.cross(down, north)
+        q = quat.from_dcm((north, east, down))
+        if use_mag:
+            q = quat.mul(quat.from_axis_angle((0.0, 0.0, 1.0), self._mag_decl), q)
+        q = quat.normalized(q)
+        if not quat.is_finite(q):
+            return False
+        self.q = q
+        self.initialised = True
+        return True

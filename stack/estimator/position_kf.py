@@ -1,0 +1,713 @@
+"""Local position Kalman filter in the spirit of PX4's LPE (``src/modules/local_position_estimator``).
+
+A linear Kalman filter with 10 states::
+
+    x, y, z        position NED about the reference point [m]
+    vx, vy, vz     velocity NED [m/s]
+    bx, by, bz     accelerometer bias, body FRD [m/s²]
+    baro_offset    barometer altitude minus true altitude [m]
+
+Prediction integrates the accelerometer specific force, rotated to NED by the attitude estimate,
+plus gravity: ``a = R(q)·(f − b) + (0, 0, g)``. The bias is kept in the body frame, like LPE,
+because an accelerometer bias is a property of the sensor: it stays constant while the vehicle yaws,
+whereas its NED image would rotate with every heading change and could only be followed through
+process noise. The price is a state-dependent transition matrix, rebuilt every step from ``R``.
+
+Corrections:
+
+- GPS position (lat/lon projected with :class:`stack.mathlib.geo.MapProjection`, altitude against
+  the reference altitude) and NED velocity. Each sample is fused at its measurement time
+  ``timestamp_sample − LPE_GPS_DELAY``: the filter keeps the states, covariances and inputs of the
+  last 0.5 s (LPE's ``GPS_DELAY_MAX``), rolls back to the step at the measurement time, fuses there
+  and re-runs the later predictions and baro fusions. This is the exact linear-KF answer, unlike
+  LPE, which only computes the residual against the delayed state and applies it to the current one.
+- Barometer altitude, fused at arrival (PX4's baro delay is 0). Until GPS sets the global origin,
+  z is referenced to the first baro sample and the baro offset state is frozen at 0; afterwards the
+  offset is estimated against GPS altitude, so GPS defines absolute height and the baro smooths it.
+- Gates: EKF2-style innovation tests per group (horizontal position, vertical position,
+  horizontal velocity, vertical velocity, baro): a group is fused when every component satisfies
+  ``r² ≤ gate²·S``. A group that has been rejected for longer than 7 s (EKF2's
+  ``reset_timeout_max``) is reset to the measurement, with PX4-style reset counters and deltas.
+
+The origin (ref lat/lon/alt) is set at the 10th consecutive GPS fix passing LPE's initialisation
+checks (3-D fix, ≥ 6 satellites, eph ≤ LPE_EPH_MAX, epv ≤ LPE_EPV_MAX): the horizontal position is
+reset to zero there and the velocity to the GPS velocity; the reference altitude is chosen so that
+the current z does not jump.
+
+Parameters, in :data:`PARAMS` with (default, min, max). LPE names carry PX4's LPE defaults.
+Additions, with the reason:
+
+- ``LPE_XY_PUB`` 2.0 m: eph (``sqrt(Pxx + Pyy)``) above which ``xy_valid`` is cleared. LPE hard-codes
+  this 2 m (``EST_STDDEV_XY_VALID``); it is exposed beside LPE's own ``LPE_VXY_PUB``/``LPE_Z_PUB``.
+  (PX4's ``LPE_X_LP`` is not an eph limit: it is the 5 Hz low-pass LPE applies to its published
+  state, which this filter does not add, so as not to delay the position controller.)
+- ``LPE_PN_BARO`` 0.01 m/s/√Hz: random walk of the baro offset, a state LPE does not have
+  (EKF2's equivalent ``EKF2_HGT_BIAS_NSD`` is 0.13; a smaller value keeps the absolute height from
+  wandering with LPE's coarse GPS altitude weighting).
+- ``EKF2_GPS_P_GATE``, ``EKF2_GPS_V_GATE``, ``EKF2_BARO_GATE`` 5 σ: LPE has no configurable gate (it
+  only flags a fault at a fixed χ² level and fuses anyway), so EKF2's gates are used.
+- ``EKF2_ABL_LIM`` 0.4 m/s² and ``EKF2_ABIAS_INIT`` 0.2 m/s²: accelerometer bias limit and initial
+  uncertainty. LPE hard-codes 0.1 m/s² and 1e-3 m/s², which all but freezes the bias.
+"""
+
+from __future__ import annotations
+
+import bisect
+import math
+from collections import deque
+from dataclasses import dataclass
+from typing import Protocol
+
+import numpy as np
+
+from stack.mathlib import quaternion as quat
+from stack.mathlib.geo import MapProjection
+from stack.mathlib.quaternion import Quat
+from stack.mathlib.scalar import CONSTANTS_ONE_G, constrain
+from stack.mathlib.vector import Vec3
+
+N_X = 10
+X_X, X_Y, X_Z, X_VX, X_VY, X_VZ, X_BX, X_BY, X_BZ, X_BARO = range(N_X)
+
+PARAMS: dict[str, tuple[float, float, float]] = {
+    # name: (default, min, max)
+    "LPE_GPS_XY": (1.0, 0.01, 5.0),  # m, minimum GPS xy std dev (reported eph used when larger)
+    "LPE_GPS_Z": (3.0, 0.01, 200.0),  # m, minimum GPS z std dev (reported epv used when larger)
+    "LPE_GPS_VXY": (0.25, 0.01, 2.0),  # m/s, GPS xy velocity std dev
+    "LPE_GPS_VZ": (0.25, 0.01, 2.0),  # m/s, GPS z velocity std dev
+    "LPE_GPS_DELAY": (0.29, 0.0, 0.4),  # s, GPS delay behind its timestamp_sample
+    "LPE_BAR_Z": (3.0, 0.01, 100.0),  # m, baro altitude std dev
+    "LPE_ACC_XY": (0.012, 1e-5, 2.0),  # m/s²/√Hz, accelerometer xy noise density
+    "LPE_ACC_Z": (0.02, 1e-5, 2.0),  # m/s²/√Hz, accelerometer z noise density
+    "LPE_PN_P": (0.1, 0.0, 1.0),  # m/s/√Hz, position propagation noise density
+    "LPE_PN_V": (0.1, 0.0, 1.0),  # m/s²/√Hz, velocity propagation noise density
+    "LPE_PN_B": (1e-3, 0.0, 1.0),  # m/s³/√Hz, accel bias random walk
+    "LPE_PN_BARO": (0.01, 0.0, 1.0),  # m/s/√Hz, baro offset random walk (added)
+    "LPE_EPH_MAX": (3.0, 1.0, 5.0),  # m, max GPS eph to set the origin
+    "LPE_EPV_MAX": (5.0, 1.0, 5.0),  # m, max GPS epv to set the origin
+    "LPE_XY_PUB": (2.0, 0.3, 100.0),  # m, eph limit for xy_valid (added)
+    "LPE_VXY_PUB": (0.3, 0.01, 1.0),  # m/s, per-axis velocity std dev limit for v_xy_valid
+    "LPE_Z_PUB": (1.0, 0.3, 5.0),  # m, z std dev limit for z_valid / v_z_valid
+    "EKF2_GPS_P_GATE": (5.0, 1.0, 10.0),  # σ, GPS position innovation gate
+    "EKF2_GPS_V_GATE": (5.0, 1.0, 10.0),  # σ, GPS velocity innovation gate
+    "EKF2_BARO_GATE": (5.0, 1.0, 10.0),  # σ, baro innovation gate
+    "EKF2_ABL_LIM": (0.4, 0.0, 0.8),  # m/s², accel bias limit
+    "EKF2_ABIAS_INIT": (0.2, 0.0, 0.5),  # m/s², initial accel bias std dev
+}
+
+GPS_DELAY_MAX_US = 500_000  # LPE: history length; older measurements are dropped
+GPS_TIMEOUT_US = 1_000_000  # LPE: no horizontal GPS fusion for this long = dead reckoning
+GPS_INIT_COUNT = 10  # LPE REQ_GPS_INIT_COUNT
+GPS_INIT_MIN_SATS = 6  # LPE
+GPS_FIX_3D = 3
+FUSION_RESET_TIMEOUT_US = 7_000_000  # EKF2 reset_timeout_max
+P_MAX = 1e6  # LPE: a variance above this stops growing
+DT_MAX_S = 0.05
+ACCEL_MAX = 16.0 * CONSTANTS_ONE_G  # full scale of a typical flight-controller IMU
+ALT_MIN_M, ALT_MAX_M = -1000.0, 20000.0  # plausible AMSL altitudes of a multicopter sensor
+
+# Innovation groups of a GPS sample: (rows of the measurement vector, gate parameter).
+_GPS_GROUPS = (
+    ((0, 1), "EKF2_GPS_P_GATE"),
+    ((2,), "EKF2_GPS_P_GATE"),
+    ((3, 4), "EKF2_GPS_V_GATE"),
+    ((5,), "EKF2_GPS_V_GATE"),
+)
+_G_HPOS, _G_VPOS, _G_HVEL, _G_VVEL = range(4)
+
+
+class GpsMeasurement(Protocol):
+    """What :meth:`LocalPositionKF.fuse_gps` reads; ``stack.msg.sensors.SensorGps`` satisfies it."""
+
+    timestamp_sample: int  # µs, time the fix was valid at the receiver
+    latitude_deg: float
+    longitude_deg: float
+    altitude_msl_m: float
+    vel_n_m_s: float
+    vel_e_m_s: float
+    vel_d_m_s: float
+    vel_ned_valid: bool
+    eph: float  # m, 1σ; NaN = not reported
+    epv: float  # m, 1σ; NaN = not reported
+    fix_type: int
+    satellites_used: int
+
+
+@dataclass(slots=True)
+class LocalPositionEstimate:
+    """The filter output, shaped like PX4's ``vehicle_local_position`` (plus the global position)."""
+
+    timestamp_sample: int  # µs, time of the last prediction
+    position: Vec3  # m, NED about the reference point
+    velocity: Vec3  # m/s, NED
+    acceleration: Vec3  # m/s², NED, bias-corrected, gravity removed
+    xy_valid: bool
+    z_valid: bool
+    v_xy_valid: bool
+    v_z_valid: bool
+    eph: float  # m, 1σ horizontal position
+    epv: float  # m, 1σ vertical position
+    evh: float  # m/s, 1σ horizontal velocity
+    evv: float  # m/s, 1σ vertical velocity
+    dead_reckoning: bool  # horizontal aiding was lost: xy comes from the IMU alone
+    xy_global: bool  # the reference lat/lon is set
+    z_global: bool  # z is referenced to GPS altitude (else to the first baro sample)
+    ref_timestamp: int  # µs, measurement time of the fix that set the origin (0 = not set)
+    ref_lat: float  # deg (NaN until set)
+    ref_lon: float  # deg
+    ref_alt: float  # m AMSL of z = 0 (NaN until z is initialised)
+    lat: float  # deg, global position (NaN until the origin is set)
+    lon: float  # deg
+    alt: float  # m AMSL
+    delta_xy: tuple[float, float]  # m, jump of the last xy reset
+    xy_reset_counter: int  # counts every reset (PX4 publishes it modulo 256)
+    delta_z: float
+    z_reset_counter: int
+    delta_vxy: tuple[float, float]
+    vxy_reset_counter: int
+    delta_vz: float
+    vz_reset_counter: int
+    accel_bias: Vec3  # m/s², body FRD
+    baro_offset: float  # m, baro altitude minus estimated altitude
+
+
+class _Step:
+    """One entry of the history: the event that moved the filter to (x, P) at time t_us — a
+    prediction (transition F, input u, dt), a baro fusion, or neither (the start of the history)."""
+
+    __slots__ = ("P", "baro_alt", "prediction", "t_us", "x")
+
+    def __init__(self, t_us: int, x: np.ndarray, P: np.ndarray) -> None:
+        self.t_us = t_us
+        self.x = x
+        self.P = P
+        self.prediction: tuple[np.ndarray, np.ndarray, float] | None = None
+        self.baro_alt: float | None = None
+
+
+def _step_time(step: _Step) -> int:
+    return step.t_us
+
+
+class LocalPositionKF:
+    """Position/velocity/accel-bias/baro-offset Kalman filter fusing IMU, GPS and barometer.
+
+    Call :meth:`predict` for every IMU sample (or with averaged samples at a lower rate), and
+    :meth:`fuse_gps` / :meth:`fuse_baro` when those arrive. Arrays in the history are never
+    modified in place, so a past step can be restored by reference.
+    """
+
+    __slots__ = (
+        "P",
+        "_accel_ned",
+        "_baro_initialised",
+        "_gps_init_count",
+        "_hist",
+        "_last_baro_fused_us",
+        "_last_fused_us",
+        "_last_gps_meas_us",
+        "_map",
+        "_q_c",
+        "_ref_alt",
+        "_ref_timestamp",
+        "_t_us",
+        "_z_initialised",
+        "baro_test_ratio",
+        "delta_vxy",
+        "delta_vz",
+        "delta_xy",
+        "delta_z",
+        "gps_pos_test_ratio",
+        "gps_vel_test_ratio",
+        "params",
+        "vxy_reset_counter",
+        "vz_reset_counter",
+        "x",
+        "xy_reset_counter",
+        "z_reset_counter",
+    )
+
+    def __init__(self, **params: float) -> None:
+        self.params = {name: spec[0] for name, spec in PARAMS.items()}
+        self._map: MapProjection | None = None
+        self.set_params(**params)
+        self.reset()
+
+    def set_params(self, **params: float) -> None:
+        """Set parameters by PX4 name (see :data:`PARAMS`); values are clamped to their range."""
+        for name, value in params.items():
+            if name not in PARAMS:
+                raise KeyError(f"unknown parameter {name}")
+            _, lo, hi = PARAMS[name]
+            self.params[name] = constrain(float(value), lo, hi)
+        self._update_process_noise()
+
+    def reset(self) -> None:
+        """Return to the power-on state: no time base, no altitude reference, no origin."""
+        p = self.params
+        self.x = np.zeros(N_X)
+        self.P = np.diag(
+            [8.0, 8.0, 8.0]  # LPE: twice its 2 m validity limit, squared
+            + [2.0 * p["LPE_VXY_PUB"] ** 2] * 3
+            + [p["EKF2_ABIAS_INIT"] ** 2] * 3
+            + [0.0]
+        )
+        self._t_us: int | None = None
+        self._hist: deque[_Step] = deque()
+        self._accel_ned: Vec3 = (0.0, 0.0, 0.0)
+        self._map = None
+        self._ref_alt = math.nan
+        self._ref_timestamp = 0
+        self._z_initialised = False
+        self._baro_initialised = False
+        self._gps_init_count = 0
+        self._last_gps_meas_us: int | None = None
+        self._last_fused_us = [0, 0, 0, 0]  # per GPS group
+        self._last_baro_fused_us = 0
+        self.xy_reset_counter = self.z_reset_counter = self.vxy_reset_counter = self.vz_reset_counter = 0
+        self.delta_xy = (0.0, 0.0)
+        self.delta_vxy = (0.0, 0.0)
+        self.delta_z = self.delta_vz = 0.0
+        self.gps_pos_test_ratio = self.gps_vel_test_ratio = self.baro_test_ratio = 0.0
+        self._update_process_noise()
+
+    # ------------------------------------------------------------------ prediction
+
+    def predict(self, timestamp_sample_us: int, accel_body: Vec3, q: Quat) -> bool:
+        """Propagate to ``timestamp_sample_us`` with the specific force ``accel_body`` [m/s², FRD]
+        held since the previous call and the attitude ``q`` (body → NED).
+
+        Returns False (state untouched) for a non-finite or out-of-range input or a timestamp that
+        does not advance. The first call only starts the time base.
+        """
+        ax, ay, az = accel_body
+        if not (math.isfinite(ax) and math.isfinite(ay) and math.isfinite(az)):
+            return False
+        if ax * ax + ay * ay + az * az > ACCEL_MAX * ACCEL_MAX:
+            return False
+        if not quat.is_finite(q):
+            return False
+        q_norm = quat.norm(q)
+        if not 0.5 < q_norm < 2.0:
+            return False
+        t_prev = self._t_us
+        if t_prev is None:
+            self._t_us = timestamp_sample_us
+            self._hist.append(_Step(timestamp_sample_us, self.x, self.P))
+            return True
+        if timestamp_sample_us <= t_prev:
+            return False
+        dt = min((timestamp_sample_us - t_prev) * 1e-6, DT_MAX_S)
+        self._t_us = timestamp_sample_us
+
+        r = quat.to_dcm(quat.normalized(q))
+        r0, r1, r2 = r
+        # Specific force in NED plus gravity, before the bias correction (which lives in F).
+        an = r0[0] * ax + r0[1] * ay + r0[2] * az
+        ae = r1[0] * ax + r1[1] * ay + r1[2] * az
+        ad = r2[0] * ax + r2[1] * ay + r2[2] * az + CONSTANTS_ONE_G
+        half_dt2 = 0.5 * dt * dt
+        u = np.array((half_dt2 * an, half_dt2 * ae, half_dt2 * ad, dt * an, dt * ae, dt * ad, 0.0, 0.0, 0.0, 0.0))
+        rot = np.array(r)
+        F = np.identity(N_X)
+        F[0, 3] = F[1, 4] = F[2, 5] = dt
+        F[0:3, 6:9] = rot * -half_dt2
+        F[3:6, 6:9] = rot * -dt
+
+        self.x, self.P = self._propagate(self.x, self.P, F, u, dt)
+        bx, by, bz = self.x[6:9].tolist()
+        self._accel_ned = (
+            an - (r0[0] * bx + r0[1] * by + r0[2] * bz),
+            ae - (r1[0] * bx + r1[1] * by + r1[2] * bz),
+            ad - (r2[0] * bx + r2[1] * by + r2[2] * bz),
+        )
+
+        step = _Step(timestamp_sample_us, self.x, self.P)
+        step.prediction = (F, u, dt)
+        hist = self._hist
+        hist.append(step)
+        oldest = timestamp_sample_us - GPS_DELAY_MAX_US
+        while hist[0].t_us < oldest:
+            hist.popleft()
+        return True
+
+    def _propagate(
+        self, x: np.ndarray, P: np.ndarray, F: np.ndarray, u: np.ndarray, dt: float
+    ) -> tuple[np.ndarray, np.ndarray]:
+        x = F @ x + u
+        lim = self.params["EKF2_ABL_LIM"]
+        if not (-lim <= x[X_BX] <= lim and -lim <= x[X_BY] <= lim and -lim <= x[X_BZ] <= lim):
+            np.clip(x[6:9], -lim, lim, out=x[6:9])
+        P_new = F @ P @ F.T
+        P_new.flat[:: N_X + 1] += self._q_c * dt
+        diag = P_new.diagonal()
+        if diag.max() > P_MAX:
+            # LPE: a variance that has run away stops propagating (with its correlations).
+            for i in np.flatnonzero(diag > P_MAX):
+                P_new[i, :] = P[i, :]
+                P_new[:, i] = P[:, i]
+        return x, P_new
+
+    def _update_process_noise(self) -> None:
+        p = self.params
+        vxy = p["LPE_PN_V"] ** 2 + p["LPE_ACC_XY"] ** 2
+        vz = p["LPE_PN_V"] ** 2 + p["LPE_ACC_Z"] ** 2
+        # The baro offset is only a state once GPS altitude defines the reference.
+        baro = p["LPE_PN_BARO"] ** 2 if self._map is not None else 0.0
+        self._q_c = np.array([p["LPE_PN_P"] ** 2] * 3 + [vxy, vxy, vz] + [p["LPE_PN_B"] ** 2] * 3 + [baro])
+
+    # ------------------------------------------------------------------ barometer
+
+    def fuse_baro(self, alt_amsl_m: float) -> bool:
+        """Fuse a barometric altitude [m AMSL] at the current filter time; True when it changed the
+        estimate. PX4's baro delay is 0: call this after the prediction nearest the baro sample.
+
+        The first sample defines the altitude reference while there is no GPS origin.
+        """
+        t_now = self._t_us
+        if t_now is None or not math.isfinite(alt_amsl_m) or not ALT_MIN_M < alt_amsl_m < ALT_MAX_M:
+            return False
+        if not self._baro_initialised:
+            self._init_baro(alt_amsl_m, t_now)
+            self._last_baro_fused_us = t_now
+            return True
+        x, P, ratio = self._baro_update(self.x, self.P, alt_amsl_m)
+        self.baro_test_ratio = ratio
+        if ratio <= 1.0:
+            self.x, self.P = x, P
+            self._last_baro_fused_us = t_now
+            step = _Step(t_now, x, P)
+            step.baro_alt = alt_amsl_m
+            self._hist.append(step)
+            return True
+        if t_now - self._last_baro_fused_us > FUSION_RESET_TIMEOUT_US:
+            self._reset_to_baro(alt_amsl_m, t_now)
+            self._last_baro_fused_us = t_now
+            return True
+        return False
+
+    def _baro_update(self, x: np.ndarray, P: np.ndarray, alt: float) -> tuple[np.ndarray, np.ndarray, float]:
+        """Gated scalar update with h(x) = ref_alt − z + baro_offset; returns (x, P, test ratio)."""
+        p = self.params
+        innov = alt - (self._ref_alt - x[X_Z] + x[X_BARO])
+        pht = P[:, X_BARO] - P[:, X_Z]
+        s = pht[X_BARO] - pht[X_Z] + p["LPE_BAR_Z"] ** 2
+        ratio = innov * innov / (p["EKF2_BARO_GATE"] ** 2 * s)
+        if ratio > 1.0:
+            return x, P, ratio
+        k = pht / s
+        x = x + k * innov
+        P = P - np.outer(k, pht)
+        return x, 0.5 * (P + P.T), ratio
+
+    def _init_baro(self, alt: float, t_now: int) -> None:
+        x = self.x.copy()
+        P = self.P.copy()
+        r = self.params["LPE_BAR_Z"] ** 2
+        if self._z_initialised:
+            # z is GPS-referenced already: the baro only brings its own offset.
+            x[X_BARO] = alt - (self._ref_alt - x[X_Z])
+            P[X_BARO, :] = 0.0
+            P[:, X_BARO] = 0.0
+            P[X_BARO, X_BARO] = P[X_Z, X_Z] + r
+        else:
+            self._ref_alt = alt
+            x[X_Z] = 0.0
+            x[X_BARO] = 0.0
+            P[X_Z, :] = P[:, X_Z] = 0.0
+            P[X_BARO, :] = P[:, X_BARO] = 0.0
+            P[X_Z, X_Z] = r
+            self._z_initialised = True
+        self._baro_initialised = True
+        self.x, self.P = x, P
+        self._restart_history(t_now)
+
+    def _reset_to_baro(self, alt: float, t_now: int) -> None:
+        """Baro rejected for too long: if GPS height is being fused the baro offset has changed,
+        otherwise the height estimate is wrong and is reset to the baro."""
+        x = self.x.copy()
+        P = self.P.copy()
+        r = self.params["LPE_BAR_Z"] ** 2
+        gps_height_recent = self._map is not None and t_now - self._last_fused_us[_G_VPOS] < FUSION_RESET_TIMEOUT_US
+        if gps_height_recent:
+            x[X_BARO] = alt - (self._ref_alt - x[X_Z])
+            P[X_BARO, :] = P[:, X_BARO] = 0.0
+            P[X_BARO, X_BARO] = P[X_Z, X_Z] + r
+        else:
+            z_new = self._ref_alt + x[X_BARO] - alt
+            self.delta_z = float(z_new - x[X_Z])
+            self.z_reset_counter += 1
+            x[X_Z] = z_new
+            P[X_Z, :] = P[:, X_Z] = 0.0
+            P[X_Z, X_Z] = r + P[X_BARO, X_BARO]
+        self.x, self.P = x, P
+        self._restart_history(t_now)
+
+    # ------------------------------------------------------------------ GPS
+
+    def fuse_gps(self, gps: GpsMeasurement) -> bool:
+        """Fuse a GPS fix at its measurement time; True when it changed the estimate (fused, reset
+        or set the origin).
+
+        Fixes before the origin is set only count toward the initialisation checks. A fix older
+        than the 0.5 s history, not newer than the previous one, without a 3-D fix, or with a
+        non-finite or implausible position is dropped.
+        """
+        t_now = self._t_us
+        if t_now is None:
+            return False
+        lat, lon, alt = gps.latitude_deg, gps.longitude_deg, gps.altitude_msl_m
+        if not (math.isfinite(lat) and math.isfinite(lon) and math.isfinite(alt)):
+            return False
+        if abs(lat) > 90.0 or abs(lon) > 180.0 or not ALT_MIN_M < alt < ALT_MAX_M:
+            return False
+        if gps.fix_type < GPS_FIX_3D:
+            self._gps_init_count = 0
+            return False
+        vel = (gps.vel_n_m_s, gps.vel_e_m_s, gps.vel_d_m_s)
+        vel_ok = bool(gps.vel_ned_valid) and all(math.isfinite(v) for v in vel)
+
+        t_meas = min(gps.timestamp_sample - round(self.params["LPE_GPS_DELAY"] * 1e6), t_now)
+        if self._last_gps_meas_us is not None and t_meas <= self._last_gps_meas_us:
+            return False
+        hist = self._hist
+        if t_meas < hist[0].t_us:
+            return False
+
+        p = self.params
+        eph = gps.eph if math.isfinite(gps.eph) else 0.0
+        epv = gps.epv if math.isfinite(gps.epv) else 0.0
+        if self._map is None:
+            init_ok = (
+                vel_ok
+                and gps.satellites_used >= GPS_INIT_MIN_SATS
+                and math.isfinite(gps.eph)
+                and math.isfinite(gps.epv)
+                and gps.eph <= p["LPE_EPH_MAX"]
+                and gps.epv <= p["LPE_EPV_MAX"]
+            )
+            self._gps_init_count = self._gps_init_count + 1 if init_ok else 0
+            if self._gps_init_count < GPS_INIT_COUNT:
+                return False
+
+        var = np.array(
+            [max(p["LPE_GPS_XY"], eph) ** 2] * 2
+            + [max(p["LPE_GPS_Z"], epv) ** 2]
+            + [p["LPE_GPS_VXY"] ** 2] * 2
+            + [p["LPE_GPS_VZ"] ** 2]
+        )
+        k = bisect.bisect_right(hist, t_meas, key=_step_time) - 1
+        base = hist[k]
+        x_before = self.x
+
+        if self._map is None:
+            x, P = self._set_origin(base.x, base.P, lat, lon, alt, vel, var, t_meas)
+            resets = (True, False, True, True)
+        else:
+            north, east = self._map.project(lat, lon)
+            y = np.array((north, east, self._ref_alt - alt, *vel) if vel_ok else (north, east, self._ref_alt - alt))
+            x, P, resets = self._gps_update(base.x, base.P, y, var, t_meas)
+            if x is base.x:
+                return False
+
+        self._last_gps_meas_us = t_meas
+        base.x, base.P = x, P
+        self._replay(k + 1)
+        self._record_resets(x_before, resets)
+        return True
+
+    def _set_origin(
+        self,
+        x: np.ndarray,
+        P: np.ndarray,
+        lat: float,
+        lon: float,
+        alt: float,
+        vel: Vec3,
+        var: np.ndarray,
+        t_meas: int,
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Place the origin at this fix, reset xy and velocity to it, and reference z to GPS."""
+        x = x.copy()
+        P = P.copy()
+        self._map = MapProjection(lat, lon)
+        self._ref_timestamp = t_meas
+        for i in (X_X, X_Y, X_VX, X_VY, X_VZ):
+            P[i, :] = P[:, i] = 0.0
+        x[X_X] = x[X_Y] = 0.0
+        x[X_VX], x[X_VY], x[X_VZ] = vel
+        P[X_X, X_X] = P[X_Y, X_Y] = var[0]
+        P[X_VX, X_VX] = P[X_VY, X_VY] = var[3]
+        P[X_VZ, X_VZ] = var[5]
+        if self._baro_initialised:
+            # z stays continuous and the baro prediction ref − z + offset unchanged. The error of
+            # this GPS altitude goes to the offset: the reference altitude defines the local frame,
+            # so z keeps its baro-relative accuracy (and z_valid does not drop at the origin).
+            new_ref = alt + x[X_Z]
+            x[X_BARO] += self._ref_alt - new_ref
+            P[X_BARO, X_BARO] += var[2]
+        else:
+            new_ref = alt
+            x[X_Z] = 0.0
+            P[X_Z, :] = P[:, X_Z] = 0.0
+            P[X_Z, X_Z] = var[2]
+            self._z_initialised = True
+        self._ref_alt = float(new_ref)
+        for g in range(4):
+            self._last_fused_us[g] = t_meas
+        self._update_process_noise()
+        return x, P
+
+    def _gps_update(
+        self, x: np.ndarray, P: np.ndarray, y: np.ndarray, var: np.ndarray, t_meas: int
+    ) -> tuple[np.ndarray, np.ndarray, tuple[bool, ...]]:
+        """Gate each group, fuse the accepted ones jointly, reset groups rejected for too long.
+
+        Returns the inputs themselves when nothing was fused or reset.
+        """
+        p = self.params
+        n = len(y)
+        innov = y - x[:n]
+        s_diag = P.diagonal()[:n] + var[:n]
+        norm_sq = innov * innov / s_diag
+        accepted: list[int] = []
+        to_reset = [False, False, False, False]
+        ratios = [0.0, 0.0, 0.0, 0.0]
+        for g, (rows, gate_name) in enumerate(_GPS_GROUPS):
+            if rows[0] >= n:
+                continue
+            ratio = max(norm_sq[i] for i in rows) / p[gate_name] ** 2
+            ratios[g] = float(ratio)
+            if ratio <= 1.0:
+                accepted.extend(rows)
+                self._last_fused_us[g] = t_meas
+            elif t_meas - self._last_fused_us[g] > FUSION_RESET_TIMEOUT_US:
+                to_reset[g] = True
+        self.gps_pos_test_ratio = max(ratios[_G_HPOS], ratios[_G_VPOS])
+        self.gps_vel_test_ratio = max(ratios[_G_HVEL], ratios[_G_VVEL])
+
+        if accepted:
+            idx = np.array(accepted)
+            pht = P[:, idx]
+            s = pht[idx, :] + np.diag(var[idx])
+            gain = np.linalg.solve(s, pht.T).T
+            x = x + gain @ innov[idx]
+            P = P - gain @ pht.T
+            P = 0.5 * (P + P.T)
+        if any(to_reset):
+            x, P = self._reset_to_gps(x, P, y, var, to_reset, t_meas)
+        return x, P, tuple(to_reset)
+
+    def _reset_to_gps(
+        self, x: np.ndarray, P: np.ndarray, y: np.ndarray, var: np.ndarray, groups: list[bool], t_meas: int
+    ) -> tuple[np.ndarray, np.ndarray]:
+        x = x.copy()
+        P = P.copy()
+        for g, (rows, _) in enumerate(_GPS_GROUPS):
+            if not groups[g]:
+                continue
+            for i in rows:
+                if i == X_Z and self._baro_initialised:
+                    # Keep the baro consistent with the new height (ref − z + offset unchanged).
+                    x[X_BARO] += y[i] - x[X_Z]
+                    P[X_BARO, :] = P[:, X_BARO] = 0.0
+                P[i, :] = P[:, i] = 0.0
+                x[i] = y[i]
+                P[i, i] = var[i]
+                if i == X_Z and self._baro_initialised:
+                    P[X_BARO, X_BARO] = P[X_Z, X_BARO] = P[X_BARO, X_Z] = var[i]
+            self._last_fused_us[g] = t_meas
+        return x, P
+
+    def _record_resets(self, x_before: np.ndarray, resets: tuple[bool, ...]) -> None:
+        d = self.x - x_before
+        if resets[_G_HPOS]:
+            self.xy_reset_counter += 1
+            self.delta_xy = (float(d[X_X]), float(d[X_Y]))
+        if resets[_G_VPOS]:
+            self.z_reset_counter += 1
+            self.delta_z = float(d[X_Z])
+        if resets[_G_HVEL]:
+            self.vxy_reset_counter += 1
+            self.delta_vxy = (float(d[X_VX]), float(d[X_VY]))
+        if resets[_G_VVEL]:
+            self.vz_reset_counter += 1
+            self.delta_vz = float(d[X_VZ])
+
+    # ------------------------------------------------------------------ history
+
+    def _replay(self, start: int) -> None:
+        """Re-run the predictions and baro fusions recorded after index ``start − 1``."""
+        hist = self._hist
+        x, P = hist[start - 1].x, hist[start - 1].P
+        for i in range(start, len(hist)):
+            step = hist[i]
+            if step.prediction is not None:
+                x, P = self._propagate(x, P, *step.prediction)
+            elif step.baro_alt is not None:
+                x, P, _ = self._baro_update(x, P, step.baro_alt)
+            step.x, step.P = x, P
+        self.x, self.P = x, P
+
+    def _restart_history(self, t_now: int) -> None:
+        """After a reset made at the current time, older steps no longer describe the same frame."""
+        self._hist.clear()
+        self._hist.append(_Step(t_now, self.x, self.P))
+
+    # ------------------------------------------------------------------ output
+
+    def estimate(self) -> LocalPositionEstimate:
+        """Snapshot of the current estimate with validity flags and accuracies."""
+        p = self.params
+        x = self.x.tolist()
+        d = self.P.diagonal().tolist()
+        eph = math.sqrt(d[X_X] + d[X_Y])
+        epv = math.sqrt(d[X_Z])
+        evh = math.sqrt(d[X_VX] + d[X_VY])
+        evv = math.sqrt(d[X_VZ])
+        origin = self._map is not None
+        t_now = self._t_us or 0
+        xy_valid = origin and eph <= p["LPE_XY_PUB"]
+        v_xy_valid = origin and max(d[X_VX], d[X_VY]) <= p["LPE_VXY_PUB"] ** 2
+        z_valid = self._z_initialised and epv <= p["LPE_Z_PUB"]
+        last_h_aiding = max(self._last_fused_us[_G_HPOS], self._last_fused_us[_G_HVEL])
+        if self._map is not None:
+            lat, lon = self._map.reproject(x[X_X], x[X_Y])
+            ref_lat, ref_lon = self._map.lat0_deg, self._map.lon0_deg
+            alt = self._ref_alt - x[X_Z]
+        else:
+            lat = lon = alt = ref_lat = ref_lon = math.nan
+        return LocalPositionEstimate(
+            timestamp_sample=t_now,
+            position=(x[X_X], x[X_Y], x[X_Z]),
+            velocity=(x[X_VX], x[X_VY], x[X_VZ]),
+            acceleration=self._accel_ned,
+            xy_valid=xy_valid,
+            z_valid=z_valid,
+            v_xy_valid=v_xy_valid,
+            v_z_valid=z_valid,
+            eph=eph,
+            epv=epv,
+            evh=evh,
+            evv=evv,
+            dead_reckoning=origin and t_now - last_h_aiding > GPS_TIMEOUT_US,
+            xy_global=origin,
+            z_global=origin,
+            ref_timestamp=self._ref_timestamp,
+            ref_lat=ref_lat,
+            ref_lon=ref_lon,
+            ref_alt=self._ref_alt,
+            lat=lat,
+            lon=lon,
+            alt=alt,
+            delta_xy=self.delta_xy,
+            xy_reset_counter=self.xy_reset_counter,
+            delta_z=self.delta_z,
+            z_reset_counter=self.z_reset_counter,
+            delta_vxy=self.delta_vxy,
+            vxy_reset_counter=self.vxy_reset_counter,
+            delta_vz=self.delta_vz,
+            vz_reset_counter=self.vz_reset_counter,
+            accel_bias=(x[X_BX], x[X_BY], x[X_BZ]),
+            baro_offset=x[X_BARO],
+        )
