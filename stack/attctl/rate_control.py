@@ -1,0 +1,197 @@
+"""Multicopter body-rate PID: rate setpoint → normalised torque.
+
+Follows PX4 ``src/lib/rate_control/rate_control.cpp`` (RateControl, seed 003) together with the parts
+of ``mc_rate_control/MulticopterRateControl.cpp`` that are pure computation: K-form gains, NaN rate
+setpoints holding the current rate, NaN torques published as 0, the yaw-torque low-pass
+(MC_YAW_TQ_CUTOFF) and the acro stick mapping.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+
+from stack.mathlib.filters import AlphaFilter
+from stack.mathlib.scalar import superexpo
+from stack.mathlib.vector import Vec3
+from stack.runtime.params import Param
+
+PARAMS: tuple[Param, ...] = (
+    Param("MC_ROLLRATE_P", 0.15, 0.01, 0.5, "", "Roll rate P gain (torque per rad/s of error)"),
+    Param("MC_ROLLRATE_I", 0.2, 0.0, None, "", "Roll rate I gain"),
+    Param("MC_ROLLRATE_D", 0.003, 0.0, 0.01, "", "Roll rate D gain (on measured angular acceleration)"),
+    Param("MC_ROLLRATE_FF", 0.0, 0.0, None, "", "Roll rate feed-forward gain"),
+    Param("MC_ROLLRATE_K", 1.0, 0.01, 5.0, "", "Roll rate controller gain multiplying P, I and D"),
+    Param("MC_RR_INT_LIM", 0.3, 0.0, None, "", "Roll rate integrator limit"),
+    Param("MC_PITCHRATE_P", 0.15, 0.01, 0.6, "", "Pitch rate P gain"),
+    Param("MC_PITCHRATE_I", 0.2, 0.0, None, "", "Pitch rate I gain"),
+    Param("MC_PITCHRATE_D", 0.003, 0.0, None, "", "Pitch rate D gain"),
+    Param("MC_PITCHRATE_FF", 0.0, 0.0, None, "", "Pitch rate feed-forward gain"),
+    Param("MC_PITCHRATE_K", 1.0, 0.01, 5.0, "", "Pitch rate controller gain multiplying P, I and D"),
+    Param("MC_PR_INT_LIM", 0.3, 0.0, None, "", "Pitch rate integrator limit"),
+    Param("MC_YAWRATE_P", 0.2, 0.0, 0.6, "", "Yaw rate P gain"),
+    Param("MC_YAWRATE_I", 0.1, 0.0, None, "", "Yaw rate I gain"),
+    Param("MC_YAWRATE_D", 0.0, 0.0, None, "", "Yaw rate D gain"),
+    Param("MC_YAWRATE_FF", 0.0, 0.0, None, "", "Yaw rate feed-forward gain"),
+    Param("MC_YAWRATE_K", 1.0, 0.01, 5.0, "", "Yaw rate controller gain multiplying P, I and D"),
+    Param("MC_YR_INT_LIM", 0.3, 0.0, None, "", "Yaw rate integrator limit"),
+    Param("MC_YAW_TQ_CUTOFF", 2.0, 0.0, 10.0, "Hz", "Yaw torque low-pass cutoff (0 = off)"),
+)
+ACRO_PARAMS: tuple[Param, ...] = (
+    Param("MC_ACRO_R_MAX", 100.0, 0.0, 1800.0, "deg/s", "Acro roll rate at full stick"),
+    Param("MC_ACRO_P_MAX", 100.0, 0.0, 1800.0, "deg/s", "Acro pitch rate at full stick"),
+    Param("MC_ACRO_Y_MAX", 100.0, 0.0, 1800.0, "deg/s", "Acro yaw rate at full stick"),
+    Param("MC_ACRO_EXPO", 0.0, 0.0, 1.0, "", "Acro roll/pitch expo (0 linear … 1 cubic)"),
+    Param("MC_ACRO_EXPO_Y", 0.0, 0.0, 1.0, "", "Acro yaw expo"),
+    Param("MC_ACRO_SUPEXPO", 0.0, 0.0, 0.95, "", "Acro roll/pitch super-expo (0 = off)"),
+    Param("MC_ACRO_SUPEXPOY", 0.0, 0.0, 0.95, "", "Acro yaw super-expo (0 = off)"),
+)
+DEFAULTS: dict[str, object] = {p.name: p.default for p in PARAMS + ACRO_PARAMS}
+
+I_FACTOR_RATE = math.radians(400.0)
+"""Rate error at which the integrator gain falls to zero (PX4 i_factor)."""
+
+
+def integrator_factor(rate_error: float) -> float:
+    """PX4's i_factor: 1 − (e / 400°/s)², floored at 0; ≈1 up to 100°/s, 0.75 at 200°/s."""
+    f = rate_error / I_FACTOR_RATE
+    return max(0.0, 1.0 - f * f)
+
+
+class RateControl:
+    """PX4's RateControl: torque = P·e + I − D·ω̇ + FF·ω_sp per axis, with a saturation-aware integrator."""
+
+    __slots__ = ("_gain_d", "_gain_ff", "_gain_i", "_gain_p", "_int", "_lim_int", "_sat_neg", "_sat_pos")
+
+    def __init__(self, params: Mapping[str, object] | None = None) -> None:
+        self._int = [0.0, 0.0, 0.0]
+        self._sat_pos = [False, False, False]
+        self._sat_neg = [False, False, False]
+        self._gain_p: Vec3 = (0.0, 0.0, 0.0)
+        self._gain_i: Vec3 = (0.0, 0.0, 0.0)
+        self._gain_d: Vec3 = (0.0, 0.0, 0.0)
+        self._gain_ff: Vec3 = (0.0, 0.0, 0.0)
+        self._lim_int: Vec3 = (0.0, 0.0, 0.0)
+        self.set_params(params or {})
+
+    def set_params(self, params: Mapping[str, object]) -> None:
+        """Apply the MC_*RATE_* and MC_*R_INT_LIM parameters in PX4's K-form (effective P/I/D = K × P/I/D)."""
+        p = {**DEFAULTS, **params}
+        axes = ("ROLLRATE", "PITCHRATE", "YAWRATE")
+        k = [float(p[f"MC_{a}_K"]) for a in axes]
+        self.set_gains(
+            tuple(k[i] * float(p[f"MC_{a}_P"]) for i, a in enumerate(axes)),
+            tuple(k[i] * float(p[f"MC_{a}_I"]) for i, a in enumerate(axes)),
+            tuple(k[i] * float(p[f"MC_{a}_D"]) for i, a in enumerate(axes)),
+        )
+        self.set_feed_forward_gain(tuple(float(p[f"MC_{a}_FF"]) for a in axes))
+        self.set_integrator_limit(tuple(float(p[n]) for n in ("MC_RR_INT_LIM", "MC_PR_INT_LIM", "MC_YR_INT_LIM")))
+
+    def set_gains(self, p: Vec3, i: Vec3, d: Vec3) -> None:
+        self._gain_p = tuple(p)
+        self._gain_i = tuple(i)
+        self._gain_d = tuple(d)
+
+    def set_feed_forward_gain(self, ff: Vec3) -> None:
+        self._gain_ff = tuple(ff)
+
+    def set_integrator_limit(self, limit: Vec3) -> None:
+        self._lim_int = tuple(limit)
+
+    def set_saturation_status(self, positive: tuple[bool, bool, bool], negative: tuple[bool, bool, bool]) -> None:
+        """Per-axis allocator saturation (roll, pitch, yaw): while an axis is saturated in a direction,
+        its integrator may only move the other way."""
+        self._sat_pos = [bool(v) for v in positive]
+        self._sat_neg = [bool(v) for v in negative]
+
+    def reset_integral(self) -> None:
+        self._int = [0.0, 0.0, 0.0]
+
+    @property
+    def integral(self) -> Vec3:
+        """Integrator states (rate_ctrl_status rollspeed/pitchspeed/yawspeed_integ), normalised torque."""
+        return (self._int[0], self._int[1], self._int[2])
+
+    def update(self, rate: Vec3, rate_sp: Vec3, angular_accel: Vec3, dt: float, landed: bool) -> Vec3:
+        """Normalised torque for measured ``rate`` [rad/s], setpoint ``rate_sp`` (NaN axis = hold the
+        current rate) and measured angular acceleration [rad/s²]. The integrator is frozen while landed.
+        Non-finite torque components are returned as 0."""
+        out = [0.0, 0.0, 0.0]
+        gp, gi, gd, gff = self._gain_p, self._gain_i, self._gain_d, self._gain_ff
+        integ = self._int
+        for i in range(3):
+            sp = rate_sp[i]
+            if sp != sp:
+                sp = rate[i]
+            err = sp - rate[i]
+            torque = gp[i] * err + integ[i] - gd[i] * angular_accel[i] + gff[i] * sp
+            out[i] = torque if math.isfinite(torque) else 0.0
+            if not landed:
+                if self._sat_pos[i] and err > 0.0:
+                    err = 0.0
+                if self._sat_neg[i] and err < 0.0:
+                    err = 0.0
+                new = integ[i] + integrator_factor(err) * gi[i] * err * dt
+                if math.isfinite(new):
+                    lim = self._lim_int[i]
+                    integ[i] = lim if new > lim else -lim if new < -lim else new
+        return (out[0], out[1], out[2])
+
+
+class YawTorqueLowPass:
+    """First-order low-pass on the yaw torque (MC_YAW_TQ_CUTOFF, Hz; 0 = off), PX4's ``_output_lpf_yaw``:
+    alpha = dt / (dt + 1/(2π·cutoff)) recomputed from each step's dt, state starting at 0."""
+
+    __slots__ = ("_filter", "_tau")
+
+    def __init__(self, cutoff_hz: float = 2.0) -> None:
+        self._filter = AlphaFilter()
+        self._filter.reset(0.0)
+        self._tau = 0.0
+        self.set_cutoff(cutoff_hz)
+
+    def set_cutoff(self, cutoff_hz: float) -> None:
+        self._tau = 1.0 / (2.0 * math.pi * cutoff_hz) if cutoff_hz > 0.0 else 0.0
+
+    def reset(self, value: float = 0.0) -> None:
+        self._filter.reset(value)
+
+    def update(self, torque_z: float, dt: float) -> float:
+        self._filter.set_time_constant(dt, self._tau)
+        return self._filter.update(torque_z)
+
+
+class AcroStickMapping:
+    """PX4 acro mode: sticks → body-rate setpoint and thrust (MulticopterRateControl).
+
+    Sticks follow manual_control_setpoint: each in [−1, 1], pitch +1 = stick forward = nose down,
+    yaw + = clockwise, throttle −1 = minimum. Body rates (FRD): roll = roll stick, pitch = −pitch stick,
+    yaw = yaw stick, each through superexpo and scaled by MC_ACRO_*_MAX.
+    """
+
+    __slots__ = ("_expo", "_expo_y", "_rate_max", "_supexpo", "_supexpo_y")
+
+    def __init__(self, params: Mapping[str, object] | None = None) -> None:
+        self.set_params(params or {})
+
+    def set_params(self, params: Mapping[str, object]) -> None:
+        p = {**DEFAULTS, **params}
+        self._rate_max = tuple(math.radians(float(p[n])) for n in ("MC_ACRO_R_MAX", "MC_ACRO_P_MAX", "MC_ACRO_Y_MAX"))
+        self._expo = float(p["MC_ACRO_EXPO"])
+        self._expo_y = float(p["MC_ACRO_EXPO_Y"])
+        self._supexpo = float(p["MC_ACRO_SUPEXPO"])
+        self._supexpo_y = float(p["MC_ACRO_SUPEXPOY"])
+
+    def rates(self, roll: float, pitch: float, yaw: float) -> Vec3:
+        """Body-rate setpoint [rad/s] from the roll, pitch and yaw sticks."""
+        m = self._rate_max
+        return (
+            superexpo(roll, self._expo, self._supexpo) * m[0],
+            superexpo(-pitch, self._expo, self._supexpo) * m[1],
+            superexpo(yaw, self._expo_y, self._supexpo_y) * m[2],
+        )
+
+    @staticmethod
+    def thrust_body(throttle: float) -> Vec3:
+        """Normalised body thrust from the throttle stick: collective (throttle + 1)/2 along −z."""
+        return (0.0, 0.0, -(throttle + 1.0) * 0.5)

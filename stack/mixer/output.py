@@ -1,0 +1,112 @@
+"""Motor output stage: allocated motor thrusts → actuator_motors, PWM and the simulator's view.
+
+Follows PX4's output path: the per-motor slew limit (CA_R<n>_SLEW, applied by ControlAllocator), the
+thrust model THR_MDL_FAC of ``mixer_module/functions/FunctionMotors`` (normalised thrust → motor
+command), the armed/disarmed PWM mapping of ``MixingOutput`` (PWM_MAIN_MIN/MAX/DIS) and the rescaling
+of ``simulation/pwm_out_sim/PWMSim.cpp`` into ``actuator_outputs_sim``.
+
+Idle: PWM_MAIN_MIN defaults to 1075 µs here, not PX4's 1000 µs, so that a zero command from an armed
+vehicle spins the motors at 7.5 % of the ESC range (PX4's documented practice of raising PWM_MIN until
+the motors idle reliably; PX4's own legacy multicopter scripts used 1075, and DShot's DSHOT_MIN 0.055
+plays the same role). The simulator view keeps the fixed ESC calibration range [1000, 2000] µs → [0, 1],
+so the idle is visible to the simulated motors; disarmed outputs (PWM_MAIN_DIS) read 0 there, as in
+pwm_out_sim, which leaves them unwritten.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from typing import NamedTuple
+
+from stack.mixer.allocation import FLT_EPSILON
+from stack.mixer.effectiveness import MAX_ROTORS
+from stack.runtime.params import Param
+
+PARAMS: tuple[Param, ...] = (
+    Param("THR_MDL_FAC", 0.0, 0.0, 1.0, "", "Thrust model: rel_thrust = f·u² + (1−f)·u (0 linear, 1 quadratic)"),
+    Param("PWM_MAIN_DIS", 900, 800, 2200, "us", "PWM while disarmed or for a stopped motor"),
+    Param("PWM_MAIN_MIN", 1075, 800, 1400, "us", "PWM for a zero command while armed (motor idle)"),
+    Param("PWM_MAIN_MAX", 2000, 1600, 2200, "us", "PWM for a full command"),
+    *(Param(f"CA_R{i}_SLEW", 0.0, 0.0, 10.0, "s", f"Motor {i}: minimum time to cross the full range (0 = off)")
+      for i in range(MAX_ROTORS)),
+)
+DEFAULTS: dict[str, object] = {p.name: p.default for p in PARAMS}
+
+ESC_RANGE_MIN_US = 1000.0
+"""ESC calibration endpoints: the pulse widths the simulator reads as 0 and 1 (pwm_out_sim's range)."""
+ESC_RANGE_MAX_US = 2000.0
+
+
+def command_from_thrust(thrust: float, factor: float) -> float:
+    """Motor command u for a normalised thrust, inverting thrust = f·u² + (1−f)·u (f = THR_MDL_FAC)."""
+    if factor <= 0.0 or factor > 1.0:
+        return thrust
+    b = 1.0 - factor
+    tmp1 = b / (2.0 * factor)
+    tmp2 = b * b / (4.0 * factor * factor)
+    if thrust > 0.0:
+        return -tmp1 + math.sqrt(tmp2 + thrust / factor)
+    if thrust < 0.0:
+        return tmp1 - math.sqrt(tmp2 - thrust / factor)
+    return 0.0
+
+
+def thrust_from_command(command: float, factor: float) -> float:
+    """Normalised thrust of motor command u ≥ 0 under the THR_MDL_FAC model."""
+    return factor * command * command + (1.0 - factor) * command
+
+
+class MotorOutputs(NamedTuple):
+    actuator_motors: tuple[float, ...]
+    """Normalised thrust after the slew limit, [0, 1]; NaN = motor stopped (disarmed or not commanded)."""
+    pwm: tuple[float, ...]
+    """Pulse widths [µs]: PWM_MAIN_DIS when stopped, PWM_MAIN_MIN … PWM_MAIN_MAX when armed."""
+    sim: tuple[float, ...]
+    """actuator_outputs_sim: the PWM on the ESC range [1000, 2000] µs → [0, 1]; stopped motors 0."""
+
+
+class MotorOutput:
+    """Stateful output stage for N motors (the slew limits remember the last thrusts)."""
+
+    __slots__ = ("_factor", "_prev", "_pwm_dis", "_pwm_max", "_pwm_min", "_slew_time")
+
+    def __init__(self, num_motors: int, params: Mapping[str, object] | None = None) -> None:
+        self._prev = [0.0] * num_motors
+        self.set_params(params or {})
+
+    def set_params(self, params: Mapping[str, object]) -> None:
+        p = {**DEFAULTS, **params}
+        self._factor = float(p["THR_MDL_FAC"])
+        self._slew_time = [float(p[f"CA_R{i}_SLEW"]) for i in range(len(self._prev))]
+        self._pwm_dis = float(p["PWM_MAIN_DIS"])
+        self._pwm_min = float(p["PWM_MAIN_MIN"])
+        self._pwm_max = float(p["PWM_MAIN_MAX"])
+
+    def update(self, thrusts: Sequence[float], armed: bool, dt: float) -> MotorOutputs:
+        """Map allocated motor thrusts (normalised, [0, 1]; NaN or < 0 stops that motor) to the outputs."""
+        n = len(self._prev)
+        if not armed:
+            self._prev = [0.0] * n
+            return MotorOutputs((math.nan,) * n, (self._pwm_dis,) * n, (0.0,) * n)
+        motors, pwm, sim = [], [], []
+        span = self._pwm_max - self._pwm_min
+        for i in range(n):
+            t = thrusts[i]
+            if not t >= -FLT_EPSILON:
+                self._prev[i] = 0.0
+                motors.append(math.nan)
+                pwm.append(self._pwm_dis)
+                sim.append(0.0)
+                continue
+            prev = self._prev[i]
+            slew_time = self._slew_time[i]
+            max_step = dt / slew_time if slew_time > 0.0 else math.inf
+            t = min(max(t, prev - max_step, 0.0), prev + max_step, 1.0)
+            self._prev[i] = t
+            u = min(max(command_from_thrust(t, self._factor), 0.0), 1.0)
+            us = self._pwm_min + u * span
+            motors.append(t)
+            pwm.append(us)
+            sim.append(min(max((us - ESC_RANGE_MIN_US) / (ESC_RANGE_MAX_US - ESC_RANGE_MIN_US), 0.0), 1.0))
+        return MotorOutputs(tuple(motors), tuple(pwm), tuple(sim))
