@@ -1,9 +1,11 @@
 """Zenoh session configuration with safe defaults.
 
-By default every session is a peer listening on 127.0.0.1 only, with multicast scouting off; it
-connects to one rendezvous endpoint (the supervisor's) and gossip over that session meshes the
-peers directly. A profile may instead name router endpoints, so modules on several hosts form one
-stack through an ordinary Zenoh router.
+By default every session is a peer listening on 127.0.0.1 only, with multicast scouting off and
+explicit endpoints: it connects to the rendezvous (the supervisor's Zenoh router) and to the modules
+started before it, so the modules of a stack form a direct mesh built in start order (gossip's
+automatic meshing raced under load and could leave two peers unlinked). Tools join as clients of
+the router. A profile may also name router endpoints, so modules on several hosts form one stack
+through an ordinary Zenoh router.
 """
 
 from __future__ import annotations
@@ -24,17 +26,12 @@ class BusConfig:
     # Zenoh's low-latency transport saves ~25 % per hop; every session of a stack must agree on it.
     low_latency: bool = True
     lease_ms: int = 3000
+    gossip: bool = False
     extra: dict[str, object] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         if self.mode not in ("peer", "client", "router"):
             raise ValueError(f"bus.mode must be 'peer', 'client' or 'router', not '{self.mode}'")
-
-    def with_connect(self, endpoints: tuple[str, ...]) -> BusConfig:
-        return BusConfig(self.mode, endpoints, self.listen, self.low_latency, self.lease_ms, dict(self.extra))
-
-    def with_listen(self, endpoints: tuple[str, ...]) -> BusConfig:
-        return BusConfig(self.mode, self.connect, endpoints, self.low_latency, self.lease_ms, dict(self.extra))
 
     def to_json(self) -> str:
         return json.dumps(asdict(self))
@@ -48,6 +45,7 @@ class BusConfig:
             listen=tuple(d["listen"]),
             low_latency=d["low_latency"],
             lease_ms=d["lease_ms"],
+            gossip=d.get("gossip", False),
             extra=d.get("extra", {}),
         )
 
@@ -55,7 +53,7 @@ class BusConfig:
         conf = zenoh.Config()
         conf.insert_json5("mode", json.dumps(self.mode))
         conf.insert_json5("scouting/multicast/enabled", "false")
-        conf.insert_json5("scouting/gossip/enabled", "true")
+        conf.insert_json5("scouting/gossip/enabled", json.dumps(self.gossip))
         conf.insert_json5("scouting/delay", "100")
         conf.insert_json5("listen/endpoints", json.dumps(list(self.listen)))
         conf.insert_json5("connect/endpoints", json.dumps(list(self.connect)))

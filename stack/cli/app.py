@@ -60,13 +60,22 @@ def down(
         pid = int(s["pid"])
         os.kill(pid, signal.SIGTERM)
         typer.echo(f"stopping stack '{s['vehicle']}' (supervisor pid {pid})")
-        try:
-            psutil.Process(pid).wait(timeout)
-        except psutil.NoSuchProcess:
-            pass
-        except psutil.TimeoutExpired:
+        if not _wait_exit(pid, timeout):
             fail(f"stack '{s['vehicle']}' did not stop within {timeout:g} s")
     typer.echo("stopped")
+
+
+def _wait_exit(pid: int, timeout: float) -> bool:
+    """Wait until the process is gone (a zombie waiting for its parent counts as gone)."""
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        try:
+            if psutil.Process(pid).status() == psutil.STATUS_ZOMBIE:
+                return True
+        except psutil.NoSuchProcess:
+            return True
+        time.sleep(0.05)
+    return False
 
 
 @app.command()

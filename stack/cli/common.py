@@ -32,7 +32,7 @@ def fail(message: str, code: int = 1) -> NoReturn:
 def find_stack(vehicle: str | None, endpoint: str | None) -> tuple[str, BusConfig]:
     """The vehicle and bus settings to reach a running stack."""
     if endpoint:
-        return vehicle or "v1", BusConfig(connect=(endpoint,))
+        return vehicle or "v1", BusConfig(mode="client", connect=(endpoint,), listen=())
     stacks = run_state.running_stacks()
     if vehicle is not None:
         stacks = [s for s in stacks if s["vehicle"] == vehicle]
@@ -45,7 +45,7 @@ def find_stack(vehicle: str | None, endpoint: str | None) -> tuple[str, BusConfi
     found = stacks[0]
     bus = BusConfig.from_json(json.dumps(found["bus"]))
     return str(found["vehicle"]), BusConfig(
-        mode="peer", connect=(str(found["endpoint"]),), low_latency=bus.low_latency, lease_ms=bus.lease_ms
+        mode="client", connect=(str(found["endpoint"]),), listen=(), low_latency=bus.low_latency, lease_ms=bus.lease_ms
     )
 
 
@@ -57,7 +57,13 @@ def connect(vehicle: str | None, endpoint: str | None, name: str = "cli") -> Ite
 
 
 def query_json(session: zenoh.Session, key: str, payload: dict | None = None, timeout: float = 2.0) -> list[dict]:
-    replies = session.get(key, payload=json.dumps(payload) if payload is not None else None, timeout=timeout)
+    replies = session.get(
+        key,
+        payload=json.dumps(payload) if payload is not None else None,
+        consolidation=zenoh.ConsolidationMode.NONE,
+        target=zenoh.QueryTarget.ALL,
+        timeout=timeout,
+    )
     out = []
     for reply in replies:
         if reply.ok is not None:

@@ -314,6 +314,10 @@ def pub(
     typer.echo(f"published {sent} message{'s' if sent != 1 else ''} on {topic}")
 
 
+def _type_name(t: object) -> str:
+    return t.__name__ if isinstance(t, type) else str(t).replace("typing.", "")
+
+
 @app.command()
 def info(
     topic: str,
@@ -324,7 +328,7 @@ def info(
     """A topic's type, schema (fields, types, defaults), fingerprint, publishers and subscribers."""
     msg_type = _topic_type(topic)
     schema = [
-        {"name": f.name, "type": str(f.type).replace("typing.", ""), "default": to_jsonable(f.default)}
+        {"name": f.name, "type": _type_name(f.type), "default": to_jsonable(f.default)}
         for f in msgspec.structs.fields(msg_type)
     ]
     result: dict[str, object] = {

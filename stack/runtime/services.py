@@ -30,7 +30,8 @@ class ParamService:
     def __init__(self, session: zenoh.Session, vehicle: str, module: str, store: ParamStore) -> None:
         self.module = module
         self.store = store
-        self._queryable = session.declare_queryable(keys.param_key(vehicle, module), self._on_query)
+        self.key = keys.param_key(vehicle, module)
+        self._queryable = session.declare_queryable(self.key, self._on_query)
 
     def _on_query(self, query: zenoh.Query) -> None:
         try:
@@ -38,7 +39,7 @@ class ParamService:
             reply = self.handle(request)
         except (ValueError, TypeError, AttributeError) as e:
             reply = {"module": self.module, "error": f"bad request: {e}"}
-        query.reply(query.key_expr, json.dumps(reply))
+        query.reply(self.key, json.dumps(reply))
 
     def handle(self, request: dict[str, object]) -> dict[str, object]:
         op = request.get("op", "list")

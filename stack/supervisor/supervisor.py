@@ -26,7 +26,7 @@ import msgspec
 import zenoh
 
 from stack.bus import keys
-from stack.bus.config import BusConfig
+from stack.bus.config import LOOPBACK_ANY_PORT, BusConfig
 from stack.msg.internal import ModuleHeartbeat
 from stack.runtime.spec import ModuleSpec
 from stack.supervisor import state as run_state
@@ -80,6 +80,8 @@ class Supervisor:
             low_latency=profile.bus.low_latency,
             lease_ms=profile.bus.lease_ms,
         )
+        local_mesh = profile.bus.mode == "peer" and profile.bus.listen == (LOOPBACK_ANY_PORT,)
+        self.module_endpoints = {e.name: f"tcp/127.0.0.1:{free_port()}" for e in profile.modules} if local_mesh else {}
         self.modules = [
             ModuleProcess(e, run_dir / f"{e.name}.spec.json", run_dir / f"{e.name}.log") for e in profile.modules
         ]
@@ -98,7 +100,7 @@ class Supervisor:
         signal.signal(signal.SIGINT, self._on_signal)
         signal.signal(signal.SIGTERM, self._on_signal)
         bus = BusConfig(
-            mode="peer" if self.profile.bus.mode == "client" else self.profile.bus.mode,
+            mode="router",
             connect=self.profile.bus.connect,
             listen=(self.endpoint,),
             low_latency=self.profile.bus.low_latency,
@@ -160,6 +162,21 @@ class Supervisor:
                 return False
         return True
 
+    def _module_bus(self, name: str) -> BusConfig:
+        """Each module listens on its own endpoint and connects to the router and the modules before it."""
+        if not self.module_endpoints:
+            return self.module_bus
+        names = [m.entry.name for m in self.modules]
+        earlier = tuple(self.module_endpoints[n] for n in names[: names.index(name)])
+        bus = self.module_bus
+        return BusConfig(
+            mode=bus.mode,
+            connect=(*bus.connect, *earlier),
+            listen=(self.module_endpoints[name],),
+            low_latency=bus.low_latency,
+            lease_ms=bus.lease_ms,
+        )
+
     def _spec(self, m: ModuleProcess) -> ModuleSpec:
         e = m.entry
         args = {**e.args, **self.options.extra_args.get(e.name, {})}
@@ -167,7 +184,7 @@ class Supervisor:
             name=e.name,
             module=e.module,
             vehicle=self.vehicle,
-            bus=self.module_bus,
+            bus=self._module_bus(e.name),
             params=e.params,
             args=args,
             lockstep=self.profile.lockstep,
@@ -192,6 +209,7 @@ class Supervisor:
             process_group=0,
         )
         m.state = "starting"
+        self._say(f"starting {m.entry.name} (pid {m.proc.pid})")
         m.exit_code = None
         m.restart_at = None
         log_file = m.log_path.open("a")
@@ -217,6 +235,7 @@ class Supervisor:
                     return False
                 self._alive_changed.wait(0.05)
         m.state = "running"
+        self._say(f"{m.entry.name} ready")
         return True
 
     def _on_alive(self, sample: zenoh.Sample) -> None:
@@ -314,10 +333,10 @@ class Supervisor:
     def _on_roster_query(self, query: zenoh.Query) -> None:
         modules = {m.entry.name: m.pid for m in self.modules if m.state == "running"}
         reply = {"complete": self.roster_complete, "modules": modules}
-        query.reply(query.key_expr, json.dumps(reply))
+        query.reply(keys.supervisor_key(self.vehicle, "roster"), json.dumps(reply))
 
     def _on_status_query(self, query: zenoh.Query) -> None:
-        query.reply(query.key_expr, json.dumps(self.status()))
+        query.reply(keys.supervisor_key(self.vehicle, "status"), json.dumps(self.status()))
 
     def status(self) -> dict[str, object]:
         rows = []

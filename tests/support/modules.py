@@ -9,6 +9,7 @@ from __future__ import annotations
 import json
 import os
 import random
+import time
 from pathlib import Path
 
 from stack.msg.estimation import VehicleAngularVelocity
@@ -103,8 +104,10 @@ class Summer(Module):
     def run(self, msg: VehicleAngularVelocity, dt: float) -> None:
         sp = self.latest("vehicle_rates_setpoint")
         self.acc = 0.9 * self.acc + msg.xyz[0] + (sp.pitch if sp is not None else 0.0)
-        self.publish("vehicle_torque_setpoint", VehicleTorqueSetpoint(timestamp_sample=msg.timestamp_sample,
-                                                                       xyz=(self.acc, msg.xyz[0], dt)))
+        self.publish(
+            "vehicle_torque_setpoint",
+            VehicleTorqueSetpoint(timestamp_sample=msg.timestamp_sample, xyz=(self.acc, msg.xyz[0], dt)),
+        )
 
 
 class Pacer(Module):
@@ -164,3 +167,57 @@ class Crasher(Module):
         if self.ticks >= int(self.args["ticks"]):
             raise SystemExit(4)
         self.publish("vehicle_command", VehicleCommand(command=VehicleCommand.VEHICLE_CMD_NAV_LOITER_UNLIM))
+
+
+class Staller(Module):
+    """Triggered by sensor_gyro; hangs forever on its N-th run (lockstep stall detection tests)."""
+
+    NAME = "staller"
+    TRIGGER = Trigger("sensor_gyro")
+    ARGS = (Arg("stall_at", 100),)
+
+    def __init__(self, rt) -> None:
+        super().__init__(rt)
+        self.runs = 0
+
+    def run(self, msg: SensorGyro, dt: float) -> None:
+        self.runs += 1
+        if self.runs == self.args["stall_at"]:
+            while True:
+                time.sleep(1.0)
+
+
+class Probe(Module):
+    """Triggered by sensor_gyro: records which input messages each run could see, into a JSON file."""
+
+    NAME = "probe"
+    TRIGGER = Trigger("sensor_gyro")
+    ARGS = (Arg("out", ""),)
+
+    def __init__(self, rt) -> None:
+        super().__init__(rt)
+        self.subscribe("vehicle_rates_setpoint")
+        self.subscribe("vehicle_angular_velocity")
+        self.seen: list[list[float]] = []
+
+    def run(self, msg: SensorGyro, dt: float) -> None:
+        sp = self.latest("vehicle_rates_setpoint")
+        av = self.latest("vehicle_angular_velocity")
+        self.seen.append(
+            [self.now_us(), msg.timestamp_sample, sp.timestamp if sp else -1, av.timestamp if av else -1, dt]
+        )
+
+    def close(self) -> None:
+        if self.args["out"]:
+            Path(str(self.args["out"])).write_text(json.dumps(self.seen))
+
+
+class BrokenInit(Module):
+    """Fails while starting (supervisor failure handling)."""
+
+    NAME = "broken_init"
+    TRIGGER = Timer(10.0)
+
+    def __init__(self, rt) -> None:
+        super().__init__(rt)
+        raise RuntimeError("cannot start: the hardware is missing")

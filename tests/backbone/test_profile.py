@@ -1,0 +1,115 @@
+"""Launch profiles: checked before anything starts; a problem names the file, the key and what is wrong."""
+
+import pytest
+
+from stack.runtime.params import Param, ParamError, ParamStore
+from stack.supervisor.profile import ProfileError, load_profile
+from tests.support.harness import run_cli, write_profile
+
+GOOD = """
+[stack]
+vehicle = "t1"
+seed = 3
+
+[params]
+TEST_OFFSET = 2.5
+
+[[module]]
+module = "tests.support.modules:TickSource"
+args = { rate_hz = 100.0 }
+params = { TEST_GAIN = 2.0 }
+critical = true
+
+[[module]]
+module = "tests.support.modules:Doubler"
+restart = "on-failure"
+
+[[module]]
+name = "pacer_when_plotting"
+module = "tests.support.modules:Pacer"
+condition = "plot and TEST_OFFSET > 1"
+"""
+
+
+def test_a_good_profile_loads_in_order_with_parameters(tmp_path):
+    p = load_profile(write_profile(tmp_path / "good.toml", GOOD))
+    assert [m.name for m in p.modules] == ["tick_source", "doubler"]
+    assert p.vehicle == "t1" and p.seed == 3 and p.lockstep
+    tick, doubler = p.modules
+    assert tick.params == {"TEST_GAIN": 2.0} and tick.args["rate_hz"] == 100.0 and tick.critical
+    assert doubler.params == {"TEST_OFFSET": 2.5} and doubler.restart == "on-failure"
+    with_plot = load_profile(tmp_path / "good.toml", flags={"plot": True, "realtime": True})
+    assert [m.name for m in with_plot.modules] == ["tick_source", "doubler", "pacer_when_plotting"]
+    assert not with_plot.lockstep
+
+
+@pytest.mark.parametrize(
+    ("change", "key", "problem"),
+    [
+        (("seed = 3", "seed = 3\nseed = 4"), "", "TOML syntax error"),
+        (("tests.support.modules:Doubler", "tests.support.modules:Nope"), "module[1].module", "cannot be loaded"),
+        (("tests.support.modules:Doubler", "no_such_module"), "module[1].module", "unknown module 'no_such_module'"),
+        (("TEST_GAIN = 2.0", "TEST_GAN = 2.0"), "module[0] (tick_source).params.TEST_GAN", "no such parameter"),
+        (("TEST_GAIN = 2.0", 'TEST_GAIN = "high"'), "module[0] (tick_source).params.TEST_GAIN", "expected a number"),
+        (("TEST_GAIN = 2.0", "TEST_GAIN = 20.0"), "module[0] (tick_source).params.TEST_GAIN", "above the maximum 10"),
+        (("TEST_OFFSET = 2.5", "TEST_OFFSET = -200"), "params.TEST_OFFSET", "below the minimum -100"),
+        (("TEST_OFFSET = 2.5", "TEST_OFFSET = 2.5\nMC_ROLL_P = 1.0"), "params.MC_ROLL_P", "no module of this profile"),
+        (("rate_hz = 100.0", "rate = 100.0"), "module[0] (tick_source).args", "unknown argument 'rate'"),
+        (('restart = "on-failure"', 'restart = "sometimes"'), "module[1] (doubler).restart", "not one of"),
+        (('vehicle = "t1"', 'vehicle = "my/drone"'), "stack.vehicle", "invalid vehicle name"),
+        (("seed = 3", "seed = 3\ncolour = 1"), "stack.colour", "unknown key"),
+        (("critical = true", "critical = 1"), "module[0] (tick_source).critical", "expected bool"),
+        (('"plot and TEST_OFFSET > 1"', '"plot and WHATEVER"'), "module[2] (pacer_when_plotting).condition", "unknown"),
+        (('"plot and TEST_OFFSET > 1"', '"import os"'), "module[2] (pacer_when_plotting).condition", "cannot parse"),
+    ],
+)
+def test_a_broken_profile_is_refused_naming_file_key_and_problem(tmp_path, change, key, problem):
+    path = write_profile(tmp_path / "broken.toml", GOOD.replace(*change))
+    with pytest.raises(ProfileError) as err:
+        load_profile(path)
+    message = str(err.value)
+    assert "\n" not in message
+    assert message.startswith(f"{path}: {key}: " if key else f"{path}: ")
+    assert problem in message
+
+
+def test_stack_up_refuses_a_broken_profile_before_starting_anything(tmp_path):
+    path = write_profile(tmp_path / "broken.toml", GOOD.replace("TEST_GAIN = 2.0", "TEST_GAIN = 20.0"))
+    home = tmp_path / "home"
+    out = run_cli(home, "up", str(path), "--duration", "1")
+    assert out.returncode == 2
+    assert out.stderr.strip().splitlines() == [
+        f"error: {path}: module[0] (tick_source).params.TEST_GAIN: 20.0 is above the maximum 10"
+    ]
+    assert not (home / "runs").exists()
+
+
+def test_unknown_profile_lists_the_available_ones(tmp_path):
+    out = run_cli(tmp_path / "home", "up", "no_such_profile")
+    assert out.returncode == 2 and "no such profile" in out.stderr
+
+
+def test_parameter_checks():
+    p = Param("MC_ROLLRATE_P", 0.15, 0.01, 0.5)
+    assert p.check("0.2") == 0.2 and p.check(0.3) == 0.3
+    for bad, why in ((0.6, "above the maximum"), (float("nan"), "not a finite"), (True, "expected a number")):
+        with pytest.raises(ParamError, match=why):
+            p.check(bad)
+    mode = Param("MC_AIRMODE", 0, 0, 2)
+    assert mode.check("2") == 2
+    with pytest.raises(ParamError, match="expected an integer"):
+        mode.check(1.5)
+    flag = Param("SYS_HAS_MAG", True)
+    assert flag.check("false") is False and flag.check(1) is True
+
+
+def test_parameter_store_applies_changes_between_runs():
+    store = ParamStore((Param("A", 1.0, 0, 10), Param("B", 2, 0, 5)), {"A": 3.0})
+    assert store["A"] == 3.0
+    assert store.set("A", 4) == (3.0, 4.0)
+    assert store["A"] == 3.0 and store.values()["A"] == 4.0  # pending until the loop takes it
+    assert store.take_changes() == {"A"} and store["A"] == 4.0
+    assert store.take_changes() == set()
+    with pytest.raises(ParamError):
+        store.set("B", 9)
+    assert store.values()["B"] == 2

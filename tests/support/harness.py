@@ -1,0 +1,180 @@
+"""Run real stacks in tests: `stack up` as a subprocess, CLI commands against it, orphan checks."""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import signal
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+
+import psutil
+
+REPO = Path(__file__).resolve().parents[2]
+
+
+def stack_env(home: Path) -> dict[str, str]:
+    env = {k: v for k, v in os.environ.items() if k not in ("STACK_ENDPOINT",)}
+    env["STACK_HOME"] = str(home)
+    env["PYTHONPATH"] = str(REPO) + os.pathsep + env.get("PYTHONPATH", "")
+    env["PYTHONUNBUFFERED"] = "1"
+    return env
+
+
+def run_cli(home: Path, *args: str, timeout: float = 60.0) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
+        [sys.executable, "-m", "stack", *args],
+        env=stack_env(home),
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+        cwd=REPO,
+    )
+
+
+class RunningStack:
+    """`stack up PROFILE ...` in the background, with its output collected line by line."""
+
+    def __init__(self, home: Path, profile: Path | str, *args: str) -> None:
+        self.home = home
+        self.lines: list[str] = []
+        self._cond = threading.Condition()
+        self.proc = subprocess.Popen(
+            [sys.executable, "-m", "stack", "up", str(profile), *args],
+            env=stack_env(home),
+            stdout=subprocess.PIPE,
+            stderr=subprocess.STDOUT,
+            text=True,
+            cwd=REPO,
+        )
+        self._reader = threading.Thread(target=self._read, daemon=True)
+        self._reader.start()
+
+    def _read(self) -> None:
+        assert self.proc.stdout is not None
+        for line in self.proc.stdout:
+            with self._cond:
+                self.lines.append(line.rstrip("\n"))
+                self._cond.notify_all()
+
+    @property
+    def output(self) -> str:
+        with self._cond:
+            return "\n".join(self.lines)
+
+    def wait_for(self, pattern: str, timeout: float = 60.0) -> re.Match[str]:
+        regex = re.compile(pattern)
+        deadline = time.monotonic() + timeout
+        with self._cond:
+            seen = 0
+            while True:
+                for line in self.lines[seen:]:
+                    m = regex.search(line)
+                    if m:
+                        return m
+                seen = len(self.lines)
+                left = deadline - time.monotonic()
+                if left <= 0 or (self.proc.poll() is not None and not self._reader.is_alive()):
+                    raise AssertionError(f"'{pattern}' not seen; output so far:\n{self.output}")
+                self._cond.wait(min(left, 0.2))
+
+    def wait_up(self, timeout: float = 90.0) -> None:
+        self.wait_for(r"\[stack\] all \d+ modules up", timeout)
+
+    def cli(self, *args: str, timeout: float = 60.0) -> subprocess.CompletedProcess[str]:
+        return run_cli(self.home, *args, timeout=timeout)
+
+    def status(self) -> dict:
+        out = self.cli("status", "--json")
+        assert out.returncode == 0, out.stderr
+        return json.loads(out.stdout)
+
+    def module_pids(self) -> dict[str, int]:
+        return {m["module"]: m["pid"] for m in self.status()["modules"] if m["pid"]}
+
+    def run_dir(self) -> Path:
+        return Path(self.wait_for(r"run directory (\S+)").group(1))
+
+    def stop(self, sig: int = signal.SIGINT, timeout: float = 60.0) -> int:
+        if self.proc.poll() is None:
+            self.proc.send_signal(sig)
+        try:
+            code = self.proc.wait(timeout=timeout)
+        finally:
+            self.kill()
+        self._reader.join(timeout=5.0)
+        return code
+
+    def wait(self, timeout: float = 120.0) -> int:
+        code = self.proc.wait(timeout=timeout)
+        self._reader.join(timeout=5.0)
+        return code
+
+    def kill(self) -> None:
+        """Last-resort cleanup: the supervisor and anything started from this stack's home."""
+        if self.proc.poll() is None:
+            self.proc.kill()
+            self.proc.wait()
+        for p in stack_processes(self.home):
+            p.kill()
+
+
+def stack_processes(home: Path) -> list[psutil.Process]:
+    """Module processes whose spec lives under this STACK_HOME (i.e. started by a test's stack)."""
+    found = []
+    for p in psutil.process_iter(["cmdline"]):
+        try:
+            cmd = p.info["cmdline"] or []
+        except (psutil.NoSuchProcess, psutil.AccessDenied):
+            continue
+        if any(str(home) in part for part in cmd) and "stack.runtime.main" in cmd:
+            found.append(p)
+    return found
+
+
+def wait_no_processes(home: Path, timeout: float = 10.0) -> list[psutil.Process]:
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        left = [p for p in stack_processes(home) if p.is_running() and p.status() != psutil.STATUS_ZOMBIE]
+        if not left:
+            return []
+        time.sleep(0.1)
+    return left
+
+
+def write_profile(path: Path, text: str) -> Path:
+    path.write_text(text)
+    return path
+
+
+def chain_profile(path: Path, *, lockstep: bool = True, seed: int = 7, tick_args: str = "", extra: str = "") -> Path:
+    """The test processing chain: a tick source, a doubler, a summer and a timer module."""
+    return write_profile(
+        path,
+        f"""
+[stack]
+vehicle = "t1"
+lockstep = {str(lockstep).lower()}
+seed = {seed}
+stall_timeout_s = 4.0
+
+[[module]]
+module = "tests.support.modules:TickSource"
+args = {{ {tick_args} }}
+critical = true
+
+[[module]]
+module = "tests.support.modules:Doubler"
+
+[[module]]
+module = "tests.support.modules:Summer"
+
+[[module]]
+module = "tests.support.modules:Pacer"
+{extra}
+""",
+    )
