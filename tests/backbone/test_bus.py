@@ -5,9 +5,9 @@ import subprocess
 import sys
 import time
 
-from tests.support.harness import REPO, RunningStack, chain_profile, stack_env, wait_no_processes
 from stack.bus.node import stable_publisher_id
 from stack.supervisor.supervisor import free_port
+from tests.support.harness import REPO, RunningStack, chain_profile, stack_env, wait_no_processes
 
 
 def test_messages_cross_processes_in_order_with_header(tmp_path):

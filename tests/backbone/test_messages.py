@@ -9,13 +9,34 @@ from stack.cli.topic import parse_message
 from stack.msg.base import Message
 from stack.msg.registry import TOPICS, fingerprint, message_type, schema_text
 
-REQUIRED = (
-    "sensor_gyro sensor_accel sensor_mag sensor_baro sensor_gps vehicle_angular_velocity vehicle_attitude "
-    "vehicle_local_position vehicle_global_position vehicle_attitude_setpoint vehicle_rates_setpoint "
-    "vehicle_torque_setpoint vehicle_thrust_setpoint actuator_motors actuator_outputs control_allocator_status "
-    "rate_ctrl_status trajectory_setpoint vehicle_control_mode vehicle_status actuator_armed "
-    "manual_control_setpoint vehicle_command vehicle_command_ack parameter_update sim_groundtruth"
-).split()
+REQUIRED = [
+    "sensor_gyro",
+    "sensor_accel",
+    "sensor_mag",
+    "sensor_baro",
+    "sensor_gps",
+    "vehicle_angular_velocity",
+    "vehicle_attitude",
+    "vehicle_local_position",
+    "vehicle_global_position",
+    "vehicle_attitude_setpoint",
+    "vehicle_rates_setpoint",
+    "vehicle_torque_setpoint",
+    "vehicle_thrust_setpoint",
+    "actuator_motors",
+    "actuator_outputs",
+    "control_allocator_status",
+    "rate_ctrl_status",
+    "trajectory_setpoint",
+    "vehicle_control_mode",
+    "vehicle_status",
+    "actuator_armed",
+    "manual_control_setpoint",
+    "vehicle_command",
+    "vehicle_command_ack",
+    "parameter_update",
+    "sim_groundtruth",
+]
 
 
 def test_catalogue_has_the_px4_topics():
