@@ -80,6 +80,9 @@ class Module:
     DT_RANGE: ClassVar[tuple[float, float]] = (0.0002, 0.02)
     # The lockstep coordinator (the simulator) drives time instead of following it.
     LOCKSTEP_COORDINATOR: ClassVar[bool] = False
+    # A passive module (recorder, plot bridge) only observes: it never joins the lockstep, runs on the
+    # wall clock, and the simulation does not wait for it. It still syncs at start so it misses nothing.
+    PASSIVE: ClassVar[bool] = False
 
     def __init__(self, rt: Runtime) -> None:
         self.rt = rt

@@ -43,7 +43,7 @@ class Runtime:
         self.module_cls = load_module_class(spec.module)
         self.params = ParamStore(self.module_cls.PARAMS, spec.params)
         self.args = resolve_args(self.module_cls.ARGS, spec.args)
-        self.lockstep = spec.lockstep
+        self.lockstep = spec.lockstep and not self.module_cls.PASSIVE
         self.inputs: dict[tuple[str, int], InputBuffer] = {}
         self.outputs: dict[tuple[str, int], TopicPublisher] = {}
         self.state = "starting"
@@ -98,7 +98,7 @@ class Runtime:
                 services.append(Heartbeat(node.session, node.vehicle, self.name, self.snapshot))
                 lockstep_part = self._make_lockstep()
                 node.declare_token(keys.alive_token(node.vehicle, self.name, os.getpid()))
-                if self.lockstep:
+                if self.spec.lockstep:
                     self._sync(lockstep_part if isinstance(lockstep_part, LockstepMember) else None)
                 self.state = "running"
                 log.info("%s ready (%s)", self.name, self.describe_trigger())
