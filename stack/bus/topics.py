@@ -1,10 +1,11 @@
 """Typed publishers and subscribers over Zenoh, with the stack's message header.
 
-Every sample carries a 29-byte attachment: the schema fingerprint of its type, the publisher id,
-a per-publisher sequence number shared by all its topics, the publication time (µs) and flags
-(bit 0: the time is lockstep simulated time). The fingerprint lets a subscriber built from a
-different definition detect the mismatch and drop the sample instead of mis-decoding it; the
-sequence number and time make lockstep deterministic.
+Every sample carries a 33-byte attachment (``HEADER``): the schema fingerprint of its type, the
+publisher id, a per-publisher sequence number shared by all its topics, the index of the message
+on its topic (1, 2, ... per publisher), the publication time (µs) and flags (bit 0: the time is
+lockstep simulated time). The fingerprint lets a subscriber built from a different definition detect
+the mismatch and drop the sample instead of mis-decoding it; the sequence number, topic index and
+time make lockstep deterministic.
 """
 
 from __future__ import annotations
@@ -23,8 +24,10 @@ from stack.msg.registry import fingerprint
 if TYPE_CHECKING:
     from stack.bus.node import Node
 
-HEADER = struct.Struct("<QIQqB")
+HEADER = struct.Struct("<QIQIqB")
 FLAG_LOCKSTEP_TIME = 1
+
+
 log = logging.getLogger("stack.bus")
 
 # Diagnostics that nothing in the control path consumes: in real time these may be dropped under
@@ -33,8 +36,9 @@ TELEMETRY_TOPICS = frozenset(
     {"rate_ctrl_status", "vehicle_local_position_setpoint", "sim_groundtruth", "actuator_outputs", "parameter_update"}
 )
 
-# (publication time µs — or -1 when not lockstep time —, publisher id, publisher sequence, message)
-Received = tuple[int, int, int, Any]
+# (publication time µs — or -1 when not lockstep time —, publisher id, publisher sequence, message,
+#  index of the message on its topic for that publisher)
+Received = tuple[int, int, int, Any, int]
 
 
 class TopicPublisher:
@@ -64,10 +68,8 @@ class TopicPublisher:
             msg.timestamp = now_us
         node.seq += 1
         self.count += 1
-        self._pub.put(
-            self.encoder.encode(msg),
-            attachment=HEADER.pack(self.fingerprint, node.publisher_id, node.seq, now_us, node.header_flags),
-        )
+        header = HEADER.pack(self.fingerprint, node.publisher_id, node.seq, self.count, now_us, node.header_flags)
+        self._pub.put(self.encoder.encode(msg), attachment=header)
         node.on_published(self)
 
     def matching(self) -> bool:
@@ -128,7 +130,7 @@ class TopicSubscriber:
         if len(raw) != HEADER.size:
             self._reject_schema(f"malformed header of {len(raw)} bytes")
             return None
-        fp, pub_id, seq, pub_time, flags = HEADER.unpack(raw)
+        fp, pub_id, seq, index, pub_time, flags = HEADER.unpack(raw)
         if fp != self.fingerprint:
             mine = f"{self.msg_type.__name__} {self.fingerprint:016x}"
             self._reject_schema(f"publisher {pub_id:08x} sends schema {fp:016x}, this subscriber expects {mine}")
@@ -141,7 +143,7 @@ class TopicSubscriber:
                 log.warning("%s: dropped malformed message (%d so far): %s", self.key, self.decode_errors, e)
             return None
         self.received += 1
-        return (pub_time if flags & FLAG_LOCKSTEP_TIME else -1, pub_id, seq, msg)
+        return (pub_time if flags & FLAG_LOCKSTEP_TIME else -1, pub_id, seq, msg, index)
 
     def _reject_schema(self, why: str) -> None:
         self.schema_errors += 1
@@ -170,4 +172,3 @@ class TopicSubscriber:
 
     def undeclare(self) -> None:
         self._sub.undeclare()
-

@@ -11,7 +11,7 @@ import psutil
 import typer
 
 from stack.bus import keys
-from stack.cli import param, topic
+from stack.cli import fly, param, topic
 from stack.cli.common import EndpointOption, JsonOption, VehicleOption, connect, fail, print_table, query_json
 from stack.supervisor import state as run_state
 from stack.supervisor.profile import DEFAULT_PROFILE, ProfileError, load_profile
@@ -24,6 +24,7 @@ app = typer.Typer(
 )
 app.add_typer(topic.app, name="topic")
 app.add_typer(param.app, name="param")
+app.command("fly")(fly.fly)
 
 
 @app.command()

@@ -129,7 +129,7 @@ def _subscribe(node: Node, topic: str, instance: int) -> tuple[zenoh.Subscriber,
         att = sample.attachment
         if att is None or len(att) != HEADER.size:
             return
-        fp, pub, seq, t, _flags = HEADER.unpack(att.to_bytes())
+        fp, pub, seq, index, t, _flags = HEADER.unpack(att.to_bytes())
         if fp != expected:
             if not warned:
                 warned.append(1)
@@ -140,7 +140,7 @@ def _subscribe(node: Node, topic: str, instance: int) -> tuple[zenoh.Subscriber,
                 )
             return
         try:
-            q.put((t, pub, seq, decoder.decode(sample.payload.to_bytes())))
+            q.put((t, pub, seq, decoder.decode(sample.payload.to_bytes()), index))
         except msgspec.DecodeError as e:
             typer.echo(f"warning: malformed {topic} message dropped: {e}", err=True)
 
@@ -168,7 +168,7 @@ def echo(
         try:
             while count == 0 or shown < count:
                 try:
-                    _, _, _, msg = q.get(timeout=timeout)
+                    _, _, _, msg, _ = q.get(timeout=timeout)
                 except queue.Empty:
                     fail(f"waited {timeout:g} s without a message on {topic} (instance {instance})")
                 shown += 1
@@ -213,7 +213,7 @@ def hz(
         try:
             while duration == 0 or time.monotonic() - start < duration:
                 try:
-                    _, _, _, msg = q.get(timeout=0.05)
+                    _, _, _, msg, _ = q.get(timeout=0.05)
                     arrivals.append(time.monotonic())
                     stamps.append(msg.timestamp)
                     del arrivals[: -window - 1], stamps[: -window - 1]

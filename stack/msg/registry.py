@@ -17,8 +17,10 @@ from stack.msg.estimation import (
 )
 from stack.msg.sensors import SensorAccel, SensorBaro, SensorGps, SensorGyro, SensorMag
 from stack.msg.setpoints import (
+    HoverThrustEstimate,
     ManualControlSetpoint,
     RateCtrlStatus,
+    TakeoffStatus,
     TrajectorySetpoint,
     VehicleAttitudeSetpoint,
     VehicleLocalPositionSetpoint,
@@ -29,10 +31,15 @@ from stack.msg.setpoints import (
 from stack.msg.simulation import SimGroundtruth
 from stack.msg.system import (
     ActuatorArmed,
+    BatteryStatus,
+    HomePosition,
+    OffboardControlMode,
     ParameterUpdate,
+    TelemetryStatus,
     VehicleCommand,
     VehicleCommandAck,
     VehicleControlMode,
+    VehicleLandDetected,
     VehicleStatus,
 )
 
@@ -63,6 +70,13 @@ TOPICS: dict[str, type[Message]] = {
     "vehicle_control_mode": VehicleControlMode,
     "vehicle_status": VehicleStatus,
     "actuator_armed": ActuatorArmed,
+    "vehicle_land_detected": VehicleLandDetected,
+    "offboard_control_mode": OffboardControlMode,
+    "telemetry_status": TelemetryStatus,
+    "battery_status": BatteryStatus,
+    "home_position": HomePosition,
+    "hover_thrust_estimate": HoverThrustEstimate,
+    "takeoff_status": TakeoffStatus,
     "vehicle_command": VehicleCommand,
     "vehicle_command_ack": VehicleCommandAck,
     "parameter_update": ParameterUpdate,

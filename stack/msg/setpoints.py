@@ -94,3 +94,30 @@ class ManualControlSetpoint(Message):
     aux6: float = 0.0
     sticks_moving: bool = False
     buttons: int = 0
+
+
+class HoverThrustEstimate(Message):
+    """Collective thrust that holds altitude (PX4 ``HoverThrustEstimate``), normalised."""
+
+    timestamp_sample: int = 0
+    hover_thrust: float = NAN
+    hover_thrust_var: float = NAN
+    accel_innov: float = NAN
+    accel_innov_var: float = NAN
+    accel_innov_test_ratio: float = NAN
+    accel_noise_var: float = NAN
+    valid: bool = False
+
+
+class TakeoffStatus(Message):
+    """The position controller's takeoff stage (PX4 ``TakeoffStatus``) and current tilt limit [rad]."""
+
+    TAKEOFF_STATE_UNINITIALIZED = 0
+    TAKEOFF_STATE_DISARMED = 1
+    TAKEOFF_STATE_SPOOLUP = 2
+    TAKEOFF_STATE_READY_FOR_TAKEOFF = 3
+    TAKEOFF_STATE_RAMPUP = 4
+    TAKEOFF_STATE_FLIGHT = 5
+
+    takeoff_state: int = TAKEOFF_STATE_UNINITIALIZED
+    tilt_limit: float = NAN

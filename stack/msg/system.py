@@ -107,6 +107,10 @@ class VehicleCommand(Message):
     VEHICLE_CMD_DO_REPOSITION = 192
     VEHICLE_CMD_MISSION_START = 300
     VEHICLE_CMD_COMPONENT_ARM_DISARM = 400
+    # PX4-internal ids (above 65535): SET_NAV_STATE is PX4's; DO_REPOSITION_LOCAL is ours (DO_REPOSITION
+    # with param5/6/7 the local north, east, down in metres).
+    VEHICLE_CMD_SET_NAV_STATE = 100001
+    VEHICLE_CMD_DO_REPOSITION_LOCAL = 100192
     ARMING_ACTION_DISARM = 0
     ARMING_ACTION_ARM = 1
     ARM_FORCE_MAGIC = 21196
@@ -159,3 +163,82 @@ class ParameterUpdate(Message):
     active: int = 0
     changed: int = 0
     custom_default: int = 0
+
+
+class VehicleLandDetected(Message):
+    """Land detector output (PX4 ``VehicleLandDetected``): the stages from ground contact to landed."""
+
+    freefall: bool = False
+    ground_contact: bool = True
+    maybe_landed: bool = True
+    landed: bool = True
+    in_ground_effect: bool = True
+    in_descend: bool = False
+    has_low_throttle: bool = False
+    vertical_movement: bool = False
+    horizontal_movement: bool = False
+    rotational_movement: bool = False
+    close_to_ground_or_skipped_check: bool = True
+    at_rest: bool = True
+
+
+class OffboardControlMode(Message):
+    """Which setpoints an offboard controller streams (PX4 ``OffboardControlMode``); also its proof of life."""
+
+    position: bool = False
+    velocity: bool = False
+    acceleration: bool = False
+    attitude: bool = False
+    body_rate: bool = False
+    thrust_and_torque: bool = False
+    direct_actuator: bool = False
+
+
+class TelemetryStatus(Message):
+    """A command link's heartbeat (the subset of PX4 ``TelemetryStatus`` the commander uses)."""
+
+    LINK_TYPE_GENERIC = 0
+    LINK_TYPE_UDP = 1
+
+    type: int = LINK_TYPE_GENERIC
+    heartbeat_type_gcs: bool = False
+    heartbeat_type_onboard_controller: bool = False
+
+
+class BatteryStatus(Message):
+    """Battery state (PX4 ``BatteryStatus`` fields a multicopter uses); ``remaining`` in [0, 1]."""
+
+    WARNING_NONE = 0
+    WARNING_LOW = 1
+    WARNING_CRITICAL = 2
+    WARNING_EMERGENCY = 3
+
+    connected: bool = False
+    voltage_v: float = 0.0
+    current_a: float = -1.0
+    current_average_a: float = -1.0
+    discharged_mah: float = -1.0
+    remaining: float = -1.0
+    scale: float = 1.0
+    time_remaining_s: float = float("nan")
+    temperature: float = float("nan")
+    cell_count: int = 0
+    capacity: float = 0.0
+    warning: int = WARNING_NONE
+
+
+class HomePosition(Message):
+    """Home: where the vehicle armed, in local NED and geodetic coordinates (PX4 ``HomePosition``)."""
+
+    lat: float = float("nan")
+    lon: float = float("nan")
+    alt: float = float("nan")
+    x: float = 0.0
+    y: float = 0.0
+    z: float = 0.0
+    yaw: float = 0.0
+    valid_alt: bool = False
+    valid_hpos: bool = False
+    valid_lpos: bool = False
+    manual_home: bool = False
+    update_count: int = 0

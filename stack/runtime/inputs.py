@@ -19,7 +19,7 @@ from stack.bus.topics import Received, TopicSubscriber
 
 
 class InputBuffer:
-    __slots__ = ("_latest_key", "_new", "_pending", "_queue", "counts", "latest", "queue_mode", "sub")
+    __slots__ = ("_latest_key", "_new", "_pending", "_queue", "last_index", "latest", "queue_mode", "sub")
 
     def __init__(self, sub: TopicSubscriber, queue_mode: bool) -> None:
         self.sub = sub
@@ -29,16 +29,19 @@ class InputBuffer:
         self._new = False
         self._pending: list[Received] = []
         self._queue: list[tuple[tuple[int, int, int], Any]] = []
-        # Messages received per publisher id, for the lockstep barrier.
-        self.counts: dict[int, int] = {}
+        # Highest topic index received per publisher id, for the lockstep barrier. A latest-value input
+        # may sit on a ring buffer that drops old messages: the barrier only needs the newest to be in.
+        self.last_index: dict[int, int] = {}
 
     def pull(self) -> None:
         """Move everything Zenoh has delivered into the pending list."""
         poll = self.sub.poll
+        last = self.last_index
         item = poll()
         while item is not None:
             self._pending.append(item)
-            self.counts[item[1]] = self.counts.get(item[1], 0) + 1
+            if item[4] > last.get(item[1], 0):
+                last[item[1]] = item[4]
             item = poll()
 
     def promote_all(self) -> None:
@@ -58,7 +61,7 @@ class InputBuffer:
             return
         waiting: list[Received] = []
         for item in self._pending:
-            t, pub, seq, msg = item
+            t, pub, seq, msg = item[0], item[1], item[2], item[3]
             if pub not in members:
                 self._accept((now, pub, seq), msg)
             elif t < now or (pub == trigger_pub and seq < trigger_seq):

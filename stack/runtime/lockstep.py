@@ -56,7 +56,7 @@ def timer_due(t: int, last_fire: int | None, period_us: int) -> bool:
 
 
 class Barrier:
-    """Waits until the subscriptions hold every message the lockstep counts announce."""
+    """Waits until each subscription holds the newest message the lockstep counts announce."""
 
     def __init__(self, inputs: Iterable[InputBuffer]) -> None:
         self.by_suffix = {buf.sub.suffix: buf for buf in inputs}
@@ -81,9 +81,9 @@ class Barrier:
             for key, total in list(self.required.items()):
                 pub, suffix = key
                 buf = self.by_suffix[suffix]
-                if buf.counts.get(pub, 0) < total:
+                if buf.last_index.get(pub, 0) < total:
                     buf.pull()
-                    if buf.counts.get(pub, 0) < total:
+                    if buf.last_index.get(pub, 0) < total:
                         return False
                 del self.required[key]
         return True

@@ -30,6 +30,7 @@ log = logging.getLogger("stack.runtime")
 
 SYNC_TIMEOUT_S = 60.0
 LOCKSTEP_QUEUE = 1 << 14
+LATEST_RING = 8
 
 
 class Shutdown(BaseException):
@@ -68,12 +69,12 @@ class Runtime:
     # -- declarations used by Module -----------------------------------------------------------------
 
     def add_input(self, topic: str, instance: int, queue: bool, capacity: int) -> None:
-        if self.lockstep:
-            sub = self.node.subscriber(topic, instance, capacity=max(capacity, LOCKSTEP_QUEUE))
-        elif queue:
-            sub = self.node.subscriber(topic, instance, capacity=capacity)
+        if queue:
+            sub = self.node.subscriber(topic, instance, capacity=max(capacity, LOCKSTEP_QUEUE if self.lockstep else 0))
         else:
-            sub = self.node.subscriber(topic, instance, capacity=4, keep_last=True)
+            # Latest-value inputs keep the last few messages only. In lockstep a publisher sends a topic
+            # about once per step, so the newest message visible at a run is always among them.
+            sub = self.node.subscriber(topic, instance, capacity=LATEST_RING, keep_last=True)
         self.inputs[(topic, instance)] = InputBuffer(sub, queue)
 
     def add_output(self, topic: str, instance: int, reliable: bool | None) -> None:
@@ -239,7 +240,7 @@ class Runtime:
         last_sample = 0
         while True:
             item = buf.sub.recv()
-            t, pub, seq, msg = item
+            t, pub, seq, msg = item[0], item[1], item[2], item[3]
             self._take_trigger(buf, item)
             if t >= 0:
                 member.advance_to(t)
@@ -320,7 +321,7 @@ class Runtime:
     # -- one run ---------------------------------------------------------------------------------------
 
     def _take_trigger(self, buf: InputBuffer, item: Received) -> None:
-        buf.counts[item[1]] = buf.counts.get(item[1], 0) + 1
+        buf.last_index[item[1]] = item[4]
         buf.latest = item[3]
 
     def _run(self, msg: Any, sample_us: int, last_sample_us: int) -> int:

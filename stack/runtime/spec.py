@@ -29,6 +29,7 @@ MODULES: dict[str, str] = {
     "mavlink_pixhawk": "stack.mavlink.module:PixhawkAdapterModule",
     "rerun_bridge": "stack.viz.module:RerunBridgeModule",
     "recorder": "stack.record.module:RecorderModule",
+    "scenario": "stack.scenario.module:ScenarioModule",
 }
 
 

@@ -278,6 +278,10 @@ class Simulator:
         """Wind on/off; off means exactly zero wind."""
         self._wind.set_enabled(enabled)
 
+    def set_wind(self, params: WindParams) -> None:
+        """New wind figures (mean, gusts, enabled), applied from the next step."""
+        self._wind.set_params(params)
+
     def reset_pose(
         self,
         position: Vec3 = ZERO3,

@@ -86,6 +86,14 @@ class WindModel:
         self._enabled = enabled
         self._wind = self._sum()
 
+    def set_params(self, params: WindParams) -> None:
+        """Change the wind figures while running; the gust state carries on from where it is."""
+        self.params = params
+        self._enabled = params.enabled
+        self._calm = params.is_calm
+        self._dt = -1.0
+        self._wind = self._sum()
+
     @property
     def wind(self) -> Vec3:
         """The current wind NED (m/s)."""

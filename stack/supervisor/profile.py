@@ -55,6 +55,7 @@ class Profile:
     port: int
     stall_timeout_s: float = 10.0
     modules: list[ModuleEntry] = field(default_factory=list)
+    scenario_limits: dict[str, dict[str, float | bool]] = field(default_factory=dict)
 
     @property
     def name(self) -> str:
@@ -95,7 +96,7 @@ class _Loader:
             doc = tomllib.loads(self.path.read_text())
         except tomllib.TOMLDecodeError as e:
             raise self.fail("", f"TOML syntax error: {e}") from None
-        self._only(doc, "", {"stack", "bus", "params", "module"})
+        self._only(doc, "", {"stack", "bus", "params", "module", "scenario"})
         stack = self._table(doc, "stack")
         self._only(stack, "stack", {"vehicle", "description", "lockstep", "seed", "airframe", "stall_timeout_s"})
         vehicle = self._get(stack, "stack", "vehicle", str, "v1")
@@ -138,7 +139,30 @@ class _Loader:
         for name in given_shared:
             if name not in declared:
                 raise self.fail(f"params.{name}", "no module of this profile has this parameter")
+        profile.scenario_limits = self._scenario_limits(self._table(doc, "scenario"))
         return profile
+
+    def _scenario_limits(self, table: dict) -> dict[str, dict[str, float | bool]]:
+        """Per-scenario check limits for this vehicle (``[scenario.attitude_step] yaw_rise_time_s = 0.3``)."""
+        from stack.scenario.catalogue import scenarios
+
+        known = scenarios()
+        limits: dict[str, dict[str, float | bool]] = {}
+        for name, overrides in table.items():
+            if name not in known:
+                raise self.fail(f"scenario.{name}", f"unknown scenario (known: {', '.join(sorted(known))})")
+            if not isinstance(overrides, dict):
+                raise self.fail(f"scenario.{name}", "expected a table of check limits")
+            checks = {c.metric: c for c in known[name].checks}
+            for metric, value in overrides.items():
+                if metric not in checks:
+                    raise self.fail(f"scenario.{name}.{metric}", f"not a check of {name} ({', '.join(checks)})")
+                if type(value) is not type(checks[metric].limit) and not (
+                    isinstance(value, int | float) and isinstance(checks[metric].limit, float)
+                ):
+                    raise self.fail(f"scenario.{name}.{metric}", f"expected {type(checks[metric].limit).__name__}")
+            limits[name] = dict(overrides)
+        return limits
 
     def _bus(self, table: dict) -> tuple[BusConfig, int]:
         self._only(table, "bus", {"port", "connect", "listen", "mode", "low_latency", "lease_ms"})

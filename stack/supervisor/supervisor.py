@@ -44,6 +44,7 @@ class UpOptions:
     duration: float | None = None
     log_level: str = "INFO"
     echo_logs: bool = True
+    echo_only: tuple[str, ...] = ()
     extra_args: dict[str, dict[str, object]] = field(default_factory=dict)
 
 
@@ -371,7 +372,8 @@ class Supervisor:
                 line = raw.decode(errors="replace").rstrip()
                 log_file.write(f"{time.strftime('%H:%M:%S')} {line}\n")
                 log_file.flush()
-                if self.options.echo_logs:
+                echo = self.options.echo_logs or name in self.options.echo_only
+                if echo:
                     with self._print_lock:
                         print(prefix + line, flush=True)
 

@@ -32,7 +32,10 @@ def test_messages_cross_processes_in_order_with_header(tmp_path):
 
 def test_malformed_and_mismatched_samples_are_counted_and_dropped(tmp_path):
     home = tmp_path / "home"
-    stack = RunningStack(home, chain_profile(tmp_path / "chain.toml", lockstep=False))
+    profile = chain_profile(
+        tmp_path / "chain.toml", lockstep=False, extra='[[module]]\nmodule = "tests.support.modules:CommandCounter"\n'
+    )
+    stack = RunningStack(home, profile)
     try:
         stack.wait_up()
         rogue = subprocess.run(
@@ -40,13 +43,13 @@ def test_malformed_and_mismatched_samples_are_counted_and_dropped(tmp_path):
         )
         assert rogue.returncode == 0
         time.sleep(1.5)  # a heartbeat carries the counters
-        doubler = next(m for m in stack.status()["modules"] if m["module"] == "doubler")
-        assert doubler["decode_errors"] == 20
-        assert doubler["schema_errors"] == 40
-        runs_before = doubler["runs"]
+        counter = next(m for m in stack.status()["modules"] if m["module"] == "command_counter")
+        assert counter["decode_errors"] == 20
+        assert counter["schema_errors"] == 40
+        runs_before = counter["runs"]
         time.sleep(1.2)
-        doubler = next(m for m in stack.status()["modules"] if m["module"] == "doubler")
-        assert doubler["runs"] > runs_before and doubler["state"] == "running"
+        counter = next(m for m in stack.status()["modules"] if m["module"] == "command_counter")
+        assert counter["runs"] > runs_before and counter["state"] == "running"
         assert "schema mismatch" in stack.output and "malformed" in stack.output
     finally:
         assert stack.stop() == 0

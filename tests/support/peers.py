@@ -2,8 +2,8 @@
 
 - ``pub ENDPOINT N``: listens on ENDPOINT, waits for a subscriber, publishes N vehicle_command messages.
 - ``sub ENDPOINT N OUT``: connects to ENDPOINT, receives N vehicle_command messages, writes them as JSON.
-- ``rogue``: joins the running stack (found through STACK_HOME) and sends it bad samples on sensor_gyro:
-  malformed payloads, a foreign schema fingerprint, and samples without the stack header.
+- ``rogue``: joins the running stack (found through STACK_HOME) and sends it bad samples on
+  vehicle_command: malformed payloads, a foreign schema fingerprint, and samples without the stack header.
 """
 
 from __future__ import annotations
@@ -21,7 +21,6 @@ from stack.bus.node import Node
 from stack.bus.topics import HEADER
 from stack.cli.common import find_stack
 from stack.msg.registry import fingerprint
-from stack.msg.sensors import SensorGyro
 from stack.msg.system import VehicleCommand
 
 
@@ -40,7 +39,7 @@ def subscribe(endpoint: str, n: int, out: str) -> None:
         sub = node.subscriber("vehicle_command", capacity=n + 16)
         got = []
         while len(got) < n:
-            t, pub, seq, msg = sub.recv()
+            t, pub, seq, msg, _ = sub.recv()
             got.append({"t": t, "publisher": pub, "seq": seq, "param1": msg.param1, "command": msg.command})
     with open(out, "w") as f:
         json.dump(got, f)
@@ -49,17 +48,17 @@ def subscribe(endpoint: str, n: int, out: str) -> None:
 def rogue() -> None:
     vehicle, bus = find_stack(None, None)
     with zenoh.open(bus.zenoh_config("rogue")) as session:
-        key = keys.topic_key(vehicle, "sensor_gyro", 0)
+        key = keys.topic_key(vehicle, "vehicle_command", 0)
         pub = session.declare_publisher(key, congestion_control=zenoh.CongestionControl.BLOCK)
         time.sleep(0.5)
-        good_fp = fingerprint(SensorGyro)
+        good_fp = fingerprint(VehicleCommand)
         for i in range(20):
-            # The right header with a payload that is not a SensorGyro.
-            pub.put(b"\xc1\x00garbage", attachment=HEADER.pack(good_fp, 99, i, 0, 0))
+            # The right header with a payload that is not a VehicleCommand.
+            pub.put(b"\xc1\x00garbage", attachment=HEADER.pack(good_fp, 99, i, i + 1, 0, 0))
             # A well-formed message from a publisher built with another definition.
-            pub.put(msgspec.msgpack.encode(SensorGyro()), attachment=HEADER.pack(good_fp ^ 1, 99, i, 0, 0))
+            pub.put(msgspec.msgpack.encode(VehicleCommand()), attachment=HEADER.pack(good_fp ^ 1, 99, i, i + 1, 0, 0))
             # No stack header at all.
-            pub.put(msgspec.msgpack.encode(SensorGyro()))
+            pub.put(msgspec.msgpack.encode(VehicleCommand()))
             time.sleep(0.01)
         time.sleep(0.5)
         pub.undeclare()

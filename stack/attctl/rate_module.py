@@ -1,0 +1,78 @@
+"""mc_rate_control: the body-rate loop, run on every filtered angular velocity sample.
+
+Seed 003's RateControl: PID with feed-forward, the integrator held back on an axis the allocator
+reports saturated and while landed, and D on the measured angular acceleration. Its torque and
+thrust setpoints go to the allocator (thrust first, so the allocator, triggered by the torque,
+always sees the thrust of the same step).
+"""
+
+from __future__ import annotations
+
+from stack.attctl import rate_control
+from stack.attctl.rate_control import RateControl, YawTorqueLowPass
+from stack.msg.estimation import VehicleAngularVelocity
+from stack.msg.setpoints import RateCtrlStatus, VehicleThrustSetpoint, VehicleTorqueSetpoint
+from stack.runtime.module import Module, Trigger
+
+FLT_EPSILON = 1.1920929e-07
+
+
+class MulticopterRateControl(Module):
+    NAME = "mc_rate_control"
+    DESCRIPTION = "Body-rate controller (PX4 mc_rate_control): rate setpoint → torque and thrust setpoints"
+    TRIGGER = Trigger("vehicle_angular_velocity")
+    DT_RANGE = (0.000125, 0.02)
+    PARAMS = rate_control.PARAMS
+
+    def __init__(self, rt) -> None:
+        super().__init__(rt)
+        for topic in (
+            "vehicle_rates_setpoint",
+            "control_allocator_status",
+            "vehicle_control_mode",
+            "vehicle_land_detected",
+        ):
+            self.subscribe(topic)
+        self.advertise("vehicle_thrust_setpoint")
+        self.advertise("vehicle_torque_setpoint")
+        self.advertise("rate_ctrl_status")
+        self.control = RateControl(self.params.values())
+        self.yaw_filter = YawTorqueLowPass(float(self.params["MC_YAW_TQ_CUTOFF"]))
+
+    def on_params_changed(self, changed: set[str]) -> None:
+        self.control.set_params(self.params.values())
+        self.yaw_filter.set_cutoff(float(self.params["MC_YAW_TQ_CUTOFF"]))
+
+    def run(self, rates: VehicleAngularVelocity, dt: float) -> None:
+        mode = self.latest("vehicle_control_mode")
+        if mode is None or not mode.flag_control_rates_enabled:
+            return
+        status = self.update("control_allocator_status")
+        if status is not None:
+            positive = [False, False, False]
+            negative = [False, False, False]
+            if not status.torque_setpoint_achieved:
+                for i, unallocated in enumerate(status.unallocated_torque):
+                    positive[i] = unallocated > FLT_EPSILON
+                    negative[i] = unallocated < -FLT_EPSILON
+            self.control.set_saturation_status(tuple(positive), tuple(negative))
+        if not mode.flag_armed:
+            self.control.reset_integral()
+            self.yaw_filter.reset()
+        land = self.latest("vehicle_land_detected")
+        landed = land is not None and (land.landed or land.maybe_landed)
+        sp = self.latest("vehicle_rates_setpoint")
+        if sp is None:
+            return
+        if sp.reset_integral:
+            self.control.reset_integral()
+        torque = self.control.update(rates.xyz, (sp.roll, sp.pitch, sp.yaw), rates.xyz_derivative, dt, landed)
+        torque = (torque[0], torque[1], self.yaw_filter.update(torque[2], dt))
+        thrust = tuple(t if t == t else 0.0 for t in sp.thrust_body)
+        t = rates.timestamp_sample
+        self.publish("vehicle_thrust_setpoint", VehicleThrustSetpoint(timestamp_sample=t, xyz=thrust))
+        self.publish("vehicle_torque_setpoint", VehicleTorqueSetpoint(timestamp_sample=t, xyz=torque))
+        i = self.control.integral
+        self.publish(
+            "rate_ctrl_status", RateCtrlStatus(rollspeed_integ=i[0], pitchspeed_integ=i[1], yawspeed_integ=i[2])
+        )

@@ -1,0 +1,110 @@
+"""``stack fly SCENARIO``: bring a stack up, fly a scripted scenario against it, write a JSON report."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import typer
+
+from stack.cli.common import fail, print_table
+from stack.runtime.spec import load_module_class
+from stack.scenario.catalogue import scenarios
+from stack.supervisor import state as run_state
+from stack.supervisor.profile import DEFAULT_PROFILE, ModuleEntry, Profile, ProfileError, load_profile
+from stack.supervisor.supervisor import Supervisor, UpOptions
+
+
+def fly(
+    scenario: str = typer.Argument("", help="Scenario name (see --list)"),
+    profile: str = typer.Option(DEFAULT_PROFILE, "--profile", "-p", help="Launch profile: a name in launch/ or a path"),
+    seed: int | None = typer.Option(None, "--seed", "-s", help="Override the profile's seed"),
+    report: Path | None = typer.Option(None, "--report", "-r", help="Where to write the JSON report"),
+    list_: bool = typer.Option(False, "--list", help="List the scenarios and exit"),
+    log_level: str = typer.Option("INFO", help="Log level of the modules"),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help="Only the scenario's progress and the result"),
+) -> None:
+    """Fly a scripted scenario (in lockstep, deterministic for a seed) and report how well the stack flew."""
+    known = scenarios()
+    if list_ or not scenario:
+        for s in known.values():
+            typer.echo(f"{s.name:16s} {s.description}")
+        raise typer.Exit(0)
+    if scenario not in known:
+        fail(f"unknown scenario '{scenario}' (known: {', '.join(sorted(known))})", code=2)
+    try:
+        prof = load_profile(profile)
+    except ProfileError as e:
+        fail(str(e), code=2)
+    for running in run_state.running_stacks():
+        if running["vehicle"] == prof.vehicle:
+            fail(f"a stack for vehicle '{prof.vehicle}' is already running (pid {running['pid']}); `stack down` first")
+    if seed is not None:
+        prof.seed = seed
+    run_dir = run_state.new_run_dir(f"fly-{scenario}", prof.vehicle)
+    result_path = run_dir / "scenario_result.json"
+    add_scenario(prof, scenario, result_path)
+    options = UpOptions(log_level=log_level, echo_logs=not quiet, echo_only=("scenario",) if quiet else ())
+    code = Supervisor(prof, options, run_dir).run()
+    if not result_path.exists():
+        fail(f"the scenario produced no result (supervisor exit code {code}); see the logs in {run_dir}")
+    result = json.loads(result_path.read_text())
+    full = {
+        "scenario": scenario,
+        "profile": prof.name,
+        "seed": prof.seed,
+        "passed": result["passed"],
+        "sim_time_s": result["sim_time_s"],
+        "wall_time_s": result["wall_time_s"],
+        "realtime_factor": result["realtime_factor"],
+        "metrics": result["metrics"],
+        "checks": result["checks"],
+        "error": result["error"],
+        "run_dir": str(run_dir),
+    }
+    out = report or run_dir / "report.json"
+    out.write_text(json.dumps(full, indent=2))
+    _print_summary(full, out)
+    raise typer.Exit(0 if full["passed"] else 1)
+
+
+def add_scenario(prof: Profile, scenario: str, result_path: Path) -> None:
+    """Append the scenario module to a profile (critical: the stack stops when the scenario ends)."""
+    limits = prof.scenario_limits.get(scenario, {})
+    cls = load_module_class("scenario")
+    prof.modules.append(
+        ModuleEntry(
+            name="scenario",
+            module="scenario",
+            cls=cls,
+            params={},
+            args={"name": scenario, "result": str(result_path), "limits": json.dumps(limits)},
+            condition="",
+            restart="no",
+            max_restarts=0,
+            critical=True,
+        )
+    )
+
+
+def _print_summary(report: dict, path: Path) -> None:
+    status = "PASSED" if report["passed"] else "FAILED"
+    typer.echo(
+        f"\n{report['scenario']} on {report['profile']} (seed {report['seed']}): {status} — "
+        f"{report['sim_time_s']:.1f} s simulated in {report['wall_time_s']:.1f} s "
+        f"(real-time factor {report['realtime_factor']:.1f})"
+    )
+    if report["error"]:
+        typer.echo(f"error: {report['error']}")
+    rows = [
+        (c["name"], _fmt(c["value"]), _fmt(c["limit"]), "ok" if c["passed"] else "FAIL") for c in report["checks"]
+    ]
+    print_table(("CHECK", "VALUE", "LIMIT", ""), rows)
+    others = {k: v for k, v in report["metrics"].items() if k not in {c["name"] for c in report["checks"]}}
+    for k, v in others.items():
+        typer.echo(f"{k}: {_fmt(v)}")
+    typer.echo(f"report: {path}")
+
+
+def _fmt(value: object) -> str:
+    return f"{value:.4g}" if isinstance(value, float) else str(value)

@@ -1,0 +1,425 @@
+"""The failsafe state machine: which action a failure calls for and which mode the vehicle flies in.
+
+Follows PX4's failsafe framework (``src/modules/commander/failsafe/framework.cpp`` and ``failsafe.cpp``)
+for the failures this stack detects:
+
+* **command-link loss** (``gcs_connection_lost``): NAV_DLL_ACT (0 disabled, 1 hold, 2 return, 3 land,
+  5 terminate, 6 disarm); ignored while disarmed, while landing, and in the modes COM_DLL_EXCEPT exempts
+  (bit 0 mission, bit 1 the other auto modes);
+* **battery**: LOW only warns; CRITICAL and EMERGENCY act per COM_LOW_BAT_ACT (0 warn, 1 return,
+  2 land, 3 return at critical then land at emergency), but only when the warning is worse than it was at
+  arming;
+* **geofence breach**: GF_ACTION (0 none, 1 warn, 2 hold, 3 return, 4 terminate, 5 land);
+* **mode fallback** (estimator or mission loss): Position falls back to Altitude, Altitude to
+  Stabilized, and any mode that cannot run goes to Return — which, when it cannot run either, falls
+  through Land and Descend to Terminate. With no local position, an auto mode therefore ends in Descend;
+  with position but no home it ends in Land.
+
+The worst active action wins (None < Warn < fallbacks < Hold < Return < Land < Descend < Disarm <
+Terminate). An action that allows it is first delayed by COM_FAIL_ACT_T seconds in Hold (PX4's "Failsafe
+activated: entering Hold for 5 seconds"). The user takes over by switching mode where the action allows it
+(Hold, Return, Land, Descend; never Terminate or Disarm); the action is then reduced to a warning until a
+new failure arrives. Link-loss, geofence and Hold/Return/Land actions stay until the user changes mode or
+disarms; battery and fallback actions clear with their condition. Terminate never clears.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+from enum import IntEnum
+from typing import NamedTuple
+
+from stack.commander.battery import BatteryWarning
+from stack.commander.geofence import GeofenceAction
+from stack.commander.health import can_run, missing_cause
+from stack.commander.modes import AUTO_NAV_STATES, Requirement
+from stack.msg.system import VehicleStatus
+from stack.runtime.params import Param
+
+NS = VehicleStatus
+
+PARAMS: tuple[Param, ...] = (
+    Param(
+        "NAV_DLL_ACT",
+        0,
+        0,
+        6,
+        "",
+        "Link-loss action: 0 off, 1 hold, 2 return, 3 land, 5 terminate, 6 disarm",
+        choices=(0, 1, 2, 3, 5, 6),
+    ),
+    Param("COM_DLL_EXCEPT", 0, 0, 31, "", "No link-loss failsafe in: bit 0 Mission, bit 1 the other auto modes"),
+    Param(
+        "COM_LOW_BAT_ACT",
+        0,
+        0,
+        3,
+        "",
+        "Battery: 0 warn, 1 return, 2 land, 3 return at critical then land at emergency",
+        choices=(0, 1, 2, 3),
+    ),
+    Param("COM_FAIL_ACT_T", 5.0, 0.0, 25.0, "s", "Hold this long before a failsafe action (0 = act at once)"),
+)
+DEFAULTS: dict[str, object] = {p.name: p.default for p in PARAMS}
+
+DLL_EXCEPT_MISSION = 1
+DLL_EXCEPT_AUTO_MODES = 2
+
+
+class FailsafeAction(IntEnum):
+    """PX4 ``FailsafeBase::Action``, in order of severity."""
+
+    NONE = 0
+    WARN = 1
+    FALLBACK_POSCTL = 2
+    FALLBACK_ALTCTL = 3
+    FALLBACK_STAB = 4
+    HOLD = 5
+    RTL = 6
+    LAND = 7
+    DESCEND = 8
+    DISARM = 9
+    TERMINATE = 10
+
+
+ACTION_NAMES: dict[FailsafeAction, str] = {
+    FailsafeAction.NONE: "none",
+    FailsafeAction.WARN: "warn",
+    FailsafeAction.FALLBACK_POSCTL: "fallback_posctl",
+    FailsafeAction.FALLBACK_ALTCTL: "fallback_altctl",
+    FailsafeAction.FALLBACK_STAB: "fallback_stabilized",
+    FailsafeAction.HOLD: "hold",
+    FailsafeAction.RTL: "rtl",
+    FailsafeAction.LAND: "land",
+    FailsafeAction.DESCEND: "descend",
+    FailsafeAction.DISARM: "disarm",
+    FailsafeAction.TERMINATE: "terminate",
+}
+
+ACTION_MODES: dict[FailsafeAction, int] = {
+    FailsafeAction.FALLBACK_POSCTL: NS.NAVIGATION_STATE_POSCTL,
+    FailsafeAction.FALLBACK_ALTCTL: NS.NAVIGATION_STATE_ALTCTL,
+    FailsafeAction.FALLBACK_STAB: NS.NAVIGATION_STATE_STAB,
+    FailsafeAction.HOLD: NS.NAVIGATION_STATE_AUTO_LOITER,
+    FailsafeAction.RTL: NS.NAVIGATION_STATE_AUTO_RTL,
+    FailsafeAction.LAND: NS.NAVIGATION_STATE_AUTO_LAND,
+    FailsafeAction.DESCEND: NS.NAVIGATION_STATE_DESCEND,
+    FailsafeAction.TERMINATE: NS.NAVIGATION_STATE_TERMINATION,
+}
+
+_TAKEOVER_ACTIONS = frozenset({FailsafeAction.HOLD, FailsafeAction.RTL, FailsafeAction.LAND, FailsafeAction.DESCEND})
+
+
+class Takeover(IntEnum):
+    """How the user may take over from an action (PX4 ``UserTakeoverAllowed``), least restrictive first.
+    AUTO becomes ALWAYS (with the COM_FAIL_ACT_T delay) or MODE_SWITCH_ONLY when the action is added."""
+
+    ALWAYS = 0
+    MODE_SWITCH_ONLY = 1
+    NEVER = 2
+    AUTO = 3
+
+
+class Clear(IntEnum):
+    """When an action goes away (PX4 ``ClearCondition``)."""
+
+    WHEN_CONDITION_CLEARS = 0
+    ON_MODE_CHANGE_OR_DISARM = 1
+    NEVER = 2
+
+
+class _Options(NamedTuple):
+    action: FailsafeAction
+    clear: Clear = Clear.WHEN_CONDITION_CLEARS
+    takeover: Takeover = Takeover.AUTO
+
+
+@dataclass(slots=True)
+class _Active:
+    cause: str
+    action: FailsafeAction
+    clear: Clear
+    takeover: Takeover
+    failing: bool = True
+    checked: bool = True
+
+
+@dataclass(slots=True)
+class FailsafeConditions:
+    """The failure states the checks watch (PX4 ``failsafe_flags``)."""
+
+    failing: Requirement = Requirement.NONE
+    gcs_connection_lost: bool = False
+    battery_warning: int = BatteryWarning.NONE
+    geofence_breached: bool = False
+
+
+class FailsafeResult(NamedTuple):
+    action: FailsafeAction
+    """The action in force (Hold while a delayed action waits)."""
+    delayed_action: FailsafeAction
+    cause: str
+    nav_state: int
+    """The mode to fly: the action's mode, or the user's intended mode."""
+    user_intended_nav_state: int
+    user_takeover: bool
+
+
+def _from_dll_param(value: int) -> _Options:
+    if value == 1:
+        return _Options(FailsafeAction.HOLD, Clear.ON_MODE_CHANGE_OR_DISARM)
+    if value == 2:
+        return _Options(FailsafeAction.RTL, Clear.ON_MODE_CHANGE_OR_DISARM)
+    if value == 3:
+        return _Options(FailsafeAction.LAND, Clear.ON_MODE_CHANGE_OR_DISARM)
+    if value == 5:
+        return _Options(FailsafeAction.TERMINATE, Clear.NEVER, Takeover.NEVER)
+    if value == 6:
+        return _Options(FailsafeAction.DISARM, takeover=Takeover.NEVER)
+    return _Options(FailsafeAction.NONE)
+
+
+def _from_geofence_param(value: int) -> _Options:
+    action = GeofenceAction(value)
+    if action == GeofenceAction.NONE:
+        return _Options(FailsafeAction.NONE)
+    if action == GeofenceAction.HOLD:
+        return _Options(FailsafeAction.HOLD, Clear.ON_MODE_CHANGE_OR_DISARM, Takeover.MODE_SWITCH_ONLY)
+    if action == GeofenceAction.RETURN:
+        return _Options(FailsafeAction.RTL, Clear.ON_MODE_CHANGE_OR_DISARM)
+    if action == GeofenceAction.TERMINATE:
+        return _Options(FailsafeAction.TERMINATE, Clear.NEVER, Takeover.NEVER)
+    if action == GeofenceAction.LAND:
+        return _Options(FailsafeAction.LAND, Clear.ON_MODE_CHANGE_OR_DISARM)
+    return _Options(FailsafeAction.WARN)
+
+
+def _from_battery_param(value: int, warning: int) -> _Options:
+    if warning == BatteryWarning.CRITICAL:
+        action = {1: FailsafeAction.RTL, 2: FailsafeAction.LAND, 3: FailsafeAction.RTL}.get(value, FailsafeAction.WARN)
+    elif warning >= BatteryWarning.EMERGENCY:
+        action = {1: FailsafeAction.RTL, 2: FailsafeAction.LAND, 3: FailsafeAction.LAND}.get(value, FailsafeAction.WARN)
+    else:
+        action = FailsafeAction.WARN
+    return _Options(action)
+
+
+BATTERY_CAUSES = {
+    BatteryWarning.LOW: "battery_low",
+    BatteryWarning.CRITICAL: "battery_critical",
+    BatteryWarning.EMERGENCY: "battery_emergency",
+    BatteryWarning.FAILED: "battery_emergency",
+}
+
+
+def mode_fallback(failing: Requirement, intended: int) -> tuple[FailsafeAction, int]:
+    """PX4 ``checkModeFallback``: the fallback action for the intended mode and the mode it leads to."""
+    action = FailsafeAction.NONE
+    if intended == NS.NAVIGATION_STATE_POSCTL and not can_run(intended, failing):
+        action, intended = FailsafeAction.FALLBACK_ALTCTL, NS.NAVIGATION_STATE_ALTCTL
+    if intended == NS.NAVIGATION_STATE_ALTCTL and not can_run(intended, failing):
+        action, intended = FailsafeAction.FALLBACK_STAB, NS.NAVIGATION_STATE_STAB
+    if not can_run(intended, failing):
+        action, intended = FailsafeAction.RTL, NS.NAVIGATION_STATE_AUTO_RTL
+    return action, intended
+
+
+def runnable_action(action: FailsafeAction, failing: Requirement) -> FailsafeAction:
+    """The action itself if its mode can run, else the next one down PX4's fallback chain."""
+    chain = (
+        FailsafeAction.FALLBACK_POSCTL,
+        FailsafeAction.FALLBACK_ALTCTL,
+        FailsafeAction.FALLBACK_STAB,
+        FailsafeAction.HOLD,
+        FailsafeAction.RTL,
+        FailsafeAction.LAND,
+        FailsafeAction.DESCEND,
+    )
+    if action not in chain:
+        return action
+    for candidate in chain[chain.index(action) :]:
+        if can_run(ACTION_MODES[candidate], failing):
+            return candidate
+    return FailsafeAction.TERMINATE
+
+
+class Failsafe:
+    """Call ``update`` every commander cycle with the arming state, the user's intended mode (and whether
+    the user just changed it) and the current failure conditions."""
+
+    __slots__ = (
+        "_actions",
+        "_battery_warning_at_arming",
+        "_delay_us",
+        "_last_update_us",
+        "_p",
+        "_selected",
+        "_takeover_active",
+        "_was_armed",
+    )
+
+    def __init__(self, params: Mapping[str, object] | None = None) -> None:
+        self._actions: dict[str, _Active] = {}
+        self._selected = FailsafeAction.NONE
+        self._delay_us = 0
+        self._takeover_active = False
+        self._was_armed = False
+        self._battery_warning_at_arming = BatteryWarning.NONE
+        self._last_update_us = 0
+        self.set_params(params or {})
+
+    def set_params(self, params: Mapping[str, object]) -> None:
+        self._p = {**DEFAULTS, **params}
+
+    @property
+    def selected_action(self) -> FailsafeAction:
+        return self._selected
+
+    def update(
+        self,
+        now_us: int,
+        armed: bool,
+        intended: int,
+        intended_updated: bool,
+        cond: FailsafeConditions,
+        gf_action: int,
+    ) -> FailsafeResult:
+        p = self._p
+        dt_us = max(now_us - self._last_update_us, 0) if self._last_update_us else 0
+        self._last_update_us = now_us
+        self._delay_us = max(self._delay_us - dt_us, 0)
+
+        if self._was_armed and not armed:
+            self._remove_actions(Clear.ON_MODE_CHANGE_OR_DISARM)
+        elif armed and not self._was_armed:
+            self._battery_warning_at_arming = cond.battery_warning
+        self._was_armed = armed
+        if intended_updated or self._takeover_active:
+            self._remove_actions(Clear.ON_MODE_CHANGE_OR_DISARM)
+
+        failing = cond.failing
+        landing = intended == NS.NAVIGATION_STATE_AUTO_LAND
+        dll_action = int(p["NAV_DLL_ACT"])
+        if dll_action != 0 and armed and not landing and not self._dll_exempt(intended):
+            self._check("gcs_connection_loss", cond.gcs_connection_lost, _from_dll_param(dll_action))
+
+        self._check("geofence_breach", cond.geofence_breached, _from_geofence_param(gf_action))
+
+        warning = cond.battery_warning
+        if warning > BatteryWarning.NONE:
+            bat_action = int(p["COM_LOW_BAT_ACT"]) if warning > self._battery_warning_at_arming else 0
+            self._check(BATTERY_CAUSES[BatteryWarning(min(warning, 4))], True, _from_battery_param(bat_action, warning))
+
+        fallback, _ = mode_fallback(failing, intended)
+        if fallback != FailsafeAction.NONE:
+            self._check(missing_cause(intended, failing), True, _Options(fallback, takeover=Takeover.ALWAYS))
+
+        for key in [k for k, a in self._actions.items() if not a.checked]:
+            self._condition_cleared(key)
+        for active in self._actions.values():
+            active.checked = False
+
+        if self._selected > FailsafeAction.HOLD or not can_run(NS.NAVIGATION_STATE_AUTO_LOITER, failing):
+            self._delay_us = 0
+        if self._takeover_active:
+            self._delay_us = 0
+
+        return self._select(armed, intended, intended_updated, failing)
+
+    def _dll_exempt(self, intended: int) -> bool:
+        mask = int(self._p["COM_DLL_EXCEPT"])
+        if intended == NS.NAVIGATION_STATE_AUTO_MISSION:
+            return bool(mask & DLL_EXCEPT_MISSION)
+        if intended in AUTO_NAV_STATES:
+            return bool(mask & DLL_EXCEPT_AUTO_MODES)
+        return False
+
+    def _check(self, cause: str, failing: bool, options: _Options) -> None:
+        active = self._actions.get(cause)
+        if not failing:
+            if active is not None:
+                active.checked = True
+                self._condition_cleared(cause)
+            return
+        if options.action == FailsafeAction.NONE:
+            return
+        if active is not None:
+            active.failing = True
+            active.checked = True
+            active.action = options.action
+            return
+        takeover = options.takeover
+        if takeover == Takeover.AUTO:
+            if float(self._p["COM_FAIL_ACT_T"]) > 0.1:
+                if options.action != FailsafeAction.WARN and self._delay_us == 0:
+                    self._delay_us = round(float(self._p["COM_FAIL_ACT_T"]) * 1e6)
+                takeover = Takeover.ALWAYS
+            else:
+                takeover = Takeover.MODE_SWITCH_ONLY
+        self._actions[cause] = _Active(cause, options.action, options.clear, takeover)
+        if options.action >= FailsafeAction.HOLD:
+            self._takeover_active = False
+
+    def _condition_cleared(self, cause: str) -> None:
+        active = self._actions[cause]
+        if active.clear == Clear.WHEN_CONDITION_CLEARS:
+            del self._actions[cause]
+        else:
+            active.failing = False
+
+    def _remove_actions(self, clear: Clear) -> None:
+        for cause in [c for c, a in self._actions.items() if a.clear == clear and not a.failing]:
+            del self._actions[cause]
+
+    def _select(self, armed: bool, intended: int, intended_updated: bool, failing: Requirement) -> FailsafeResult:
+        if self._selected == FailsafeAction.TERMINATE:
+            return self._result(FailsafeAction.TERMINATE, FailsafeAction.NONE, "terminated", intended, False)
+        if not armed:
+            return self._result(FailsafeAction.NONE, FailsafeAction.NONE, "", intended, False)
+
+        selected = FailsafeAction.NONE
+        cause = ""
+        takeover = Takeover.ALWAYS
+        for active in self._actions.values():
+            takeover = max(takeover, active.takeover)
+            if active.action > selected:
+                selected, cause = active.action, active.cause
+
+        delayed = FailsafeAction.NONE
+        if (
+            self._delay_us > 0
+            and not self._takeover_active
+            and takeover <= Takeover.MODE_SWITCH_ONLY
+            and selected not in (FailsafeAction.DISARM, FailsafeAction.TERMINATE)
+        ):
+            delayed, selected, takeover = selected, FailsafeAction.HOLD, Takeover.MODE_SWITCH_ONLY
+
+        wants_takeover = intended_updated and self._selected == selected
+        user_takeover = False
+        if selected in _TAKEOVER_ACTIONS and takeover != Takeover.NEVER and (self._takeover_active or wants_takeover):
+            selected, delayed, user_takeover = FailsafeAction.WARN, FailsafeAction.NONE, True
+            fallback, _ = mode_fallback(failing, intended)
+            if fallback > selected:
+                selected = fallback
+
+        selected = runnable_action(selected, failing)
+
+        # Already landing: a Return would only climb away from the landing spot.
+        if (
+            intended == NS.NAVIGATION_STATE_AUTO_LAND
+            and FailsafeAction.RTL in (selected, delayed)
+            and can_run(NS.NAVIGATION_STATE_AUTO_LAND, failing)
+        ):
+            selected, delayed = FailsafeAction.WARN, FailsafeAction.NONE
+        return self._result(selected, delayed, cause, intended, user_takeover)
+
+    def _result(
+        self, action: FailsafeAction, delayed: FailsafeAction, cause: str, intended: int, user_takeover: bool
+    ) -> FailsafeResult:
+        self._selected = action
+        self._takeover_active = user_takeover
+        nav_state = ACTION_MODES.get(action, intended)
+        return FailsafeResult(
+            action, delayed, cause if action > FailsafeAction.NONE else "", nav_state, intended, user_takeover
+        )

@@ -1,0 +1,189 @@
+"""Health and arming checks: which estimates and sensors are usable, and whether arming is allowed.
+
+After PX4 ``HealthAndArmingChecks`` (``estimatorCheck``, ``sensor checks``, ``batteryCheck``, ``modeCheck``):
+the result is the set of mode requirements that currently fail (so "can mode X run" is one mask test) and,
+for arming, the first reason in PX4's spirit ("Arming denied: ..."):
+
+* the mode forbids arming (Return, Land, Descend, Termination);
+* gyro and accelerometer data, and barometer / magnetometer data when SYS_HAS_BARO / SYS_HAS_MAG, are
+  fresh (younger than 1 s);
+* the angular velocity and the attitude estimate are fresh and the attitude quaternion is a unit
+  quaternion — whatever the mode;
+* the mode's own requirements (a valid local position for Position and the auto modes, an altitude
+  estimate, a mission);
+* a 3-D GPS fix when SYS_HAS_GPS and either COM_ARM_WO_GPS = 0 or the mode needs a position;
+* the battery warning is below CRITICAL (PX4: LOW only warns).
+
+Validity: the attitude and angular velocity are valid when updated within 1 s; the local position is
+valid when updated within 1 s with ``xy_valid`` and ``v_xy_valid`` set and ``eph`` (when reported) below
+COM_POS_FS_EPH; "relaxed" drops the velocity and accuracy conditions; the altitude needs ``z_valid``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from stack.commander.battery import BatteryWarning
+from stack.commander.modes import MODES, REQUIREMENT_CAUSE, REQUIREMENT_TEXT, RUN_REQUIREMENTS, Requirement
+from stack.mathlib.quaternion import IDENTITY, Quat
+from stack.msg.estimation import VehicleLocalPosition
+from stack.msg.sensors import SensorGps
+
+ESTIMATE_TIMEOUT_US = 1_000_000
+SENSOR_TIMEOUT_US = 1_000_000
+QUATERNION_NORM_TOLERANCE = 0.05
+
+
+@dataclass(slots=True)
+class CommanderInputs:
+    """The latest values the commander reads; the module glue copies them from their topics.
+
+    Timestamps are the receive/publication times of the last message (0 = never). ``landed`` and
+    ``maybe_landed`` come from ``vehicle_land_detected``; ``battery_warning`` from ``battery_status``;
+    ``last_gcs_heartbeat_us`` is the time of the last message from a ground station or companion (the
+    command link); ``mission_count`` is the number of items of the loaded, valid mission (0: none) and
+    ``mission_finished`` whether its last item has been reached.
+    """
+
+    attitude_timestamp_us: int = 0
+    attitude_q: Quat = IDENTITY
+    angular_velocity_timestamp_us: int = 0
+    local_position: VehicleLocalPosition | None = None
+    gyro_timestamp_us: int = 0
+    accel_timestamp_us: int = 0
+    baro_timestamp_us: int = 0
+    mag_timestamp_us: int = 0
+    gps_timestamp_us: int = 0
+    gps_fix_type: int = 0
+    landed: bool = True
+    maybe_landed: bool = True
+    battery_warning: int = BatteryWarning.NONE
+    last_gcs_heartbeat_us: int = 0
+    mission_count: int = 0
+    mission_finished: bool = False
+
+
+@dataclass(slots=True)
+class HealthParams:
+    """Tunables under their PX4 names."""
+
+    sys_has_baro: bool = True
+    """SYS_HAS_BARO: a barometer is fitted and required."""
+    sys_has_mag: bool = True
+    """SYS_HAS_MAG: a magnetometer is fitted and required."""
+    sys_has_gps: bool = True
+    """SYS_HAS_GPS: a GNSS receiver is fitted."""
+    com_arm_wo_gps: bool = True
+    """COM_ARM_WO_GPS: allow arming without a GPS fix in modes that do not need a position."""
+    com_pos_fs_eph: float = 5.0
+    """COM_POS_FS_EPH: horizontal position error [m] above which the local position is invalid."""
+
+
+def _fresh(now_us: int, stamp_us: int, timeout_us: int) -> bool:
+    return stamp_us > 0 and now_us - stamp_us < timeout_us
+
+
+_AV = int(Requirement.ANGULAR_VELOCITY)
+_ATT = int(Requirement.ATTITUDE)
+_POS = int(Requirement.LOCAL_POSITION)
+_POS_RELAXED = int(Requirement.LOCAL_POSITION_RELAXED)
+_ALT = int(Requirement.LOCAL_ALT)
+_MISSION = int(Requirement.MISSION)
+_HOME = int(Requirement.HOME)
+# Plain-int masks: IntFlag arithmetic costs about a microsecond per operation.
+_RUN_MASKS: dict[int, int] = {state: int(m.requirements & RUN_REQUIREMENTS) for state, m in MODES.items()}
+_PREVENTS_ARMING = frozenset(s for s, m in MODES.items() if m.requirements & Requirement.PREVENT_ARMING)
+_REQUIREMENT_ORDER: tuple[tuple[int, Requirement], ...] = tuple((int(r), r) for r in REQUIREMENT_TEXT)
+
+
+def failing_requirements(now_us: int, inp: CommanderInputs, params: HealthParams, home_valid: bool) -> Requirement:
+    """The run requirements that are not met now (PX4 ``failsafe_flags`` ``*_invalid``)."""
+    failing = 0
+    if not _fresh(now_us, inp.angular_velocity_timestamp_us, ESTIMATE_TIMEOUT_US):
+        failing |= _AV
+    q = inp.attitude_q
+    norm = math.sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3])
+    if not _fresh(now_us, inp.attitude_timestamp_us, ESTIMATE_TIMEOUT_US) or not (
+        abs(norm - 1.0) < QUATERNION_NORM_TOLERANCE
+    ):
+        failing |= _ATT
+    lpos = inp.local_position
+    if lpos is None or not _fresh(now_us, lpos.timestamp, ESTIMATE_TIMEOUT_US):
+        failing |= _POS | _POS_RELAXED | _ALT
+    else:
+        if not lpos.xy_valid:
+            failing |= _POS | _POS_RELAXED
+        elif not lpos.v_xy_valid or lpos.eph > params.com_pos_fs_eph:
+            failing |= _POS
+        if not lpos.z_valid:
+            failing |= _ALT
+    if inp.mission_count <= 0:
+        failing |= _MISSION
+    if not home_valid:
+        failing |= _HOME
+    return Requirement(failing)
+
+
+def can_run(nav_state: int, failing: Requirement) -> bool:
+    mask = _RUN_MASKS.get(nav_state)
+    return mask is not None and not (mask & int(failing))
+
+
+def missing_requirement(nav_state: int, failing: Requirement) -> Requirement:
+    """The first run requirement of the mode that is not met (NONE if it can run)."""
+    missing = _RUN_MASKS.get(nav_state, 0) & int(failing)
+    if missing:
+        for bit, req in _REQUIREMENT_ORDER:
+            if missing & bit:
+                return req
+    return Requirement.NONE
+
+
+def first_missing(nav_state: int, failing: Requirement) -> str:
+    """What the mode misses, e.g. "a valid local position estimate" ("" if it can run)."""
+    return REQUIREMENT_TEXT.get(missing_requirement(nav_state, failing), "")
+
+
+def missing_cause(nav_state: int, failing: Requirement) -> str:
+    """The failsafe cause name for what the mode misses, e.g. "local_position_invalid"."""
+    return REQUIREMENT_CAUSE.get(missing_requirement(nav_state, failing), "")
+
+
+def arming_denial(now_us: int, nav_state: int, failing: Requirement, inp: CommanderInputs, params: HealthParams) -> str:
+    """Why arming in ``nav_state`` is refused now, or "" if the pre-arm checks pass.
+
+    The mode's home requirement is left out: home is set on arming."""
+    mode = MODES.get(nav_state)
+    if mode is None:
+        return f"Arming denied: nav_state {nav_state} is not a supported mode"
+    if nav_state in _PREVENTS_ARMING:
+        return f"Arming denied: not possible in {mode.name} mode, switch mode first"
+    sensors = (
+        ("gyro", inp.gyro_timestamp_us, True),
+        ("accelerometer", inp.accel_timestamp_us, True),
+        ("barometer", inp.baro_timestamp_us, params.sys_has_baro),
+        ("magnetometer", inp.mag_timestamp_us, params.sys_has_mag),
+    )
+    for name, stamp, required in sensors:
+        if required and not _fresh(now_us, stamp, SENSOR_TIMEOUT_US):
+            return f"Arming denied: no {name} data"
+    failing_bits = int(failing)
+    if failing_bits & _AV:
+        return "Arming denied: no angular velocity estimate"
+    if failing_bits & _ATT:
+        return "Arming denied: attitude estimate invalid"
+    missing = first_missing(nav_state, Requirement(failing_bits & ~_HOME))
+    if missing:
+        return f"Arming denied: {mode.name} mode requires {missing}"
+    needs_position = bool(_RUN_MASKS[nav_state] & (_POS | _POS_RELAXED))
+    if params.sys_has_gps and (needs_position or not params.com_arm_wo_gps):
+        if not _fresh(now_us, inp.gps_timestamp_us, SENSOR_TIMEOUT_US):
+            return "Arming denied: no GPS data"
+        if inp.gps_fix_type < SensorGps.FIX_TYPE_3D:
+            return "Arming denied: no 3D GPS fix"
+    if inp.battery_warning >= BatteryWarning.EMERGENCY:
+        return "Arming denied: battery at emergency level"
+    if inp.battery_warning >= BatteryWarning.CRITICAL:
+        return "Arming denied: battery critically low"
+    return ""

@@ -1,0 +1,204 @@
+"""The commander module: arming, modes, commands and failsafes (PX4 ``commander``), on a 50 Hz timer.
+
+It answers every ``vehicle_command`` with a ``vehicle_command_ack`` and publishes ``actuator_armed``,
+``vehicle_status`` and ``vehicle_control_mode`` (the flags the controllers obey) on change and at
+2 Hz, plus ``home_position``. In Offboard the control flags follow the offboard controller's
+``offboard_control_mode``, which must keep arriving (COM_OF_LOSS_T) or the vehicle falls back.
+"""
+
+from __future__ import annotations
+
+import math
+
+import msgspec
+
+from stack.commander.health import CommanderInputs
+from stack.commander.modes import nav_state_from_custom_mode
+from stack.commander.state_machine import PARAMS as COMMANDER_PARAMS
+from stack.commander.state_machine import Commander
+from stack.msg.system import (
+    HomePosition,
+    OffboardControlMode,
+    VehicleCommand,
+    VehicleCommandAck,
+    VehicleControlMode,
+    VehicleStatus,
+)
+from stack.runtime.module import Module, Timer
+from stack.runtime.params import Param
+
+NS = VehicleStatus
+REPUBLISH_US = 500_000
+OFFBOARD_PARAMS = (
+    Param("COM_OF_LOSS_T", 1.0, 0.0, 60.0, "s", "Offboard signal counts as lost after this long without one"),
+)
+MAV_MODE_FLAG_CUSTOM_MODE_ENABLED = 1
+
+
+def offboard_control_flags(ocm: OffboardControlMode) -> dict[str, bool]:
+    """PX4's control flags for Offboard, from what the offboard controller streams."""
+    flags = {"flag_control_offboard_enabled": True, "flag_control_allocation_enabled": True}
+    if ocm.position or ocm.velocity or ocm.acceleration:
+        flags |= {
+            "flag_multicopter_position_control_enabled": True,
+            "flag_control_position_enabled": ocm.position,
+            "flag_control_velocity_enabled": ocm.position or ocm.velocity,
+            "flag_control_altitude_enabled": ocm.position,
+            "flag_control_climb_rate_enabled": ocm.position or ocm.velocity,
+            "flag_control_acceleration_enabled": True,
+        }
+    if ocm.position or ocm.velocity or ocm.acceleration or ocm.attitude:
+        flags["flag_control_attitude_enabled"] = True
+    if not ocm.thrust_and_torque and not ocm.direct_actuator:
+        flags["flag_control_rates_enabled"] = True
+    if ocm.direct_actuator:
+        flags["flag_control_allocation_enabled"] = False
+    return flags
+
+
+class CommanderModule(Module):
+    NAME = "commander"
+    DESCRIPTION = "Arming, flight modes, commands and failsafes (PX4 commander)"
+    TRIGGER = Timer(50.0)
+    DT_RANGE = (0.001, 0.1)
+    PARAMS = COMMANDER_PARAMS + OFFBOARD_PARAMS
+
+    def __init__(self, rt) -> None:
+        super().__init__(rt)
+        self.subscribe("vehicle_command", queue=True)
+        for topic in (
+            "vehicle_attitude",
+            "vehicle_angular_velocity",
+            "vehicle_local_position",
+            "sensor_gyro",
+            "sensor_accel",
+            "sensor_baro",
+            "sensor_mag",
+            "sensor_gps",
+            "vehicle_land_detected",
+            "battery_status",
+            "telemetry_status",
+            "offboard_control_mode",
+        ):
+            self.subscribe(topic)
+        for topic in ("actuator_armed", "vehicle_status", "vehicle_control_mode", "vehicle_command_ack"):
+            self.advertise(topic)
+        self.advertise("home_position")
+        self.commander = Commander(self.params.values())
+        self._last_publish = 0
+        self._home_count = 0
+        self._last_gcs = 0
+        self._offboard_flags: dict[str, bool] | None = None
+
+    def on_params_changed(self, changed: set[str]) -> None:
+        self.commander.set_params(self.params.values())
+
+    def run(self, msg: None, dt: float) -> None:
+        now = self.now_us()
+        for cmd in self.take("vehicle_command"):
+            self._handle(cmd, now)
+        out = self.commander.update(now, self._inputs(now))
+        for event in out.events:
+            self.log.info("%s", event)
+        control = out.vehicle_control_mode
+        changed = out.changed
+        if self.commander.nav_state == NS.NAVIGATION_STATE_OFFBOARD:
+            flags = self._offboard(now)
+            if flags != self._offboard_flags:
+                changed = True
+                self._offboard_flags = flags
+            if flags is not None:
+                control = msgspec.structs.replace(
+                    VehicleControlMode(flag_armed=control.flag_armed, source_id=control.source_id), **flags
+                )
+        if changed or now - self._last_publish >= REPUBLISH_US:
+            self._last_publish = now
+            # PX4 publishes actuator_armed before vehicle_status.
+            self.publish("actuator_armed", msgspec.structs.replace(out.actuator_armed, timestamp=now))
+            self.publish("vehicle_status", msgspec.structs.replace(out.vehicle_status, timestamp=now))
+            self.publish("vehicle_control_mode", msgspec.structs.replace(control, timestamp=now))
+        if out.home is not None and out.home.update_count != self._home_count:
+            self._home_count = out.home.update_count
+            h = out.home
+            self.publish(
+                "home_position",
+                HomePosition(
+                    lat=h.lat,
+                    lon=h.lon,
+                    alt=h.alt,
+                    x=h.x,
+                    y=h.y,
+                    z=h.z,
+                    yaw=h.yaw,
+                    valid_alt=True,
+                    valid_hpos=True,
+                    valid_lpos=True,
+                    update_count=h.update_count,
+                ),
+            )
+
+    def _handle(self, cmd: VehicleCommand, now: int) -> None:
+        if cmd.from_external:
+            self._last_gcs = max(self._last_gcs, now)
+        if self._wants_offboard(cmd) and self._offboard(now) is None:
+            ack = VehicleCommandAck(
+                command=cmd.command,
+                result=VehicleCommandAck.VEHICLE_CMD_RESULT_TEMPORARILY_REJECTED,
+                target_system=cmd.source_system,
+                target_component=cmd.source_component,
+                reason="Switching to Offboard denied: no offboard signal (offboard_control_mode)",
+            )
+        else:
+            ack = self.commander.handle_command(cmd, now)
+        if ack.result != VehicleCommandAck.VEHICLE_CMD_RESULT_ACCEPTED:
+            self.log.warning("command %d refused: %s", cmd.command, ack.reason)
+        self.publish("vehicle_command_ack", ack)
+
+    @staticmethod
+    def _wants_offboard(cmd: VehicleCommand) -> bool:
+        if cmd.command == VehicleCommand.VEHICLE_CMD_SET_NAV_STATE:
+            return cmd.param1 == NS.NAVIGATION_STATE_OFFBOARD
+        if cmd.command != VehicleCommand.VEHICLE_CMD_DO_SET_MODE or math.isnan(cmd.param1):
+            return False
+        if int(cmd.param1) & MAV_MODE_FLAG_CUSTOM_MODE_ENABLED and not math.isnan(cmd.param2):
+            sub = 0 if math.isnan(cmd.param3) else int(cmd.param3)
+            return nav_state_from_custom_mode(int(cmd.param2), sub) == NS.NAVIGATION_STATE_OFFBOARD
+        return False
+
+    def _offboard(self, now: int) -> dict[str, bool] | None:
+        """The Offboard control flags, or None if the offboard signal is missing."""
+        ocm = self.latest("offboard_control_mode")
+        if ocm is None or now - ocm.timestamp > float(self.params["COM_OF_LOSS_T"]) * 1e6:
+            return None
+        return offboard_control_flags(ocm)
+
+    def _inputs(self, now: int) -> CommanderInputs:
+        latest = self.latest
+
+        def stamp(topic: str) -> int:
+            m = latest(topic)
+            return m.timestamp if m is not None else 0
+
+        att = latest("vehicle_attitude")
+        land = latest("vehicle_land_detected")
+        gps = latest("sensor_gps")
+        battery = latest("battery_status")
+        telemetry = latest("telemetry_status")
+        if telemetry is not None and (telemetry.heartbeat_type_gcs or telemetry.heartbeat_type_onboard_controller):
+            self._last_gcs = max(self._last_gcs, telemetry.timestamp)
+        return CommanderInputs(
+            attitude_timestamp_us=att.timestamp if att is not None else 0,
+            attitude_q=att.q if att is not None else (1.0, 0.0, 0.0, 0.0),
+            angular_velocity_timestamp_us=stamp("vehicle_angular_velocity"),
+            local_position=latest("vehicle_local_position"),
+            gyro_timestamp_us=stamp("sensor_gyro"),
+            accel_timestamp_us=stamp("sensor_accel"),
+            baro_timestamp_us=stamp("sensor_baro"),
+            mag_timestamp_us=stamp("sensor_mag"),
+            gps_timestamp_us=stamp("sensor_gps"),
+            gps_fix_type=gps.fix_type if gps is not None else 0,
+            landed=land.landed if land is not None else True,
+            maybe_landed=land.maybe_landed if land is not None else True,
+            battery_warning=battery.warning if battery is not None else 0,
+            last_gcs_heartbeat_us=self._last_gcs,
+        )

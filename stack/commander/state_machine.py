@@ -1,0 +1,724 @@
+"""The commander: arming, flight modes, commands and failsafes (PX4 ``src/modules/commander/Commander.cpp``).
+
+:class:`Commander` is clocked by its caller: ``update(now_us, inputs)`` every cycle (PX4: 100 Hz) with the
+latest :class:`~stack.commander.health.CommanderInputs`, and ``handle_command(cmd, now_us)`` for each
+``vehicle_command``, which always returns a ``vehicle_command_ack``:
+
+* ACCEPTED; DENIED with a reason when a parameter is NaN, infinite or out of range (``result_param2`` names
+  the offending parameter, 1–7, as MAVLink's COMMAND_ACK does) or the mode is unknown; TEMPORARILY_REJECTED
+  with a reason when the command is valid but the vehicle cannot do it now (pre-arm checks, mode
+  requirements, not landed...), which is what PX4 answers for refused arming and mode changes; UNSUPPORTED
+  for any other command. A refused command changes nothing.
+
+Commands (MAVLink ids; PX4 encodings):
+
+* COMPONENT_ARM_DISARM (400): param1 1 arm / 0 disarm (rounded, as PX4 does), param2 21196 forces (arming
+  skips the checks, disarming skips the landed check).
+* DO_SET_MODE (176): param1 base mode; with MAV_MODE_FLAG_CUSTOM_MODE_ENABLED (1) set, param2/param3 are
+  PX4's custom main/sub mode as QGroundControl sends them (main 1 Manual, 2 Altitude, 3 Position, 5 Acro,
+  7 Stabilized, 8 Rattitude; main 4 Auto with sub 2 Takeoff, 3 Hold, 4 Mission, 5 Return, 6 Land; a NaN
+  sub mode reads as 0); without it the base-mode flags are read as PX4 does (auto → Mission, manual input
+  with guided → Position, with stabilize → Stabilized, else Manual).
+* SET_NAV_STATE (100001, PX4-internal): param1 is the nav_state itself — the stack's simple mode id.
+* NAV_TAKEOFF (22): param7 the takeoff altitude AMSL, or NaN for MIS_TAKEOFF_ALT above home; our
+  extension: param2 = 1 makes param7 metres above home. param4 yaw [deg] (NaN keeps the heading). Like
+  PX4's ``commander takeoff`` it arms the vehicle when disarmed. Only from the ground.
+* NAV_LAND (21), NAV_RETURN_TO_LAUNCH (20), NAV_LOITER_UNLIM (17, Hold): mode changes; Land and Return
+  need the vehicle armed (they forbid arming).
+* DO_REPOSITION (192): go to param5/param6 latitude/longitude [deg] and param7 altitude AMSL [m] (each NaN
+  keeps the current value), yaw param4 [deg], ground speed param1 [m/s] (≤ 0 or NaN: default); switches to
+  Hold. Our extension DO_REPOSITION_LOCAL (100192, PX4-internal id range): the same with param5/6/7 the
+  local north, east, down [m]. Refused when not flying or outside the geofence.
+* MISSION_START (300): param1 first item (−1: current); needs a valid mission; arms when disarmed.
+
+Modes follow PX4's rules: disarmed, any mode may be selected (except Land/Return, which could not arm);
+armed, only a mode whose requirements are met; Takeoff only from the ground; Mission only with a mission.
+Home is set on arming from the local position (or, if there was none, when one first appears on the
+ground). Takeoff ends in Hold (COM_TAKEOFF_ACT 0) or Mission (1) once within NAV_MC_ALT_RAD of the takeoff
+altitude. Auto-disarm: COM_DISARM_LAND seconds after landing (not mid-mission), COM_DISARM_PRFLT seconds
+after arming without taking off. The command link counts as lost COM_DL_LOSS_T seconds after the last
+ground-station/companion message, once one has been seen.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Mapping
+from enum import IntEnum
+from typing import NamedTuple
+
+from stack.commander.failsafe import ACTION_NAMES, Failsafe, FailsafeAction, FailsafeConditions
+from stack.commander.failsafe import PARAMS as FAILSAFE_PARAMS
+from stack.commander.geofence import PARAMS as GEOFENCE_PARAMS
+from stack.commander.geofence import CylinderGeofence
+from stack.commander.health import (
+    CommanderInputs,
+    HealthParams,
+    arming_denial,
+    can_run,
+    failing_requirements,
+    first_missing,
+)
+from stack.commander.home import HomePosition, home_from_local_position
+from stack.commander.hysteresis import Hysteresis
+from stack.commander.modes import (
+    MAV_MODE_FLAG_CUSTOM_MODE_ENABLED,
+    MODES,
+    VALID_NAV_STATES_MASK,
+    Requirement,
+    control_mode,
+    mode_name,
+    nav_state_from_base_mode,
+    nav_state_from_custom_mode,
+)
+from stack.mathlib.geo import MapProjection
+from stack.msg.estimation import VehicleLocalPosition
+from stack.msg.system import ActuatorArmed, VehicleCommand, VehicleCommandAck, VehicleControlMode, VehicleStatus
+from stack.runtime.params import Param
+
+NS = VehicleStatus
+CMD = VehicleCommand
+ACK = VehicleCommandAck
+
+VEHICLE_CMD_SET_NAV_STATE = CMD.VEHICLE_CMD_SET_NAV_STATE
+VEHICLE_CMD_DO_REPOSITION_LOCAL = CMD.VEHICLE_CMD_DO_REPOSITION_LOCAL
+TAKEOFF_ALTITUDE_RELATIVE = 1
+"""NAV_TAKEOFF param2 value saying param7 is metres above home rather than AMSL (our extension)."""
+_POSITION_KNOWN = int(Requirement.LOCAL_POSITION_RELAXED | Requirement.LOCAL_ALT)
+_POSITION_AND_ALTITUDE = int(Requirement.LOCAL_POSITION | Requirement.LOCAL_ALT)
+
+OWN_PARAMS: tuple[Param, ...] = (
+    Param("COM_DISARM_LAND", 2.0, -1.0, 20.0, "s", "Disarm this long after landing (≤ 0: never)"),
+    Param("COM_DISARM_PRFLT", 10.0, -1.0, 20.0, "s", "Disarm this long after arming without taking off (≤ 0: never)"),
+    Param("COM_DL_LOSS_T", 10, 5, 300, "s", "Command link counts as lost after this long without a message"),
+    Param("COM_TAKEOFF_ACT", 0, 0, 1, "", "After takeoff: 0 Hold, 1 Mission (if one is loaded)", choices=(0, 1)),
+    Param("COM_POS_FS_EPH", 5.0, 0.0, 1000.0, "m", "Horizontal position error above which the position is invalid"),
+    Param("COM_ARM_WO_GPS", 1, 0, 1, "", "1: allow arming without GPS in modes that need no position", choices=(0, 1)),
+    Param("SYS_HAS_BARO", 1, 0, 1, "", "A barometer is fitted and required to arm", choices=(0, 1)),
+    Param("SYS_HAS_MAG", 1, 0, 1, "", "A magnetometer is fitted and required to arm", choices=(0, 1)),
+    Param("SYS_HAS_GPS", 1, 0, 1, "", "A GNSS receiver is fitted", choices=(0, 1)),
+    Param("MIS_TAKEOFF_ALT", 2.5, 0.0, None, "m", "Takeoff altitude above home when a takeoff gives none"),
+    Param("NAV_MC_ALT_RAD", 0.8, 0.05, 200.0, "m", "Vertical acceptance radius (takeoff altitude reached)"),
+)
+PARAMS: tuple[Param, ...] = OWN_PARAMS + FAILSAFE_PARAMS + GEOFENCE_PARAMS
+DEFAULTS: dict[str, object] = {p.name: p.default for p in PARAMS}
+
+
+class ArmDisarmReason(IntEnum):
+    """``vehicle_status.latest_arming_reason`` / ``latest_disarming_reason`` (PX4 ``arm_disarm_reason_t``)."""
+
+    TRANSITION_TO_STANDBY = 0
+    RC_STICK = 1
+    RC_SWITCH = 2
+    COMMAND_INTERNAL = 3
+    COMMAND_EXTERNAL = 4
+    MISSION_START = 5
+    AUTO_DISARM_LAND = 7
+    AUTO_DISARM_PREFLIGHT = 8
+    FAILSAFE = 15
+
+
+class NavigationRequest(NamedTuple):
+    """What the commander asks the navigation glue to fly, beyond the mode itself."""
+
+    takeoff_altitude: float
+    """Takeoff target above home [m]."""
+    takeoff_yaw: float
+    """Takeoff heading [rad]; NaN keeps the current heading."""
+    reposition: tuple[float, float, float, float] | None
+    """Last go-to target: local north, east, down [m] and yaw [rad] (NaN: keep heading)."""
+    reposition_speed: float
+    """Requested ground speed [m/s]; NaN for the default."""
+    reposition_counter: int
+    """Increments with every accepted go-to."""
+    mission_start_index: int
+    """First item of the last mission start (−1: continue from the current item)."""
+    mission_start_counter: int
+
+
+class CommanderOutputs(NamedTuple):
+    vehicle_status: VehicleStatus
+    vehicle_control_mode: VehicleControlMode
+    actuator_armed: ActuatorArmed
+    changed: bool
+    """Something in the three messages changed: publish now (else PX4 republishes at 2 Hz)."""
+    failsafe_action: str
+    """Name of the failsafe action in force: none, warn, hold, rtl, land, descend, disarm, terminate, fallback_*."""
+    failsafe_delayed_action: str
+    """The action waiting out COM_FAIL_ACT_T in Hold ("none" when none)."""
+    failsafe_cause: str
+    """Why: gcs_connection_loss, battery_critical, geofence_breach, local_position_invalid... ("" when none)."""
+    home: HomePosition | None
+    navigation: NavigationRequest
+    events: tuple[str, ...]
+    """Human-readable notices since the last update (arming, mode changes, failsafes)."""
+
+
+_Verdict = tuple[int, str, int]
+"""(result, reason, offending parameter index) of a command handler."""
+_ACCEPTED: _Verdict = (ACK.VEHICLE_CMD_RESULT_ACCEPTED, "", 0)
+
+
+def _denied(reason: str, param: int = 0) -> _Verdict:
+    return (ACK.VEHICLE_CMD_RESULT_DENIED, reason, param)
+
+
+def _rejected(reason: str) -> _Verdict:
+    return (ACK.VEHICLE_CMD_RESULT_TEMPORARILY_REJECTED, reason, 0)
+
+
+def _finite_or_nan(value: float) -> bool:
+    return math.isfinite(value) or math.isnan(value)
+
+
+class Commander:
+    """PX4's commander as a pure state machine (see the module docstring for the rules)."""
+
+    def __init__(
+        self, params: Mapping[str, object] | None = None, initial_nav_state: int = NS.NAVIGATION_STATE_MANUAL
+    ) -> None:
+        self._inputs = CommanderInputs()
+        self._failsafe = Failsafe()
+        self._geofence = CylinderGeofence()
+        self._health = HealthParams()
+        self.arming_state = NS.ARMING_STATE_DISARMED
+        self.user_intended_nav_state = initial_nav_state
+        self.nav_state = initial_nav_state
+        self._intention_updated = False
+        self._nav_state_timestamp_us = 0
+        self._armed_time_us = 0
+        self._takeoff_time_us = 0
+        self._have_taken_off = False
+        self._latest_arming_reason = 0
+        self._latest_disarming_reason = 0
+        self._home: HomePosition | None = None
+        self._failing = Requirement.NONE
+        self._preflight_ok = False
+        self._gcs_lost = False
+        self._gcs_lost_counter = 0
+        self._geofence_violation = ""
+        self._failsafe_action = FailsafeAction.NONE
+        self._failsafe_delayed = FailsafeAction.NONE
+        self._failsafe_cause = ""
+        self._failsafe_takeover = False
+        self._auto_disarm = Hysteresis(False)
+        self._takeoff_altitude = math.nan
+        self._takeoff_yaw = math.nan
+        self._reposition: tuple[float, float, float, float] | None = None
+        self._reposition_speed = math.nan
+        self._reposition_counter = 0
+        self._mission_start_index = 0
+        self._mission_start_counter = 0
+        self._events: list[str] = []
+        self._published_key: tuple | None = None
+        self._messages: tuple[VehicleStatus, VehicleControlMode, ActuatorArmed] | None = None
+        self._handlers: dict[int, Callable[[VehicleCommand, int], _Verdict]] = {
+            CMD.VEHICLE_CMD_COMPONENT_ARM_DISARM: self._cmd_arm_disarm,
+            CMD.VEHICLE_CMD_DO_SET_MODE: self._cmd_set_mode,
+            VEHICLE_CMD_SET_NAV_STATE: self._cmd_set_nav_state,
+            CMD.VEHICLE_CMD_NAV_TAKEOFF: self._cmd_takeoff,
+            CMD.VEHICLE_CMD_NAV_LAND: self._cmd_mode(NS.NAVIGATION_STATE_AUTO_LAND),
+            CMD.VEHICLE_CMD_NAV_RETURN_TO_LAUNCH: self._cmd_mode(NS.NAVIGATION_STATE_AUTO_RTL),
+            CMD.VEHICLE_CMD_NAV_LOITER_UNLIM: self._cmd_mode(NS.NAVIGATION_STATE_AUTO_LOITER),
+            CMD.VEHICLE_CMD_DO_REPOSITION: self._cmd_reposition_global,
+            VEHICLE_CMD_DO_REPOSITION_LOCAL: self._cmd_reposition_local,
+            CMD.VEHICLE_CMD_MISSION_START: self._cmd_mission_start,
+        }
+        self.set_params(params or {})
+        self._takeoff_altitude = float(self._p["MIS_TAKEOFF_ALT"])
+
+    # ------------------------------------------------------------------ configuration and state
+
+    def set_params(self, params: Mapping[str, object]) -> None:
+        p = {**DEFAULTS, **params}
+        self._p = p
+        self._failsafe.set_params(p)
+        self._geofence.set_params(p)
+        self._health = HealthParams(
+            sys_has_baro=bool(p["SYS_HAS_BARO"]),
+            sys_has_mag=bool(p["SYS_HAS_MAG"]),
+            sys_has_gps=bool(p["SYS_HAS_GPS"]),
+            com_arm_wo_gps=bool(p["COM_ARM_WO_GPS"]),
+            com_pos_fs_eph=float(p["COM_POS_FS_EPH"]),
+        )
+
+    @property
+    def armed(self) -> bool:
+        return self.arming_state == NS.ARMING_STATE_ARMED
+
+    @property
+    def home(self) -> HomePosition | None:
+        return self._home
+
+    @property
+    def failsafe_action(self) -> str:
+        return ACTION_NAMES[self._failsafe_action]
+
+    @property
+    def failsafe_cause(self) -> str:
+        return self._failsafe_cause
+
+    def can_run(self, nav_state: int) -> bool:
+        """Whether the mode's requirements are met now."""
+        return can_run(nav_state, self._failing)
+
+    # ------------------------------------------------------------------ cycle
+
+    def update(self, now_us: int, inputs: CommanderInputs) -> CommanderOutputs:
+        """One commander cycle with the latest inputs; returns what to publish."""
+        self._inputs = inputs
+        self._step(now_us)
+        return self._outputs()
+
+    def handle_command(self, cmd: VehicleCommand, now_us: int) -> VehicleCommandAck:
+        """Execute a ``vehicle_command`` and return its acknowledgement."""
+        handler = self._handlers.get(cmd.command)
+        if handler is None:
+            result, reason, param = (ACK.VEHICLE_CMD_RESULT_UNSUPPORTED, f"Unsupported command {cmd.command}", 0)
+        else:
+            result, reason, param = handler(cmd, now_us)
+        if result == ACK.VEHICLE_CMD_RESULT_ACCEPTED:
+            self._step(now_us)
+        elif reason:
+            self._events.append(reason)
+        return VehicleCommandAck(
+            timestamp=now_us,
+            command=cmd.command,
+            result=result,
+            result_param2=param,
+            target_system=cmd.source_system,
+            target_component=cmd.source_component,
+            from_external=False,
+            reason=reason,
+        )
+
+    def _step(self, now_us: int) -> None:
+        inp = self._inputs
+        p = self._p
+        lpos = inp.local_position
+        self._failing = failing_requirements(now_us, inp, self._health, self._home is not None)
+        position_known = not int(self._failing) & _POSITION_KNOWN
+        armed = self.armed
+
+        if armed and not inp.landed and not self._have_taken_off:
+            self._have_taken_off = True
+            self._takeoff_time_us = now_us
+        if armed and self._home is None and position_known and inp.landed and lpos is not None:
+            self._set_home(lpos)
+            self._failing &= ~Requirement.HOME
+
+        self._update_link(now_us)
+        self._geofence_violation = ""
+        if armed and self._home is not None and self._geofence.enabled and position_known and lpos is not None:
+            self._geofence_violation = self._geofence.violation(self._home.position, lpos.x, lpos.y, lpos.z)
+
+        if (
+            armed
+            and not inp.landed
+            and self.user_intended_nav_state == NS.NAVIGATION_STATE_AUTO_TAKEOFF
+            and self.nav_state == NS.NAVIGATION_STATE_AUTO_TAKEOFF
+            and self._takeoff_reached()
+        ):
+            follow = NS.NAVIGATION_STATE_AUTO_LOITER
+            if int(p["COM_TAKEOFF_ACT"]) == 1 and can_run(NS.NAVIGATION_STATE_AUTO_MISSION, self._failing):
+                follow = NS.NAVIGATION_STATE_AUTO_MISSION
+            self._events.append(f"Takeoff complete, switching to {mode_name(follow)}")
+            self._set_intention(follow)
+
+        conditions = FailsafeConditions(
+            failing=self._failing,
+            gcs_connection_lost=self._gcs_lost,
+            battery_warning=inp.battery_warning,
+            geofence_breached=bool(self._geofence_violation),
+        )
+        result = self._failsafe.update(
+            now_us, armed, self.user_intended_nav_state, self._intention_updated, conditions, int(p["GF_ACTION"])
+        )
+        self._intention_updated = False
+        self._note_failsafe(result.action, result.delayed_action, result.cause, result.user_takeover)
+        if result.action == FailsafeAction.DISARM and armed:
+            self._disarm(now_us, ArmDisarmReason.FAILSAFE, forced=True)
+        if result.nav_state != self.nav_state:
+            self.nav_state = result.nav_state
+            self._nav_state_timestamp_us = now_us
+
+        self._update_auto_disarm(now_us)
+        self._preflight_ok = not arming_denial(now_us, self.user_intended_nav_state, self._failing, inp, self._health)
+
+    def _update_link(self, now_us: int) -> None:
+        last = self._inputs.last_gcs_heartbeat_us
+        lost = last > 0 and now_us - last > int(self._p["COM_DL_LOSS_T"]) * 1_000_000
+        if lost and not self._gcs_lost:
+            self._gcs_lost_counter += 1
+            self._events.append("Connection to ground station lost")
+        elif self._gcs_lost and not lost:
+            self._events.append("Data link regained")
+        self._gcs_lost = lost
+
+    def _takeoff_reached(self) -> bool:
+        lpos = self._inputs.local_position
+        if lpos is None or self._home is None or int(self._failing) & int(Requirement.LOCAL_ALT):
+            return False
+        target_z = self._home.z - self._takeoff_altitude
+        return lpos.z <= target_z + float(self._p["NAV_MC_ALT_RAD"])
+
+    def _note_failsafe(self, action: FailsafeAction, delayed: FailsafeAction, cause: str, takeover: bool) -> None:
+        if action != self._failsafe_action or delayed != self._failsafe_delayed:
+            if delayed > FailsafeAction.WARN:
+                delay = float(self._p["COM_FAIL_ACT_T"])
+                self._events.append(
+                    f"Failsafe activated ({cause}): entering Hold for {delay:g} s, then {ACTION_NAMES[delayed]}"
+                )
+            elif action > FailsafeAction.WARN:
+                self._events.append(f"Failsafe activated ({cause}): {ACTION_NAMES[action]}")
+            elif action == FailsafeAction.WARN and not takeover:
+                self._events.append(f"Failsafe warning ({cause})")
+            elif self._failsafe_action > FailsafeAction.WARN:
+                self._events.append("Failsafe cleared" if not takeover else "User took over from the failsafe")
+        self._failsafe_action = action
+        self._failsafe_delayed = delayed
+        self._failsafe_cause = cause
+        self._failsafe_takeover = takeover
+
+    def _update_auto_disarm(self, now_us: int) -> None:
+        if not self.armed:
+            self._auto_disarm.force(False)
+            return
+        p = self._p
+        inp = self._inputs
+        land_s = float(p["COM_DISARM_LAND"])
+        preflight_s = float(p["COM_DISARM_PRFLT"])
+        amid_mission = self.nav_state == NS.NAVIGATION_STATE_AUTO_MISSION and not inp.mission_finished
+        if land_s > 0.0 and self._have_taken_off and not amid_mission:
+            self._auto_disarm.set_hysteresis_time_from(False, round(land_s * 1e6))
+            self._auto_disarm.set_state_and_update(inp.landed, now_us)
+        elif preflight_s > 0.0 and not self._have_taken_off:
+            self._auto_disarm.set_hysteresis_time_from(False, round(preflight_s * 1e6))
+            self._auto_disarm.set_state_and_update(True, now_us)
+        if self._auto_disarm.state:
+            reason = ArmDisarmReason.AUTO_DISARM_LAND if self._have_taken_off else ArmDisarmReason.AUTO_DISARM_PREFLIGHT
+            self._disarm(now_us, reason, forced=False)
+
+    # ------------------------------------------------------------------ arming and modes
+
+    def _set_home(self, lpos: VehicleLocalPosition) -> None:
+        self._home = home_from_local_position(
+            lpos.x, lpos.y, lpos.z, lpos.heading, lpos.ref_lat, lpos.ref_lon, lpos.ref_alt
+        )
+        self._events.append(f"Home set at N {lpos.x:.1f} m, E {lpos.y:.1f} m, D {lpos.z:.1f} m")
+
+    def _arm(self, now_us: int, reason: ArmDisarmReason, forced: bool, prechecked: bool = False) -> str:
+        """Arm after the pre-arm checks (skipped when ``forced`` or already passed); returns the refusal."""
+        if self.armed:
+            return ""
+        if self._failsafe.selected_action == FailsafeAction.TERMINATE:
+            return "Arming denied: flight termination is latched"
+        if not forced and not prechecked:
+            denial = arming_denial(now_us, self.user_intended_nav_state, self._failing, self._inputs, self._health)
+            if denial:
+                return denial
+        self.arming_state = NS.ARMING_STATE_ARMED
+        self._armed_time_us = now_us
+        self._takeoff_time_us = 0
+        self._have_taken_off = False
+        self._latest_arming_reason = int(reason)
+        self._auto_disarm.force(False)
+        lpos = self._inputs.local_position
+        position_known = not int(self._failing) & _POSITION_KNOWN
+        self._home = None
+        if position_known and lpos is not None:
+            self._set_home(lpos)
+        self._events.append("Armed (forced: pre-arm checks skipped)" if forced else "Armed")
+        return ""
+
+    def _disarm(self, now_us: int, reason: ArmDisarmReason, forced: bool) -> str:
+        if not self.armed:
+            return ""
+        if not forced and not (self._inputs.landed or self._inputs.maybe_landed):
+            return "Disarming denied: not landed"
+        self.arming_state = NS.ARMING_STATE_DISARMED
+        self._armed_time_us = 0
+        self._takeoff_time_us = 0
+        self._have_taken_off = False
+        self._latest_disarming_reason = int(reason)
+        self._auto_disarm.force(False)
+        self._events.append(f"Disarmed ({reason.name.lower()})")
+        return ""
+
+    def _set_intention(self, nav_state: int) -> None:
+        self.user_intended_nav_state = nav_state
+        self._intention_updated = True
+
+    def _mode_refusal(self, nav_state: int) -> _Verdict | None:
+        """Why switching to ``nav_state`` is refused now, or None (PX4 ``UserModeIntention::change``)."""
+        mode = MODES.get(nav_state)
+        if mode is None or not mode.user_selectable:
+            return _denied(f"Unsupported mode (nav_state {nav_state})", 1)
+        prefix = f"Switching to {mode.name} is currently not possible"
+        if nav_state == NS.NAVIGATION_STATE_AUTO_TAKEOFF and self.armed and not self._inputs.landed:
+            return _rejected(f"{prefix}: already flying")
+        if nav_state in (NS.NAVIGATION_STATE_AUTO_RTL, NS.NAVIGATION_STATE_AUTO_LAND) and not self.armed:
+            return _rejected(f"{prefix}: the vehicle is disarmed")
+        if nav_state == NS.NAVIGATION_STATE_AUTO_MISSION and self._failing & Requirement.MISSION:
+            return _rejected(f"{prefix}: no valid mission")
+        if self.armed and not can_run(nav_state, self._failing):
+            return _rejected(f"{prefix}: requires {first_missing(nav_state, self._failing)}")
+        return None
+
+    def _change_mode(self, nav_state: int) -> _Verdict:
+        refusal = self._mode_refusal(nav_state)
+        if refusal is not None:
+            return refusal
+        if nav_state != self.user_intended_nav_state:
+            self._events.append(f"Mode: {mode_name(nav_state)}")
+            if nav_state == NS.NAVIGATION_STATE_AUTO_TAKEOFF:
+                self._takeoff_altitude = float(self._p["MIS_TAKEOFF_ALT"])
+                self._takeoff_yaw = math.nan
+        self._set_intention(nav_state)
+        return _ACCEPTED
+
+    def _mode_and_arm(self, nav_state: int, now_us: int, reason: ArmDisarmReason) -> _Verdict:
+        """Switch to ``nav_state`` and arm if needed, or change nothing."""
+        refusal = self._mode_refusal(nav_state)
+        if refusal is not None:
+            return refusal
+        if not self.armed:
+            denial = arming_denial(now_us, nav_state, self._failing, self._inputs, self._health)
+            if not denial and self._failsafe.selected_action == FailsafeAction.TERMINATE:
+                denial = "Arming denied: flight termination is latched"
+            if denial:
+                return _rejected(denial)
+        self._change_mode(nav_state)
+        if not self.armed:
+            self._arm(now_us, reason, forced=False, prechecked=True)
+        return _ACCEPTED
+
+    # ------------------------------------------------------------------ command handlers
+
+    def _cmd_arm_disarm(self, cmd: VehicleCommand, now_us: int) -> _Verdict:
+        if not math.isfinite(cmd.param1) or round(cmd.param1) not in (0, 1):
+            return _denied(f"Arm/disarm: param1 must be 1 (arm) or 0 (disarm), got {cmd.param1:g}", 1)
+        forced = math.isfinite(cmd.param2) and round(cmd.param2) == CMD.ARM_FORCE_MAGIC
+        reason = ArmDisarmReason.COMMAND_EXTERNAL if cmd.from_external else ArmDisarmReason.COMMAND_INTERNAL
+        if round(cmd.param1) == CMD.ARMING_ACTION_ARM:
+            refusal = self._arm(now_us, reason, forced=forced)
+        else:
+            refusal = self._disarm(now_us, reason, forced=forced)
+        return _rejected(refusal) if refusal else _ACCEPTED
+
+    def _cmd_set_mode(self, cmd: VehicleCommand, now_us: int) -> _Verdict:
+        base = cmd.param1
+        if not math.isfinite(base) or not 0 <= base <= 255:
+            return _denied(f"Set mode: base mode (param1) must be 0–255, got {base:g}", 1)
+        if int(base) & MAV_MODE_FLAG_CUSTOM_MODE_ENABLED:
+            main = cmd.param2
+            sub = 0.0 if math.isnan(cmd.param3) else cmd.param3
+            if not math.isfinite(main):
+                return _denied(f"Set mode: custom main mode (param2) must be a number, got {main:g}", 2)
+            if not math.isfinite(sub):
+                return _denied(f"Set mode: custom sub mode (param3) must be a number, got {sub:g}", 3)
+            nav_state = nav_state_from_custom_mode(round(main), round(sub))
+            if nav_state is None:
+                return _denied(f"Set mode: unknown or unsupported PX4 mode (main {main:g}, sub {sub:g})", 2)
+        else:
+            nav_state = nav_state_from_base_mode(int(base))
+            if nav_state is None:
+                return _denied(f"Set mode: base mode {int(base)} names no flight mode", 1)
+        return self._change_mode(nav_state)
+
+    def _cmd_set_nav_state(self, cmd: VehicleCommand, now_us: int) -> _Verdict:
+        value = cmd.param1
+        if not math.isfinite(value) or value != round(value) or round(value) not in MODES:
+            return _denied(f"Set mode: unknown mode id {value:g}", 1)
+        return self._change_mode(round(value))
+
+    def _cmd_mode(self, nav_state: int) -> Callable[[VehicleCommand, int], _Verdict]:
+        def handler(cmd: VehicleCommand, now_us: int) -> _Verdict:
+            return self._change_mode(nav_state)
+
+        return handler
+
+    def _ground_altitude_amsl(self) -> float:
+        """Altitude AMSL [m] of home when armed, else of the vehicle now (NaN without a reference)."""
+        if self.armed and self._home is not None:
+            return self._home.alt
+        lpos = self._inputs.local_position
+        return lpos.ref_alt - lpos.z if lpos is not None else math.nan
+
+    def _cmd_takeoff(self, cmd: VehicleCommand, now_us: int) -> _Verdict:
+        if not _finite_or_nan(cmd.param4):
+            return _denied(f"Takeoff: yaw (param4) must be finite or NaN, got {cmd.param4:g}", 4)
+        altitude = cmd.param7
+        relative = math.isfinite(cmd.param2) and round(cmd.param2) == TAKEOFF_ALTITUDE_RELATIVE
+        if math.isnan(altitude):
+            altitude = float(self._p["MIS_TAKEOFF_ALT"])
+        elif not math.isfinite(altitude):
+            return _denied(f"Takeoff: altitude (param7) must be finite, got {altitude:g}", 7)
+        elif not relative:
+            ground = self._ground_altitude_amsl()
+            if not math.isfinite(ground):
+                return _denied("Takeoff: altitude given AMSL but the local frame has no altitude reference", 7)
+            altitude -= ground
+        if not altitude > 0.0:
+            return _denied(f"Takeoff: altitude must be above home, got {altitude:.1f} m", 7)
+        ceiling = self._geofence.max_ver_dist
+        if ceiling > 0.0 and altitude > ceiling:
+            return _denied(f"Takeoff: {altitude:.1f} m above home is beyond GF_MAX_VER_DIST {ceiling:g} m", 7)
+        verdict = self._mode_and_arm(NS.NAVIGATION_STATE_AUTO_TAKEOFF, now_us, reason=self._command_reason(cmd))
+        if verdict[0] == ACK.VEHICLE_CMD_RESULT_ACCEPTED:
+            self._takeoff_altitude = altitude
+            self._takeoff_yaw = math.radians(cmd.param4) if math.isfinite(cmd.param4) else math.nan
+        return verdict
+
+    @staticmethod
+    def _command_reason(cmd: VehicleCommand) -> ArmDisarmReason:
+        return ArmDisarmReason.COMMAND_EXTERNAL if cmd.from_external else ArmDisarmReason.COMMAND_INTERNAL
+
+    def _check_reposition_params(self, cmd: VehicleCommand) -> _Verdict | None:
+        for index, value in ((1, cmd.param1), (4, cmd.param4), (5, cmd.param5), (6, cmd.param6), (7, cmd.param7)):
+            if not _finite_or_nan(value):
+                return _denied(f"Reposition: param{index} must be finite or NaN, got {value:g}", index)
+        return None
+
+    def _cmd_reposition_global(self, cmd: VehicleCommand, now_us: int) -> _Verdict:
+        refusal = self._check_reposition_params(cmd)
+        if refusal is not None:
+            return refusal
+        lat, lon = cmd.param5, cmd.param6
+        if math.isnan(lat) != math.isnan(lon):
+            return _denied("Reposition: give both latitude (param5) and longitude (param6), or neither", 5)
+        if math.isfinite(lat) and not (-90.0 <= lat <= 90.0):
+            return _denied(f"Reposition: latitude {lat:g} is outside ±90°", 5)
+        if math.isfinite(lon) and not (-180.0 <= lon <= 180.0):
+            return _denied(f"Reposition: longitude {lon:g} is outside ±180°", 6)
+        lpos = self._inputs.local_position
+        north = east = down = math.nan
+        if math.isfinite(lat):
+            if lpos is None or not (math.isfinite(lpos.ref_lat) and math.isfinite(lpos.ref_lon)):
+                return _denied("Reposition: the local frame has no global reference for latitude/longitude", 5)
+            north, east = MapProjection(lpos.ref_lat, lpos.ref_lon).project(lat, lon)
+        if math.isfinite(cmd.param7):
+            if lpos is None or not math.isfinite(lpos.ref_alt):
+                return _denied("Reposition: the local frame has no altitude reference for an AMSL altitude", 7)
+            down = lpos.ref_alt - cmd.param7
+        return self._reposition_to(north, east, down, cmd)
+
+    def _cmd_reposition_local(self, cmd: VehicleCommand, now_us: int) -> _Verdict:
+        refusal = self._check_reposition_params(cmd)
+        if refusal is not None:
+            return refusal
+        return self._reposition_to(cmd.param5, cmd.param6, cmd.param7, cmd)
+
+    def _reposition_to(self, north: float, east: float, down: float, cmd: VehicleCommand) -> _Verdict:
+        """Go to the local target (NaN components keep the current position) after the state checks."""
+        lpos = self._inputs.local_position
+        if not self.armed or self._inputs.landed:
+            return _rejected("Reposition denied: the vehicle is not flying")
+        if lpos is None or int(self._failing) & _POSITION_AND_ALTITUDE:
+            return _rejected("Reposition denied: no valid local position estimate")
+        north = lpos.x if math.isnan(north) else north
+        east = lpos.y if math.isnan(east) else east
+        down = lpos.z if math.isnan(down) else down
+        if self._home is not None:
+            violation = self._geofence.violation(self._home.position, north, east, down)
+            if violation:
+                return _denied(f"Reposition denied: target outside the geofence ({violation})", 5)
+        verdict = self._change_mode(NS.NAVIGATION_STATE_AUTO_LOITER)
+        if verdict[0] != ACK.VEHICLE_CMD_RESULT_ACCEPTED:
+            return verdict
+        yaw = math.radians(cmd.param4) if math.isfinite(cmd.param4) else math.nan
+        self._reposition = (north, east, down, yaw)
+        self._reposition_speed = cmd.param1 if math.isfinite(cmd.param1) and cmd.param1 > 0.0 else math.nan
+        self._reposition_counter += 1
+        self._events.append(f"Going to N {north:.1f} m, E {east:.1f} m, D {down:.1f} m")
+        return _ACCEPTED
+
+    def _cmd_mission_start(self, cmd: VehicleCommand, now_us: int) -> _Verdict:
+        count = self._inputs.mission_count
+        if count <= 0:
+            return _denied("Mission start denied: no valid mission")
+        first = cmd.param1
+        if not math.isfinite(first) or first != round(first) or not -1 <= first < count:
+            return _denied(f"Mission start: first item (param1) must be −1…{count - 1}, got {first:g}", 1)
+        verdict = self._mode_and_arm(NS.NAVIGATION_STATE_AUTO_MISSION, now_us, ArmDisarmReason.MISSION_START)
+        if verdict[0] == ACK.VEHICLE_CMD_RESULT_ACCEPTED:
+            self._mission_start_index = round(first)
+            self._mission_start_counter += 1
+        return verdict
+
+    # ------------------------------------------------------------------ outputs
+
+    def _outputs(self) -> CommanderOutputs:
+        armed = self.armed
+        can_set = 0
+        for state in MODES:
+            if can_run(state, self._failing):
+                can_set |= 1 << state
+        key = (
+            self.arming_state,
+            self.nav_state,
+            self.user_intended_nav_state,
+            self._nav_state_timestamp_us,
+            self._armed_time_us,
+            self._takeoff_time_us,
+            self._latest_arming_reason,
+            self._latest_disarming_reason,
+            self._failsafe_action > FailsafeAction.WARN,
+            self._failsafe_takeover,
+            self._gcs_lost,
+            self._gcs_lost_counter,
+            self._preflight_ok,
+            can_set,
+        )
+        changed = key != self._published_key
+        if changed or self._messages is None:
+            self._published_key = key
+            terminated = self.nav_state == NS.NAVIGATION_STATE_TERMINATION
+            status = VehicleStatus(
+                armed_time=self._armed_time_us,
+                takeoff_time=self._takeoff_time_us,
+                arming_state=self.arming_state,
+                latest_arming_reason=self._latest_arming_reason,
+                latest_disarming_reason=self._latest_disarming_reason,
+                nav_state_timestamp=self._nav_state_timestamp_us,
+                nav_state_user_intention=self.user_intended_nav_state,
+                nav_state=self.nav_state,
+                valid_nav_states_mask=VALID_NAV_STATES_MASK,
+                can_set_nav_states_mask=can_set,
+                failsafe=self._failsafe_action > FailsafeAction.WARN,
+                failsafe_and_user_took_over=self._failsafe_takeover,
+                gcs_connection_lost=self._gcs_lost,
+                gcs_connection_lost_counter=self._gcs_lost_counter,
+                pre_flight_checks_pass=self._preflight_ok,
+            )
+            actuator_armed = ActuatorArmed(
+                armed=armed,
+                prearmed=armed,
+                ready_to_arm=self._preflight_ok or armed,
+                lockdown=terminated,
+                termination=terminated,
+            )
+            self._messages = (status, control_mode(self.nav_state, armed), actuator_armed)
+        events = tuple(self._events)
+        self._events.clear()
+        status, mode, actuator_armed = self._messages
+        return CommanderOutputs(
+            vehicle_status=status,
+            vehicle_control_mode=mode,
+            actuator_armed=actuator_armed,
+            changed=changed,
+            failsafe_action=ACTION_NAMES[self._failsafe_action],
+            failsafe_delayed_action=ACTION_NAMES[self._failsafe_delayed],
+            failsafe_cause=self._failsafe_cause,
+            home=self._home,
+            navigation=NavigationRequest(
+                takeoff_altitude=self._takeoff_altitude,
+                takeoff_yaw=self._takeoff_yaw,
+                reposition=self._reposition,
+                reposition_speed=self._reposition_speed,
+                reposition_counter=self._reposition_counter,
+                mission_start_index=self._mission_start_index,
+                mission_start_counter=self._mission_start_counter,
+            ),
+            events=events,
+        )

@@ -1,0 +1,96 @@
+"""attitude_estimator_q and the gyro pipeline as one module, run on every gyro sample.
+
+It publishes ``vehicle_angular_velocity`` first (the rate loop's input, bias-corrected and
+filtered, with the angular acceleration for the D term) and then ``vehicle_attitude``, as PX4's
+``sensors`` and ``attitude_estimator_q`` modules do between them.
+"""
+
+from __future__ import annotations
+
+from stack.estimator.acceleration import VelocityDerivative
+from stack.estimator.angular_velocity import AngularVelocityFilter
+from stack.estimator.attitude_q import AttitudeEstimatorQ
+from stack.msg.estimation import VehicleAngularVelocity, VehicleAttitude
+from stack.msg.sensors import SensorGyro
+from stack.runtime.module import Module, Trigger
+from stack.runtime.params import Param
+
+ATTITUDE_PARAMS = (
+    Param("ATT_W_ACC", 0.2, 0.0, 1.0, "1/s", "Accelerometer (tilt) correction weight"),
+    Param("ATT_W_MAG", 0.1, 0.0, 1.0, "1/s", "Magnetometer (heading) correction weight"),
+    Param("ATT_W_GYRO_BIAS", 0.1, 0.0, 1.0, "1/s", "Gyro bias learning weight"),
+    Param("ATT_BIAS_MAX", 0.05, 0.0, 2.0, "rad/s", "Gyro bias limit"),
+    Param("ATT_MAG_DECL", 0.0, -180.0, 180.0, "deg", "Magnetic declination, east positive"),
+    Param("ATT_ACC_COMP", 0, 0, 1, "", "Compensate the accelerometer with the velocity-derived acceleration"),
+)
+COMPENSATION_PARAMS = (
+    Param("ATT_ACC_COMP_LP", 1.0, 0.0, 10.0, "Hz", "Low-pass cutoff of the velocity-derived acceleration (0 = off)"),
+)
+GYRO_PARAMS = (
+    Param("IMU_GYRO_CUTOFF", 40.0, 0.0, 1000.0, "Hz", "Body-rate low-pass cutoff (0 = off)"),
+    Param("IMU_DGYRO_CUTOFF", 20.0, 0.0, 1000.0, "Hz", "Angular-acceleration low-pass cutoff (0 = off)"),
+)
+
+
+class AttitudeEstimatorModule(Module):
+    NAME = "attitude_estimator_q"
+    DESCRIPTION = "Quaternion complementary filter (PX4 attitude_estimator_q) and gyro filtering"
+    TRIGGER = Trigger("sensor_gyro")
+    DT_RANGE = (0.00001, 0.02)
+    PARAMS = ATTITUDE_PARAMS + GYRO_PARAMS + COMPENSATION_PARAMS
+
+    def __init__(self, rt) -> None:
+        super().__init__(rt)
+        self.subscribe("sensor_accel")
+        self.subscribe("sensor_mag")
+        self.subscribe("vehicle_local_position")
+        self.subscribe("sensor_gps")
+        self.advertise("vehicle_angular_velocity")
+        self.advertise("vehicle_attitude")
+        self.estimator = AttitudeEstimatorQ(**self._values(ATTITUDE_PARAMS))
+        self.rates = AngularVelocityFilter(**self._values(GYRO_PARAMS))
+        self.acceleration = VelocityDerivative(float(self.params["ATT_ACC_COMP_LP"]))
+        self._accel_time = 0
+        self._velocity_time = 0
+
+    def _values(self, params: tuple[Param, ...]) -> dict[str, object]:
+        return {p.name: self.params[p.name] for p in params}
+
+    def on_params_changed(self, changed: set[str]) -> None:
+        self.estimator.set_params(**self._values(ATTITUDE_PARAMS))
+        self.rates.set_params(**self._values(GYRO_PARAMS))
+        if "ATT_ACC_COMP_LP" in changed:
+            self.acceleration = VelocityDerivative(float(self.params["ATT_ACC_COMP_LP"]))
+
+    def run(self, gyro_msg: SensorGyro, dt: float) -> None:
+        t = gyro_msg.timestamp_sample
+        gyro = (gyro_msg.x, gyro_msg.y, gyro_msg.z)
+        accel_msg = self.latest("sensor_accel")
+        mag_msg = self.update("sensor_mag")
+        mag = (mag_msg.x, mag_msg.y, mag_msg.z) if mag_msg is not None else None
+        if accel_msg is not None and accel_msg.timestamp_sample != self._accel_time:
+            self._accel_time = accel_msg.timestamp_sample
+            accel = (accel_msg.x, accel_msg.y, accel_msg.z)
+            self.estimator.update(dt, gyro, accel, mag, self._acceleration_compensation())
+        xyz, xyz_dot = self.rates.update(t, gyro, self.estimator.gyro_bias)
+        self.publish(
+            "vehicle_angular_velocity", VehicleAngularVelocity(timestamp_sample=t, xyz=xyz, xyz_derivative=xyz_dot)
+        )
+        if self.estimator.initialised:
+            self.publish("vehicle_attitude", VehicleAttitude(timestamp_sample=t, q=self.estimator.q))
+
+    def _acceleration_compensation(self) -> tuple[float, float, float] | None:
+        """NED acceleration from the local-position velocity, or the GPS velocity without one (ATT_ACC_COMP)."""
+        if not self.params["ATT_ACC_COMP"]:
+            return None
+        lpos = self.latest("vehicle_local_position")
+        if lpos is not None and lpos.v_xy_valid and lpos.v_z_valid:
+            if lpos.timestamp_sample > self._velocity_time:
+                self._velocity_time = lpos.timestamp_sample
+                self.acceleration.update(lpos.timestamp_sample, (lpos.vx, lpos.vy, lpos.vz))
+            return self.acceleration.acceleration
+        gps = self.latest("sensor_gps")
+        if gps is not None and gps.vel_ned_valid and gps.timestamp_sample > self._velocity_time:
+            self._velocity_time = gps.timestamp_sample
+            self.acceleration.update(gps.timestamp_sample, (gps.vel_n_m_s, gps.vel_e_m_s, gps.vel_d_m_s))
+        return self.acceleration.acceleration

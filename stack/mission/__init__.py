@@ -1,0 +1,1 @@
+"""Missions: QGroundControl ``.plan`` and waypoint-list files, and tracking progress along a mission."""

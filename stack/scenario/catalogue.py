@@ -1,0 +1,54 @@
+"""The scenarios ``stack fly`` knows: each a script, the topics it records, and how it is judged."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+from stack.scenario.script import Script, ScriptContext
+
+Evaluate = Callable[[ScriptContext], dict[str, Any]]
+
+
+@dataclass(frozen=True)
+class Check:
+    """A metric compared with a limit: ``metric <= limit`` (``at_least``: ``>=``; bool: must equal)."""
+
+    metric: str
+    limit: float | bool | str
+    at_least: bool = False
+
+    def passed(self, value: Any) -> bool:
+        if isinstance(self.limit, bool | str):
+            return value == self.limit
+        if value is None or value != value:
+            return False
+        return value >= self.limit if self.at_least else value <= self.limit
+
+
+@dataclass(frozen=True)
+class Scenario:
+    name: str
+    description: str
+    script: Script
+    evaluate: Evaluate
+    checks: tuple[Check, ...]
+    record: tuple[str, ...] = ()
+    publish: tuple[str, ...] = ()
+    watch: tuple[str, ...] = ()
+    timeout_s: float = 300.0
+    params: dict[str, Any] = field(default_factory=dict)
+
+
+def scenarios() -> dict[str, Scenario]:
+    from stack.scenario import attitude_step
+
+    return {s.name: s for s in (attitude_step.SCENARIO,)}
+
+
+def get_scenario(name: str) -> Scenario:
+    known = scenarios()
+    if name not in known:
+        raise KeyError(f"unknown scenario '{name}' (known: {', '.join(sorted(known))})")
+    return known[name]

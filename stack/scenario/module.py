@@ -1,0 +1,111 @@
+"""The scenario module: runs a flight script against the stack over the bus and judges the flight.
+
+``stack fly`` adds it to a profile. It is an ordinary lockstep member on a 100 Hz timer (so the
+script acts at exact simulated times and runs are deterministic); it records what the scenario
+needs, steps the script, and when the script ends computes the metrics and writes the result file.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import time
+from pathlib import Path
+
+from stack.runtime.module import Arg, Module, Timer
+from stack.scenario.catalogue import get_scenario
+from stack.scenario.script import ScenarioError, ScriptContext
+
+
+class ScenarioModule(Module):
+    NAME = "scenario"
+    DESCRIPTION = "Runs a scripted flight over the bus and writes its metrics"
+    TRIGGER = Timer(100.0)
+    ARGS = (
+        Arg("name", "", "Scenario to fly (see `stack fly --list`)"),
+        Arg("result", "", "Where to write the result JSON"),
+        Arg("limits", "{}", 'JSON object overriding check limits, e.g. {"yaw_rise_time_s": 0.3}'),
+    )
+
+    def __init__(self, rt) -> None:
+        super().__init__(rt)
+        self.scenario = get_scenario(str(self.args["name"]))
+        self.limits = json.loads(str(self.args["limits"]))
+        for topic in self.scenario.record + self.scenario.watch:
+            self.subscribe(topic, queue=topic in self.scenario.record)
+        self.subscribe("vehicle_command_ack", queue=True)
+        for topic in ("vehicle_command", *self.scenario.publish):
+            self.advertise(topic)
+        self.ctx = ScriptContext(self.publish, lambda: self.now_us() * 1e-6)
+        self.script = self.scenario.script(self.ctx)
+        self.waiting = None
+        self.started_wall: float | None = None
+        self.started_sim = 0.0
+
+    def run(self, msg: None, dt: float) -> None:
+        if self.started_wall is None:
+            self.started_wall = time.monotonic()
+            self.started_sim = self.ctx.now
+        self._take_data()
+        for hook in self.ctx.tick_hooks:
+            hook()
+        try:
+            while self.waiting is None or self.waiting():
+                self.waiting = next(self.script)
+        except StopIteration:
+            self._finish(None)
+        except ScenarioError as e:
+            self._finish(str(e))
+        if self.ctx.now - self.started_sim > self.scenario.timeout_s:
+            self._finish(f"the scenario did not finish within {self.scenario.timeout_s:g} s")
+
+    def _take_data(self) -> None:
+        ctx = self.ctx
+        for topic in self.scenario.record:
+            for m in self.take(topic):
+                ctx.record(topic, getattr(m, "timestamp_sample", 0) * 1e-6 or m.timestamp * 1e-6, m)
+                ctx.latest[topic] = m
+        for topic in self.scenario.watch:
+            m = self.latest(topic)
+            if m is not None:
+                ctx.latest[topic] = m
+        ctx.take_acks(self.take("vehicle_command_ack"))
+        for t, text in ctx.events:
+            self.log.info("t=%.2f s: %s", t, text)
+        ctx.events.clear()
+
+    def _finish(self, error: str | None) -> None:
+        wall = time.monotonic() - (self.started_wall or time.monotonic())
+        sim = self.ctx.now - self.started_sim
+        metrics: dict[str, object] = {}
+        if error is None:
+            try:
+                metrics = self.scenario.evaluate(self.ctx)
+            except ScenarioError as e:
+                error = str(e)
+        checks = []
+        for check in self.scenario.checks:
+            limit = self.limits.get(check.metric, check.limit)
+            value = metrics.get(check.metric)
+            ok = error is None and type(check)(check.metric, limit, check.at_least).passed(value)
+            checks.append({"name": check.metric, "value": _plain(value), "limit": limit, "passed": ok})
+        result = {
+            "scenario": self.scenario.name,
+            "passed": error is None and all(c["passed"] for c in checks),
+            "error": error,
+            "sim_time_s": sim,
+            "wall_time_s": wall,
+            "realtime_factor": sim / wall if wall > 0 else math.nan,
+            "metrics": {k: _plain(v) for k, v in metrics.items()},
+            "checks": checks,
+        }
+        if self.args["result"]:
+            Path(str(self.args["result"])).write_text(json.dumps(result, indent=2))
+        self.log.info("scenario %s %s", self.scenario.name, "passed" if result["passed"] else "FAILED")
+        raise SystemExit(0)
+
+
+def _plain(value: object) -> object:
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return value

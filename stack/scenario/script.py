@@ -1,0 +1,107 @@
+"""What a flight script sees: time, the latest topics, commands with their acknowledgements, waits.
+
+A script is a generator function taking a :class:`ScriptContext`. It yields to wait (``yield
+ctx.wait(2.0)``, ``yield ctx.until(lambda: ..., timeout=5)``) and uses the context to publish
+setpoints and commands. It only talks to the stack over the bus, as any user's script would.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Generator
+from dataclasses import dataclass, field
+from typing import Any
+
+from stack.msg.system import VehicleCommand, VehicleCommandAck
+
+Wait = Callable[[], bool]
+Script = Callable[["ScriptContext"], Generator[Wait, None, None]]
+
+
+class ScenarioError(RuntimeError):
+    """The scenario could not go on (a command was refused, a wait timed out)."""
+
+
+@dataclass
+class Series:
+    """A recorded signal: sample times [s] and values."""
+
+    times: list[float] = field(default_factory=list)
+    values: list[Any] = field(default_factory=list)
+
+    def add(self, t: float, value: Any) -> None:
+        self.times.append(t)
+        self.values.append(value)
+
+    def between(self, t0: float, t1: float) -> list[Any]:
+        return [v for t, v in zip(self.times, self.values, strict=True) if t0 <= t <= t1]
+
+
+class ScriptContext:
+    """The script's handle on the stack; the scenario module drives it once per tick."""
+
+    def __init__(self, publish: Callable[[str, Any], None], now_s: Callable[[], float]) -> None:
+        self._publish = publish
+        self._now_s = now_s
+        self.latest: dict[str, Any] = {}
+        self.series: dict[str, Series] = {}
+        self.events: list[tuple[float, str]] = []
+        self.tick_hooks: list[Callable[[], None]] = []
+        self.state: dict[str, Any] = {}
+        self._acks: list[VehicleCommandAck] = []
+
+    # -- time and waiting ------------------------------------------------------------------------------
+
+    @property
+    def now(self) -> float:
+        """Simulated (or wall) time in seconds."""
+        return self._now_s()
+
+    def wait(self, seconds: float) -> Wait:
+        end = self.now + seconds
+        return lambda: self.now >= end - 1e-9
+
+    def until(self, condition: Callable[[], bool], timeout: float, what: str) -> Wait:
+        deadline = self.now + timeout
+
+        def check() -> bool:
+            if condition():
+                return True
+            if self.now > deadline:
+                raise ScenarioError(f"timed out after {timeout:g} s waiting for {what}")
+            return False
+
+        return check
+
+    def log(self, text: str) -> None:
+        self.events.append((self.now, text))
+
+    # -- data --------------------------------------------------------------------------------------------
+
+    def record(self, name: str, t: float, value: Any) -> None:
+        self.series.setdefault(name, Series()).add(t, value)
+
+    def take_acks(self, acks: list[VehicleCommandAck]) -> None:
+        self._acks.extend(acks)
+
+    # -- commands ----------------------------------------------------------------------------------------
+
+    def publish(self, topic: str, msg: Any) -> None:
+        self._publish(topic, msg)
+
+    def command(self, command: int, timeout: float = 2.0, **params: float) -> Generator[Wait, None, VehicleCommandAck]:
+        """Send a vehicle_command and wait for its acknowledgement; a refusal raises ScenarioError."""
+        self._acks.clear()
+        self.publish("vehicle_command", VehicleCommand(command=command, from_external=True, **params))
+        yield self.until(
+            lambda: any(a.command == command for a in self._acks), timeout, f"the ack of command {command}"
+        )
+        ack = next(a for a in self._acks if a.command == command)
+        if ack.result != VehicleCommandAck.VEHICLE_CMD_RESULT_ACCEPTED:
+            raise ScenarioError(f"command {command} refused (result {ack.result}): {ack.reason or 'no reason given'}")
+        self.log(f"command {command} accepted")
+        return ack
+
+
+def degrees(values: list[float]) -> list[float]:
+    return [math.degrees(v) for v in values]

@@ -1,0 +1,203 @@
+"""The simulator module: the default plant, and the lockstep coordinator of a simulated stack.
+
+Each step it reads the latest ``actuator_outputs_sim``, advances the physics by one IMU period and
+publishes the sensors that fell due (accelerometer before gyro, the estimator's trigger) and the
+ground truth. In lockstep it drives simulated time; with ``--realtime`` it is paced by the wall clock.
+"""
+
+from __future__ import annotations
+
+import math
+
+from stack.mathlib.vector import Vec3
+from stack.msg.sensors import SensorAccel, SensorBaro, SensorGps, SensorGyro, SensorMag
+from stack.msg.simulation import SimGroundtruth
+from stack.runtime.module import Arg, Module
+from stack.runtime.params import Param
+from stack.sim.sensors import BaroSample, GpsSample, ImuSample, MagSample
+from stack.sim.simulator import SIH_HOME, Simulator
+from stack.sim.wind import WindParams
+
+# Device ids as PX4's simulated drivers report them (SIH's IMU id; the others distinct).
+IMU_DEVICE_ID = 1310988
+MAG_DEVICE_ID = 197388
+BARO_DEVICE_ID = 6620172
+GPS_DEVICE_ID = 11469064
+
+
+class SimulatorModule(Module):
+    NAME = "simulator"
+    DESCRIPTION = "Rigid-body multicopter simulator (PX4 SIH-like): physics, sensors, ground truth"
+    LOCKSTEP_COORDINATOR = True
+    ARGS = (
+        Arg("vehicle", "sih_quad", "Vehicle model: a name in stack/sim/vehicles or a path to a model file"),
+        Arg("imu_rate_hz", 250.0, "IMU rate = lockstep step rate (PX4 SITL IMU_INTEG_RATE)"),
+        Arg("physics_rate_hz", 1000.0, "RK4 physics rate"),
+        Arg("mag_rate_hz", 50.0),
+        Arg("baro_rate_hz", 20.0),
+        Arg("gps_rate_hz", 10.0),
+        Arg("gps_delay_s", 0.0, "GPS measurement delay"),
+    )
+    PARAMS = (
+        Param("SIH_LOC_LAT0", SIH_HOME[0], -90.0, 90.0, "deg", "Home latitude (applies at start)"),
+        Param("SIH_LOC_LON0", SIH_HOME[1], -180.0, 180.0, "deg", "Home longitude (applies at start)"),
+        Param("SIH_LOC_H0", SIH_HOME[2], -420.0, 8848.0, "m", "Home altitude AMSL (applies at start)"),
+        Param("SIM_GPS_USED", 10, 0, 50, "", "Satellites in view; fewer than 4 means no fix (GPS loss injection)"),
+        Param("SIM_WIND_SPD", 0.0, 0.0, 40.0, "m/s", "Mean wind speed (ArduPilot SIM_WIND_SPD)"),
+        Param("SIM_WIND_DIR", 0.0, 0.0, 360.0, "deg", "Direction the wind blows from (ArduPilot SIM_WIND_DIR)"),
+        Param("SIM_WIND_GUST", 0.0, 0.0, 20.0, "m/s", "Horizontal gust standard deviation"),
+        Param("SIM_WIND_GUST_T", 2.0, 0.1, 60.0, "s", "Gust correlation time"),
+    )
+
+    def __init__(self, rt) -> None:
+        super().__init__(rt)
+        p, a = self.params, self.args
+        self.sim = Simulator(
+            model=str(a["vehicle"]),
+            seed=rt.spec.seed,
+            physics_rate_hz=float(a["physics_rate_hz"]),
+            imu_rate_hz=float(a["imu_rate_hz"]),
+            mag_rate_hz=float(a["mag_rate_hz"]),
+            baro_rate_hz=float(a["baro_rate_hz"]),
+            gps_rate_hz=float(a["gps_rate_hz"]),
+            home=(float(p["SIH_LOC_LAT0"]), float(p["SIH_LOC_LON0"]), float(p["SIH_LOC_H0"])),
+            wind=self._wind_params(),
+        )
+        self.sim.set_gps_enabled(int(p["SIM_GPS_USED"]) >= 4)
+        self.motor_count = self.sim.model.rotor_count
+        self.subscribe("actuator_outputs_sim")
+        for topic in ("sensor_accel", "sensor_gyro", "sensor_mag", "sensor_baro", "sensor_gps", "sim_groundtruth"):
+            self.advertise(topic)
+        self.epoch_us: int | None = None
+        self.log.info(
+            "vehicle %s: %d rotors, %.3f kg, hover thrust fraction %.3f",
+            self.sim.model.name,
+            self.motor_count,
+            self.sim.model.mass,
+            self.sim.model.hover_thrust_fraction,
+        )
+
+    def _wind_params(self) -> WindParams:
+        p = self.params
+        speed, gust = float(p["SIM_WIND_SPD"]), float(p["SIM_WIND_GUST"])
+        return WindParams.from_speed_direction(
+            speed,
+            float(p["SIM_WIND_DIR"]),
+            gust_std_horizontal=gust,
+            gust_std_vertical=0.5 * gust,
+            gust_time_constant=float(p["SIM_WIND_GUST_T"]),
+            enabled=speed > 0.0 or gust > 0.0,
+        )
+
+    def on_params_changed(self, changed: set[str]) -> None:
+        if "SIM_GPS_USED" in changed:
+            enabled = int(self.params["SIM_GPS_USED"]) >= 4
+            self.sim.set_gps_enabled(enabled)
+            self.log.info("GPS %s", "restored" if enabled else "lost (fewer than 4 satellites)")
+        if changed & {"SIM_WIND_SPD", "SIM_WIND_DIR", "SIM_WIND_GUST", "SIM_WIND_GUST_T"}:
+            self.sim.set_wind(self._wind_params())
+
+    def step_period_us(self) -> int:
+        return self.sim.imu_period_us
+
+    def motor_commands(self) -> tuple[float, ...]:
+        outputs = self.latest("actuator_outputs_sim")
+        if outputs is None:
+            return (0.0,) * self.motor_count
+        commands = outputs.output[: self.motor_count]
+        return tuple(c if math.isfinite(c) else 0.0 for c in commands)
+
+    def run(self, msg: object, dt: float) -> None:
+        now = self.now_us()
+        if self.epoch_us is None:
+            # Simulated sample times map onto the stack's clock: identical in lockstep, wall time otherwise.
+            self.epoch_us = now - (self.sim.time_us + self.sim.imu_period_us)
+        epoch = self.epoch_us
+        for sample in self.sim.advance(self.motor_commands()):
+            if isinstance(sample, ImuSample):
+                self._publish_imu(sample, epoch)
+            elif isinstance(sample, MagSample):
+                self._publish_mag(sample, epoch)
+            elif isinstance(sample, BaroSample):
+                self._publish_baro(sample, epoch)
+            elif isinstance(sample, GpsSample):
+                self._publish_gps(sample, epoch)
+        self._publish_truth(epoch)
+
+    def _publish_imu(self, s: ImuSample, epoch: int) -> None:
+        t = epoch + s.time_us
+        a, g = s.accel, s.gyro
+        self.publish(
+            "sensor_accel",
+            SensorAccel(timestamp_sample=t, device_id=IMU_DEVICE_ID, x=a[0], y=a[1], z=a[2], temperature=s.temperature),
+        )
+        self.publish(
+            "sensor_gyro",
+            SensorGyro(timestamp_sample=t, device_id=IMU_DEVICE_ID, x=g[0], y=g[1], z=g[2], temperature=s.temperature),
+        )
+
+    def _publish_mag(self, s: MagSample, epoch: int) -> None:
+        f = s.field
+        self.publish(
+            "sensor_mag", SensorMag(timestamp_sample=epoch + s.time_us, device_id=MAG_DEVICE_ID, x=f[0], y=f[1], z=f[2])
+        )
+
+    def _publish_baro(self, s: BaroSample, epoch: int) -> None:
+        self.publish(
+            "sensor_baro",
+            SensorBaro(
+                timestamp_sample=epoch + s.time_us,
+                device_id=BARO_DEVICE_ID,
+                pressure=s.pressure_pa,
+                temperature=s.temperature,
+            ),
+        )
+
+    def _publish_gps(self, s: GpsSample, epoch: int) -> None:
+        vn, ve, vd = s.vel_ned
+        self.publish(
+            "sensor_gps",
+            SensorGps(
+                timestamp_sample=epoch + s.time_us,
+                device_id=GPS_DEVICE_ID,
+                latitude_deg=s.lat,
+                longitude_deg=s.lon,
+                altitude_msl_m=s.alt_msl,
+                altitude_ellipsoid_m=s.alt_msl,
+                s_variance_m_s=s.s_variance_m_s,
+                fix_type=s.fix_type,
+                eph=s.eph,
+                epv=s.epv,
+                hdop=s.hdop,
+                vdop=s.vdop,
+                vel_m_s=math.hypot(vn, ve),
+                vel_n_m_s=vn,
+                vel_e_m_s=ve,
+                vel_d_m_s=vd,
+                cog_rad=math.atan2(ve, vn),
+                vel_ned_valid=s.fix_type >= SensorGps.FIX_TYPE_3D,
+                satellites_used=s.satellites,
+            ),
+        )
+
+    def _publish_truth(self, epoch: int) -> None:
+        t = self.sim.truth()
+        wind: Vec3 = self.sim.wind
+        self.publish(
+            "sim_groundtruth",
+            SimGroundtruth(
+                timestamp_sample=epoch + t.time_us,
+                position=t.position,
+                velocity=t.velocity,
+                acceleration=t.acceleration,
+                q=t.q,
+                angular_velocity=t.angular_velocity,
+                angular_acceleration=t.angular_acceleration,
+                lat=t.lat,
+                lon=t.lon,
+                alt=t.alt,
+                on_ground=t.on_ground,
+                wind=wind,
+                motors=t.motors,
+            ),
+        )

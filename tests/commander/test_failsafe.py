@@ -1,0 +1,221 @@
+import pytest
+
+from stack.commander import commands as C
+from stack.commander.battery import BatteryWarning
+from stack.commander.failsafe import FailsafeAction, mode_fallback, runnable_action
+from stack.commander.modes import Requirement
+from stack.commander.state_machine import ArmDisarmReason
+from stack.msg.system import VehicleCommandAck as ACK
+from stack.msg.system import VehicleStatus as NS
+from tests.commander.helpers import local_position, make_clock
+
+POSITION_LOST = Requirement.LOCAL_POSITION | Requirement.LOCAL_POSITION_RELAXED | Requirement.LOCAL_ALT
+
+
+def _in_mission(**params):
+    """A vehicle flying a mission at 10 m, with a ground station connected."""
+    clock = make_clock(**params)
+    clock.overrides = {"mission_count": 5, "last_gcs_heartbeat_us": clock.t}
+    clock.step()
+    assert clock.send(C.mission_start_command(0)).result == ACK.VEHICLE_CMD_RESULT_ACCEPTED
+    clock.fly_to((5.0, 0.0, -10.0))
+    assert clock.status.nav_state == NS.NAVIGATION_STATE_AUTO_MISSION
+    return clock
+
+
+def test_position_accuracy_lost_in_mission_lands():
+    clock = _in_mission()
+    clock.overrides["local_position"] = local_position(clock.t + clock.period, 5.0, 0.0, -10.0, eph=8.0)
+    out = clock.step()
+    assert out.vehicle_status.nav_state == NS.NAVIGATION_STATE_AUTO_LAND
+    assert out.vehicle_status.failsafe
+    assert (out.failsafe_action, out.failsafe_cause) == ("land", "local_position_invalid")
+    assert out.vehicle_status.nav_state_user_intention == NS.NAVIGATION_STATE_AUTO_MISSION
+    assert any(e.startswith("Failsafe activated (local_position_invalid): land") for e in out.events)
+
+
+def test_position_lost_in_mission_descends():
+    clock = _in_mission()
+    clock.overrides["local_position"] = None
+    out = clock.step()
+    assert out.vehicle_status.nav_state == NS.NAVIGATION_STATE_DESCEND
+    assert out.failsafe_action == "descend"
+    assert out.vehicle_control_mode.flag_control_climb_rate_enabled
+    assert not out.vehicle_control_mode.flag_control_position_enabled
+
+
+def test_estimate_recovers_and_the_mission_continues():
+    clock = _in_mission()
+    clock.overrides["local_position"] = None
+    assert clock.step().vehicle_status.nav_state == NS.NAVIGATION_STATE_DESCEND
+    del clock.overrides["local_position"]
+    out = clock.step()
+    assert out.vehicle_status.nav_state == NS.NAVIGATION_STATE_AUTO_MISSION
+    assert out.failsafe_action == "none" and not out.vehicle_status.failsafe
+
+
+def test_position_mode_falls_back_to_altitude_then_stabilized():
+    clock = make_clock()
+    clock.send(C.set_mode_command("posctl"))
+    clock.send(C.arm_command())
+    clock.fly_to((0.0, 0.0, -5.0))
+    clock.overrides = {"local_position": local_position(clock.t + clock.period, z=-5.0, xy_valid=False)}
+    out = clock.step()
+    assert (out.vehicle_status.nav_state, out.failsafe_action) == (NS.NAVIGATION_STATE_ALTCTL, "fallback_altctl")
+    clock.overrides = {"local_position": None}
+    out = clock.step()
+    assert (out.vehicle_status.nav_state, out.failsafe_action) == (NS.NAVIGATION_STATE_STAB, "fallback_stabilized")
+
+
+def test_command_link_loss_in_mission_returns():
+    clock = _in_mission(NAV_DLL_ACT=2)
+    heartbeat = clock.t
+    clock.overrides["last_gcs_heartbeat_us"] = heartbeat
+    out = clock.step(9.9)
+    assert out.vehicle_status.nav_state == NS.NAVIGATION_STATE_AUTO_MISSION
+    assert not out.vehicle_status.gcs_connection_lost
+    out = clock.step(0.2)
+    assert out.vehicle_status.gcs_connection_lost
+    assert out.vehicle_status.gcs_connection_lost_counter == 1
+    assert out.vehicle_status.nav_state == NS.NAVIGATION_STATE_AUTO_RTL
+    assert (out.failsafe_action, out.failsafe_cause) == ("rtl", "gcs_connection_loss")
+
+
+def test_command_link_loss_waits_com_fail_act_t_in_hold_first():
+    clock = _in_mission(NAV_DLL_ACT=2, COM_FAIL_ACT_T=5.0)
+    clock.overrides["last_gcs_heartbeat_us"] = clock.t
+    out = clock.step(10.1)
+    assert out.vehicle_status.nav_state == NS.NAVIGATION_STATE_AUTO_LOITER
+    assert (out.failsafe_action, out.failsafe_delayed_action) == ("hold", "rtl")
+    assert clock.step(4.8).vehicle_status.nav_state == NS.NAVIGATION_STATE_AUTO_LOITER
+    out = clock.step(0.3)
+    assert out.vehicle_status.nav_state == NS.NAVIGATION_STATE_AUTO_RTL
+    assert out.failsafe_delayed_action == "none"
+
+
+def test_link_loss_is_ignored_by_default_and_when_exempt():
+    clock = _in_mission()
+    clock.overrides["last_gcs_heartbeat_us"] = clock.t
+    assert clock.step(12.0).vehicle_status.nav_state == NS.NAVIGATION_STATE_AUTO_MISSION
+    clock = _in_mission(NAV_DLL_ACT=2, COM_DLL_EXCEPT=1)
+    clock.overrides["last_gcs_heartbeat_us"] = clock.t
+    out = clock.step(12.0)
+    assert out.vehicle_status.gcs_connection_lost
+    assert out.vehicle_status.nav_state == NS.NAVIGATION_STATE_AUTO_MISSION
+
+
+def test_no_link_loss_before_a_first_heartbeat():
+    clock = make_clock(NAV_DLL_ACT=2)
+    clock.send(C.set_mode_command("hold"))
+    clock.send(C.arm_command())
+    out = clock.fly_to((0.0, 0.0, -5.0))
+    assert not clock.step(30.0).vehicle_status.gcs_connection_lost
+    assert out.vehicle_status.nav_state == NS.NAVIGATION_STATE_AUTO_LOITER
+
+
+def test_low_battery_warns_critical_returns_emergency_lands():
+    clock = _in_mission(COM_LOW_BAT_ACT=3)
+    clock.overrides["battery_warning"] = BatteryWarning.LOW
+    out = clock.step()
+    assert out.vehicle_status.nav_state == NS.NAVIGATION_STATE_AUTO_MISSION
+    assert (out.failsafe_action, out.failsafe_cause) == ("warn", "battery_low")
+    assert not out.vehicle_status.failsafe
+    clock.overrides["battery_warning"] = BatteryWarning.CRITICAL
+    out = clock.step()
+    assert out.vehicle_status.nav_state == NS.NAVIGATION_STATE_AUTO_RTL
+    assert (out.failsafe_action, out.failsafe_cause) == ("rtl", "battery_critical")
+    clock.overrides["battery_warning"] = BatteryWarning.EMERGENCY
+    out = clock.step()
+    assert out.vehicle_status.nav_state == NS.NAVIGATION_STATE_AUTO_LAND
+    assert (out.failsafe_action, out.failsafe_cause) == ("land", "battery_emergency")
+
+
+@pytest.mark.parametrize(
+    ("action", "critical", "emergency"), [(0, "warn", "warn"), (1, "rtl", "rtl"), (2, "land", "land")]
+)
+def test_com_low_bat_act_choices(action, critical, emergency):
+    clock = _in_mission(COM_LOW_BAT_ACT=action)
+    clock.overrides["battery_warning"] = BatteryWarning.CRITICAL
+    assert clock.step().failsafe_action == critical
+    clock.overrides["battery_warning"] = BatteryWarning.EMERGENCY
+    assert clock.step().failsafe_action == emergency
+
+
+def test_battery_already_low_at_arming_only_warns():
+    clock = make_clock(COM_LOW_BAT_ACT=3)
+    clock.overrides = {"battery_warning": BatteryWarning.CRITICAL}
+    clock.step()
+    clock.send(C.set_mode_command("hold"))
+    clock.send(C.arm_command(force=True))
+    out = clock.fly_to((0.0, 0.0, -5.0))
+    assert out.failsafe_action == "warn"
+    assert out.vehicle_status.nav_state == NS.NAVIGATION_STATE_AUTO_LOITER
+
+
+def test_geofence_breach_returns():
+    clock = _in_mission(GF_ACTION=3, GF_MAX_HOR_DIST=50.0)
+    assert clock.fly_to((49.0, 0.0, -10.0)).vehicle_status.nav_state == NS.NAVIGATION_STATE_AUTO_MISSION
+    out = clock.fly_to((40.0, 31.0, -10.0))
+    assert out.vehicle_status.nav_state == NS.NAVIGATION_STATE_AUTO_RTL
+    assert (out.failsafe_action, out.failsafe_cause) == ("rtl", "geofence_breach")
+    # Coming back inside does not cancel the return: the action clears on a mode change or disarm.
+    assert clock.fly_to((10.0, 0.0, -10.0)).vehicle_status.nav_state == NS.NAVIGATION_STATE_AUTO_RTL
+
+
+def test_geofence_height_and_default_hold():
+    clock = _in_mission(GF_MAX_VER_DIST=20.0)
+    out = clock.fly_to((0.0, 0.0, -25.0))
+    assert (out.vehicle_status.nav_state, out.failsafe_action) == (NS.NAVIGATION_STATE_AUTO_LOITER, "hold")
+
+
+def test_user_takes_over_from_a_return_by_switching_mode():
+    clock = _in_mission(GF_ACTION=3, GF_MAX_HOR_DIST=50.0)
+    assert clock.fly_to((60.0, 0.0, -10.0)).vehicle_status.nav_state == NS.NAVIGATION_STATE_AUTO_RTL
+    assert clock.send(C.set_mode_command("posctl")).result == ACK.VEHICLE_CMD_RESULT_ACCEPTED
+    out = clock.step()
+    assert out.vehicle_status.nav_state == NS.NAVIGATION_STATE_POSCTL
+    assert out.vehicle_status.failsafe_and_user_took_over
+    assert not out.vehicle_status.failsafe
+    assert out.failsafe_action == "warn"
+
+
+def test_no_takeover_from_terminate():
+    clock = _in_mission(GF_ACTION=4, GF_MAX_HOR_DIST=50.0)
+    out = clock.fly_to((60.0, 0.0, -10.0))
+    assert out.vehicle_status.nav_state == NS.NAVIGATION_STATE_TERMINATION
+    assert out.actuator_armed.termination and out.vehicle_control_mode.flag_control_termination_enabled
+    clock.send(C.set_mode_command("posctl"))
+    assert clock.fly_to((0.0, 0.0, -10.0)).vehicle_status.nav_state == NS.NAVIGATION_STATE_TERMINATION
+
+
+def test_disarm_action_disarms():
+    clock = _in_mission(NAV_DLL_ACT=6)
+    clock.overrides["last_gcs_heartbeat_us"] = clock.t
+    out = clock.step(10.1)
+    assert out.vehicle_status.arming_state == NS.ARMING_STATE_DISARMED
+    assert out.vehicle_status.latest_disarming_reason == ArmDisarmReason.FAILSAFE
+
+
+def test_already_landing_does_not_return():
+    clock = _in_mission(COM_LOW_BAT_ACT=1)
+    clock.send(C.land_command())
+    clock.step()
+    clock.overrides["battery_warning"] = BatteryWarning.CRITICAL
+    out = clock.step()
+    assert out.vehicle_status.nav_state == NS.NAVIGATION_STATE_AUTO_LAND
+    assert out.failsafe_action == "warn"
+
+
+def test_fallback_chain():
+    assert mode_fallback(Requirement.NONE, NS.NAVIGATION_STATE_POSCTL) == (
+        FailsafeAction.NONE,
+        NS.NAVIGATION_STATE_POSCTL,
+    )
+    assert mode_fallback(Requirement.MISSION, NS.NAVIGATION_STATE_AUTO_MISSION) == (
+        FailsafeAction.RTL,
+        NS.NAVIGATION_STATE_AUTO_RTL,
+    )
+    assert runnable_action(FailsafeAction.RTL, Requirement.HOME) == FailsafeAction.LAND
+    assert runnable_action(FailsafeAction.HOLD, POSITION_LOST) == FailsafeAction.DESCEND
+    assert runnable_action(FailsafeAction.RTL, POSITION_LOST | Requirement.ATTITUDE) == FailsafeAction.TERMINATE
+    assert runnable_action(FailsafeAction.DISARM, POSITION_LOST) == FailsafeAction.DISARM
