@@ -87,6 +87,11 @@ def lockstep_clock_key(vehicle: str) -> str:
     return f"{ROOT}/{vehicle}/@lockstep/clock"
 
 
+def lockstep_tick_key(vehicle: str, member: str) -> str:
+    """Where a timed lockstep member receives the clock, only on the steps its timer is due."""
+    return f"{ROOT}/{vehicle}/@lockstep/tick/{member}"
+
+
 def lockstep_ack_key(vehicle: str) -> str:
     return f"{ROOT}/{vehicle}/@lockstep/ack"
 

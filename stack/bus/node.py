@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import logging
 import os
 import random
 import time
@@ -103,7 +104,11 @@ class Node:
             pub.undeclare()
         self._tokens.clear()
         if self._owns_session:
-            self.session.close()
+            try:
+                self.session.close()
+            except zenoh.ZError as e:
+                # Zenoh gives up closing after a timeout (e.g. a peer stopped reading); the process exits anyway.
+                logging.getLogger("stack.bus").warning("closing the Zenoh session: %s", e)
 
 
 def pid_tag() -> str:

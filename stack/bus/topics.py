@@ -26,6 +26,9 @@ if TYPE_CHECKING:
 
 HEADER = struct.Struct("<QIQIqB")
 FLAG_LOCKSTEP_TIME = 1
+# A probe carries no message: a publisher sends probes at start-up so each subscriber can tell that
+# the publisher's samples reach it (see stack.runtime.runner: the lockstep start-up sync).
+FLAG_PROBE = 2
 
 
 log = logging.getLogger("stack.bus")
@@ -72,6 +75,11 @@ class TopicPublisher:
         self._pub.put(self.encoder.encode(msg), attachment=header)
         node.on_published(self)
 
+    def probe(self) -> None:
+        """Send a probe (not a message: subscribers note the publisher and deliver nothing)."""
+        node = self._node
+        self._pub.put(b"", attachment=HEADER.pack(self.fingerprint, node.publisher_id, 0, 0, 0, FLAG_PROBE))
+
     def matching(self) -> bool:
         """Whether any subscriber is known for this topic."""
         return self._pub.matching_status.matching
@@ -92,6 +100,7 @@ class TopicSubscriber:
         "instance",
         "key",
         "msg_type",
+        "probed_by",
         "received",
         "schema_errors",
         "suffix",
@@ -115,6 +124,7 @@ class TopicSubscriber:
         self.fingerprint = fingerprint(msg_type)
         self._decoder = msgspec.msgpack.Decoder(msg_type)
         self.received = 0
+        self.probed_by: set[int] = set()
         self.decode_errors = 0
         self.schema_errors = 0
         self._warned = False
@@ -131,6 +141,9 @@ class TopicSubscriber:
             self._reject_schema(f"malformed header of {len(raw)} bytes")
             return None
         fp, pub_id, seq, index, pub_time, flags = HEADER.unpack(raw)
+        if flags & FLAG_PROBE:
+            self.probed_by.add(pub_id)
+            return None
         if fp != self.fingerprint:
             mine = f"{self.msg_type.__name__} {self.fingerprint:016x}"
             self._reject_schema(f"publisher {pub_id:08x} sends schema {fp:016x}, this subscriber expects {mine}")

@@ -15,6 +15,7 @@ import typer
 import zenoh
 
 from stack.bus import keys
+from stack.bus.graph import read_graph
 from stack.bus.node import Node
 from stack.bus.topics import HEADER, Received
 from stack.cli.common import (
@@ -27,7 +28,6 @@ from stack.cli.common import (
     print_table,
     to_jsonable,
 )
-from stack.cli.graph import read_graph
 from stack.msg.base import Message
 from stack.msg.registry import TOPICS, UnknownTopic, fingerprint, message_type, schema_text
 

@@ -1,9 +1,13 @@
-"""The commander module: arming, modes, commands and failsafes (PX4 ``commander``), on a 50 Hz timer.
+"""The commander module: arming, modes, commands, failsafes and land detection, on a 50 Hz timer.
 
 It answers every ``vehicle_command`` with a ``vehicle_command_ack`` and publishes ``actuator_armed``,
 ``vehicle_status`` and ``vehicle_control_mode`` (the flags the controllers obey) on change and at
 2 Hz, plus ``home_position``. In Offboard the control flags follow the offboard controller's
-``offboard_control_mode``, which must keep arriving (COM_OF_LOSS_T) or the vehicle falls back.
+``offboard_control_mode``, which must keep arriving (COM_OF_LOSS_T) or the switch is refused.
+
+PX4's land detector runs in the same process, on the same tick, and publishes
+``vehicle_land_detected``: in PX4 both read the 250 Hz attitude and IMU topics in-process for free;
+here they read the estimator's 10 Hz ``estimator_status`` and ``vehicle_imu_status`` summaries.
 """
 
 from __future__ import annotations
@@ -12,18 +16,23 @@ import math
 
 import msgspec
 
+from stack.commander import land_detector
 from stack.commander.health import CommanderInputs
+from stack.commander.land_detector import LandDetectorInputs, MulticopterLandDetector
 from stack.commander.modes import nav_state_from_custom_mode
 from stack.commander.state_machine import PARAMS as COMMANDER_PARAMS
 from stack.commander.state_machine import Commander
+from stack.msg.setpoints import TakeoffStatus
 from stack.msg.system import (
     HomePosition,
     OffboardControlMode,
     VehicleCommand,
     VehicleCommandAck,
     VehicleControlMode,
+    VehicleLandDetected,
     VehicleStatus,
 )
+from stack.posctl.takeoff import TakeoffState
 from stack.runtime.module import Module, Timer
 from stack.runtime.params import Param
 
@@ -61,30 +70,38 @@ class CommanderModule(Module):
     DESCRIPTION = "Arming, flight modes, commands and failsafes (PX4 commander)"
     TRIGGER = Timer(50.0)
     DT_RANGE = (0.001, 0.1)
-    PARAMS = COMMANDER_PARAMS + OFFBOARD_PARAMS
+    PARAMS = (
+        COMMANDER_PARAMS
+        + OFFBOARD_PARAMS
+        + tuple(p for p in land_detector.PARAMS if p.name not in {q.name for q in COMMANDER_PARAMS})
+    )
 
     def __init__(self, rt) -> None:
         super().__init__(rt)
         self.subscribe("vehicle_command", queue=True)
         for topic in (
-            "vehicle_attitude",
-            "vehicle_angular_velocity",
+            "estimator_status",
+            "vehicle_imu_status",
             "vehicle_local_position",
-            "sensor_gyro",
-            "sensor_accel",
             "sensor_baro",
             "sensor_mag",
             "sensor_gps",
-            "vehicle_land_detected",
             "battery_status",
             "telemetry_status",
             "offboard_control_mode",
+            "vehicle_thrust_setpoint",
+            "trajectory_setpoint",
+            "hover_thrust_estimate",
+            "takeoff_status",
         ):
             self.subscribe(topic)
         for topic in ("actuator_armed", "vehicle_status", "vehicle_control_mode", "vehicle_command_ack"):
             self.advertise(topic)
         self.advertise("home_position")
+        self.advertise("vehicle_land_detected")
         self.commander = Commander(self.params.values())
+        self.land_detector = MulticopterLandDetector(self.params.values())
+        self.land = VehicleLandDetected()
         self._last_publish = 0
         self._home_count = 0
         self._last_gcs = 0
@@ -92,9 +109,12 @@ class CommanderModule(Module):
 
     def on_params_changed(self, changed: set[str]) -> None:
         self.commander.set_params(self.params.values())
+        self.land_detector = MulticopterLandDetector(self.params.values())
 
     def run(self, msg: None, dt: float) -> None:
         now = self.now_us()
+        self.land = VehicleLandDetected(**self.land_detector.update(now, self._land_inputs())._asdict())
+        self.publish("vehicle_land_detected", self.land)
         for cmd in self.take("vehicle_command"):
             self._handle(cmd, now)
         out = self.commander.update(now, self._inputs(now))
@@ -179,26 +199,64 @@ class CommanderModule(Module):
             m = latest(topic)
             return m.timestamp if m is not None else 0
 
-        att = latest("vehicle_attitude")
-        land = latest("vehicle_land_detected")
+        est = latest("estimator_status")
+        imu = latest("vehicle_imu_status")
+        land = self.land
         gps = latest("sensor_gps")
         battery = latest("battery_status")
         telemetry = latest("telemetry_status")
         if telemetry is not None and (telemetry.heartbeat_type_gcs or telemetry.heartbeat_type_onboard_controller):
             self._last_gcs = max(self._last_gcs, telemetry.timestamp)
+        imu_alive = imu is not None and imu.gyro_rate_hz > 0.0
         return CommanderInputs(
-            attitude_timestamp_us=att.timestamp if att is not None else 0,
-            attitude_q=att.q if att is not None else (1.0, 0.0, 0.0, 0.0),
-            angular_velocity_timestamp_us=stamp("vehicle_angular_velocity"),
+            attitude_timestamp_us=est.attitude_timestamp if est is not None and est.attitude_valid else 0,
+            attitude_q=est.q if est is not None else (1.0, 0.0, 0.0, 0.0),
+            angular_velocity_timestamp_us=est.angular_velocity_timestamp if est is not None else 0,
             local_position=latest("vehicle_local_position"),
-            gyro_timestamp_us=stamp("sensor_gyro"),
-            accel_timestamp_us=stamp("sensor_accel"),
+            gyro_timestamp_us=imu.timestamp if imu_alive else 0,
+            accel_timestamp_us=imu.timestamp if imu is not None and imu.accel_rate_hz > 0.0 else 0,
             baro_timestamp_us=stamp("sensor_baro"),
             mag_timestamp_us=stamp("sensor_mag"),
             gps_timestamp_us=stamp("sensor_gps"),
             gps_fix_type=gps.fix_type if gps is not None else 0,
-            landed=land.landed if land is not None else True,
-            maybe_landed=land.maybe_landed if land is not None else True,
+            landed=land.landed,
+            maybe_landed=land.maybe_landed,
             battery_warning=battery.warning if battery is not None else 0,
             last_gcs_heartbeat_us=self._last_gcs,
         )
+
+    def _land_inputs(self) -> LandDetectorInputs:
+        latest = self.latest
+        inp = LandDetectorInputs()
+        inp.armed = self.commander.armed
+        lpos = latest("vehicle_local_position")
+        if lpos is not None:
+            inp.local_position_timestamp_us = lpos.timestamp
+            inp.z_valid, inp.v_xy_valid, inp.v_z_valid = lpos.z_valid, lpos.v_xy_valid, lpos.v_z_valid
+            inp.vx, inp.vy, inp.vz, inp.z_deriv = lpos.vx, lpos.vy, lpos.vz, lpos.z_deriv
+            inp.dist_bottom_valid, inp.dist_bottom = lpos.dist_bottom_valid, lpos.dist_bottom
+        imu = latest("vehicle_imu_status")
+        if imu is not None:
+            inp.angular_velocity = imu.mean_gyro
+            inp.acceleration = imu.mean_accel
+        thrust = latest("vehicle_thrust_setpoint")
+        if thrust is not None:
+            inp.throttle = -thrust.xyz[2]
+        mode = self.commander.nav_state
+        inp.climb_rate_control = mode not in (
+            NS.NAVIGATION_STATE_MANUAL,
+            NS.NAVIGATION_STATE_STAB,
+            NS.NAVIGATION_STATE_ACRO,
+            NS.NAVIGATION_STATE_RATTITUDE,
+            NS.NAVIGATION_STATE_OFFBOARD,
+        )
+        trajectory = latest("trajectory_setpoint")
+        inp.velocity_setpoint_z = trajectory.velocity[2] if trajectory is not None else math.nan
+        hover = latest("hover_thrust_estimate")
+        if hover is not None and hover.valid:
+            inp.hover_thrust, inp.hover_thrust_timestamp_us = hover.hover_thrust, hover.timestamp
+        takeoff = latest("takeoff_status")
+        if takeoff is not None and takeoff.takeoff_state >= TakeoffStatus.TAKEOFF_STATE_DISARMED:
+            # takeoff_status uses PX4's numbering, one above the position controller's TakeoffState.
+            inp.takeoff_state = TakeoffState(takeoff.takeoff_state - 1)
+        return inp

@@ -2,16 +2,20 @@
 
 It publishes ``vehicle_angular_velocity`` first (the rate loop's input, bias-corrected and
 filtered, with the angular acceleration for the D term) and then ``vehicle_attitude``, as PX4's
-``sensors`` and ``attitude_estimator_q`` modules do between them.
+``sensors`` and ``attitude_estimator_q`` modules do between them; and at 10 Hz
+``vehicle_imu_status`` and ``estimator_status``, summaries for the commander, whose checks do not
+need every 250 Hz sample.
 """
 
 from __future__ import annotations
 
+import math
+
 from stack.estimator.acceleration import VelocityDerivative
 from stack.estimator.angular_velocity import AngularVelocityFilter
 from stack.estimator.attitude_q import AttitudeEstimatorQ
-from stack.msg.estimation import VehicleAngularVelocity, VehicleAttitude
-from stack.msg.sensors import SensorGyro
+from stack.msg.estimation import EstimatorStatus, VehicleAngularVelocity, VehicleAttitude, VehicleImuStatus
+from stack.msg.sensors import SensorAccel, SensorGyro
 from stack.runtime.module import Module, Trigger
 from stack.runtime.params import Param
 
@@ -26,10 +30,61 @@ ATTITUDE_PARAMS = (
 COMPENSATION_PARAMS = (
     Param("ATT_ACC_COMP_LP", 1.0, 0.0, 10.0, "Hz", "Low-pass cutoff of the velocity-derived acceleration (0 = off)"),
 )
+STATUS_INTERVAL_US = 100_000
 GYRO_PARAMS = (
     Param("IMU_GYRO_CUTOFF", 40.0, 0.0, 1000.0, "Hz", "Body-rate low-pass cutoff (0 = off)"),
     Param("IMU_DGYRO_CUTOFF", 20.0, 0.0, 1000.0, "Hz", "Angular-acceleration low-pass cutoff (0 = off)"),
 )
+
+
+class ImuSummary:
+    """Means and extremes of the IMU between two ``vehicle_imu_status`` messages."""
+
+    def __init__(self) -> None:
+        self.start_us = 0
+        self._reset(0)
+
+    def _reset(self, start_us: int) -> None:
+        self.start_us = start_us
+        self.n = 0
+        self.gyro_sum = [0.0, 0.0, 0.0]
+        self.accel_sum = [0.0, 0.0, 0.0]
+        self.max_gyro = 0.0
+        self.min_accel = math.inf
+        self.accel_n = 0
+
+    def add(self, t: int, gyro: tuple[float, float, float], accel: SensorAccel | None) -> None:
+        if self.n == 0 and self.start_us == 0:
+            self.start_us = t
+        self.n += 1
+        for i in range(3):
+            self.gyro_sum[i] += gyro[i]
+        self.max_gyro = max(self.max_gyro, math.sqrt(gyro[0] ** 2 + gyro[1] ** 2 + gyro[2] ** 2))
+        if accel is not None:
+            a = (accel.x, accel.y, accel.z)
+            self.accel_n += 1
+            for i in range(3):
+                self.accel_sum[i] += a[i]
+            self.min_accel = min(self.min_accel, math.sqrt(a[0] ** 2 + a[1] ** 2 + a[2] ** 2))
+
+    def status(self, gyro_msg: SensorGyro) -> VehicleImuStatus:
+        span = max(gyro_msg.timestamp_sample - self.start_us, 1) * 1e-6
+        n, na = max(self.n, 1), max(self.accel_n, 1)
+        status = VehicleImuStatus(
+            timestamp_sample=gyro_msg.timestamp_sample,
+            accel_device_id=gyro_msg.device_id,
+            gyro_device_id=gyro_msg.device_id,
+            gyro_error_count=gyro_msg.error_count,
+            accel_rate_hz=self.accel_n / span,
+            gyro_rate_hz=self.n / span,
+            mean_accel=tuple(v / na for v in self.accel_sum),
+            mean_gyro=tuple(v / n for v in self.gyro_sum),
+            max_gyro_norm=self.max_gyro,
+            min_accel_norm=self.min_accel if self.accel_n else 0.0,
+            temperature_gyro=gyro_msg.temperature,
+        )
+        self._reset(gyro_msg.timestamp_sample)
+        return status
 
 
 class AttitudeEstimatorModule(Module):
@@ -47,6 +102,10 @@ class AttitudeEstimatorModule(Module):
         self.subscribe("sensor_gps")
         self.advertise("vehicle_angular_velocity")
         self.advertise("vehicle_attitude")
+        self.advertise("vehicle_imu_status")
+        self.advertise("estimator_status")
+        self.imu = ImuSummary()
+        self._attitude_time = 0
         self.estimator = AttitudeEstimatorQ(**self._values(ATTITUDE_PARAMS))
         self.rates = AngularVelocityFilter(**self._values(GYRO_PARAMS))
         self.acceleration = VelocityDerivative(float(self.params["ATT_ACC_COMP_LP"]))
@@ -78,6 +137,24 @@ class AttitudeEstimatorModule(Module):
         )
         if self.estimator.initialised:
             self.publish("vehicle_attitude", VehicleAttitude(timestamp_sample=t, q=self.estimator.q))
+            self._attitude_time = self.now_us()
+        self.imu.add(t, xyz, accel_msg)
+        if t - self.imu.start_us >= STATUS_INTERVAL_US:
+            self._publish_status(gyro_msg)
+
+    def _publish_status(self, gyro_msg: SensorGyro) -> None:
+        now = self.now_us()
+        self.publish("vehicle_imu_status", self.imu.status(gyro_msg))
+        self.publish(
+            "estimator_status",
+            EstimatorStatus(
+                attitude_valid=self.estimator.initialised,
+                q=self.estimator.q,
+                attitude_timestamp=self._attitude_time,
+                angular_velocity_timestamp=now,
+                gyro_bias=self.estimator.gyro_bias,
+            ),
+        )
 
     def _acceleration_compensation(self) -> tuple[float, float, float] | None:
         """NED acceleration from the local-position velocity, or the GPS velocity without one (ATT_ACC_COMP)."""

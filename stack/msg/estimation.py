@@ -99,3 +99,40 @@ class VehicleGlobalPosition(Message):
     eph: float = INF
     epv: float = INF
     dead_reckoning: bool = False
+
+
+class VehicleImuStatus(Message):
+    """IMU health at a low rate (the subset of PX4 ``VehicleImuStatus`` a commander uses), ~10 Hz.
+
+    The means are over the interval since the previous status, so a 10 Hz consumer sees what a
+    250 Hz stream would tell it about motion (rotation, free fall) without receiving every sample.
+    """
+
+    timestamp_sample: int = 0
+    accel_device_id: int = 0
+    gyro_device_id: int = 0
+    accel_error_count: int = 0
+    gyro_error_count: int = 0
+    accel_rate_hz: float = 0.0
+    gyro_rate_hz: float = 0.0
+    mean_accel: F3 = ZERO3
+    mean_gyro: F3 = ZERO3
+    max_gyro_norm: float = 0.0
+    min_accel_norm: float = 0.0
+    temperature_accel: float = NAN
+    temperature_gyro: float = NAN
+
+
+class EstimatorStatus(Message):
+    """The attitude estimator's state at a low rate (~10 Hz) for the commander's checks.
+
+    PX4's commander reads ``vehicle_attitude`` in-process for free; across processes a 10 Hz summary
+    (the last attitude, when it and the body rates were published, the gyro bias) costs far less
+    than the 250 Hz streams.
+    """
+
+    attitude_valid: bool = False
+    q: F4 = Q_IDENTITY
+    attitude_timestamp: int = 0
+    angular_velocity_timestamp: int = 0
+    gyro_bias: F3 = ZERO3

@@ -34,11 +34,12 @@ class ModuleHeartbeat(Message):
 
 
 class LockstepClock(Message):
-    """One lockstep step: the new time and the cumulative publication counts of the previous step.
+    """One lockstep step: the new time and the cumulative publication counts up to the previous step.
 
-    ``counts`` lists ``(publisher_id, topic_key, total)`` for every (publisher, topic) whose total
-    changed since the previous clock; subscribers wait until they hold that many messages before
-    they act at this time, so what every module sees is independent of process scheduling.
+    ``counts`` lists ``(publisher_id, topic_key, total)`` for every (publisher, topic) of the
+    lockstep. Before acting at this time a subscriber waits until it holds message number ``total``
+    of each topic it reads, so what every module sees is independent of process scheduling. As the
+    counts are cumulative, a member that only needs the latest clock may drop older ones.
     ``members`` lists the publisher ids of the modules expected to act (and acknowledge) at this step.
     """
 

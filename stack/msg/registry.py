@@ -10,9 +10,11 @@ import msgspec
 from stack.msg.actuators import ActuatorMotors, ActuatorOutputs, ControlAllocatorStatus
 from stack.msg.base import Message
 from stack.msg.estimation import (
+    EstimatorStatus,
     VehicleAngularVelocity,
     VehicleAttitude,
     VehicleGlobalPosition,
+    VehicleImuStatus,
     VehicleLocalPosition,
 )
 from stack.msg.sensors import SensorAccel, SensorBaro, SensorGps, SensorGyro, SensorMag
@@ -55,6 +57,8 @@ TOPICS: dict[str, type[Message]] = {
     "vehicle_attitude": VehicleAttitude,
     "vehicle_local_position": VehicleLocalPosition,
     "vehicle_global_position": VehicleGlobalPosition,
+    "vehicle_imu_status": VehicleImuStatus,
+    "estimator_status": EstimatorStatus,
     "trajectory_setpoint": TrajectorySetpoint,
     "vehicle_local_position_setpoint": VehicleLocalPositionSetpoint,
     "vehicle_attitude_setpoint": VehicleAttitudeSetpoint,

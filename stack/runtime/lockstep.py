@@ -5,9 +5,11 @@ drives it as the *coordinator*; every other triggered or timed module is a *memb
 
 - Each member declares a liveliness token naming its trigger topic or its timer period.
 - The coordinator publishes a clock message per step (the new time, the members expected to act,
-  and the cumulative publication counts of the previous step), then its own messages.
-- A member runs once per trigger message (or when its timer falls due on a clock tick) and then
-  acknowledges, reporting how many messages it published on each topic during that run.
+  and the cumulative publication counts up to the previous step), then its own messages. Timed
+  members receive the clock on their own key, and only on the steps their timer is due, so a 50 Hz
+  module is not woken 250 times a second.
+- A member runs once per trigger message (or per tick) and then acknowledges, reporting how many
+  messages it published on each topic during that run.
 - The coordinator keeps, per (member, trigger), the number of runs it still expects: it adds the
   runs each reported publication will cause and subtracts each acknowledgement. The step is done
   when every count is back to zero; only then does time advance.
@@ -40,6 +42,7 @@ from stack.runtime.inputs import InputBuffer
 log = logging.getLogger("stack.lockstep")
 
 TIMER = "@timer"
+CLOCK_RING = 8
 _WAKE = "@wake"
 _clock_decoder = msgspec.msgpack.Decoder(LockstepClock)
 _ack_decoder = msgspec.msgpack.Decoder(LockstepAck)
@@ -61,12 +64,10 @@ class Barrier:
     def __init__(self, inputs: Iterable[InputBuffer]) -> None:
         self.by_suffix = {buf.sub.suffix: buf for buf in inputs}
         self.required: dict[tuple[int, str], int] = {}
-        self._lock = threading.Lock()
 
     def require(self, publisher_id: int, suffix: str, total: int) -> None:
         if suffix in self.by_suffix:
-            with self._lock:
-                self.required[(publisher_id, suffix)] = total
+            self.required[(publisher_id, suffix)] = total
 
     def wait(self) -> None:
         if not self.required:
@@ -77,27 +78,27 @@ class Barrier:
             time.sleep(0 if spins < 100 else 0.0002)
 
     def _satisfied(self) -> bool:
-        with self._lock:
-            for key, total in list(self.required.items()):
-                pub, suffix = key
-                buf = self.by_suffix[suffix]
+        for key, total in list(self.required.items()):
+            pub, suffix = key
+            buf = self.by_suffix[suffix]
+            if buf.last_index.get(pub, 0) < total:
+                buf.pull()
                 if buf.last_index.get(pub, 0) < total:
-                    buf.pull()
-                    if buf.last_index.get(pub, 0) < total:
-                        return False
-                del self.required[key]
+                    return False
+            del self.required[key]
         return True
 
 
 class LockstepMember:
     """The member side: follows the clock, holds the barrier, acknowledges runs.
 
-    A timed member blocks on the clock itself (``next_clock``). A triggered member blocks on its
-    trigger topic, so its clock is followed by a callback thread instead, which keeps the clock
-    queue drained however rarely the trigger fires.
+    A timed member blocks on its own tick key (``next_clock``). A triggered member blocks on its
+    trigger topic; its clock subscription is a small ring (the counts in each clock are cumulative,
+    so older clocks may be dropped) read when a trigger arrives (``advance_to``). Neither is woken
+    by clocks it does not need.
     """
 
-    def __init__(self, node: Node, inputs: Iterable[InputBuffer], trigger: str, follow_in_thread: bool) -> None:
+    def __init__(self, node: Node, inputs: Iterable[InputBuffer], trigger: str, timed: bool) -> None:
         self.node = node
         self.trigger = trigger
         self.now = 0
@@ -105,12 +106,14 @@ class LockstepMember:
         self.admitted = False
         self.members: frozenset[int] = frozenset()
         self.barrier = Barrier(inputs)
-        self._cond = threading.Condition()
-        clock_key = keys.lockstep_clock_key(node.vehicle)
-        if follow_in_thread:
-            self._clock_sub = node.session.declare_subscriber(clock_key, self._on_clock)
+        if timed:
+            self._clock_sub = node.session.declare_subscriber(
+                keys.lockstep_tick_key(node.vehicle, node.name), zenoh.handlers.FifoChannel(4096)
+            )
         else:
-            self._clock_sub = node.session.declare_subscriber(clock_key, zenoh.handlers.FifoChannel(4096))
+            self._clock_sub = node.session.declare_subscriber(
+                keys.lockstep_clock_key(node.vehicle), zenoh.handlers.RingChannel(CLOCK_RING)
+            )
         self._ack_pub = node.session.declare_publisher(
             keys.lockstep_ack_key(node.vehicle), congestion_control=zenoh.CongestionControl.BLOCK, express=True
         )
@@ -129,23 +132,19 @@ class LockstepMember:
         self.step = clk.step
         self.now = clk.timestamp
 
-    def _on_clock(self, sample: zenoh.Sample) -> None:
-        clk = _clock_decoder.decode(sample.payload.to_bytes())
-        with self._cond:
-            self._take(clk)
-            self._cond.notify_all()
-
     def next_clock(self) -> None:
-        """Block until the next clock tick and take it in (timed members)."""
+        """Block until the next tick and take it in (timed members)."""
         self._take(_clock_decoder.decode(self._clock_sub.recv().payload.to_bytes()))
 
     def advance_to(self, t: int) -> None:
-        """Wait until the clock has reached ``t`` (triggered members)."""
-        if self.now >= t:
-            return
-        with self._cond:
-            while self.now < t:
-                self._cond.wait(0.1)
+        """Take in the newest clock, waiting until one has reached ``t`` (triggered members)."""
+        sub = self._clock_sub
+        sample = sub.try_recv()
+        while sample is not None:
+            self._take(_clock_decoder.decode(sample.payload.to_bytes()))
+            sample = sub.try_recv()
+        while self.now < t:
+            self._take(_clock_decoder.decode(sub.recv().payload.to_bytes()))
 
     def ack(self, trigger_publisher: int, trigger_topic: str, touched: Iterable[TopicPublisher]) -> None:
         if not self.admitted:
@@ -190,7 +189,7 @@ class LockstepCoordinator:
         self._triggered_by: dict[str, list[int]] = {}
         self._pending: dict[tuple[int, str], int] = {}
         self._totals: dict[tuple[int, str], int] = {}
-        self._changed: dict[tuple[int, str], int] = {}
+        self._tick_pubs: dict[int, zenoh.Publisher] = {}
         self._events: list[tuple[str, _Member]] = []
         self._events_lock = threading.Lock()
         self._waiting_since: float | None = None
@@ -237,6 +236,9 @@ class LockstepCoordinator:
 
     def _drop(self, publisher_id: int, why: str) -> None:
         m = self.members.pop(publisher_id)
+        tick = self._tick_pubs.pop(publisher_id, None)
+        if tick is not None:
+            tick.undeclare()
         if m.trigger is not None:
             self._triggered_by[m.trigger].remove(publisher_id)
         for key in [k for k in self._pending if k[0] == publisher_id]:
@@ -250,16 +252,26 @@ class LockstepCoordinator:
         self._apply_membership()
         self.now = t
         self.step += 1
+        counts = [(pub, suffix, total) for (pub, suffix), total in self._totals.items()]
+        member_ids = [*self.members, self.node.publisher_id]
+        clock = _encoder.encode(LockstepClock(timestamp=t, step=self.step, counts=counts, members=member_ids))
+        self._clock_pub.put(clock)
         for m in self.members.values():
             if m.period_us is not None and timer_due(t, m.last_fire, m.period_us):
                 m.last_fire = t
                 self._expect(m.publisher_id, TIMER, 1)
-        counts = [(pub, suffix, total) for (pub, suffix), total in self._changed.items()]
-        self._changed.clear()
-        member_ids = [*self.members, self.node.publisher_id]
-        self._clock_pub.put(
-            _encoder.encode(LockstepClock(timestamp=t, step=self.step, counts=counts, members=member_ids))
-        )
+                self._tick_publisher(m).put(clock)
+
+    def _tick_publisher(self, m: _Member) -> zenoh.Publisher:
+        pub = self._tick_pubs.get(m.publisher_id)
+        if pub is None:
+            pub = self.node.session.declare_publisher(
+                keys.lockstep_tick_key(self.node.vehicle, m.name),
+                congestion_control=zenoh.CongestionControl.BLOCK,
+                express=True,
+            )
+            self._tick_pubs[m.publisher_id] = pub
+        return pub
 
     def account_own(self, touched: Iterable[TopicPublisher]) -> None:
         """Count the coordinator's own publications of this step (call after publishing them)."""
@@ -270,7 +282,6 @@ class LockstepCoordinator:
             key = (publisher_id, suffix)
             runs = total - self._totals.get(key, 0)
             self._totals[key] = total
-            self._changed[key] = total
             self.barrier.require(publisher_id, suffix, total)
             if runs > 0:
                 for m in self._triggered_by.get(suffix, ()):
@@ -331,6 +342,8 @@ class LockstepCoordinator:
 
     def close(self) -> None:
         self._closed.set()
+        for pub in self._tick_pubs.values():
+            pub.undeclare()
         self._member_sub.undeclare()
         self._ack_sub.undeclare()
         self._clock_pub.undeclare()

@@ -7,20 +7,18 @@ cleanly, closing every Zenoh session (zenoh-python can hang at exit otherwise).
 
 from __future__ import annotations
 
-import json
 import logging
 import os
 import time
 from typing import Any
 
-import zenoh
-
 from stack.bus import keys
 from stack.bus.node import Node, wall_clock_us
 from stack.bus.topics import FLAG_LOCKSTEP_TIME, Received, TopicPublisher
 from stack.msg.system import ParameterUpdate
+from stack.runtime import startup
 from stack.runtime.inputs import InputBuffer
-from stack.runtime.lockstep import TIMER, LockstepCoordinator, LockstepMember, timer_due
+from stack.runtime.lockstep import TIMER, LockstepCoordinator, LockstepMember
 from stack.runtime.module import Module, Timer, Trigger
 from stack.runtime.params import ParamStore
 from stack.runtime.services import Heartbeat, ParamService
@@ -28,7 +26,6 @@ from stack.runtime.spec import ModuleSpec, load_module_class, resolve_args
 
 log = logging.getLogger("stack.runtime")
 
-SYNC_TIMEOUT_S = 60.0
 LOCKSTEP_QUEUE = 1 << 14
 LATEST_RING = 8
 
@@ -100,7 +97,9 @@ class Runtime:
                 lockstep_part = self._make_lockstep()
                 node.declare_token(keys.alive_token(node.vehicle, self.name, os.getpid()))
                 if self.spec.lockstep:
-                    self._sync(lockstep_part if isinstance(lockstep_part, LockstepMember) else None)
+                    self.state = "syncing"
+                    member = lockstep_part if isinstance(lockstep_part, LockstepMember) else None
+                    startup.sync(node, self.inputs.values(), member, self.spec.late_join)
                 self.state = "running"
                 log.info("%s ready (%s)", self.name, self.describe_trigger())
                 self._loop(lockstep_part)
@@ -147,38 +146,11 @@ class Runtime:
         trigger = cls.TRIGGER
         if isinstance(trigger, Trigger):
             return LockstepMember(
-                self.node, self._data_inputs(), f"topic/{trigger.topic}/{trigger.instance}", follow_in_thread=True
+                self.node, self._data_inputs(), f"topic/{trigger.topic}/{trigger.instance}", timed=False
             )
         if isinstance(trigger, Timer):
-            return LockstepMember(self.node, self._data_inputs(), f"timer/{trigger.period_us}", follow_in_thread=False)
+            return LockstepMember(self.node, self._data_inputs(), f"timer/{trigger.period_us}", timed=True)
         return None
-
-    def _sync(self, member: LockstepMember | None = None) -> None:
-        """Before lockstep starts, see every module of the roster, so every publisher knows its subscribers.
-
-        A module declares its subscriptions before its alive token; once this module sees all alive
-        tokens, the links to all modules exist and their declarations have reached it.
-        """
-        self.state = "syncing"
-        node = self.node
-        deadline = time.monotonic() + SYNC_TIMEOUT_S
-        roster: dict[str, int] | None = None
-        while True:
-            if roster is None:
-                roster = query_roster(node.session, node.vehicle)
-            if roster is not None:
-                alive = alive_modules(node.session, node.vehicle)
-                if all(alive.get(name) == pid for name, pid in roster.items() if name != self.name):
-                    break
-            if time.monotonic() > deadline:
-                raise RuntimeError(
-                    "lockstep sync timed out: "
-                    + ("no supervisor roster" if roster is None else f"roster {roster}, alive {alive}")
-                )
-            time.sleep(0.02)
-        if member is not None:
-            member.register()
-        node.declare_token(keys.synced_token(node.vehicle, self.name))
 
     # -- loops -----------------------------------------------------------------------------------------
 
@@ -195,7 +167,7 @@ class Runtime:
                 self._loop_wall_trigger()
         elif isinstance(cls.TRIGGER, Timer):
             if isinstance(part, LockstepMember):
-                self._loop_lockstep_timer(part, cls.TRIGGER.period_us)
+                self._loop_lockstep_timer(part)
             else:
                 self._loop_wall_timer(cls.TRIGGER.period_us)
         else:
@@ -258,17 +230,14 @@ class Runtime:
             member.ack(pub, suffix, touched)
             touched.clear()
 
-    def _loop_lockstep_timer(self, member: LockstepMember, period_us: int) -> None:
+    def _loop_lockstep_timer(self, member: LockstepMember) -> None:
+        """The coordinator sends this member a tick on each step its timer is due."""
         data = self._data_inputs()
         touched = self.node.touched
-        last_fire: int | None = None
         last = 0
         while True:
             member.next_clock()
             now = member.now
-            if not timer_due(now, last_fire, period_us):
-                continue
-            last_fire = now
             self._now = now
             member.barrier.wait()
             members = member.members
@@ -280,36 +249,46 @@ class Runtime:
             touched.clear()
 
     def _loop_coordinator(self, coordinator: LockstepCoordinator) -> None:
-        self._wait_for_synced_roster()
+        self._wait_for_synced_roster(coordinator)
         period = self.module.step_period_us()
         data = self._data_inputs()
         touched = self.node.touched
-        members = frozenset()
         last = 0
         while True:
             coordinator.finish_step()
             t = coordinator.now + period
+            coordinator.begin_step(t)
             members = frozenset((*coordinator.members, self.node.publisher_id))
             for d in data:
                 d.pull()
                 d.promote_visible(t, -1, 0, members)
-            coordinator.begin_step(t)
             self._now = t
             last = self._run(None, t, last)
             coordinator.account_own(touched)
             touched.clear()
 
-    def _wait_for_synced_roster(self) -> None:
+    def _wait_for_synced_roster(self, coordinator: LockstepCoordinator) -> None:
+        """Start only when every module of the roster has synced and every member has been admitted.
+
+        A member declares its member token before its synced token, so once the synced tokens are
+        visible the member tokens are too; the coordinator must also have taken them in.
+        """
         self.state = "waiting for modules"
-        deadline = time.monotonic() + SYNC_TIMEOUT_S
+        deadline = time.monotonic() + startup.SYNC_TIMEOUT_S
+        session, vehicle = self.node.session, self.node.vehicle
         while True:
-            roster = query_roster(self.node.session, self.node.vehicle) or {}
+            roster = startup.query_roster(session, vehicle) or {}
             synced = {
                 str(r.ok.key_expr).rsplit("/", 1)[-1]
-                for r in self.node.session.liveliness().get(keys.synced_query(self.node.vehicle), timeout=1.0)
+                for r in session.liveliness().get(keys.synced_query(vehicle), timeout=1.0)
                 if r.ok is not None
             }
-            missing = sorted(set(roster) - synced - {self.name})
+            members = {
+                str(r.ok.key_expr).split("/")[4]
+                for r in session.liveliness().get(keys.lockstep_member_query(vehicle), timeout=1.0)
+                if r.ok is not None
+            }
+            missing = sorted((set(roster) - synced - {self.name}) | (members - coordinator.known_members()))
             if roster and not missing:
                 break
             if time.monotonic() > deadline:
@@ -389,23 +368,3 @@ class Runtime:
 def sample_time(msg: Any) -> int:
     """The time a message's data refers to: ``timestamp_sample`` when it has one (PX4's dt source)."""
     return getattr(msg, "timestamp_sample", 0) or msg.timestamp
-
-
-def query_roster(session: zenoh.Session, vehicle: str) -> dict[str, int] | None:
-    """The supervisor's list of started modules (name → pid), once all of them are up; else None."""
-    for reply in session.get(keys.supervisor_key(vehicle, "roster"), timeout=1.0):
-        if reply.ok is not None:
-            data = json.loads(reply.ok.payload.to_string())
-            if data.get("complete"):
-                return {str(k): int(v) for k, v in data["modules"].items()}
-    return None
-
-
-def alive_modules(session: zenoh.Session, vehicle: str) -> dict[str, int]:
-    """Modules whose alive token this session sees: name → pid."""
-    alive: dict[str, int] = {}
-    for reply in session.liveliness().get(keys.alive_query(vehicle), timeout=1.0):
-        if reply.ok is not None:
-            parts = str(reply.ok.key_expr).split("/")
-            alive[parts[-2]] = int(parts[-1])
-    return alive

@@ -25,7 +25,6 @@ MODULES: dict[str, str] = {
     "mc_pos_control": "stack.posctl.pos_module:MulticopterPositionControl",
     "flight_mode_manager": "stack.posctl.fmm_module:FlightModeManager",
     "mc_hover_thrust_estimator": "stack.posctl.hte_module:HoverThrustEstimatorModule",
-    "land_detector": "stack.commander.land_module:LandDetectorModule",
     "mavlink_pixhawk": "stack.mavlink.module:PixhawkAdapterModule",
     "rerun_bridge": "stack.viz.module:RerunBridgeModule",
     "recorder": "stack.record.module:RecorderModule",
@@ -69,6 +68,8 @@ class ModuleSpec:
     supervisor_pid: int = 0
     stall_timeout_s: float = 10.0
     run_dir: str = ""
+    # A restart while the stack runs: join the lockstep without the start-up probe handshake.
+    late_join: bool = False
 
     def to_json(self) -> str:
         d = asdict(self)

@@ -194,6 +194,7 @@ class Supervisor:
             supervisor_pid=os.getpid(),
             stall_timeout_s=self.profile.stall_timeout_s,
             run_dir=str(self.run_dir),
+            late_join=m.restarts > 0,
         )
 
     def _spawn(self, m: ModuleProcess) -> None:

@@ -1,0 +1,125 @@
+"""Lockstep start-up: no module acts until every publisher's samples are known to reach every subscriber.
+
+A lost first message would stall a lockstep run forever (its subscriber's acknowledgement never
+comes), and Zenoh gives no way to ask a publisher which subscribers it knows. So each module, once
+the supervisor's roster is complete:
+
+1. sends probe samples on every topic it publishes (``TopicPublisher.probe``), repeatedly;
+2. waits until, for every topic it subscribes to, a probe has arrived from every roster module that
+   announces publishing that topic (the graph's liveliness tokens say who);
+3. then registers as a lockstep member (if it is one) and declares itself synced, and keeps probing
+   until every module of the roster is synced — only then does the simulator take its first step.
+
+A module restarted while the stack runs joins late: the others no longer probe, so it only waits
+until it sees them and gives declarations a moment to settle before joining.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import time
+from collections.abc import Iterable
+
+import zenoh
+
+from stack.bus import keys
+from stack.bus.graph import read_graph
+from stack.bus.node import Node, stable_publisher_id
+from stack.runtime.inputs import InputBuffer
+from stack.runtime.lockstep import LockstepMember
+
+log = logging.getLogger("stack.runtime")
+
+SYNC_TIMEOUT_S = 60.0
+PROBE_PERIOD_S = 0.02
+LATE_JOIN_SETTLE_S = 0.5
+
+
+def query_roster(session: zenoh.Session, vehicle: str) -> dict[str, int] | None:
+    """The supervisor's list of started modules (name → pid), once all of them are up; else None."""
+    for reply in session.get(keys.supervisor_key(vehicle, "roster"), timeout=1.0):
+        if reply.ok is not None:
+            data = json.loads(reply.ok.payload.to_string())
+            if data.get("complete"):
+                return {str(k): int(v) for k, v in data["modules"].items()}
+    return None
+
+
+def alive_modules(session: zenoh.Session, vehicle: str) -> dict[str, int]:
+    """Modules whose alive token this session sees: name → pid."""
+    alive: dict[str, int] = {}
+    for reply in session.liveliness().get(keys.alive_query(vehicle), timeout=1.0):
+        if reply.ok is not None:
+            parts = str(reply.ok.key_expr).split("/")
+            alive[parts[-2]] = int(parts[-1])
+    return alive
+
+
+def synced_modules(session: zenoh.Session, vehicle: str) -> set[str]:
+    return {
+        str(r.ok.key_expr).rsplit("/", 1)[-1]
+        for r in session.liveliness().get(keys.synced_query(vehicle), timeout=1.0)
+        if r.ok is not None
+    }
+
+
+def sync(node: Node, inputs: Iterable[InputBuffer], member: LockstepMember | None, late_join: bool) -> None:
+    """Block until this module may take part in the lockstep (see the module docstring)."""
+    inputs = list(inputs)
+    deadline = time.monotonic() + SYNC_TIMEOUT_S
+    roster: dict[str, int] | None = None
+    declared = False
+    problem = "no supervisor roster"
+    while True:
+        if roster is None:
+            roster = query_roster(node.session, node.vehicle)
+        if roster is not None:
+            for pub in node.publishers:
+                pub.probe()
+            if not declared:
+                # Until this module is synced no lockstep message can come (the simulator waits for
+                # it), so draining takes in probes only; afterwards the trigger queue is left alone.
+                for buf in inputs:
+                    buf.pull()
+            alive = alive_modules(node.session, node.vehicle)
+            others = {name for name in roster if name != node.name}
+            waiting_for = sorted(n for n in others if alive.get(n) != roster[n])
+            if waiting_for:
+                problem = f"modules not seen: {', '.join(waiting_for)}"
+            elif not declared:
+                if late_join:
+                    time.sleep(LATE_JOIN_SETTLE_S)
+                    unreached = []
+                else:
+                    unreached = _unprobed(node, inputs, others)
+                if unreached:
+                    problem = f"no sample yet from {', '.join(unreached)}"
+                else:
+                    if member is not None:
+                        member.register()
+                    node.declare_token(keys.synced_token(node.vehicle, node.name))
+                    declared = True
+            if declared:
+                pending = sorted(others - synced_modules(node.session, node.vehicle))
+                if late_join or not pending:
+                    return
+                problem = f"waiting for {', '.join(pending)} to sync"
+        if time.monotonic() > deadline:
+            raise RuntimeError(f"lockstep start-up timed out after {SYNC_TIMEOUT_S:.0f} s: {problem}")
+        time.sleep(PROBE_PERIOD_S)
+
+
+def _unprobed(node: Node, inputs: list[InputBuffer], others: set[str]) -> list[str]:
+    """``publisher → topic`` pairs whose probe has not reached this module yet."""
+    graph = read_graph(node.session, node.vehicle)
+    missing = []
+    for buf in inputs:
+        sub = buf.sub
+        entry = graph.get((sub.topic, sub.instance))
+        if entry is None:
+            continue
+        for publisher in entry.publishers:
+            if publisher in others and stable_publisher_id(node.vehicle, publisher) not in sub.probed_by:
+                missing.append(f"{publisher} → {sub.topic}")
+    return missing
