@@ -6,13 +6,15 @@ import json
 import os
 import signal
 import time
+from pathlib import Path
 
 import psutil
 import typer
 
 from stack.bus import keys
-from stack.cli import fly, param, topic
+from stack.cli import fly, log, param, plot, topic
 from stack.cli.common import EndpointOption, JsonOption, VehicleOption, connect, fail, print_table, query_json
+from stack.cli.observers import add_observers
 from stack.supervisor import state as run_state
 from stack.supervisor.profile import DEFAULT_PROFILE, ProfileError, load_profile
 from stack.supervisor.supervisor import Supervisor, UpOptions
@@ -24,7 +26,10 @@ app = typer.Typer(
 )
 app.add_typer(topic.app, name="topic")
 app.add_typer(param.app, name="param")
+app.add_typer(log.app, name="log")
 app.command("fly")(fly.fly)
+app.command("plot")(plot.plot)
+app.command("replay")(log.replay)
 
 
 @app.command()
@@ -34,17 +39,24 @@ def up(
     realtime: bool = typer.Option(False, "--realtime", help="Pace the simulator to the wall clock (no lockstep)"),
     log_level: str = typer.Option("INFO", help="Log level of the modules"),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="Do not echo module logs (they are still written)"),
+    plot_: bool = typer.Option(False, "--plot", help="Live Rerun plots (a viewer where a display exists)"),
+    web: bool = typer.Option(False, "--web", help="Serve the Rerun web viewer on 127.0.0.1 and print its URL"),
+    save: str | None = typer.Option(None, "--save", help="Write the live plots to this .rrd file"),
+    record: Path | None = typer.Option(None, "--record", help="Record every topic to this MCAP file"),
 ) -> None:
     """Start a stack from a launch profile and supervise it until Ctrl-C, SIGTERM or --duration."""
     try:
-        prof = load_profile(profile, flags={"realtime": realtime})
+        prof = load_profile(profile, flags={"realtime": realtime, "plot": plot_ or web, "record": record is not None})
     except ProfileError as e:
         fail(str(e), code=2)
+    add_observers(prof, plot=plot_, web=web, save=save, record=record)
     for running in run_state.running_stacks():
         if running["vehicle"] == prof.vehicle:
             fail(f"a stack for vehicle '{prof.vehicle}' is already running (pid {running['pid']}); `stack down` first")
     run_dir = run_state.new_run_dir(prof.name, prof.vehicle)
     supervisor = Supervisor(prof, UpOptions(duration=duration, log_level=log_level, echo_logs=not quiet), run_dir)
+    if record is not None:
+        typer.echo(f"[stack] recording to {record.resolve()}")
     raise typer.Exit(supervisor.run())
 
 

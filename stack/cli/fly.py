@@ -8,6 +8,7 @@ from pathlib import Path
 import typer
 
 from stack.cli.common import fail, print_table
+from stack.cli.observers import add_observers
 from stack.runtime.spec import load_module_class
 from stack.scenario.catalogue import scenarios
 from stack.supervisor import state as run_state
@@ -23,6 +24,10 @@ def fly(
     list_: bool = typer.Option(False, "--list", help="List the scenarios and exit"),
     log_level: str = typer.Option("INFO", help="Log level of the modules"),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="Only the scenario's progress and the result"),
+    plot_: bool = typer.Option(False, "--plot", help="Live Rerun plots of the flight"),
+    web: bool = typer.Option(False, "--web", help="Serve the Rerun web viewer on 127.0.0.1 and print its URL"),
+    save: str | None = typer.Option(None, "--save", help="Write the flight's plots to this .rrd file"),
+    record: Path | None = typer.Option(None, "--record", help="Record every topic to this MCAP file"),
 ) -> None:
     """Fly a scripted scenario (in lockstep, deterministic for a seed) and report how well the stack flew."""
     known = scenarios()
@@ -33,7 +38,7 @@ def fly(
     if scenario not in known:
         fail(f"unknown scenario '{scenario}' (known: {', '.join(sorted(known))})", code=2)
     try:
-        prof = load_profile(profile)
+        prof = load_profile(profile, flags={"plot": plot_ or web, "record": record is not None})
     except ProfileError as e:
         fail(str(e), code=2)
     for running in run_state.running_stacks():
@@ -44,6 +49,7 @@ def fly(
     run_dir = run_state.new_run_dir(f"fly-{scenario}", prof.vehicle)
     result_path = run_dir / "scenario_result.json"
     add_scenario(prof, scenario, result_path)
+    add_observers(prof, plot=plot_, web=web, save=save, record=record)
     options = UpOptions(log_level=log_level, echo_logs=not quiet, echo_only=("scenario",) if quiet else ())
     code = Supervisor(prof, options, run_dir).run()
     if not result_path.exists():
@@ -61,6 +67,7 @@ def fly(
         "checks": result["checks"],
         "error": result["error"],
         "run_dir": str(run_dir),
+        "recording": str(record.resolve()) if record is not None else None,
     }
     out = report or run_dir / "report.json"
     out.write_text(json.dumps(full, indent=2))

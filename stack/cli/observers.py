@@ -1,0 +1,35 @@
+"""The observers ``--plot`` and ``--record`` add to any profile: the Rerun bridge and the recorder."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from stack.runtime.spec import load_module_class
+from stack.supervisor.profile import ModuleEntry, Profile
+
+
+def _entry(name: str, args: dict[str, object]) -> ModuleEntry:
+    cls = load_module_class(name)
+    defaults = {a.name: a.default for a in cls.ARGS}
+    return ModuleEntry(
+        name=name,
+        module=name,
+        cls=cls,
+        params={},
+        args={**defaults, **args},
+        condition="",
+        restart="no",
+        max_restarts=0,
+        critical=False,
+    )
+
+
+def add_observers(prof: Profile, *, plot: bool, web: bool, save: str | None, record: Path | None) -> None:
+    """Insert the recorder first (it stops last, so it records to the end) and the plot bridge last."""
+    if record is not None:
+        prof.modules.insert(0, _entry("recorder", {"path": str(record.resolve())}))
+    if plot or web or save:
+        args: dict[str, object] = {"web": web, "spawn": not web}
+        if save:
+            args["save"] = str(Path(save).resolve())
+        prof.modules.append(_entry("rerun_bridge", args))

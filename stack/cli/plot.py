@@ -1,0 +1,91 @@
+"""``stack plot``: live Rerun plots of a running stack, from another terminal.
+
+The command runs the ``rerun_bridge`` module in this process, as a Zenoh client of the stack's
+router: the same code as ``stack up --plot``, attached late. It stays outside the lockstep like any
+passive module and stops cleanly on Ctrl-C, SIGTERM or ``--duration``.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import signal
+import sys
+from types import FrameType
+
+import typer
+
+from stack.bus import keys
+from stack.bus.config import BusConfig
+from stack.bus.node import Node
+from stack.cli.common import EndpointOption, VehicleOption, fail, find_stack, query_json
+from stack.runtime.runner import Runtime, Shutdown
+from stack.runtime.spec import ModuleSpec
+
+
+def _stack_is_lockstep(vehicle: str, bus: BusConfig) -> bool:
+    """Whether the stack runs in lockstep (its timestamps are then simulated time from zero)."""
+    with Node(bus, vehicle, "plot-probe", stable_id=False) as node:
+        answers = query_json(node.session, keys.supervisor_key(vehicle, "status"))
+    return bool(answers and answers[0].get("lockstep"))
+
+
+def _stop_on_signals(duration: float) -> None:
+    """SIGINT, SIGTERM and the --duration alarm unwind the bridge once; repeats are ignored meanwhile."""
+    stopping: list[bool] = []
+
+    def on_signal(signum: int, frame: FrameType | None) -> None:
+        if stopping:
+            return
+        stopping.append(True)
+        raise Shutdown(signal.Signals(signum).name)
+
+    for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGALRM):
+        signal.signal(sig, on_signal)
+    if duration > 0:
+        signal.setitimer(signal.ITIMER_REAL, duration)
+
+
+def plot(
+    web: bool = typer.Option(False, "--web", help="Serve the web viewer (on 127.0.0.1) instead of a native viewer"),
+    save: str = typer.Option("", "--save", help="Also write the plots to this .rrd file"),
+    plot_rate: float = typer.Option(50.0, "--plot-rate", help="Most rows per second per topic (0: every message)"),
+    window: float = typer.Option(30.0, "--window", help="Seconds of data the time series show (0: all)"),
+    bind: str = typer.Option("127.0.0.1", "--bind", help="Address the viewer servers listen on"),
+    grpc_port: int = typer.Option(9876, "--grpc-port", help="Viewer data port (0: any free port)"),
+    web_port: int = typer.Option(9090, "--web-port", help="Web viewer page port (0: any free port)"),
+    duration: float = typer.Option(0.0, "--duration", "-d", help="Stop after this many seconds (0: until Ctrl-C)"),
+    vehicle: str | None = VehicleOption,
+    endpoint: str | None = EndpointOption,
+) -> None:
+    """Live plots of a running stack in Rerun: attitude, rates, motors, position, estimator, 3D view."""
+    vehicle_name, bus = find_stack(vehicle, endpoint)
+    lockstep = _stack_is_lockstep(vehicle_name, bus)
+    spec = ModuleSpec(
+        name=f"plot-{os.getpid()}",
+        module="rerun_bridge",
+        vehicle=vehicle_name,
+        bus=bus,
+        args={
+            "spawn": not web,
+            "web": web,
+            "save": save,
+            "bind": bind,
+            "grpc_port": grpc_port,
+            "web_port": web_port,
+            "plot_rate_hz": plot_rate,
+            "window_s": window,
+        },
+        lockstep=lockstep,
+    )
+    logging.basicConfig(level=logging.INFO, format="%(message)s", stream=sys.stdout, force=True)
+    _stop_on_signals(duration)
+    try:
+        Runtime(spec).run()
+    except Shutdown:
+        pass
+    except (ValueError, RuntimeError) as e:
+        fail(str(e))
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+    typer.echo("plot stopped")

@@ -1,0 +1,159 @@
+"""Republishing a recording on a running stack's bus, so every tool and module sees it as live.
+
+What subscribers see: each recorded message's exact payload, its recorded schema fingerprint,
+publication time and header flags (a lockstep recording keeps its simulated times and lockstep
+flag), on the same topic and instance, under the target vehicle. The publisher is the replay's
+own bus node (publisher id random per replay, named ``replay`` in the graph), with its own
+sequence and topic index numbers (1, 2, ... from the start of the replay); recorded publisher ids
+are not reused, so a replay never impersonates a live module.
+
+Replay onto a stack of observers (``stack topic echo``, plots, a recorder) or of real-time
+modules; modules running in lockstep follow the simulator's clock and would mix the replayed
+messages with their own.
+
+Pacing follows the recording clock (each message's log time: the simulated time of a lockstep
+recording, the receive time of a real-time one), scaled by the speed factor; speed 0 sends as fast
+as the bus accepts. Publishers block rather than drop, so a slow subscriber slows the replay
+instead of losing messages.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Iterable
+
+import zenoh
+
+from stack.bus import keys
+from stack.bus.node import Node
+from stack.bus.topics import HEADER
+from stack.record.recorder import ChannelInfo, RecordedMessage, RecordingReader
+from stack.record.selection import TopicSelection
+
+SETTLE_TIMEOUT_S = 1.0
+MIN_SLEEP_S = 0.0005
+
+
+class ReplayClock:
+    """When each message is due: recording time since the first message, divided by the speed.
+
+    Times never go backwards (a message stamped earlier than its predecessor is due at once);
+    ``restart`` starts a new pass (``--loop``).
+    """
+
+    __slots__ = ("_clock", "_first_us", "_last_us", "_start_s", "speed")
+
+    def __init__(self, speed: float, clock: Callable[[], float] = time.monotonic) -> None:
+        if speed < 0.0:
+            raise ValueError(f"speed must be >= 0 (0: as fast as possible), not {speed}")
+        self.speed = speed
+        self._clock = clock
+        self._first_us: int | None = None
+        self._last_us = 0
+        self._start_s = 0.0
+
+    def restart(self) -> None:
+        self._first_us = None
+
+    def delay_s(self, t_us: int) -> float:
+        """Seconds to wait before sending a message of recording time ``t_us`` (0 if due)."""
+        if self.speed == 0.0:
+            return 0.0
+        now = self._clock()
+        if self._first_us is None:
+            self._first_us = self._last_us = t_us
+            self._start_s = now
+            return 0.0
+        if t_us > self._last_us:
+            self._last_us = t_us
+        due = self._start_s + (self._last_us - self._first_us) / 1e6 / self.speed
+        return max(0.0, due - now)
+
+
+class BusReplayer:
+    """Publishes recorded messages on ``node``'s vehicle, one Zenoh publisher per topic instance."""
+
+    def __init__(self, node: Node) -> None:
+        self.node = node
+        self.sent = 0
+        self._pubs: dict[tuple[str, int], zenoh.Publisher] = {}
+        self._index: dict[tuple[str, int], int] = {}
+
+    def declare(self, channels: Iterable[ChannelInfo]) -> None:
+        """Declare the publishers (and graph entries) up front, so subscribers' routes exist before sending."""
+        for c in channels:
+            self._publisher(c.topic, c.instance, c.type_name, c.fingerprint)
+
+    def wait_for_subscribers(self, timeout_s: float = SETTLE_TIMEOUT_S) -> bool:
+        """Wait until some subscriber matches a declared topic; False if none within the timeout."""
+        deadline = time.monotonic() + timeout_s
+        while True:
+            if any(p.matching_status.matching for p in self._pubs.values()):
+                return True
+            if time.monotonic() >= deadline:
+                return False
+            time.sleep(0.02)
+
+    def _publisher(self, topic: str, instance: int, type_name: str, fp: int) -> zenoh.Publisher:
+        pub = self._pubs.get((topic, instance))
+        if pub is None:
+            node = self.node
+            pub = node.session.declare_publisher(
+                keys.topic_key(node.vehicle, topic, instance),
+                congestion_control=zenoh.CongestionControl.BLOCK,
+                express=True,
+            )
+            self._pubs[(topic, instance)] = pub
+            node.declare_token(
+                keys.graph_token(node.vehicle, node.name, "pub", topic, instance, type_name or "unknown", fp)
+            )
+        return pub
+
+    def publish(self, m: RecordedMessage) -> None:
+        key = (m.topic, m.instance)
+        pub = self._pubs.get(key)
+        if pub is None:
+            pub = self._publisher(m.topic, m.instance, type(m.msg).__name__ if m.msg is not None else "", m.fingerprint)
+        node = self.node
+        node.seq += 1
+        index = self._index.get(key, 0) + 1
+        self._index[key] = index
+        header = HEADER.pack(m.fingerprint, node.publisher_id, node.seq, index, m.pub_time_us, m.flags)
+        pub.put(m.wire_payload(), attachment=header)
+        self.sent += 1
+
+    def close(self) -> None:
+        for pub in self._pubs.values():
+            pub.undeclare()
+        self._pubs.clear()
+
+
+def replay_pass(
+    reader: RecordingReader,
+    replayer: BusReplayer,
+    clock: ReplayClock,
+    *,
+    topics: TopicSelection | None = None,
+    progress: Callable[[int], None] | None = None,
+    sleep: Callable[[float], None] = time.sleep,
+) -> int:
+    """One pass over the recording: send every selected message when it is due. Returns the count."""
+    clock.restart()
+    sent = 0
+    pending = 0
+    for m in reader.iter_messages(topics):
+        delay = clock.delay_s(m.log_time_us)
+        if delay > MIN_SLEEP_S:
+            if progress is not None and pending:
+                progress(pending)
+                pending = 0
+            sleep(delay)
+        replayer.publish(m)
+        sent += 1
+        pending += 1
+        if progress is not None and pending >= 256:
+            progress(pending)
+            pending = 0
+    if progress is not None and pending:
+        progress(pending)
+    return sent

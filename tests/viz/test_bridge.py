@@ -1,0 +1,138 @@
+"""The rerun_bridge module in real test stacks, and `stack plot` attached to one. Loopback only, no viewer."""
+
+import json
+import re
+import subprocess
+import sys
+import time
+import urllib.request
+
+import psutil
+
+from stack.record.recorder import RecordingReader
+from stack.viz import layout as lay
+from stack.viz.export import export_rrd
+from tests.support.harness import REPO, RunningStack, chain_profile, stack_env, wait_no_processes
+from tests.viz.rrd import read_rrd
+
+STEPS = 1000
+
+
+def bridge(name: str, **args: object) -> str:
+    """A [[module]] entry for a rerun_bridge named ``name`` (JSON scalars are valid TOML values)."""
+    values = ", ".join(f"{k} = {json.dumps(v)}" for k, v in args.items())
+    return f'\n[[module]]\nname = "{name}"\nmodule = "rerun_bridge"\nargs = {{ {values} }}\n'
+
+
+def test_lockstep_flight_plotted_live_recorded_and_exported_with_the_same_layout(tmp_path):
+    home = tmp_path / "home"
+    full, decimated, tiny, mcap = (tmp_path / n for n in ("full.rrd", "50hz.rrd", "tiny.rrd", "flight.mcap"))
+    extra = (
+        f'\n[[module]]\nmodule = "recorder"\nargs = {{ path = "{mcap}" }}\n'
+        + bridge("plots", save=str(full), spawn=False, plot_rate_hz=0.0)
+        + bridge("plots_50hz", save=str(decimated), spawn=False)
+        + bridge("tiny", save=str(tiny), spawn=False, plot_rate_hz=0.0, queue=16)
+    )
+    stack = RunningStack(home, chain_profile(tmp_path / "chain.toml", tick_args=f"steps = {STEPS}", extra=extra))
+    try:
+        assert stack.wait(timeout=180) == 0
+    finally:
+        stack.kill()
+    assert not wait_no_processes(home)
+    output = stack.output
+
+    live = read_rrd(full)
+    estimate = lay.rates_path("roll", lay.ESTIMATE)
+    assert live.times(estimate) == [4000 * k for k in range(1, STEPS + 1)]  # every step, in order, none lost
+    assert live.rows(lay.TORQUE) == STEPS
+    assert live.rows(lay.rates_path("yaw", lay.SETPOINT)) == STEPS // 5 + 1  # the 50 Hz pacer
+    assert live.rows(lay.VEHICLE_ARMS) == 0 and lay.VEHICLE_ARMS in live.static
+    assert live.blueprints
+    assert re.search(r"\[plots\] INFO\s+plotted \d+ of \d+ messages .*; 0 buffer overruns", output)
+
+    fifty = read_rrd(decimated)
+    assert fifty.rows(estimate) == len({4000 * k // 20000 for k in range(1, STEPS + 1)})
+
+    # A bridge that cannot keep up drops its oldest samples and says so; the flight is not slowed.
+    assert re.search(r"\[tiny\] WARNING vehicle_\w+: ring buffer of 16 full, oldest samples dropped", output)
+    assert read_rrd(tiny).rows(estimate) < STEPS
+
+    exported = tmp_path / "exported.rrd"
+    with RecordingReader(mcap) as reader:
+        export_rrd(reader, exported)
+    replay = read_rrd(exported)
+    assert replay.entities() == live.entities()
+    for entity in live.entities():
+        assert replay.times(entity) == live.times(entity), entity
+        assert replay.temporal[entity] == live.temporal[entity], entity
+
+
+def listening_and_remote(proc: psutil.Process) -> tuple[set[str], set[str]]:
+    listen, remote = set(), set()
+    for c in proc.net_connections("inet"):
+        if c.status == psutil.CONN_LISTEN:
+            listen.add(c.laddr.ip)
+        elif c.raddr:
+            remote.add(c.raddr.ip)
+    return listen, remote
+
+
+def test_web_viewer_listens_on_loopback_only_and_stops_with_the_bridge(tmp_path, monkeypatch):
+    monkeypatch.setenv("XDG_CONFIG_HOME", str(tmp_path / "config"))
+    monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path / "data"))
+    monkeypatch.delenv("CI", raising=False)
+    home = tmp_path / "home"
+    extra = bridge("web_plots", web=True, grpc_port=0, web_port=0) + bridge("idle", spawn=False)
+    stack = RunningStack(home, chain_profile(tmp_path / "chain.toml", lockstep=False, extra=extra))
+    try:
+        url = stack.wait_for(r"\[web_plots\] INFO\s+web viewer: (http://127\.0\.0\.1:\d+/\?url=\S+)").group(1)
+        stack.wait_up()
+        assert "rerun%2Bhttp%3A%2F%2F127.0.0.1%3A" in url
+        pid = stack.module_pids()["web_plots"]
+        bridge_proc = psutil.Process(pid)
+        servers = bridge_proc.children(recursive=True)
+        assert len(servers) == 1
+        server = servers[0]
+        assert server.environ().get("CI") == "1"  # Rerun's analytics off for the processes we start
+        with urllib.request.urlopen(url.split("?")[0], timeout=10) as page:
+            assert page.status == 200
+        time.sleep(0.5)
+        for proc in (bridge_proc, server):
+            listen, remote = listening_and_remote(proc)
+            assert listen and listen <= {"127.0.0.1"}, (proc.name(), listen)
+            assert remote <= {"127.0.0.1"}, (proc.name(), remote)
+        assert "[idle] WARNING nothing to plot to" in stack.output
+    finally:
+        code = stack.stop()
+    assert code == 0
+    assert not psutil.pid_exists(server.pid) or server.status() == psutil.STATUS_ZOMBIE
+    assert not wait_no_processes(home)
+
+
+def test_stack_plot_attaches_to_a_running_stack(tmp_path):
+    home = tmp_path / "home"
+    out = tmp_path / "attached.rrd"
+    stack = RunningStack(home, chain_profile(tmp_path / "chain.toml"))
+    try:
+        stack.wait_up()
+        cli = "import typer; from stack.cli.plot import plot; app = typer.Typer(); app.command()(plot); app()"
+        result = subprocess.run(
+            [sys.executable, "-c", cli, "--save", str(out), "--duration", "3"],
+            env=stack_env(home),
+            capture_output=True,
+            text=True,
+            timeout=60,
+            cwd=REPO,
+        )
+        assert result.returncode == 0, result.stderr
+        assert "saving plots to" in result.stdout and "plot stopped" in result.stdout
+        assert stack.proc.poll() is None
+    finally:
+        assert stack.stop() == 0
+    assert not wait_no_processes(home)
+    rrd = read_rrd(out)
+    times = rrd.times(lay.rates_path("roll", lay.ESTIMATE))
+    assert len(times) > 10
+    # lockstep: sim_time is the simulated clock (4 ms steps), decimated to 50 Hz buckets
+    assert all(t % 4000 == 0 for t in times)
+    assert len({t // 20000 for t in times}) == len(times)
