@@ -10,6 +10,7 @@ process starts; a problem is reported in one line naming the file, the key and w
 from __future__ import annotations
 
 import ast
+import sys
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -20,8 +21,21 @@ from stack.runtime.module import Module
 from stack.runtime.params import ParamError, ParamValue
 from stack.runtime.spec import load_module_class, resolve_args
 
-LAUNCH_DIR = Path(__file__).resolve().parents[2] / "launch"
 DEFAULT_PROFILE = "sitl_quad"
+
+
+def launch_dirs() -> list[Path]:
+    """Where profiles are looked up by name: ./launch, the source checkout's launch/, the installed copy."""
+    candidates = [
+        Path.cwd() / "launch",
+        Path(__file__).resolve().parents[2] / "launch",
+        Path(sys.prefix) / "share" / "stack" / "launch",
+    ]
+    seen: list[Path] = []
+    for d in candidates:
+        if d.is_dir() and d not in seen:
+            seen.append(d)
+    return seen
 RESTART_POLICIES = ("no", "on-failure", "always")
 FLAGS = ("lockstep", "realtime", "plot", "record")
 
@@ -67,11 +81,14 @@ def resolve_path(profile: str | Path) -> Path:
     p = Path(profile)
     if p.suffix == ".toml" or p.exists():
         return p
-    return LAUNCH_DIR / f"{profile}.toml"
+    for d in launch_dirs():
+        if (d / f"{profile}.toml").exists():
+            return d / f"{profile}.toml"
+    return Path("launch") / f"{profile}.toml"
 
 
 def available_profiles() -> list[str]:
-    return sorted(p.stem for p in LAUNCH_DIR.glob("*.toml"))
+    return sorted({p.stem for d in launch_dirs() for p in d.glob("*.toml")})
 
 
 def load_profile(profile: str | Path, *, flags: dict[str, bool] | None = None) -> Profile:
