@@ -12,7 +12,7 @@ import psutil
 import typer
 
 from stack.bus import keys
-from stack.cli import fly, log, param, plot, topic
+from stack.cli import cmd, fly, log, param, plot, topic
 from stack.cli.common import EndpointOption, JsonOption, VehicleOption, connect, fail, print_table, query_json
 from stack.cli.observers import add_observers
 from stack.supervisor import state as run_state
@@ -27,6 +27,7 @@ app = typer.Typer(
 app.add_typer(topic.app, name="topic")
 app.add_typer(param.app, name="param")
 app.add_typer(log.app, name="log")
+app.add_typer(cmd.app, name="cmd")
 app.command("fly")(fly.fly)
 app.command("plot")(plot.plot)
 app.command("replay")(log.replay)

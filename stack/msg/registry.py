@@ -17,6 +17,7 @@ from stack.msg.estimation import (
     VehicleImuStatus,
     VehicleLocalPosition,
 )
+from stack.msg.navigation import Mission, MissionResult, NavigationRequest
 from stack.msg.sensors import SensorAccel, SensorBaro, SensorGps, SensorGyro, SensorMag
 from stack.msg.setpoints import (
     HoverThrustEstimate,
@@ -85,6 +86,9 @@ TOPICS: dict[str, type[Message]] = {
     "vehicle_command_ack": VehicleCommandAck,
     "parameter_update": ParameterUpdate,
     "sim_groundtruth": SimGroundtruth,
+    "mission": Mission,
+    "mission_result": MissionResult,
+    "navigation_request": NavigationRequest,
 }
 
 
@@ -119,6 +123,8 @@ def _type_text(t: msgspec.inspect.Type) -> str:
     """A version-independent spelling of a msgspec type (its repr changes between msgspec releases)."""
     if isinstance(t, msgspec.inspect.TupleType):
         return "tuple[" + ",".join(_type_text(i) for i in t.item_types) + "]"
+    if isinstance(t, msgspec.inspect.StructType):
+        return t.cls.__name__ + "(" + ",".join(f"{f.name}:{_type_text(f.type)}" for f in t.fields) + ")"
     if isinstance(t, msgspec.inspect.VarTupleType | msgspec.inspect.ListType):
         bounds = f"{t.min_length or 0}..{'' if t.max_length is None else t.max_length}"
         return f"{type(t).__name__[:-4].lower()}[{_type_text(t.item_type)};{bounds}]"

@@ -1,0 +1,117 @@
+"""`stack cmd` with a stand-in navigator and a fixed position estimate added to the default profile: the
+mission upload protocol end to end, missions placed about the vehicle's home, and --wait."""
+
+import json
+
+import msgspec
+import pytest
+
+from stack.mathlib.geo import MapProjection
+from stack.mission.items import Mission
+from stack.mission.transfer import mission_from_message
+from stack.msg import navigation
+from tests.support.harness import REPO, RunningStack, wait_no_processes, write_profile
+
+PLAN = REPO / "tests" / "mission" / "data" / "square.plan"
+PLANNED_HOME = (47.3977419, 8.5455938, 488.0)
+VEHICLE = (47.3986419, 8.5455938, 490.0)
+"""Where the stand-in estimate puts the vehicle: 100 m north of the plan's planned home and 2 m higher."""
+
+
+@pytest.fixture(scope="module")
+def stack(tmp_path_factory):
+    tmp = tmp_path_factory.mktemp("cmd_mission")
+    received = tmp / "received.jsonl"
+    lat, lon, alt = VEHICLE
+    profile = write_profile(
+        tmp / "with_navigator.toml",
+        (REPO / "launch" / "sitl_quad.toml").read_text()
+        + f"""
+[[module]]
+module = "tests.cli.standins:FixedPosition"
+args = {{ lat = {lat}, lon = {lon}, alt = {alt} }}
+
+[[module]]
+module = "tests.cli.standins:MissionResponder"
+args = {{ out = "{received}" }}
+""",
+    )
+    running = RunningStack(tmp / "home", profile, "--quiet")
+    running.received = received
+    running.wait_up()
+    yield running
+    assert running.stop() == 0
+    assert not wait_no_processes(tmp / "home")
+
+
+def last_received(stack) -> Mission:
+    """The last mission the stand-in navigator received."""
+    line = stack.received.read_text().splitlines()[-1]
+    return mission_from_message(msgspec.msgpack.decode(bytes.fromhex(line), type=navigation.Mission))
+
+
+def test_a_waypoint_list_is_accepted_by_the_navigator(stack, tmp_path):
+    waypoints = tmp_path / "square.txt"
+    waypoints.write_text("takeoff 5\n10 0 -5\n10 10 -5 90\nland\n")
+    out = stack.cli("cmd", "mission", str(waypoints), "--no-start")
+    assert out.returncode == 0, out.stderr
+    lines = out.stdout.splitlines()
+    assert lines[0].startswith("home: 47.3986419, 8.5455938, 490.0 m AMSL (")
+    assert lines[1:] == ["mission accepted: 4 items"]
+    mission = last_received(stack)
+    assert mission.source == str(waypoints) and (mission.home.lat, mission.home.lon, mission.home.alt) == VEHICLE
+    assert [(i.command, *i.position) for i in mission.items[1:3]] == [(16, 10.0, 0.0, -5.0), (16, 10.0, 10.0, -5.0)]
+
+
+def test_a_plan_is_placed_about_the_vehicle_home_not_its_planned_home(stack):
+    out = stack.cli("cmd", "mission", str(PLAN), "--no-start")
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.splitlines()[-1] == "mission accepted: 6 items"
+    takeoff, wp1, _speed, _wp2, wp3, _rtl = last_received(stack)
+    projection = MapProjection(VEHICLE[0], VEHICLE[1])
+    north, east = projection.project(PLANNED_HOME[0], PLANNED_HOME[1])
+    assert north == pytest.approx(-100.07, abs=0.01)
+    assert takeoff.position == pytest.approx((north, east, -15.0), abs=1e-6)
+    assert (wp1.north, wp1.down) == pytest.approx((north + 20.0, -15.0), abs=0.02)
+    assert wp3.down == pytest.approx(VEHICLE[2] - 510.0)  # an AMSL altitude, about the vehicle's home
+
+
+def test_an_empty_mission_is_rejected_with_the_navigators_reason(stack, tmp_path):
+    empty = tmp_path / "empty.plan"
+    plan = json.loads(PLAN.read_text())
+    plan["mission"]["items"] = []
+    empty.write_text(json.dumps(plan))
+    out = stack.cli("cmd", "mission", str(empty), "--no-start")
+    assert out.returncode == 1 and "accepted" not in out.stdout
+    assert out.stderr.strip() == "error: mission rejected: the mission has no items"
+    assert len(last_received(stack)) == 0
+
+
+def test_land_wait_follows_the_vehicle_until_disarmed(stack):
+    assert stack.cli("cmd", "arm").stdout.strip() == "arm: accepted"
+    # Never having taken off, the vehicle disarms COM_DISARM_PRFLT (10 s simulated) after arming.
+    out = stack.cli("cmd", "land", "--wait", "--timeout", "120")
+    assert out.returncode == 0, out.stderr
+    lines = out.stdout.splitlines()
+    assert lines[0] == "land: accepted" and lines[-1] == "land: landed and disarmed"
+    assert all("altitude 0.0 m" in line for line in lines[1:-1])
+
+
+def test_takeoff_wait_reports_a_takeoff_that_never_climbs(stack):
+    # Nothing flies the vehicle (no position controller; the estimate is fixed), so it disarms on the ground.
+    out = stack.cli("cmd", "takeoff", "--alt", "3", "--wait", "--timeout", "120")
+    assert out.returncode == 1
+    assert out.stdout.splitlines()[0] == "takeoff: accepted"
+    assert out.stderr.strip() == "error: takeoff: the vehicle disarmed"
+
+
+def test_a_mission_is_started_after_its_upload(stack, tmp_path):
+    waypoints = tmp_path / "out_and_back.txt"
+    waypoints.write_text("takeoff 5\n10 0 -5\nland\n")
+    beyond = stack.cli("cmd", "mission", str(waypoints), "--first", "3")
+    assert beyond.returncode == 1
+    assert beyond.stdout.splitlines()[-1] == "mission accepted: 3 items"
+    assert beyond.stderr.strip() == "mission start: DENIED: Mission start: first item (param1) must be −1…2, got 3"
+    out = stack.cli("cmd", "mission", str(waypoints))
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.splitlines()[-2:] == ["mission accepted: 3 items", "mission start: accepted"]
