@@ -43,6 +43,7 @@ log = logging.getLogger("stack.lockstep")
 
 TIMER = "@timer"
 CLOCK_RING = 8
+SLOW_WAIT_S = 2.0
 _WAKE = "@wake"
 _clock_decoder = msgspec.msgpack.Decoder(LockstepClock)
 _ack_decoder = msgspec.msgpack.Decoder(LockstepAck)
@@ -73,9 +74,25 @@ class Barrier:
         if not self.required:
             return
         spins = 0
+        started = 0.0
         while not self._satisfied():
             spins += 1
-            time.sleep(0 if spins < 100 else 0.0002)
+            if spins < 100:
+                time.sleep(0)
+                continue
+            time.sleep(0.0002)
+            if not started:
+                started = time.monotonic()
+            elif started > 0.0 and time.monotonic() - started > SLOW_WAIT_S:
+                started = -1.0  # report once per wait
+                log.warning("lockstep barrier: still waiting after %.0f s for %s", SLOW_WAIT_S, self.describe())
+
+    def describe(self) -> str:
+        """The messages the barrier still waits for (topic, publisher, index wanted and held)."""
+        return ", ".join(
+            f"{suffix} #{total} from publisher {pub} (holding #{self.by_suffix[suffix].last_index.get(pub, 0)})"
+            for (pub, suffix), total in self.required.items()
+        )
 
     def _satisfied(self) -> bool:
         for key, total in list(self.required.items()):
@@ -101,9 +118,12 @@ class LockstepMember:
     def __init__(self, node: Node, inputs: Iterable[InputBuffer], trigger: str, timed: bool) -> None:
         self.node = node
         self.trigger = trigger
+        self.timed = timed
         self.now = 0
         self.step = 0
         self.admitted = False
+        self.registered = False
+        self.heard_coordinator = False
         self.members: frozenset[int] = frozenset()
         self.barrier = Barrier(inputs)
         if timed:
@@ -122,6 +142,16 @@ class LockstepMember:
         self.node.declare_token(
             keys.lockstep_member_token(self.node.vehicle, self.node.name, self.node.publisher_id, self.trigger)
         )
+        self.registered = True
+
+    def poll_startup(self) -> None:
+        """Before the first step: note whether the coordinator's pre-start clocks reach this member."""
+        while self._clock_sub.try_recv() is not None:
+            self.heard_coordinator = True
+
+    def ack_reachable(self) -> bool:
+        """Whether this session knows the coordinator's acknowledgement subscriber (else an ack is lost)."""
+        return self._ack_pub.matching_status.matching
 
     def _take(self, clk: LockstepClock) -> None:
         require = self.barrier.require
@@ -133,8 +163,12 @@ class LockstepMember:
         self.now = clk.timestamp
 
     def next_clock(self) -> None:
-        """Block until the next tick and take it in (timed members)."""
-        self._take(_clock_decoder.decode(self._clock_sub.recv().payload.to_bytes()))
+        """Block until the next tick and take it in (timed members); pre-start clocks are skipped."""
+        while True:
+            clk = _clock_decoder.decode(self._clock_sub.recv().payload.to_bytes())
+            if clk.step > 0:
+                self._take(clk)
+                return
 
     def advance_to(self, t: int) -> None:
         """Take in the newest clock, waiting until one has reached ``t`` (triggered members)."""
@@ -144,7 +178,32 @@ class LockstepMember:
             self._take(_clock_decoder.decode(sample.payload.to_bytes()))
             sample = sub.try_recv()
         while self.now < t:
-            self._take(_clock_decoder.decode(sub.recv().payload.to_bytes()))
+            sample = sub.try_recv()
+            if sample is None:
+                sample = self._slow_clock(t)
+            self._take(_clock_decoder.decode(sample.payload.to_bytes()))
+
+    def _slow_clock(self, t: int) -> zenoh.Sample:
+        """Block for the clock of time ``t``, saying so in the log if it is long in coming."""
+        started = time.monotonic()
+        spins = 0
+        while True:
+            sample = self._clock_sub.try_recv()
+            if sample is not None:
+                return sample
+            spins += 1
+            if spins < 100:
+                time.sleep(0)
+                continue
+            if started and time.monotonic() - started > SLOW_WAIT_S:
+                started = 0.0
+                log.warning(
+                    "lockstep: a trigger at t=%d us arrived but its clock has not after %.0f s (at t=%d us)",
+                    t,
+                    SLOW_WAIT_S,
+                    self.now,
+                )
+            time.sleep(0.0002)
 
     def ack(self, trigger_publisher: int, trigger_topic: str, touched: Iterable[TopicPublisher]) -> None:
         if not self.admitted:
@@ -246,6 +305,16 @@ class LockstepCoordinator:
         log.warning("%s", why)
 
     # -- the step -----------------------------------------------------------------------------
+
+    def announce(self) -> None:
+        """Before the first step: an empty clock (step 0) on the clock key and every timed member's tick
+        key, so that members can tell the coordinator reaches them before they declare themselves synced."""
+        self._apply_membership()
+        clock = _encoder.encode(LockstepClock(timestamp=0, step=0, counts=[], members=[]))
+        self._clock_pub.put(clock)
+        for m in self.members.values():
+            if m.period_us is not None:
+                self._tick_publisher(m).put(clock)
 
     def begin_step(self, t: int) -> None:
         """Announce time ``t``: publish the clock. Publish this step's own messages right after."""

@@ -99,7 +99,9 @@ class Runtime:
                 if self.spec.lockstep:
                     self.state = "syncing"
                     member = lockstep_part if isinstance(lockstep_part, LockstepMember) else None
-                    startup.sync(node, self.inputs.values(), member, self.spec.late_join)
+                    coordinator = lockstep_part if isinstance(lockstep_part, LockstepCoordinator) else None
+                    announce = coordinator.announce if coordinator is not None else None
+                    startup.sync(node, self.inputs.values(), member, self.spec.late_join, announce)
                 self.state = "running"
                 log.info("%s ready (%s)", self.name, self.describe_trigger())
                 self._loop(lockstep_part)
@@ -277,6 +279,7 @@ class Runtime:
         deadline = time.monotonic() + startup.SYNC_TIMEOUT_S
         session, vehicle = self.node.session, self.node.vehicle
         while True:
+            coordinator.announce()
             roster = startup.query_roster(session, vehicle) or {}
             synced = {
                 str(r.ok.key_expr).rsplit("/", 1)[-1]

@@ -7,8 +7,10 @@ the supervisor's roster is complete:
 1. sends probe samples on every topic it publishes (``TopicPublisher.probe``), repeatedly;
 2. waits until, for every topic it subscribes to, a probe has arrived from every roster module that
    announces publishing that topic (the graph's liveliness tokens say who);
-3. then registers as a lockstep member (if it is one) and declares itself synced, and keeps probing
-   until every module of the roster is synced — only then does the simulator take its first step.
+3. then registers as a lockstep member (if it is one), waits until the simulator's pre-start clocks
+   reach it and it can reach the simulator's acknowledgement subscriber, declares itself synced, and
+   keeps probing until every module of the roster is synced — only then does the simulator take its
+   first step.
 
 A module restarted while the stack runs joins late: the others no longer probe, so it only waits
 until it sees them and gives declarations a moment to settle before joining.
@@ -19,7 +21,7 @@ from __future__ import annotations
 import json
 import logging
 import time
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 
 import zenoh
 
@@ -64,8 +66,17 @@ def synced_modules(session: zenoh.Session, vehicle: str) -> set[str]:
     }
 
 
-def sync(node: Node, inputs: Iterable[InputBuffer], member: LockstepMember | None, late_join: bool) -> None:
-    """Block until this module may take part in the lockstep (see the module docstring)."""
+def sync(
+    node: Node,
+    inputs: Iterable[InputBuffer],
+    member: LockstepMember | None,
+    late_join: bool,
+    announce: Callable[[], None] | None = None,
+) -> None:
+    """Block until this module may take part in the lockstep (see the module docstring).
+
+    The coordinator passes ``announce``, which sends its pre-start clocks: the members wait for them.
+    """
     inputs = list(inputs)
     deadline = time.monotonic() + SYNC_TIMEOUT_S
     roster: dict[str, int] | None = None
@@ -75,6 +86,8 @@ def sync(node: Node, inputs: Iterable[InputBuffer], member: LockstepMember | Non
         if roster is None:
             roster = query_roster(node.session, node.vehicle)
         if roster is not None:
+            if announce is not None:
+                announce()
             for pub in node.publishers:
                 pub.probe()
             if not declared:
@@ -95,9 +108,9 @@ def sync(node: Node, inputs: Iterable[InputBuffer], member: LockstepMember | Non
                     unreached = _unprobed(node, inputs, others)
                 if unreached:
                     problem = f"no sample yet from {', '.join(unreached)}"
+                elif member is not None and not _coordinator_reachable(member, late_join):
+                    problem = "the simulator's clock and this module's acknowledgements do not connect yet"
                 else:
-                    if member is not None:
-                        member.register()
                     node.declare_token(keys.synced_token(node.vehicle, node.name))
                     declared = True
             if declared:
@@ -108,6 +121,15 @@ def sync(node: Node, inputs: Iterable[InputBuffer], member: LockstepMember | Non
         if time.monotonic() > deadline:
             raise RuntimeError(f"lockstep start-up timed out after {SYNC_TIMEOUT_S:.0f} s: {problem}")
         time.sleep(PROBE_PERIOD_S)
+
+
+def _coordinator_reachable(member: LockstepMember, late_join: bool) -> bool:
+    """Registered, hearing the coordinator's pre-start clocks (not sent any more to a late joiner), and
+    able to reach its acknowledgement subscriber: no clock or acknowledgement of the run can be lost."""
+    if not member.registered:
+        member.register()
+    member.poll_startup()
+    return (late_join or member.heard_coordinator) and member.ack_reachable()
 
 
 def _unprobed(node: Node, inputs: list[InputBuffer], others: set[str]) -> list[str]:

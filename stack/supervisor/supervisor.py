@@ -3,8 +3,9 @@
 Like PX4's rcS it starts the modules in order, each when the previous one reports ready. It is the
 bus rendezvous (a Zenoh peer listening on 127.0.0.1), publishes the roster lockstep waits for,
 answers ``stack status``, restarts crashed modules with backoff where the profile says so, and
-stops everything in reverse order on Ctrl-C, SIGTERM or ``--duration``, escalating to SIGKILL.
-No module outlives it: each asks the kernel for SIGTERM when its parent dies.
+stops everything in reverse order (in lockstep, the simulator first, freezing time) on Ctrl-C,
+SIGTERM or ``--duration``, escalating to SIGKILL. No module outlives it: each asks the kernel for
+SIGTERM when its parent dies.
 """
 
 from __future__ import annotations
@@ -309,7 +310,7 @@ class Supervisor:
     # -- stopping ----------------------------------------------------------------------------------
 
     def _stop_all(self) -> None:
-        for m in reversed(self.modules):
+        for m in self._stop_order():
             proc = m.proc
             if proc is None or proc.poll() is not None:
                 continue
@@ -329,6 +330,14 @@ class Supervisor:
         for m in self.modules:
             if m.reader is not None:
                 m.reader.join(timeout=2.0)
+
+    def _stop_order(self) -> list[ModuleProcess]:
+        """Reverse start order; in lockstep the clock's driver goes first, so simulated time stops at once
+        and no module sees the world go on without the ones already stopped (a vehicle falling)."""
+        order = list(reversed(self.modules))
+        if self.profile.lockstep:
+            order.sort(key=lambda m: not m.entry.cls.LOCKSTEP_COORDINATOR)
+        return order
 
     # -- services ----------------------------------------------------------------------------------
 
