@@ -5,13 +5,29 @@ A linear Kalman filter with 10 states::
     x, y, z        position NED about the reference point [m]
     vx, vy, vz     velocity NED [m/s]
     bx, by, bz     accelerometer bias, body FRD [m/s²]
-    baro_offset    barometer altitude minus true altitude [m]
+    hgt_offset     offset of the secondary height sensor [m]
 
 Prediction integrates the accelerometer specific force, rotated to NED by the attitude estimate,
 plus gravity: ``a = R(q)·(f − b) + (0, 0, g)``. The bias is kept in the body frame, like LPE,
 because an accelerometer bias is a property of the sensor: it stays constant while the vehicle yaws,
 whereas its NED image would rotate with every heading change and could only be followed through
 process noise. The price is a state-dependent transition matrix, rebuilt every step from ``R``.
+
+Height reference (EKF2's ``EKF2_HGT_REF``): one height sensor defines z, the other one measures
+z through an offset state, so that it can correct the absolute altitude without moving z.
+
+- ``EKF2_HGT_REF = 0`` (barometer, default here): z is referenced to the first baro sample (the
+  ground at start) for the whole flight. Once GPS sets the origin, the offset state is the GPS
+  altitude minus the baro-referenced altitude, a random walk (``LPE_PN_GPS_Z``) learnt from GPS
+  altitude; the barometer has no offset. The GPS altitude row of the joint GPS update is
+  ``z − offset``: its noise goes to the offset, not to z. The published reference altitude is
+  ``baro reference + offset``, so ``alt = ref_alt − z`` is the GPS-corrected absolute altitude, and
+  ``ref_alt`` follows the offset estimate slowly. Without a baro at start, GPS defines z until the
+  first baro sample, which then takes over with z continuous (the GPS frame becomes the offset).
+- ``EKF2_HGT_REF = 1`` (GPS): the offset state is the baro altitude minus the estimated altitude
+  (random walk ``LPE_PN_BARO``). Until GPS sets the global origin, z is referenced to the first baro
+  sample and the offset is frozen at 0; afterwards GPS altitude defines absolute height and the
+  baro smooths it.
 
 Corrections:
 
@@ -21,29 +37,36 @@ Corrections:
   last 0.5 s (LPE's ``GPS_DELAY_MAX``), rolls back to the step at the measurement time, fuses there
   and re-runs the later predictions and baro fusions. This is the exact linear-KF answer, unlike
   LPE, which only computes the residual against the delayed state and applies it to the current one.
-- Barometer altitude, fused at arrival (PX4's baro delay is 0). Until GPS sets the global origin,
-  z is referenced to the first baro sample and the baro offset state is frozen at 0; afterwards the
-  offset is estimated against GPS altitude, so GPS defines absolute height and the baro smooths it.
+- Barometer altitude, fused at arrival (PX4's baro delay is 0).
 - Gates: EKF2-style innovation tests per group (horizontal position, vertical position,
   horizontal velocity, vertical velocity, baro): a group is fused when every component satisfies
   ``r² ≤ gate²·S``. A group that has been rejected for longer than 7 s (EKF2's
-  ``reset_timeout_max``) is reset to the measurement, with PX4-style reset counters and deltas.
+  ``reset_timeout_max``) is reset to the measurement, with PX4-style reset counters and deltas. With
+  the baro reference a rejected baro resets z (the offset moves with it, so the global altitude does
+  not jump) and a rejected GPS altitude resets the offset, not z; with the GPS reference a rejected
+  baro resets its offset while GPS height is fused, else z.
 
-The origin (ref lat/lon/alt) is set at the 10th consecutive GPS fix passing LPE's initialisation
+The origin (ref lat/lon) is set at the 10th consecutive GPS fix passing LPE's initialisation
 checks (3-D fix, ≥ 6 satellites, eph ≤ LPE_EPH_MAX, epv ≤ LPE_EPV_MAX): the horizontal position is
-reset to zero there and the velocity to the GPS velocity; the reference altitude is chosen so that
-the current z does not jump.
+reset to zero there and the velocity to the GPS velocity; z does not jump.
 
 Parameters, in :data:`PARAMS` with (default, min, max). LPE names carry PX4's LPE defaults.
 Additions, with the reason:
 
+- ``EKF2_HGT_REF`` 0 (barometer): the height reference, see above. PX4 also offers 2 (range
+  finder) and 3 (vision), which this filter has no sensor for. Like PX4 (``reboot_required``), a
+  change takes effect at the next :meth:`LocalPositionKF.reset`.
 - ``LPE_XY_PUB`` 2.0 m: eph (``sqrt(Pxx + Pyy)``) above which ``xy_valid`` is cleared. LPE hard-codes
   this 2 m (``EST_STDDEV_XY_VALID``); it is exposed beside LPE's own ``LPE_VXY_PUB``/``LPE_Z_PUB``.
   (PX4's ``LPE_X_LP`` is not an eph limit: it is the 5 Hz low-pass LPE applies to its published
   state, which this filter does not add, so as not to delay the position controller.)
-- ``LPE_PN_BARO`` 0.01 m/s/√Hz: random walk of the baro offset, a state LPE does not have
-  (EKF2's equivalent ``EKF2_HGT_BIAS_NSD`` is 0.13; a smaller value keeps the absolute height from
-  wandering with LPE's coarse GPS altitude weighting).
+- ``LPE_PN_BARO`` 0.01 m/s/√Hz: random walk of the baro offset (GPS reference), a state LPE does not
+  have. EKF2 uses 0.13 (its compiled-in ``baro_bias_nsd``); a smaller value keeps the absolute height
+  from wandering with LPE's coarse GPS altitude weighting.
+- ``LPE_PN_GPS_Z`` 0.13 m/s/√Hz: random walk of the GPS altitude offset (baro reference), EKF2's
+  compiled-in ``gps_hgt_bias_nsd``. A separate name because it is a different sensor's error: GNSS
+  altitude wanders by metres over minutes, and the offset must follow that so that it, and not z,
+  absorbs the GPS altitude error.
 - ``EKF2_GPS_P_GATE``, ``EKF2_GPS_V_GATE``, ``EKF2_BARO_GATE`` 5 σ: LPE has no configurable gate (it
   only flags a fault at a fixed χ² level and fuses anyway), so EKF2's gates are used.
 - ``EKF2_ABL_LIM`` 0.4 m/s² and ``EKF2_ABIAS_INIT`` 0.2 m/s²: accelerometer bias limit and initial
@@ -67,10 +90,14 @@ from stack.mathlib.scalar import CONSTANTS_ONE_G, constrain
 from stack.mathlib.vector import Vec3
 
 N_X = 10
-X_X, X_Y, X_Z, X_VX, X_VY, X_VZ, X_BX, X_BY, X_BZ, X_BARO = range(N_X)
+X_X, X_Y, X_Z, X_VX, X_VY, X_VZ, X_BX, X_BY, X_BZ, X_HGT_OFS = range(N_X)
+
+HGT_REF_BARO = 0
+HGT_REF_GPS = 1
 
 PARAMS: dict[str, tuple[float, float, float]] = {
     # name: (default, min, max)
+    "EKF2_HGT_REF": (HGT_REF_BARO, HGT_REF_BARO, HGT_REF_GPS),  # height reference: 0 baro, 1 GPS (added)
     "LPE_GPS_XY": (1.0, 0.01, 5.0),  # m, minimum GPS xy std dev (reported eph used when larger)
     "LPE_GPS_Z": (3.0, 0.01, 200.0),  # m, minimum GPS z std dev (reported epv used when larger)
     "LPE_GPS_VXY": (0.25, 0.01, 2.0),  # m/s, GPS xy velocity std dev
@@ -82,7 +109,8 @@ PARAMS: dict[str, tuple[float, float, float]] = {
     "LPE_PN_P": (0.1, 0.0, 1.0),  # m/s/√Hz, position propagation noise density
     "LPE_PN_V": (0.1, 0.0, 1.0),  # m/s²/√Hz, velocity propagation noise density
     "LPE_PN_B": (1e-3, 0.0, 1.0),  # m/s³/√Hz, accel bias random walk
-    "LPE_PN_BARO": (0.01, 0.0, 1.0),  # m/s/√Hz, baro offset random walk (added)
+    "LPE_PN_BARO": (0.01, 0.0, 1.0),  # m/s/√Hz, baro offset random walk, GPS reference (added)
+    "LPE_PN_GPS_Z": (0.13, 0.0, 1.0),  # m/s/√Hz, GPS altitude offset random walk, baro reference (added)
     "LPE_EPH_MAX": (3.0, 1.0, 5.0),  # m, max GPS eph to set the origin
     "LPE_EPV_MAX": (5.0, 1.0, 5.0),  # m, max GPS epv to set the origin
     "LPE_XY_PUB": (2.0, 0.3, 100.0),  # m, eph limit for xy_valid (added)
@@ -114,6 +142,15 @@ _GPS_GROUPS = (
     ((5,), "EKF2_GPS_V_GATE"),
 )
 _G_HPOS, _G_VPOS, _G_HVEL, _G_VVEL = range(4)
+_ROW_ALT = 2  # GPS measurement row of the altitude
+
+# Flat indices in a 10×10 matrix of the transition entries that change with dt and the attitude:
+# ∂p/∂v (dt), then ∂p/∂b (−½dt²·R) and ∂v/∂b (−dt·R), row by row.
+_F_VARIABLE = np.array(
+    [X_X * N_X + X_VX, X_Y * N_X + X_VY, X_Z * N_X + X_VZ]
+    + [row * N_X + col for row in (X_X, X_Y, X_Z, X_VX, X_VY, X_VZ) for col in (X_BX, X_BY, X_BZ)]
+)
+_IDENTITY = np.identity(N_X)
 
 
 class GpsMeasurement(Protocol):
@@ -146,19 +183,19 @@ class LocalPositionEstimate:
     v_xy_valid: bool
     v_z_valid: bool
     eph: float  # m, 1σ horizontal position
-    epv: float  # m, 1σ vertical position
+    epv: float  # m, 1σ vertical position (z, in the frame of the height reference)
     evh: float  # m/s, 1σ horizontal velocity
     evv: float  # m/s, 1σ vertical velocity
     dead_reckoning: bool  # horizontal aiding was lost: xy comes from the IMU alone
     xy_global: bool  # the reference lat/lon is set
-    z_global: bool  # z is referenced to GPS altitude (else to the first baro sample)
+    z_global: bool  # ref_alt is a GPS-based AMSL altitude (the origin is set)
     ref_timestamp: int  # µs, measurement time of the fix that set the origin (0 = not set)
     ref_lat: float  # deg (NaN until set)
     ref_lon: float  # deg
-    ref_alt: float  # m AMSL of z = 0 (NaN until z is initialised)
+    ref_alt: float  # m AMSL of z = 0 (NaN until z is initialised; moves with the GPS offset, baro reference)
     lat: float  # deg, global position (NaN until the origin is set)
     lon: float  # deg
-    alt: float  # m AMSL
+    alt: float  # m AMSL, ref_alt − z
     delta_xy: tuple[float, float]  # m, jump of the last xy reset
     xy_reset_counter: int  # counts every reset (PX4 publishes it modulo 256)
     delta_z: float
@@ -167,13 +204,16 @@ class LocalPositionEstimate:
     vxy_reset_counter: int
     delta_vz: float
     vz_reset_counter: int
+    delta_alt: float  # m, jump of alt at its last reset (vehicle_global_position.delta_alt)
+    alt_reset_counter: int  # resets that made alt jump: z resets, or GPS offset resets (baro reference)
     accel_bias: Vec3  # m/s², body FRD
-    baro_offset: float  # m, baro altitude minus estimated altitude
+    baro_offset: float  # m, baro altitude minus alt (0 until both height sensors are in use)
 
 
 class _Step:
     """One entry of the history: the event that moved the filter to (x, P) at time t_us — a
-    prediction (transition F, input u, dt), a baro fusion, or neither (the start of the history)."""
+    prediction (transition F, dt, NED specific force plus gravity, rotation), a baro fusion, or
+    neither (the start of the history)."""
 
     __slots__ = ("P", "baro_alt", "prediction", "t_us", "x")
 
@@ -181,7 +221,7 @@ class _Step:
         self.t_us = t_us
         self.x = x
         self.P = P
-        self.prediction: tuple[np.ndarray, np.ndarray, float] | None = None
+        self.prediction: tuple[np.ndarray, float, float, float, float, quat.Mat3] | None = None
         self.baro_alt: float | None = None
 
 
@@ -190,7 +230,7 @@ def _step_time(step: _Step) -> int:
 
 
 class LocalPositionKF:
-    """Position/velocity/accel-bias/baro-offset Kalman filter fusing IMU, GPS and barometer.
+    """Position/velocity/accel-bias/height-offset Kalman filter fusing IMU, GPS and barometer.
 
     Call :meth:`predict` for every IMU sample (or with averaged samples at a lower rate), and
     :meth:`fuse_gps` / :meth:`fuse_baro` when those arrive. Arrays in the history are never
@@ -199,20 +239,26 @@ class LocalPositionKF:
 
     __slots__ = (
         "P",
+        "_abl_lim",
         "_accel_ned",
         "_baro_initialised",
         "_gps_init_count",
+        "_hgt_ref",
         "_hist",
         "_last_baro_fused_us",
         "_last_fused_us",
         "_last_gps_meas_us",
         "_map",
         "_q_c",
+        "_q_dt",
+        "_q_dt_s",
         "_ref_alt",
         "_ref_timestamp",
         "_t_us",
         "_z_initialised",
+        "alt_reset_counter",
         "baro_test_ratio",
+        "delta_alt",
         "delta_vxy",
         "delta_vz",
         "delta_xy",
@@ -230,21 +276,27 @@ class LocalPositionKF:
     def __init__(self, **params: float) -> None:
         self.params = {name: spec[0] for name, spec in PARAMS.items()}
         self._map: MapProjection | None = None
+        self._hgt_ref = HGT_REF_BARO
+        self._baro_initialised = False
         self.set_params(**params)
         self.reset()
 
     def set_params(self, **params: float) -> None:
-        """Set parameters by PX4 name (see :data:`PARAMS`); values are clamped to their range."""
+        """Set parameters by PX4 name (see :data:`PARAMS`); values are clamped to their range.
+        ``EKF2_HGT_REF`` is rounded to its enum value and applies from the next :meth:`reset`."""
         for name, value in params.items():
             if name not in PARAMS:
                 raise KeyError(f"unknown parameter {name}")
             _, lo, hi = PARAMS[name]
-            self.params[name] = constrain(float(value), lo, hi)
+            value = constrain(float(value), lo, hi)
+            self.params[name] = float(round(value)) if name == "EKF2_HGT_REF" else value
+        self._abl_lim = self.params["EKF2_ABL_LIM"]
         self._update_process_noise()
 
     def reset(self) -> None:
         """Return to the power-on state: no time base, no altitude reference, no origin."""
         p = self.params
+        self._hgt_ref = int(p["EKF2_HGT_REF"])
         self.x = np.zeros(N_X)
         self.P = np.diag(
             [8.0, 8.0, 8.0]  # LPE: twice its 2 m validity limit, squared
@@ -265,11 +317,21 @@ class LocalPositionKF:
         self._last_fused_us = [0, 0, 0, 0]  # per GPS group
         self._last_baro_fused_us = 0
         self.xy_reset_counter = self.z_reset_counter = self.vxy_reset_counter = self.vz_reset_counter = 0
+        self.alt_reset_counter = 0
         self.delta_xy = (0.0, 0.0)
         self.delta_vxy = (0.0, 0.0)
-        self.delta_z = self.delta_vz = 0.0
+        self.delta_z = self.delta_vz = self.delta_alt = 0.0
         self.gps_pos_test_ratio = self.gps_vel_test_ratio = self.baro_test_ratio = 0.0
         self._update_process_noise()
+
+    @property
+    def hgt_ref(self) -> int:
+        """The height reference in use (``HGT_REF_BARO`` or ``HGT_REF_GPS``), latched at reset."""
+        return self._hgt_ref
+
+    def _gps_alt_has_offset(self) -> bool:
+        """GPS altitude is measured through the offset state (baro reference, baro in use)."""
+        return self._hgt_ref == HGT_REF_BARO and self._baro_initialised
 
     # ------------------------------------------------------------------ prediction
 
@@ -301,29 +363,31 @@ class LocalPositionKF:
         self._t_us = timestamp_sample_us
 
         r = quat.to_dcm(quat.normalized(q))
-        r0, r1, r2 = r
-        # Specific force in NED plus gravity, before the bias correction (which lives in F).
-        an = r0[0] * ax + r0[1] * ay + r0[2] * az
-        ae = r1[0] * ax + r1[1] * ay + r1[2] * az
-        ad = r2[0] * ax + r2[1] * ay + r2[2] * az + CONSTANTS_ONE_G
-        half_dt2 = 0.5 * dt * dt
-        u = np.array((half_dt2 * an, half_dt2 * ae, half_dt2 * ad, dt * an, dt * ae, dt * ad, 0.0, 0.0, 0.0, 0.0))
-        rot = np.array(r)
-        F = np.identity(N_X)
-        F[0, 3] = F[1, 4] = F[2, 5] = dt
-        F[0:3, 6:9] = rot * -half_dt2
-        F[3:6, 6:9] = rot * -dt
-
-        self.x, self.P = self._propagate(self.x, self.P, F, u, dt)
-        bx, by, bz = self.x[6:9].tolist()
+        (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = r
+        # Specific force in NED plus gravity, before the bias correction.
+        an = r00 * ax + r01 * ay + r02 * az
+        ae = r10 * ax + r11 * ay + r12 * az
+        ad = r20 * ax + r21 * ay + r22 * az + CONSTANTS_ONE_G
+        h = -0.5 * dt * dt
+        g = -dt
+        F = _IDENTITY.copy()
+        F.ravel()[_F_VARIABLE] = (
+            dt, dt, dt,
+            h * r00, h * r01, h * r02, h * r10, h * r11, h * r12, h * r20, h * r21, h * r22,
+            g * r00, g * r01, g * r02, g * r10, g * r11, g * r12, g * r20, g * r21, g * r22,
+        )
+        prediction = (F, dt, an, ae, ad, r)
+        x, self.P = self._propagate(self.x, self.P, prediction)
+        self.x = x
+        bx, by, bz = x[X_BX : X_BZ + 1].tolist()
         self._accel_ned = (
-            an - (r0[0] * bx + r0[1] * by + r0[2] * bz),
-            ae - (r1[0] * bx + r1[1] * by + r1[2] * bz),
-            ad - (r2[0] * bx + r2[1] * by + r2[2] * bz),
+            an - (r00 * bx + r01 * by + r02 * bz),
+            ae - (r10 * bx + r11 * by + r12 * bz),
+            ad - (r20 * bx + r21 * by + r22 * bz),
         )
 
-        step = _Step(timestamp_sample_us, self.x, self.P)
-        step.prediction = (F, u, dt)
+        step = _Step(timestamp_sample_us, x, self.P)
+        step.prediction = prediction
         hist = self._hist
         hist.append(step)
         oldest = timestamp_sample_us - GPS_DELAY_MAX_US
@@ -332,29 +396,58 @@ class LocalPositionKF:
         return True
 
     def _propagate(
-        self, x: np.ndarray, P: np.ndarray, F: np.ndarray, u: np.ndarray, dt: float
+        self,
+        x: np.ndarray,
+        P: np.ndarray,
+        prediction: tuple[np.ndarray, float, float, float, float, quat.Mat3],
     ) -> tuple[np.ndarray, np.ndarray]:
-        x = F @ x + u
-        lim = self.params["EKF2_ABL_LIM"]
-        if not (-lim <= x[X_BX] <= lim and -lim <= x[X_BY] <= lim and -lim <= x[X_BZ] <= lim):
-            np.clip(x[6:9], -lim, lim, out=x[6:9])
-        P_new = F @ P @ F.T
-        P_new.flat[:: N_X + 1] += self._q_c * dt
-        diag = P_new.diagonal()
-        if diag.max() > P_MAX:
+        """One prediction step: the state in plain floats (its transition is a few products), the
+        covariance as ``F·P·Fᵀ + Q·dt`` with LPE's cap on run-away variances."""
+        F, dt, an, ae, ad, r = prediction
+        px, py, pz, vx, vy, vz, bx, by, bz, ofs = x.tolist()
+        (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = r
+        cn = an - (r00 * bx + r01 * by + r02 * bz)
+        ce = ae - (r10 * bx + r11 * by + r12 * bz)
+        cd = ad - (r20 * bx + r21 * by + r22 * bz)
+        h = 0.5 * dt * dt
+        lim = self._abl_lim
+        x_new = np.array(
+            (
+                px + dt * vx + h * cn,
+                py + dt * vy + h * ce,
+                pz + dt * vz + h * cd,
+                vx + dt * cn,
+                vy + dt * ce,
+                vz + dt * cd,
+                -lim if bx < -lim else (lim if bx > lim else bx),
+                -lim if by < -lim else (lim if by > lim else by),
+                -lim if bz < -lim else (lim if bz > lim else bz),
+                ofs,
+            )
+        )
+        P_new = np.dot(np.dot(F, P), F.T)
+        if dt != self._q_dt_s:
+            self._q_dt_s = dt
+            self._q_dt = np.diag(self._q_c * dt)
+        P_new += self._q_dt
+        if max(P_new.diagonal().tolist()) > P_MAX:
             # LPE: a variance that has run away stops propagating (with its correlations).
-            for i in np.flatnonzero(diag > P_MAX):
-                P_new[i, :] = P[i, :]
-                P_new[:, i] = P[:, i]
-        return x, P_new
+            runaway = np.flatnonzero(P_new.diagonal() > P_MAX)
+            P_new[runaway, :] = P[runaway, :]
+            P_new[:, runaway] = P[:, runaway]
+        return x_new, P_new
 
     def _update_process_noise(self) -> None:
         p = self.params
         vxy = p["LPE_PN_V"] ** 2 + p["LPE_ACC_XY"] ** 2
         vz = p["LPE_PN_V"] ** 2 + p["LPE_ACC_Z"] ** 2
-        # The baro offset is only a state once GPS altitude defines the reference.
-        baro = p["LPE_PN_BARO"] ** 2 if self._map is not None else 0.0
-        self._q_c = np.array([p["LPE_PN_P"] ** 2] * 3 + [vxy, vxy, vz] + [p["LPE_PN_B"] ** 2] * 3 + [baro])
+        # The offset is only a state while both height sensors are in use.
+        if self._hgt_ref == HGT_REF_GPS:
+            ofs = p["LPE_PN_BARO"] ** 2 if self._map is not None else 0.0
+        else:
+            ofs = p["LPE_PN_GPS_Z"] ** 2 if self._map is not None and self._baro_initialised else 0.0
+        self._q_c = np.array([p["LPE_PN_P"] ** 2] * 3 + [vxy, vxy, vz] + [p["LPE_PN_B"] ** 2] * 3 + [ofs])
+        self._q_dt_s = math.nan
 
     # ------------------------------------------------------------------ barometer
 
@@ -362,7 +455,7 @@ class LocalPositionKF:
         """Fuse a barometric altitude [m AMSL] at the current filter time; True when it changed the
         estimate. PX4's baro delay is 0: call this after the prediction nearest the baro sample.
 
-        The first sample defines the altitude reference while there is no GPS origin.
+        The first sample defines the altitude reference while GPS does not (see the module doc).
         """
         t_now = self._t_us
         if t_now is None or not math.isfinite(alt_amsl_m) or not ALT_MIN_M < alt_amsl_m < ALT_MAX_M:
@@ -381,65 +474,118 @@ class LocalPositionKF:
             self._hist.append(step)
             return True
         if t_now - self._last_baro_fused_us > FUSION_RESET_TIMEOUT_US:
-            self._reset_to_baro(alt_amsl_m, t_now)
+            if self._hgt_ref == HGT_REF_GPS:
+                self._reset_to_baro(alt_amsl_m, t_now)
+            else:
+                self._reset_z_to_baro_reference(alt_amsl_m, t_now)
             self._last_baro_fused_us = t_now
             return True
         return False
 
     def _baro_update(self, x: np.ndarray, P: np.ndarray, alt: float) -> tuple[np.ndarray, np.ndarray, float]:
-        """Gated scalar update with h(x) = ref_alt − z + baro_offset; returns (x, P, test ratio)."""
+        """Gated scalar update with h(x) = ref_alt − z (+ offset with the GPS reference); returns
+        (x, P, test ratio)."""
         p = self.params
-        innov = alt - (self._ref_alt - x[X_Z] + x[X_BARO])
-        pht = P[:, X_BARO] - P[:, X_Z]
-        s = pht[X_BARO] - pht[X_Z] + p["LPE_BAR_Z"] ** 2
+        if self._hgt_ref == HGT_REF_GPS:
+            innov = alt - (self._ref_alt - x[X_Z] + x[X_HGT_OFS])
+            pht = P[:, X_HGT_OFS] - P[:, X_Z]
+            s = pht[X_HGT_OFS] - pht[X_Z] + p["LPE_BAR_Z"] ** 2
+        else:
+            innov = alt - (self._ref_alt - x[X_Z])
+            pht = -P[:, X_Z]
+            s = -pht[X_Z] + p["LPE_BAR_Z"] ** 2
         ratio = innov * innov / (p["EKF2_BARO_GATE"] ** 2 * s)
         if ratio > 1.0:
             return x, P, ratio
         k = pht / s
         x = x + k * innov
-        P = P - np.outer(k, pht)
+        P = P - k[:, None] * pht
         return x, 0.5 * (P + P.T), ratio
 
     def _init_baro(self, alt: float, t_now: int) -> None:
         x = self.x.copy()
         P = self.P.copy()
         r = self.params["LPE_BAR_Z"] ** 2
-        if self._z_initialised:
-            # z is GPS-referenced already: the baro only brings its own offset.
-            x[X_BARO] = alt - (self._ref_alt - x[X_Z])
-            P[X_BARO, :] = 0.0
-            P[:, X_BARO] = 0.0
-            P[X_BARO, X_BARO] = P[X_Z, X_Z] + r
-        else:
+        if not self._z_initialised:
             self._ref_alt = alt
             x[X_Z] = 0.0
-            x[X_BARO] = 0.0
+            x[X_HGT_OFS] = 0.0
             P[X_Z, :] = P[:, X_Z] = 0.0
-            P[X_BARO, :] = P[:, X_BARO] = 0.0
+            P[X_HGT_OFS, :] = P[:, X_HGT_OFS] = 0.0
             P[X_Z, X_Z] = r
             self._z_initialised = True
+        elif self._hgt_ref == HGT_REF_GPS:
+            # z is GPS-referenced already: the baro only brings its own offset.
+            x[X_HGT_OFS] = alt - (self._ref_alt - x[X_Z])
+            P[X_HGT_OFS, :] = 0.0
+            P[:, X_HGT_OFS] = 0.0
+            P[X_HGT_OFS, X_HGT_OFS] = P[X_Z, X_Z] + r
+        else:
+            # GPS defined z until now: the baro takes over with z continuous, and the GPS frame
+            # becomes the offset. In the new frame z is off by this sample's noise only; the offset
+            # carries z's former error (e_ofs = −e_z − n_baro).
+            ref_baro = alt + x[X_Z]
+            x[X_HGT_OFS] = self._ref_alt - ref_baro
+            pz = P[X_Z, :].copy()
+            P[X_HGT_OFS, :] = -pz
+            P[:, X_HGT_OFS] = -pz
+            P[X_Z, :] = P[:, X_Z] = 0.0
+            P[X_Z, X_Z] = r
+            P[X_Z, X_HGT_OFS] = P[X_HGT_OFS, X_Z] = r
+            P[X_HGT_OFS, X_HGT_OFS] = pz[X_Z] + r
         self._baro_initialised = True
         self.x, self.P = x, P
+        self._update_process_noise()
         self._restart_history(t_now)
 
     def _reset_to_baro(self, alt: float, t_now: int) -> None:
-        """Baro rejected for too long: if GPS height is being fused the baro offset has changed,
-        otherwise the height estimate is wrong and is reset to the baro."""
+        """GPS reference, baro rejected for too long: if GPS height is being fused the baro offset
+        has changed, otherwise the height estimate is wrong and is reset to the baro."""
         x = self.x.copy()
         P = self.P.copy()
         r = self.params["LPE_BAR_Z"] ** 2
         gps_height_recent = self._map is not None and t_now - self._last_fused_us[_G_VPOS] < FUSION_RESET_TIMEOUT_US
         if gps_height_recent:
-            x[X_BARO] = alt - (self._ref_alt - x[X_Z])
-            P[X_BARO, :] = P[:, X_BARO] = 0.0
-            P[X_BARO, X_BARO] = P[X_Z, X_Z] + r
+            x[X_HGT_OFS] = alt - (self._ref_alt - x[X_Z])
+            P[X_HGT_OFS, :] = P[:, X_HGT_OFS] = 0.0
+            P[X_HGT_OFS, X_HGT_OFS] = P[X_Z, X_Z] + r
         else:
-            z_new = self._ref_alt + x[X_BARO] - alt
+            z_new = self._ref_alt + x[X_HGT_OFS] - alt
             self.delta_z = float(z_new - x[X_Z])
             self.z_reset_counter += 1
+            if self._map is not None:
+                self._count_alt_reset(-self.delta_z)
             x[X_Z] = z_new
             P[X_Z, :] = P[:, X_Z] = 0.0
-            P[X_Z, X_Z] = r + P[X_BARO, X_BARO]
+            P[X_Z, X_Z] = r + P[X_HGT_OFS, X_HGT_OFS]
+        self.x, self.P = x, P
+        self._restart_history(t_now)
+
+    def _reset_z_to_baro_reference(self, alt: float, t_now: int) -> None:
+        """Baro reference, baro rejected for too long: z is reset to the baro. The GPS offset moves
+        with it, so the GPS altitude prediction ``z − offset`` and the global altitude do not jump."""
+        x = self.x.copy()
+        P = self.P.copy()
+        r = self.params["LPE_BAR_Z"] ** 2
+        z_new = self._ref_alt - alt
+        dz = z_new - x[X_Z]
+        pz = P[X_Z, :].copy()
+        if self._map is not None:
+            # offset' = offset + (z' − z): e_ofs' = e_ofs − e_z + e_z', with e_z' the sample noise.
+            var_ofs = P[X_HGT_OFS, X_HGT_OFS] - 2.0 * pz[X_HGT_OFS] + pz[X_Z] + r
+            row_ofs = P[X_HGT_OFS, :] - pz
+            x[X_HGT_OFS] += dz
+            P[X_HGT_OFS, :] = row_ofs
+            P[:, X_HGT_OFS] = row_ofs
+            P[X_Z, :] = P[:, X_Z] = 0.0
+            P[X_Z, X_HGT_OFS] = P[X_HGT_OFS, X_Z] = r
+            P[X_HGT_OFS, X_HGT_OFS] = var_ofs
+        else:
+            P[X_Z, :] = P[:, X_Z] = 0.0
+        P[X_Z, X_Z] = r
+        x[X_Z] = z_new
+        self.delta_z = float(dz)
+        self.z_reset_counter += 1
         self.x, self.P = x, P
         self._restart_history(t_now)
 
@@ -527,7 +673,7 @@ class LocalPositionKF:
         var: np.ndarray,
         t_meas: int,
     ) -> tuple[np.ndarray, np.ndarray]:
-        """Place the origin at this fix, reset xy and velocity to it, and reference z to GPS."""
+        """Place the origin at this fix, reset xy and velocity to it, and tie GPS altitude to z."""
         x = x.copy()
         P = P.copy()
         self._map = MapProjection(lat, lon)
@@ -539,36 +685,54 @@ class LocalPositionKF:
         P[X_X, X_X] = P[X_Y, X_Y] = var[0]
         P[X_VX, X_VX] = P[X_VY, X_VY] = var[3]
         P[X_VZ, X_VZ] = var[5]
-        if self._baro_initialised:
-            # z stays continuous and the baro prediction ref − z + offset unchanged. The error of
-            # this GPS altitude goes to the offset: the reference altitude defines the local frame,
-            # so z keeps its baro-relative accuracy (and z_valid does not drop at the origin).
-            new_ref = alt + x[X_Z]
-            x[X_BARO] += self._ref_alt - new_ref
-            P[X_BARO, X_BARO] += var[2]
-        else:
-            new_ref = alt
+        if not self._baro_initialised:
+            # No baro yet: GPS defines z (for good with the GPS reference, until the first baro
+            # sample with the baro reference).
+            self._ref_alt = alt
             x[X_Z] = 0.0
             P[X_Z, :] = P[:, X_Z] = 0.0
             P[X_Z, X_Z] = var[2]
             self._z_initialised = True
-        self._ref_alt = float(new_ref)
+        elif self._hgt_ref == HGT_REF_GPS:
+            # z stays continuous and the baro prediction ref − z + offset unchanged. The error of
+            # this GPS altitude goes to the offset: the reference altitude defines the local frame,
+            # so z keeps its baro-relative accuracy (and z_valid does not drop at the origin).
+            new_ref = alt + x[X_Z]
+            x[X_HGT_OFS] += self._ref_alt - new_ref
+            P[X_HGT_OFS, X_HGT_OFS] += var[2]
+            self._ref_alt = float(new_ref)
+        else:
+            self._init_gps_offset(x, P, alt, var[2])
         for g in range(4):
             self._last_fused_us[g] = t_meas
         self._update_process_noise()
         return x, P
+
+    def _init_gps_offset(self, x: np.ndarray, P: np.ndarray, alt: float, var: float) -> None:
+        """Baro reference: set the GPS altitude offset from one GPS altitude, in place. Its error is
+        this sample's noise plus z's error (e_ofs = n_gps + e_z), hence z's row in P."""
+        x[X_HGT_OFS] = alt - (self._ref_alt - x[X_Z])
+        P[X_HGT_OFS, :] = P[X_Z, :]
+        P[:, X_HGT_OFS] = P[:, X_Z]
+        P[X_HGT_OFS, X_HGT_OFS] = P[X_Z, X_Z] + var
 
     def _gps_update(
         self, x: np.ndarray, P: np.ndarray, y: np.ndarray, var: np.ndarray, t_meas: int
     ) -> tuple[np.ndarray, np.ndarray, tuple[bool, ...]]:
         """Gate each group, fuse the accepted ones jointly, reset groups rejected for too long.
 
-        Returns the inputs themselves when nothing was fused or reset.
+        The measurement rows are the states x, y, z, vx, vy, vz, except the altitude row with the
+        baro reference, which measures z − offset. Returns the inputs themselves when nothing was
+        fused or reset.
         """
         p = self.params
         n = len(y)
+        alt_offset = self._gps_alt_has_offset()
         innov = y - x[:n]
         s_diag = P.diagonal()[:n] + var[:n]
+        if alt_offset:
+            innov[_ROW_ALT] += x[X_HGT_OFS]
+            s_diag[_ROW_ALT] += P[X_HGT_OFS, X_HGT_OFS] - 2.0 * P[X_Z, X_HGT_OFS]
         norm_sq = innov * innov / s_diag
         accepted: list[int] = []
         to_reset = [False, False, False, False]
@@ -588,8 +752,14 @@ class LocalPositionKF:
 
         if accepted:
             idx = np.array(accepted)
-            pht = P[:, idx]
-            s = pht[idx, :] + np.diag(var[idx])
+            pht = P[:, idx]  # P·Hᵀ
+            col = accepted.index(_ROW_ALT) if alt_offset and _ROW_ALT in accepted else -1
+            if col >= 0:
+                pht[:, col] -= P[:, X_HGT_OFS]
+            s = pht[idx, :]  # H·P·Hᵀ
+            if col >= 0:
+                s[col, :] -= pht[X_HGT_OFS, :]
+            s += np.diag(var[idx])
             gain = np.linalg.solve(s, pht.T).T
             x = x + gain @ innov[idx]
             P = P - gain @ pht.T
@@ -606,17 +776,21 @@ class LocalPositionKF:
         for g, (rows, _) in enumerate(_GPS_GROUPS):
             if not groups[g]:
                 continue
+            self._last_fused_us[g] = t_meas
+            if g == _G_VPOS and self._gps_alt_has_offset():
+                # Baro reference: the GPS altitude has moved against the baro, not the vehicle.
+                self._init_gps_offset(x, P, self._ref_alt - y[_ROW_ALT], var[_ROW_ALT])
+                continue
             for i in rows:
                 if i == X_Z and self._baro_initialised:
                     # Keep the baro consistent with the new height (ref − z + offset unchanged).
-                    x[X_BARO] += y[i] - x[X_Z]
-                    P[X_BARO, :] = P[:, X_BARO] = 0.0
+                    x[X_HGT_OFS] += y[i] - x[X_Z]
+                    P[X_HGT_OFS, :] = P[:, X_HGT_OFS] = 0.0
                 P[i, :] = P[:, i] = 0.0
                 x[i] = y[i]
                 P[i, i] = var[i]
                 if i == X_Z and self._baro_initialised:
-                    P[X_BARO, X_BARO] = P[X_Z, X_BARO] = P[X_BARO, X_Z] = var[i]
-            self._last_fused_us[g] = t_meas
+                    P[X_HGT_OFS, X_HGT_OFS] = P[X_Z, X_HGT_OFS] = P[X_HGT_OFS, X_Z] = var[i]
         return x, P
 
     def _record_resets(self, x_before: np.ndarray, resets: tuple[bool, ...]) -> None:
@@ -625,14 +799,22 @@ class LocalPositionKF:
             self.xy_reset_counter += 1
             self.delta_xy = (float(d[X_X]), float(d[X_Y]))
         if resets[_G_VPOS]:
-            self.z_reset_counter += 1
-            self.delta_z = float(d[X_Z])
+            if self._gps_alt_has_offset():
+                self._count_alt_reset(float(d[X_HGT_OFS]))
+            else:
+                self.z_reset_counter += 1
+                self.delta_z = float(d[X_Z])
+                self._count_alt_reset(-self.delta_z)
         if resets[_G_HVEL]:
             self.vxy_reset_counter += 1
             self.delta_vxy = (float(d[X_VX]), float(d[X_VY]))
         if resets[_G_VVEL]:
             self.vz_reset_counter += 1
             self.delta_vz = float(d[X_VZ])
+
+    def _count_alt_reset(self, delta_alt: float) -> None:
+        self.alt_reset_counter += 1
+        self.delta_alt = delta_alt
 
     # ------------------------------------------------------------------ history
 
@@ -643,7 +825,7 @@ class LocalPositionKF:
         for i in range(start, len(hist)):
             step = hist[i]
             if step.prediction is not None:
-                x, P = self._propagate(x, P, *step.prediction)
+                x, P = self._propagate(x, P, step.prediction)
             elif step.baro_alt is not None:
                 x, P, _ = self._baro_update(x, P, step.baro_alt)
             step.x, step.P = x, P
@@ -659,7 +841,7 @@ class LocalPositionKF:
     def estimate(self) -> LocalPositionEstimate:
         """Snapshot of the current estimate with validity flags and accuracies."""
         p = self.params
-        x = self.x.tolist()
+        px, py, pz, vx, vy, vz, bx, by, bz, ofs = self.x.tolist()
         d = self.P.diagonal().tolist()
         eph = math.sqrt(d[X_X] + d[X_Y])
         epv = math.sqrt(d[X_Z])
@@ -671,16 +853,20 @@ class LocalPositionKF:
         v_xy_valid = origin and max(d[X_VX], d[X_VY]) <= p["LPE_VXY_PUB"] ** 2
         z_valid = self._z_initialised and epv <= p["LPE_Z_PUB"]
         last_h_aiding = max(self._last_fused_us[_G_HPOS], self._last_fused_us[_G_HVEL])
+        if self._hgt_ref == HGT_REF_GPS:
+            ref_alt, baro_offset = self._ref_alt, ofs
+        else:
+            ref_alt, baro_offset = self._ref_alt + ofs, -ofs
         if self._map is not None:
-            lat, lon = self._map.reproject(x[X_X], x[X_Y])
+            lat, lon = self._map.reproject(px, py)
             ref_lat, ref_lon = self._map.lat0_deg, self._map.lon0_deg
-            alt = self._ref_alt - x[X_Z]
+            alt = ref_alt - pz
         else:
             lat = lon = alt = ref_lat = ref_lon = math.nan
         return LocalPositionEstimate(
             timestamp_sample=t_now,
-            position=(x[X_X], x[X_Y], x[X_Z]),
-            velocity=(x[X_VX], x[X_VY], x[X_VZ]),
+            position=(px, py, pz),
+            velocity=(vx, vy, vz),
             acceleration=self._accel_ned,
             xy_valid=xy_valid,
             z_valid=z_valid,
@@ -696,7 +882,7 @@ class LocalPositionKF:
             ref_timestamp=self._ref_timestamp,
             ref_lat=ref_lat,
             ref_lon=ref_lon,
-            ref_alt=self._ref_alt,
+            ref_alt=ref_alt,
             lat=lat,
             lon=lon,
             alt=alt,
@@ -708,6 +894,8 @@ class LocalPositionKF:
             vxy_reset_counter=self.vxy_reset_counter,
             delta_vz=self.delta_vz,
             vz_reset_counter=self.vz_reset_counter,
-            accel_bias=(x[X_BX], x[X_BY], x[X_BZ]),
-            baro_offset=x[X_BARO],
+            delta_alt=self.delta_alt,
+            alt_reset_counter=self.alt_reset_counter,
+            accel_bias=(bx, by, bz),
+            baro_offset=baro_offset,
         )

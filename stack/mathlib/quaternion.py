@@ -192,3 +192,8 @@ def angle_between(p: Quat, q: Quat) -> float:
     """Smallest rotation angle (rad) taking p to q."""
     d = abs(p[0] * q[0] + p[1] * q[1] + p[2] * q[2] + p[3] * q[3])
     return 2.0 * math.acos(min(1.0, d))
+
+
+def tilt(q: Quat) -> float:
+    """Angle [rad] between the body z axis and the world z axis (0 level, π upside down)."""
+    return math.acos(max(-1.0, min(1.0, dcm_z(q)[2])))

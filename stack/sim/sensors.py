@@ -40,35 +40,12 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import NamedTuple
 
+from stack.mathlib.atmosphere import isa_pressure_pa, isa_temperature_k
 from stack.mathlib.geo import MapProjection
 from stack.mathlib.quaternion import Quat, rotate_inv
-from stack.mathlib.scalar import CONSTANTS_ONE_G
 from stack.mathlib.vector import ZERO3, Vec3
 
-ISA_SEA_LEVEL_PRESSURE_PA = 101325.0
-ISA_SEA_LEVEL_TEMPERATURE_K = 288.15
-ISA_LAPSE_RATE_K_PER_M = 0.0065
-ISA_GAS_CONSTANT_AIR = 287.05287  # J/(kg·K)
-ISA_PRESSURE_EXPONENT = CONSTANTS_ONE_G / (ISA_GAS_CONSTANT_AIR * ISA_LAPSE_RATE_K_PER_M)  # ≈ 5.2559
 KELVIN_OFFSET = 273.15
-
-
-def isa_temperature_k(altitude_msl: float) -> float:
-    """ISA troposphere temperature (K) at an altitude above mean sea level (m)."""
-    return ISA_SEA_LEVEL_TEMPERATURE_K - ISA_LAPSE_RATE_K_PER_M * altitude_msl
-
-
-def isa_pressure_pa(altitude_msl: float) -> float:
-    """ISA troposphere static pressure (Pa) at an altitude above mean sea level (m)."""
-    return ISA_SEA_LEVEL_PRESSURE_PA * (isa_temperature_k(altitude_msl) / ISA_SEA_LEVEL_TEMPERATURE_K) ** (
-        ISA_PRESSURE_EXPONENT
-    )
-
-
-def isa_altitude_m(pressure_pa: float) -> float:
-    """Altitude AMSL (m) at which the ISA troposphere has this pressure (inverse of ``isa_pressure_pa``)."""
-    ratio = (pressure_pa / ISA_SEA_LEVEL_PRESSURE_PA) ** (1.0 / ISA_PRESSURE_EXPONENT)
-    return ISA_SEA_LEVEL_TEMPERATURE_K / ISA_LAPSE_RATE_K_PER_M * (1.0 - ratio)
 
 
 class ImuSample(NamedTuple):
@@ -125,8 +102,14 @@ class ImuParams:
     temperature: float = 15.0
 
     def __post_init__(self) -> None:
-        for name in ("gyro_noise_density", "gyro_random_walk", "gyro_turn_on_bias_sigma", "accel_noise_density",
-                     "accel_random_walk", "accel_turn_on_bias_sigma"):
+        for name in (
+            "gyro_noise_density",
+            "gyro_random_walk",
+            "gyro_turn_on_bias_sigma",
+            "accel_noise_density",
+            "accel_random_walk",
+            "accel_turn_on_bias_sigma",
+        ):
             if not getattr(self, name) >= 0.0:
                 raise ValueError(f"ImuParams.{name} must be >= 0")
         if not (self.gyro_bias_correlation_time > 0.0 and self.accel_bias_correlation_time > 0.0):
@@ -349,11 +332,21 @@ class GpsModel:
     whose publication time has come, oldest first, each stamped with its measurement time.
     """
 
-    __slots__ = ("_drift", "_enabled", "_gauss", "_has_drift", "_home_alt", "_pending", "_projection",
-                 "delay_us", "params")
+    __slots__ = (
+        "_drift",
+        "_enabled",
+        "_gauss",
+        "_has_drift",
+        "_home_alt",
+        "_pending",
+        "_projection",
+        "delay_us",
+        "params",
+    )
 
-    def __init__(self, params: GpsParams, rate_hz: float, projection: MapProjection, home_alt_msl: float,
-                 rng: random.Random) -> None:
+    def __init__(
+        self, params: GpsParams, rate_hz: float, projection: MapProjection, home_alt_msl: float, rng: random.Random
+    ) -> None:
         if not rate_hz > 0.0:
             raise ValueError("rate_hz must be > 0")
         self.params = params
@@ -389,8 +382,9 @@ class GpsModel:
         publish_us = time_us + self.delay_us
         if not self._enabled:
             nan = math.nan
-            self._pending.append((publish_us, GpsSample(time_us, nan, nan, nan, (nan, nan, nan), 100.0, 100.0,
-                                                        99.99, 99.99, nan, 0, 0)))
+            self._pending.append(
+                (publish_us, GpsSample(time_us, nan, nan, nan, (nan, nan, nan), 100.0, 100.0, 99.99, 99.99, nan, 0, 0))
+            )
             return
         if self._has_drift:
             dn, de, dd = self._drift.step(gauss)
@@ -407,8 +401,25 @@ class GpsModel:
             velocity_ned[1] + sve * gauss(0.0, 1.0),
             velocity_ned[2] + svd * gauss(0.0, 1.0),
         )
-        self._pending.append((publish_us, GpsSample(time_us, lat, lon, self._home_alt - down, velocity, p.eph, p.epv,
-                                                    p.hdop, p.vdop, p.s_variance_m_s, 3, p.satellites)))
+        self._pending.append(
+            (
+                publish_us,
+                GpsSample(
+                    time_us,
+                    lat,
+                    lon,
+                    self._home_alt - down,
+                    velocity,
+                    p.eph,
+                    p.epv,
+                    p.hdop,
+                    p.vdop,
+                    p.s_variance_m_s,
+                    3,
+                    p.satellites,
+                ),
+            )
+        )
 
     def pop_due(self, time_us: int) -> GpsSample | None:
         """The oldest measurement whose publication time is at or before ``time_us``, or None."""

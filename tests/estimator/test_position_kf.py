@@ -1,4 +1,5 @@
-"""LocalPositionKF on synthetic IMU/GPS/baro data: convergence, tracking, delay, outage, resets, garbage."""
+"""LocalPositionKF on synthetic IMU/GPS/baro data: convergence, tracking, delay, outage, resets, garbage,
+and the height reference (EKF2_HGT_REF): baro-referenced z against GPS altitude noise, bias and jumps."""
 
 from __future__ import annotations
 
@@ -9,7 +10,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 import pytest
 
-from stack.estimator.position_kf import LocalPositionKF
+from stack.estimator.position_kf import HGT_REF_BARO, HGT_REF_GPS, X_HGT_OFS, X_Z, LocalPositionKF
 from stack.mathlib import quaternion as quat
 from stack.mathlib.geo import MapProjection
 from stack.mathlib.quaternion import Quat
@@ -20,6 +21,14 @@ IMU_DT_US = 4000  # 250 Hz
 GPS_EVERY = 31  # IMU steps between GPS fixes (~8 Hz)
 BARO_EVERY = 12  # ~20 Hz
 T0_US = 5_000_000
+GPS_EVERY_10HZ = 25
+
+# The values recommended for launch/sitl_quad.toml: the simulator's GPS fixes carry their true sample
+# time, and its barometer is good to 0.09 m (0.2 m leaves margin), where LPE's 3 m default assumes a
+# real sensor in prop wash.
+SIM_PROFILE = {"LPE_GPS_DELAY": 0.0, "LPE_BAR_Z": 0.2}
+
+BOTH_REFS = pytest.mark.parametrize("hgt_ref", (HGT_REF_BARO, HGT_REF_GPS), ids=("baro_ref", "gps_ref"))
 
 Trajectory = Callable[[float], tuple[np.ndarray, np.ndarray, np.ndarray]]
 
@@ -56,6 +65,19 @@ def circle_with_climb(t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return p, v, a
 
 
+def takeoff(t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """5 s on the ground, a 5 m climb in 5 s (cosine velocity profile), then hover."""
+    if t < 5.0:
+        return np.zeros(3), np.zeros(3), np.zeros(3)
+    if t > 10.0:
+        return np.array((0.0, 0.0, -5.0)), np.zeros(3), np.zeros(3)
+    s = (t - 5.0) / 5.0
+    z = -5.0 * (s - math.sin(2.0 * math.pi * s) / (2.0 * math.pi))
+    vz = -1.0 * (1.0 - math.cos(2.0 * math.pi * s))
+    az = -0.4 * math.pi * math.sin(2.0 * math.pi * s)
+    return np.array((0.0, 0.0, z)), np.array((0.0, 0.0, vz)), np.array((0.0, 0.0, az))
+
+
 def attitude(t: float) -> Quat:
     """A slowly yawing, slightly tilted vehicle (the filter must use q, whatever it is)."""
     return quat.from_euler(0.08 * math.sin(0.7 * t), -0.05 * math.cos(0.5 * t), 0.3 * t)
@@ -63,7 +85,9 @@ def attitude(t: float) -> Quat:
 
 @dataclass
 class Run:
-    """Per-IMU-step ground truth and estimates, in the filter's own local frame."""
+    """Per-prediction ground truth and estimates. ``pos_err`` is in the filter's published frame (its
+    z error is the error of the published altitude); ``z`` and ``true_down`` are raw, for heights
+    relative to the start."""
 
     t: np.ndarray
     pos_err: np.ndarray  # (n, 3)
@@ -72,6 +96,9 @@ class Run:
     xy_valid: np.ndarray
     dead_reckoning: np.ndarray
     z_valid: np.ndarray
+    z: np.ndarray  # estimated z
+    true_down: np.ndarray  # true down position about the start point
+    alt: np.ndarray  # published AMSL altitude
 
 
 def simulate(
@@ -87,18 +114,27 @@ def simulate(
     gps_outage: tuple[float, float] | None = None,
     gps_offset_ne: tuple[float, float] = (0.0, 0.0),
     gps_offset_from: float = math.inf,
+    gps_every: int = GPS_EVERY,
+    gps_alt_sigma: float = 0.5,
+    gps_alt_step: tuple[float, float] = (math.inf, 0.0),
     use_gps: bool = True,
     use_baro: bool = True,
     baro_offset: float = 1.5,
+    baro_sigma: float = 0.1,
     baro_step: tuple[float, float] = (math.inf, 0.0),
+    imu_per_predict: int = 1,
 ) -> Run:
     """Drive ``kf`` along ``trajectory`` with noisy sensors; GPS arrives ``gps_latency_s`` late and is
     stamped with its true sample time (``gps_stamp="sample"``) or its arrival time ("arrival").
     ``start_s`` continues an earlier run of the same filter; the baro jumps by ``baro_step[1]`` metres
-    from ``baro_step[0]`` seconds on."""
+    from ``baro_step[0]`` seconds on, the GPS altitude likewise with ``gps_alt_step``.
+    ``imu_per_predict`` = 3 runs the filter like its module: every 12 ms with the mean accelerometer
+    sample, then the baro and GPS samples that arrived meanwhile."""
     rng = np.random.default_rng(seed)
     truth_map = MapProjection(LAT0, LON0)
     pending: list[tuple[int, Gps]] = []
+    baro_queue: list[float] = []
+    accel_sum = [0.0, 0.0, 0.0]
     latency_us = round(gps_latency_s * 1e6)
     rows: list[tuple] = []
     first = round(start_s * 1e6 / IMU_DT_US)
@@ -109,20 +145,29 @@ def simulate(
         q = attitude(t)
         f_body = quat.rotate_inv(q, (a[0], a[1], a[2] - CONSTANTS_ONE_G))
         accel = tuple(f_body[k] + accel_bias_body[k] + rng.normal(0.0, accel_sigma) for k in range(3))
-        assert kf.predict(t_us, accel, q)
-
         if use_baro and i % BARO_EVERY == 0:
             step = baro_step[1] if t >= baro_step[0] else 0.0
-            kf.fuse_baro(ALT0 - p[2] + baro_offset + step + rng.normal(0.0, 0.1))
+            baro_queue.append(ALT0 - p[2] + baro_offset + step + rng.normal(0.0, baro_sigma))
         in_outage = gps_outage is not None and gps_outage[0] <= t < gps_outage[1]
-        if use_gps and i % GPS_EVERY == 0 and not in_outage:
+        if use_gps and i % gps_every == 0 and not in_outage:
             offset = gps_offset_ne if t >= gps_offset_from else (0.0, 0.0)
             north = p[0] + offset[0] + rng.normal(0.0, 0.2)
             east = p[1] + offset[1] + rng.normal(0.0, 0.2)
             lat, lon = truth_map.reproject(north, east)
             vel = v + rng.normal(0.0, (0.06, 0.077, 0.158))
-            gps = Gps(t_us, lat, lon, ALT0 - p[2] + rng.normal(0.0, 0.5), *vel)
+            alt_step = gps_alt_step[1] if t >= gps_alt_step[0] else 0.0
+            gps = Gps(t_us, lat, lon, ALT0 - p[2] + alt_step + rng.normal(0.0, gps_alt_sigma), *vel)
             pending.append((t_us + latency_us, gps))
+        for k in range(3):
+            accel_sum[k] += accel[k]
+        if (i + 1) % imu_per_predict != 0:
+            continue
+        mean = (accel_sum[0] / imu_per_predict, accel_sum[1] / imu_per_predict, accel_sum[2] / imu_per_predict)
+        accel_sum = [0.0, 0.0, 0.0]
+        assert kf.predict(t_us, mean, q)
+        for alt in baro_queue:
+            kf.fuse_baro(alt)
+        baro_queue.clear()
         while pending and pending[0][0] <= t_us:
             arrival, gps = pending.pop(0)
             kf.fuse_gps(gps if gps_stamp == "sample" else replace(gps, timestamp_sample=arrival))
@@ -131,9 +176,9 @@ def simulate(
         if est.xy_global:
             local_map = MapProjection(est.ref_lat, est.ref_lon)
             true_n, true_e = local_map.project(*truth_map.reproject(p[0], p[1]))
-            true_z = est.ref_alt - (ALT0 - p[2])
         else:
-            true_n, true_e, true_z = math.nan, math.nan, est.ref_alt - (ALT0 - p[2])
+            true_n, true_e = math.nan, math.nan
+        true_z = est.ref_alt - (ALT0 - p[2])
         rows.append(
             (
                 t,
@@ -147,6 +192,9 @@ def simulate(
                 est.xy_valid,
                 est.dead_reckoning,
                 est.z_valid,
+                est.position[2],
+                p[2],
+                est.alt,
             )
         )
     arr = np.array(rows, dtype=float)
@@ -158,6 +206,9 @@ def simulate(
         xy_valid=arr[:, 8].astype(bool),
         dead_reckoning=arr[:, 9].astype(bool),
         z_valid=arr[:, 10].astype(bool),
+        z=arr[:, 11],
+        true_down=arr[:, 12],
+        alt=arr[:, 13],
     )
 
 
@@ -165,31 +216,60 @@ def rms(values: np.ndarray) -> float:
     return float(np.sqrt(np.mean(values**2)))
 
 
+def height_error_since(run: Run, t_arm: float) -> np.ndarray:
+    """Error of the height change since ``t_arm`` (e.g. arming): (z − z_arm) − (z_true − z_true_arm)."""
+    i = int(np.searchsorted(run.t, t_arm))
+    return (run.z[i:] - run.z[i]) - (run.true_down[i:] - run.true_down[i])
+
+
+def flight_like(kf: LocalPositionKF, seconds: float, **kwargs) -> Run:
+    """The simulator's sensors (baro σ 0.09 m at 20 Hz, GPS altitude σ 0.5 m at 10 Hz, IMU σ 0.063 m/s²)
+    and the module's 12 ms prediction with averaged accelerometer samples, along ``takeoff``."""
+    options = {
+        "trajectory": takeoff,
+        "gps_every": GPS_EVERY_10HZ,
+        "baro_sigma": 0.09,
+        "baro_offset": 0.0,
+        "accel_sigma": 0.063,
+        "imu_per_predict": 3,
+    } | kwargs
+    return simulate(kf, seconds, **options)
+
+
 def horizontal(run: Run, t_from: float, t_to: float = math.inf) -> np.ndarray:
     sel = (run.t >= t_from) & (run.t < t_to)
     return np.hypot(run.pos_err[sel, 0], run.pos_err[sel, 1])
 
 
-def test_static_convergence() -> None:
-    kf = LocalPositionKF(LPE_GPS_DELAY=0.0)
+
+# ---------------------------------------------------------------------- both height references
+
+
+@BOTH_REFS
+def test_static_convergence(hgt_ref: int) -> None:
+    kf = LocalPositionKF(EKF2_HGT_REF=hgt_ref, LPE_GPS_DELAY=0.0)
     run = simulate(kf, 30.0, trajectory=hover)
     est = kf.estimate()
+    assert kf.hgt_ref == hgt_ref
     assert est.xy_valid and est.z_valid and est.v_xy_valid and est.v_z_valid
     assert not est.dead_reckoning
     assert est.xy_reset_counter == 1  # the origin was set once
+    assert est.z_reset_counter == 0 and est.alt_reset_counter == 0
     assert horizontal(run, 20.0).max() < 0.2
     assert np.abs(run.pos_err[run.t > 20.0, 2]).max() < 0.3
     assert rms(run.vel_err[run.t > 20.0]) < 0.05
     assert est.eph < 1.0 and est.epv < 1.0
-    # The global position is the truth; the baro offset is learned against GPS altitude.
+    # The global position is the truth; the baro offset (baro altitude − alt) is learned.
     north, east = MapProjection(LAT0, LON0).project(est.lat, est.lon)
     assert math.hypot(north, east) < 0.2
     assert est.alt == pytest.approx(ALT0, abs=0.3)
+    assert est.alt == est.ref_alt - est.position[2]
     assert est.baro_offset == pytest.approx(1.5, abs=0.3)
 
 
-def test_origin_is_set_at_the_first_good_fixes_without_a_height_jump() -> None:
-    kf = LocalPositionKF(LPE_GPS_DELAY=0.0)
+@BOTH_REFS
+def test_origin_is_set_at_the_first_good_fixes_without_a_height_jump(hgt_ref: int) -> None:
+    kf = LocalPositionKF(EKF2_HGT_REF=hgt_ref, LPE_GPS_DELAY=0.0)
     simulate(kf, 1.0, trajectory=hover, use_gps=False)
     z_before = kf.estimate().position[2]
     assert not kf.estimate().xy_global
@@ -201,13 +281,41 @@ def test_origin_is_set_at_the_first_good_fixes_without_a_height_jump() -> None:
     assert est.xy_reset_counter == 1 and est.vxy_reset_counter == 1 and est.vz_reset_counter == 1
     assert est.z_reset_counter == 0
     assert abs(est.position[2] - z_before) < 0.3
+    assert run.z_valid.all()
     # 10 fixes at ~8 Hz are needed before the origin is set.
     first_global = run.t[~np.isnan(run.pos_err[:, 0])][0]
     assert 2.1 < first_global < 2.4
 
 
-def test_tracks_a_climbing_circle() -> None:
-    kf = LocalPositionKF(LPE_GPS_DELAY=0.0)
+def test_noise_free_origin_gives_the_same_global_altitude_with_either_reference() -> None:
+    """Hand-worked: level and still, baro 500 m, GPS 503 m, no noise. The baro defines z = 0; the
+    origin puts the 3 m difference into the offset (baro reference: GPS offset +3; GPS reference:
+    baro offset −3 and ref_alt 503), so both publish alt 503 and baro_offset −3, exactly."""
+    level = quat.IDENTITY
+    still = (0.0, 0.0, -CONSTANTS_ONE_G)
+    for hgt_ref, offset_state in ((HGT_REF_BARO, 3.0), (HGT_REF_GPS, -3.0)):
+        kf = LocalPositionKF(EKF2_HGT_REF=hgt_ref, LPE_GPS_DELAY=0.0)
+        t = T0_US
+        assert kf.predict(t, still, level)
+        assert kf.fuse_baro(500.0)
+        assert kf.estimate().ref_alt == 500.0 and kf.estimate().position[2] == 0.0
+        for i in range(1, 41):
+            t += 12_000
+            assert kf.predict(t, still, level)
+            kf.fuse_baro(500.0)
+            if i % 4 == 0:
+                kf.fuse_gps(Gps(t, LAT0, LON0, 503.0, 0.0, 0.0, 0.0))
+        est = kf.estimate()
+        assert est.xy_global and est.z_global and est.z_reset_counter == 0
+        assert est.position[2] == 0.0
+        assert kf.x[X_HGT_OFS] == offset_state
+        assert est.ref_alt == 503.0 and est.alt == 503.0
+        assert est.baro_offset == -3.0
+
+
+@BOTH_REFS
+def test_tracks_a_climbing_circle(hgt_ref: int) -> None:
+    kf = LocalPositionKF(EKF2_HGT_REF=hgt_ref, LPE_GPS_DELAY=0.0)
     run = simulate(kf, 60.0, accel_bias_body=(0.05, -0.05, 0.1))
     assert run.xy_valid[run.t > 5.0].all() and run.z_valid[run.t > 5.0].all()
     assert rms(horizontal(run, 10.0)) < 0.15
@@ -224,12 +332,17 @@ def test_accel_bias_estimate_is_limited_to_ekf2_abl_lim() -> None:
     assert kf.estimate().accel_bias[2] == 0.3
 
 
-def test_delayed_gps_is_fused_at_its_sample_time() -> None:
+@BOTH_REFS
+def test_delayed_gps_is_fused_at_its_sample_time(hgt_ref: int) -> None:
     latency = 0.25  # 0.5 m of travel at 2 m/s
-    fused_at_sample = simulate(LocalPositionKF(LPE_GPS_DELAY=0.0), 40.0, gps_latency_s=latency)
-    via_parameter = simulate(LocalPositionKF(LPE_GPS_DELAY=latency), 40.0, gps_latency_s=latency, gps_stamp="arrival")
-    ignored = simulate(LocalPositionKF(LPE_GPS_DELAY=0.0), 40.0, gps_latency_s=latency, gps_stamp="arrival")
-    undelayed = simulate(LocalPositionKF(LPE_GPS_DELAY=0.0), 40.0)
+
+    def kf(delay: float) -> LocalPositionKF:
+        return LocalPositionKF(EKF2_HGT_REF=hgt_ref, LPE_GPS_DELAY=delay)
+
+    fused_at_sample = simulate(kf(0.0), 40.0, gps_latency_s=latency)
+    via_parameter = simulate(kf(latency), 40.0, gps_latency_s=latency, gps_stamp="arrival")
+    ignored = simulate(kf(0.0), 40.0, gps_latency_s=latency, gps_stamp="arrival")
+    undelayed = simulate(kf(0.0), 40.0)
     err_sample = rms(horizontal(fused_at_sample, 10.0))
     err_param = rms(horizontal(via_parameter, 10.0))
     err_ignored = rms(horizontal(ignored, 10.0))
@@ -240,21 +353,24 @@ def test_delayed_gps_is_fused_at_its_sample_time() -> None:
     assert err_ignored > 4.0 * err_sample
 
 
-def test_delayed_fusion_equals_fusing_on_time() -> None:
+@BOTH_REFS
+def test_delayed_fusion_equals_fusing_on_time(hgt_ref: int) -> None:
     """Rolling back, fusing and replaying (IMU and baro) is the exact Kalman answer: it matches a
     filter that received every fix without latency, once both have seen the same fixes."""
     latency_steps = 25  # 0.1 s, shorter than the GPS interval
     seconds = (GPS_EVERY * 40 + latency_steps + 1) * IMU_DT_US * 1e-6  # ends on an arrival
-    on_time = LocalPositionKF(LPE_GPS_DELAY=0.0)
-    late = LocalPositionKF(LPE_GPS_DELAY=0.0)
+    on_time = LocalPositionKF(EKF2_HGT_REF=hgt_ref, LPE_GPS_DELAY=0.0)
+    late = LocalPositionKF(EKF2_HGT_REF=hgt_ref, LPE_GPS_DELAY=0.0)
     simulate(on_time, seconds)
     simulate(late, seconds, gps_latency_s=latency_steps * IMU_DT_US * 1e-6)
+    assert on_time.x[X_HGT_OFS] != 0.0  # the offset state took part
     np.testing.assert_allclose(late.x, on_time.x, rtol=0.0, atol=1e-9)
     np.testing.assert_allclose(late.P, on_time.P, rtol=0.0, atol=1e-9)
 
 
-def test_gps_outage_dead_reckons_then_recovers() -> None:
-    kf = LocalPositionKF(LPE_GPS_DELAY=0.0)
+@BOTH_REFS
+def test_gps_outage_dead_reckons_then_recovers(hgt_ref: int) -> None:
+    kf = LocalPositionKF(EKF2_HGT_REF=hgt_ref, LPE_GPS_DELAY=0.0)
     run = simulate(kf, 50.0, gps_outage=(20.0, 30.0), accel_bias_body=(0.02, 0.0, 0.05))
     before = run.t < 20.0
     during = (run.t >= 20.0) & (run.t < 30.0)
@@ -277,8 +393,9 @@ def test_gps_outage_dead_reckons_then_recovers() -> None:
     assert kf.estimate().xy_reset_counter == 1
 
 
-def test_persistent_gps_jump_is_rejected_then_reset_to() -> None:
-    kf = LocalPositionKF(LPE_GPS_DELAY=0.0)
+@BOTH_REFS
+def test_persistent_gps_jump_is_rejected_then_reset_to(hgt_ref: int) -> None:
+    kf = LocalPositionKF(EKF2_HGT_REF=hgt_ref, LPE_GPS_DELAY=0.0)
     run = simulate(kf, 40.0, gps_offset_ne=(30.0, -40.0), gps_offset_from=20.0)
     # Rejected by the gate for 7 s: the estimate follows the IMU and the consistent GPS velocity.
     assert horizontal(run, 20.0, 26.9).max() < 0.5
@@ -291,47 +408,37 @@ def test_persistent_gps_jump_is_rejected_then_reset_to() -> None:
     assert np.hypot(shifted[:, 0], shifted[:, 1]).max() < 0.3
 
 
-def test_baro_only_altitude() -> None:
-    def climb(t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        # Smooth climb of 10 m between t = 5 s and t = 15 s (cosine velocity profile).
-        if t < 5.0:
-            return np.zeros(3), np.zeros(3), np.zeros(3)
-        if t > 15.0:
-            return np.array((0.0, 0.0, -10.0)), np.zeros(3), np.zeros(3)
-        s = (t - 5.0) / 10.0
-        z = -10.0 * (s - math.sin(2.0 * math.pi * s) / (2.0 * math.pi))
-        vz = -1.0 * (1.0 - math.cos(2.0 * math.pi * s))
-        az = -0.2 * math.pi * math.sin(2.0 * math.pi * s)
-        return np.array((0.0, 0.0, z)), np.array((0.0, 0.0, vz)), np.array((0.0, 0.0, az))
+def climb_10m(t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Smooth climb of 10 m between t = 5 s and t = 15 s (cosine velocity profile)."""
+    if t < 5.0:
+        return np.zeros(3), np.zeros(3), np.zeros(3)
+    if t > 15.0:
+        return np.array((0.0, 0.0, -10.0)), np.zeros(3), np.zeros(3)
+    s = (t - 5.0) / 10.0
+    z = -10.0 * (s - math.sin(2.0 * math.pi * s) / (2.0 * math.pi))
+    vz = -1.0 * (1.0 - math.cos(2.0 * math.pi * s))
+    az = -0.2 * math.pi * math.sin(2.0 * math.pi * s)
+    return np.array((0.0, 0.0, z)), np.array((0.0, 0.0, vz)), np.array((0.0, 0.0, az))
 
-    kf = LocalPositionKF()
-    run = simulate(kf, 25.0, trajectory=climb, use_gps=False, baro_offset=0.0)
+
+@BOTH_REFS
+def test_baro_only_altitude(hgt_ref: int) -> None:
+    kf = LocalPositionKF(EKF2_HGT_REF=hgt_ref)
+    run = simulate(kf, 25.0, trajectory=climb_10m, use_gps=False, baro_offset=0.0)
     est = kf.estimate()
     assert est.z_valid and est.v_z_valid
     assert not (est.xy_valid or est.v_xy_valid or est.xy_global or est.z_global or est.dead_reckoning)
-    assert math.isnan(est.lat) and math.isnan(est.ref_lat)
+    assert math.isnan(est.lat) and math.isnan(est.alt) and math.isnan(est.ref_lat)
     assert est.ref_alt == pytest.approx(ALT0, abs=0.5)  # the first baro sample
     assert np.abs(run.pos_err[:, 2]).max() < 0.5
     assert np.abs(run.vel_err[run.t > 2.0, 2]).max() < 0.3
     assert est.position[2] == pytest.approx(-10.0, abs=0.3)
-    assert est.baro_offset == 0.0  # frozen until GPS altitude defines the reference
+    assert est.baro_offset == 0.0 and kf.x[X_HGT_OFS] == 0.0  # no offset without a second height sensor
 
 
-def test_gps_alone_initialises_height_and_a_late_baro_brings_its_offset() -> None:
-    kf = LocalPositionKF(LPE_GPS_DELAY=0.0)
-    simulate(kf, 10.0, trajectory=hover, use_baro=False)
-    est = kf.estimate()
-    assert est.z_valid and est.z_global
-    assert est.alt == pytest.approx(ALT0, abs=0.5)
-    run = simulate(kf, 20.0, start_s=10.0, trajectory=hover)
-    est = kf.estimate()
-    assert est.baro_offset == pytest.approx(1.5, abs=0.3)
-    assert np.abs(run.pos_err[run.t > 20.0, 2]).max() < 0.3
-    assert est.z_reset_counter == 0
-
-
-def test_persistent_baro_step_resets_height_without_gps() -> None:
-    kf = LocalPositionKF()
+@BOTH_REFS
+def test_persistent_baro_step_resets_height_without_gps(hgt_ref: int) -> None:
+    kf = LocalPositionKF(EKF2_HGT_REF=hgt_ref)
     run = simulate(kf, 25.0, trajectory=hover, use_gps=False, baro_offset=0.0, baro_step=(10.0, 100.0))
     # The 100 m step stays beyond the 5σ gate: z holds on the IMU until the 7 s reset timeout.
     assert np.abs(run.pos_err[run.t < 16.9, 2]).max() < 1.0
@@ -339,19 +446,12 @@ def test_persistent_baro_step_resets_height_without_gps() -> None:
     assert est.z_reset_counter == 1
     assert est.delta_z == pytest.approx(-100.0, abs=1.5)
     assert est.position[2] == pytest.approx(-100.0, abs=0.5)  # now follows the (stepped) baro
+    assert est.alt_reset_counter == 0  # there is no global altitude yet
 
 
-def test_persistent_baro_step_with_gps_moves_the_offset_not_the_height() -> None:
-    kf = LocalPositionKF(LPE_GPS_DELAY=0.0)
-    run = simulate(kf, 30.0, trajectory=hover, baro_step=(10.0, 20.0))
-    est = kf.estimate()
-    assert est.z_reset_counter == 0
-    assert np.abs(run.pos_err[:, 2][run.t > 5.0]).max() < 0.4
-    assert est.baro_offset == pytest.approx(21.5, abs=0.3)
-
-
-def test_unaided_variance_stops_growing_at_p_max() -> None:
-    kf = LocalPositionKF()
+@BOTH_REFS
+def test_unaided_variance_stops_growing_at_p_max(hgt_ref: int) -> None:
+    kf = LocalPositionKF(EKF2_HGT_REF=hgt_ref)
     level = quat.IDENTITY
     t_us = 1_000_000
     for _ in range(int(600.0 / 0.05)):  # 10 min at DT_MAX_S steps, no aiding at all
@@ -363,8 +463,9 @@ def test_unaided_variance_stops_growing_at_p_max() -> None:
     assert diag.max() < 2e6  # ...and stopped near LPE's P_MAX
 
 
-def test_garbage_inputs_are_rejected_without_corrupting_the_state() -> None:
-    kf = LocalPositionKF(LPE_GPS_DELAY=0.0)
+@BOTH_REFS
+def test_garbage_inputs_are_rejected_without_corrupting_the_state(hgt_ref: int) -> None:
+    kf = LocalPositionKF(EKF2_HGT_REF=hgt_ref, LPE_GPS_DELAY=0.0)
     simulate(kf, 10.0, trajectory=hover)
     x, P = kf.x.copy(), kf.P.copy()
     t = kf.estimate().timestamp_sample
@@ -406,7 +507,240 @@ def test_garbage_inputs_are_rejected_without_corrupting_the_state() -> None:
 
 def test_set_params_validates_names_and_ranges() -> None:
     kf = LocalPositionKF()
-    kf.set_params(LPE_GPS_DELAY=5.0, LPE_BAR_Z=0.0)
+    kf.set_params(LPE_GPS_DELAY=5.0, LPE_BAR_Z=0.0, EKF2_HGT_REF=7.0)
     assert kf.params["LPE_GPS_DELAY"] == 0.4 and kf.params["LPE_BAR_Z"] == 0.01
+    assert kf.params["EKF2_HGT_REF"] == HGT_REF_GPS
+    kf.set_params(EKF2_HGT_REF=0.4)
+    assert kf.params["EKF2_HGT_REF"] == HGT_REF_BARO
     with pytest.raises(KeyError):
         kf.set_params(LPE_NOT_A_PARAM=1.0)
+
+
+def test_height_reference_is_baro_by_default_and_changes_at_reset_only() -> None:
+    kf = LocalPositionKF()
+    assert kf.hgt_ref == HGT_REF_BARO
+    kf.set_params(EKF2_HGT_REF=HGT_REF_GPS)  # PX4: reboot required
+    assert kf.hgt_ref == HGT_REF_BARO
+    kf.reset()
+    assert kf.hgt_ref == HGT_REF_GPS
+
+
+# ---------------------------------------------------------------------- GPS height reference
+
+
+def test_gps_reference_gps_alone_initialises_height_and_a_late_baro_brings_its_offset() -> None:
+    kf = LocalPositionKF(EKF2_HGT_REF=HGT_REF_GPS, LPE_GPS_DELAY=0.0)
+    simulate(kf, 10.0, trajectory=hover, use_baro=False)
+    est = kf.estimate()
+    assert est.z_valid and est.z_global
+    assert est.alt == pytest.approx(ALT0, abs=0.5)
+    ref_alt = est.ref_alt
+    run = simulate(kf, 20.0, start_s=10.0, trajectory=hover)
+    est = kf.estimate()
+    assert est.ref_alt == ref_alt  # GPS keeps defining z
+    assert est.baro_offset == pytest.approx(1.5, abs=0.3)
+    assert np.abs(run.pos_err[run.t > 20.0, 2]).max() < 0.3
+    assert est.z_reset_counter == 0
+
+
+def test_gps_reference_persistent_baro_step_moves_the_offset_not_the_height() -> None:
+    kf = LocalPositionKF(EKF2_HGT_REF=HGT_REF_GPS, LPE_GPS_DELAY=0.0)
+    run = simulate(kf, 30.0, trajectory=hover, baro_step=(10.0, 20.0))
+    est = kf.estimate()
+    assert est.z_reset_counter == 0
+    assert np.abs(run.pos_err[:, 2][run.t > 5.0]).max() < 0.4
+    assert est.baro_offset == pytest.approx(21.5, abs=0.3)
+
+
+def test_gps_reference_persistent_gps_altitude_jump_resets_z() -> None:
+    kf = LocalPositionKF(EKF2_HGT_REF=HGT_REF_GPS, **SIM_PROFILE)
+    flight_like(kf, 40.0, gps_alt_step=(20.0, 50.0))
+    est = kf.estimate()
+    assert est.z_reset_counter == 1 and est.alt_reset_counter == 1
+    assert est.delta_z == pytest.approx(-50.0, abs=1.0)
+    assert est.delta_alt == -est.delta_z
+    assert est.alt == pytest.approx(ALT0 + 5.0 + 50.0, abs=0.5)
+
+
+# ---------------------------------------------------------------------- barometer height reference
+
+
+def test_baro_reference_holds_the_height_of_a_takeoff_against_gps_altitude_noise() -> None:
+    """The flight problem: with GPS as the height reference the frame hangs on GPS altitude (σ 0.5 m)
+    and the height change since arming drifts by up to ~0.5 m through a takeoff and hover, depending
+    on the noise draw. Referenced to the baro (σ 0.09 m) it stays within 0.15 m for every draw."""
+    baro_worst, gps_worst = [], []
+    for seed in range(8):
+        baro_ref = flight_like(LocalPositionKF(**SIM_PROFILE), 40.0, seed=seed)
+        gps_ref = flight_like(LocalPositionKF(EKF2_HGT_REF=HGT_REF_GPS, **SIM_PROFILE), 40.0, seed=seed)
+        assert baro_ref.z_valid[baro_ref.t > 1.0].all()
+        baro_worst.append(np.abs(height_error_since(baro_ref, 4.0)).max())
+        gps_worst.append(np.abs(height_error_since(gps_ref, 4.0)).max())
+    assert max(baro_worst) < 0.15
+    assert max(gps_worst) > 0.4
+    assert np.mean(gps_worst) > 2.0 * np.mean(baro_worst)
+
+
+def test_baro_reference_z_does_not_see_a_constant_gps_altitude_bias() -> None:
+    """Hand-worked: with a +3 m GPS altitude bias from the start, every GPS altitude innovation
+    z − offset is unchanged once the offset has taken the bias, so z (and every other state) is the
+    same as without the bias, and the bias ends in the offset and in the global altitude."""
+    unbiased_kf = LocalPositionKF(**SIM_PROFILE)
+    biased_kf = LocalPositionKF(**SIM_PROFILE)
+    unbiased = flight_like(unbiased_kf, 30.0)
+    biased = flight_like(biased_kf, 30.0, gps_alt_step=(-math.inf, 3.0))
+    np.testing.assert_allclose(biased.z, unbiased.z, rtol=0.0, atol=1e-9)
+    assert biased_kf.x[X_HGT_OFS] - unbiased_kf.x[X_HGT_OFS] == pytest.approx(3.0, abs=1e-9)
+    assert biased_kf.x[X_HGT_OFS] == pytest.approx(3.0, abs=0.2)
+    global_alt = biased.t > 2.0
+    np.testing.assert_allclose(biased.alt[global_alt], unbiased.alt[global_alt] + 3.0, rtol=0.0, atol=1e-9)
+    est = biased_kf.estimate()
+    assert est.alt == pytest.approx(ALT0 + 5.0 + 3.0, abs=0.2)
+    assert est.baro_offset == pytest.approx(-3.0, abs=0.2)
+
+
+@BOTH_REFS
+def test_gps_altitude_jump_inside_the_gate_moves_the_offset_with_the_baro_reference(hgt_ref: int) -> None:
+    """A +3 m GPS altitude jump (inside the gate) against the same flight without it: with the baro
+    reference it goes to the offset, so alt follows GPS altitude and z moves by millimetres; with
+    the GPS reference z itself is pulled toward it."""
+    kf = LocalPositionKF(EKF2_HGT_REF=hgt_ref, **SIM_PROFILE)
+    jumped = flight_like(kf, 60.0, gps_alt_step=(20.0, 3.0))
+    steady = flight_like(LocalPositionKF(EKF2_HGT_REF=hgt_ref, **SIM_PROFILE), 60.0)
+    est = kf.estimate()
+    assert est.z_reset_counter == 0 and est.alt_reset_counter == 0
+    z_moved = np.abs(jumped.z - steady.z).max()
+    if hgt_ref == HGT_REF_BARO:
+        assert z_moved < 0.02
+        assert np.abs(height_error_since(jumped, 4.0)).max() < 0.15
+        assert kf.x[X_HGT_OFS] == pytest.approx(3.0, abs=0.2)
+        assert est.alt == pytest.approx(ALT0 + 5.0 + 3.0, abs=0.2)
+    else:
+        assert z_moved > 1.0
+
+
+def test_baro_reference_persistent_baro_step_resets_z_and_keeps_the_global_altitude() -> None:
+    kf = LocalPositionKF(LPE_GPS_DELAY=0.0)
+    run = simulate(kf, 30.0, trajectory=hover, baro_step=(10.0, 20.0))
+    est = kf.estimate()
+    # Rejected for 7 s, then z follows its reference, the baro; the GPS offset moves with z.
+    assert est.z_reset_counter == 1
+    assert est.delta_z == pytest.approx(-20.0, abs=0.5)
+    assert est.position[2] == pytest.approx(-20.0, abs=0.5)
+    assert est.alt_reset_counter == 0
+    assert np.abs(run.alt[run.t > 3.0] - ALT0).max() < 0.4
+    assert est.baro_offset == pytest.approx(21.5, abs=0.3)
+
+
+def test_baro_reference_persistent_gps_altitude_jump_resets_the_offset_not_z() -> None:
+    kf = LocalPositionKF(**SIM_PROFILE)
+    run = flight_like(kf, 40.0, gps_alt_step=(20.0, 50.0))
+    est = kf.estimate()
+    assert est.z_reset_counter == 0
+    assert np.abs(height_error_since(run, 4.0)).max() < 0.15
+    assert est.alt_reset_counter == 1
+    assert est.delta_alt == pytest.approx(50.0, abs=1.0)
+    assert kf.x[X_HGT_OFS] == pytest.approx(50.0, abs=0.5)
+    assert est.alt == pytest.approx(ALT0 + 5.0 + 50.0, abs=0.5)
+    # Before the 7 s timeout the jump is rejected: alt stays on the true altitude.
+    rejected = (run.t > 20.5) & (run.t < 26.9)
+    assert np.abs(run.alt[rejected] - (ALT0 - run.true_down[rejected])).max() < 0.3
+
+
+def test_baro_reference_gps_loss_keeps_z_on_the_baro() -> None:
+    kf = LocalPositionKF(**SIM_PROFILE)
+    run = flight_like(kf, 20.0)
+    var_offset_before = kf.P[X_HGT_OFS, X_HGT_OFS]
+    outage = flight_like(kf, 10.0, start_s=20.0, seed=1, use_gps=False)
+    var_offset_lost = kf.P[X_HGT_OFS, X_HGT_OFS]
+    after = flight_like(kf, 10.0, start_s=30.0, seed=2)
+    assert outage.dead_reckoning[outage.t > 21.2].all()
+    assert outage.z_valid.all()
+    z = np.concatenate((run.z, outage.z, after.z))
+    true_down = np.concatenate((run.true_down, outage.true_down, after.true_down))
+    t = np.concatenate((run.t, outage.t, after.t))
+    arm = int(np.searchsorted(t, 4.0))
+    assert np.abs((z[arm:] - z[arm]) - (true_down[arm:] - true_down[arm])).max() < 0.15
+    # Without GPS the offset is a random walk only: its variance grows by LPE_PN_GPS_Z²·10 s.
+    grown = var_offset_lost - var_offset_before
+    assert grown == pytest.approx(kf.params["LPE_PN_GPS_Z"] ** 2 * 10.0, rel=0.01)
+    assert kf.P[X_HGT_OFS, X_HGT_OFS] < var_offset_lost
+    est = kf.estimate()
+    assert est.z_reset_counter == 0 and est.alt_reset_counter == 0 and not est.dead_reckoning
+
+
+def test_baro_reference_late_baro_takes_over_from_gps_without_a_height_jump() -> None:
+    kf = LocalPositionKF(LPE_GPS_DELAY=0.0)
+    simulate(kf, 10.0, trajectory=hover, use_baro=False)
+    est = kf.estimate()
+    assert est.z_valid and est.z_global  # GPS stood in as the height reference
+    assert est.alt == pytest.approx(ALT0, abs=0.5)
+    z_gps = est.position[2]
+    run = simulate(kf, 20.0, start_s=10.0, trajectory=hover)
+    assert abs(run.z[0] - z_gps) < 0.01  # z is continuous at the switch
+    est = kf.estimate()
+    assert est.z_reset_counter == 0 and est.alt_reset_counter == 0
+    assert est.baro_offset == pytest.approx(1.5, abs=0.3)
+    assert est.alt == pytest.approx(ALT0, abs=0.3)
+    # The absolute altitude starts from the GPS-only estimate (0.5 m noise per fix) and only improves.
+    alt_err = np.abs(run.pos_err[run.t > 20.0, 2])
+    assert alt_err.max() < 0.4 and alt_err[-1] < 0.2
+
+
+def textbook_gps_update(
+    x: np.ndarray, P: np.ndarray, y: np.ndarray, var: list[float], rows: tuple[int, ...]
+) -> tuple[np.ndarray, np.ndarray]:
+    """Kalman update with GPS rows x, y, z − offset, vx, vy, vz (baro reference), restricted to ``rows``."""
+    H = np.zeros((6, 10))
+    H[range(6), range(6)] = 1.0
+    H[2, X_HGT_OFS] = -1.0
+    H, R, y = H[list(rows)], np.diag(var)[np.ix_(rows, rows)], y[list(rows)]
+    K = P @ H.T @ np.linalg.inv(H @ P @ H.T + R)
+    return x + K @ (y - H @ x), P - K @ H @ P
+
+
+def baro_reference_filter_and_fix(alt_above_prediction: float) -> tuple[LocalPositionKF, Gps, np.ndarray, list[float]]:
+    """A baro-referenced filter after 10 s of hover, and a fix at its current time that agrees with
+    its position and velocity and reads ``alt_above_prediction`` above its GPS altitude prediction.
+    epv is 0.05 m, so that the offset's share of the altitude innovation variance matters."""
+    kf = LocalPositionKF(LPE_GPS_Z=0.01, **SIM_PROFILE)
+    simulate(kf, 10.0, trajectory=hover)
+    est = kf.estimate()
+    x = kf.x
+    local = MapProjection(est.ref_lat, est.ref_lon)
+    lat, lon = local.reproject(x[0], x[1])
+    baro_ref_alt = est.ref_alt - x[X_HGT_OFS]
+    alt = baro_ref_alt - x[X_Z] + x[X_HGT_OFS] + alt_above_prediction
+    fix = Gps(est.timestamp_sample, lat, lon, alt, x[3], x[4], x[5], eph=0.9, epv=0.05)
+    y = np.array((*local.project(lat, lon), baro_ref_alt - alt, x[3], x[4], x[5]))
+    p = kf.params
+    var = [max(p["LPE_GPS_XY"], 0.9) ** 2] * 2 + [0.05**2] + [p["LPE_GPS_VXY"] ** 2] * 2 + [p["LPE_GPS_VZ"] ** 2]
+    return kf, fix, y, var
+
+
+def test_baro_reference_gps_update_is_the_kalman_update_with_the_offset_row() -> None:
+    """Hand-worked against the textbook update: GPS rows x, y, z − offset, vx, vy, vz."""
+    kf, fix, y, var = baro_reference_filter_and_fix(0.07)
+    x, P = kf.x.copy(), kf.P.copy()
+    assert kf.fuse_gps(fix)
+    x_expected, P_expected = textbook_gps_update(x, P, y, var, (0, 1, 2, 3, 4, 5))
+    np.testing.assert_allclose(kf.x, x_expected, rtol=0.0, atol=1e-12)
+    np.testing.assert_allclose(kf.P, P_expected, rtol=0.0, atol=1e-12)
+    assert kf.x[X_HGT_OFS] - x[X_HGT_OFS] > 0.0  # the offset took (most of) the innovation
+
+
+@pytest.mark.parametrize("factor", (0.999, 1.001))
+def test_baro_reference_gps_altitude_gate_includes_the_offset_variance(factor: float) -> None:
+    """EKF2_GPS_P_GATE on the altitude row: r² ≤ gate²·(P_zz + P_oo − 2·P_zo + R)."""
+    kf, _, _, _ = baro_reference_filter_and_fix(0.0)
+    P = kf.P
+    s_alt = P[X_Z, X_Z] + P[X_HGT_OFS, X_HGT_OFS] - 2.0 * P[X_Z, X_HGT_OFS] + 0.05**2
+    assert P[X_HGT_OFS, X_HGT_OFS] - 2.0 * P[X_Z, X_HGT_OFS] > 0.01 * s_alt  # the offset's share matters
+    kf, fix, y, var = baro_reference_filter_and_fix(factor * kf.params["EKF2_GPS_P_GATE"] * math.sqrt(s_alt))
+    x, P = kf.x.copy(), kf.P.copy()
+    assert kf.fuse_gps(fix)  # position and velocity agree, so those rows are fused in any case
+    assert kf.gps_pos_test_ratio == pytest.approx(factor**2, rel=1e-6)
+    rows = (0, 1, 2, 3, 4, 5) if factor < 1.0 else (0, 1, 3, 4, 5)
+    x_expected, P_expected = textbook_gps_update(x, P, y, var, rows)
+    np.testing.assert_allclose(kf.x, x_expected, rtol=0.0, atol=1e-12)
+    np.testing.assert_allclose(kf.P, P_expected, rtol=0.0, atol=1e-12)

@@ -9,6 +9,7 @@ import statistics
 
 import pytest
 
+from stack.mathlib.atmosphere import isa_altitude_m, isa_pressure_pa, isa_temperature_k
 from stack.mathlib.geo import MapProjection
 from stack.mathlib.quaternion import IDENTITY, from_euler
 from stack.sim.sensors import (
@@ -20,9 +21,6 @@ from stack.sim.sensors import (
     ImuParams,
     MagnetometerModel,
     MagParams,
-    isa_altitude_m,
-    isa_pressure_pa,
-    isa_temperature_k,
 )
 
 G = 9.80665

@@ -7,10 +7,11 @@ import math
 import pytest
 
 from stack.mathlib import quaternion as quat
+from stack.mathlib.atmosphere import isa_altitude_m
 from stack.mathlib.geo import EARTH_RADIUS_M
 from stack.mathlib.scalar import wrap_pi
 from stack.mathlib.vector import cross, normalized
-from stack.sim.sensors import BaroSample, GpsParams, GpsSample, ImuSample, MagSample, isa_altitude_m
+from stack.sim.sensors import BaroSample, GpsParams, GpsSample, ImuSample, MagSample
 from stack.sim.simulator import SIH_HOME, Simulator
 from stack.sim.wind import WindParams
 
