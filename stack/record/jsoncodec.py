@@ -65,7 +65,9 @@ def _scalar(t: _inspect.Type, where: str) -> tuple[str, Any]:
 
 
 def _field_plan(f: _inspect.Field, owner: str) -> tuple[dict[str, object], Any, str]:
-    """(JSON Schema of the field, the annotation the decoder reads it with, kind: scalar|float|floats)."""
+    """(JSON Schema of the field, the annotation the decoder reads it with, kind: scalar|float|floats|structs).
+
+    A list of nested Structs (a mission's items) becomes an array of objects, each with its own schema."""
     where = f"{owner}.{f.name}"
     t = f.type
     if isinstance(t, _inspect.TupleType):
@@ -77,6 +79,10 @@ def _field_plan(f: _inspect.Field, owner: str) -> tuple[dict[str, object], Any, 
         item = float | str if py is float else py
         schema = {"type": "array", "items": {"type": name}, "minItems": n, "maxItems": n}
         return schema, tuple[(item,) * n], "floats" if py is float else "scalar"
+    if isinstance(t, _inspect.ListType) and isinstance(t.item_type, _inspect.StructType):
+        nested = codec_for(t.item_type.cls)
+        item_schema = {k: v for k, v in json.loads(nested.schema).items() if k != "$schema"}
+        return {"type": "array", "items": item_schema}, list[msgspec.Raw], "structs"
     if isinstance(t, _inspect.VarTupleType | _inspect.ListType):
         name, py = _scalar(t.item_type, where)
         item = float | str if py is float else py
@@ -106,6 +112,7 @@ class JsonMessageCodec:
         "_float_fields",
         "_float_seq_fields",
         "_out_type",
+        "_struct_seq_fields",
         "field_names",
         "msg_type",
         "schema",
@@ -121,6 +128,7 @@ class JsonMessageCodec:
         read_fields: list[tuple[str, Any]] = []
         floats: list[int] = []
         float_seqs: list[int] = []
+        struct_seqs: list[tuple[int, JsonMessageCodec]] = []
         for i, f in enumerate(info.fields):
             schema, annotation, kind = _field_plan(f, owner)
             properties[f.name] = schema
@@ -129,6 +137,8 @@ class JsonMessageCodec:
                 floats.append(i)
             elif kind == "floats":
                 float_seqs.append(i)
+            elif kind == "structs":
+                struct_seqs.append((i, codec_for(f.type.item_type.cls)))
         self.msg_type = msg_type
         self.schema_name = owner
         self.field_names = tuple(f.name for f in info.fields)
@@ -146,6 +156,7 @@ class JsonMessageCodec:
         ).encode()
         self._float_fields = tuple(floats)
         self._float_seq_fields = tuple(float_seqs)
+        self._struct_seq_fields = tuple(struct_seqs)
         # Object-form twins of the array-like message: one to write (values unchecked), one to read.
         self._out_type = msgspec.defstruct(f"{owner}Json", [(n, object) for n in self.field_names], gc=False)
         self._encoder = msgspec.json.Encoder()
@@ -163,6 +174,8 @@ class JsonMessageCodec:
             total = sum(seq)
             if total - total:
                 values[i] = [nonfinite_name(v) if v - v else v for v in seq]
+        for i, nested in self._struct_seq_fields:
+            values[i] = [msgspec.Raw(nested.encode(item)) for item in values[i]]
         return self._encoder.encode(self._out_type(*values))
 
     def decode(self, data: bytes | memoryview) -> Any:
@@ -176,6 +189,8 @@ class JsonMessageCodec:
             seq = values[i]
             if str in map(type, seq):
                 values[i] = type(seq)(_nonfinite_value(v) if type(v) is str else v for v in seq)
+        for i, nested in self._struct_seq_fields:
+            values[i] = [nested.decode(raw) for raw in values[i]]
         return self.msg_type(*values)
 
 

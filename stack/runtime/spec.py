@@ -23,7 +23,7 @@ MODULES: dict[str, str] = {
     "control_allocator": "stack.mixer.module:ControlAllocatorModule",
     "commander": "stack.commander.module:CommanderModule",
     "mc_pos_control": "stack.posctl.pos_module:MulticopterPositionControl",
-    "flight_mode_manager": "stack.posctl.fmm_module:FlightModeManager",
+    "flight_mode_manager": "stack.posctl.fmm_module:FlightModeManagerModule",
     "mc_hover_thrust_estimator": "stack.posctl.hte_module:HoverThrustEstimatorModule",
     "mavlink_pixhawk": "stack.mavlink.module:PixhawkAdapterModule",
     "rerun_bridge": "stack.viz.module:RerunBridgeModule",
@@ -43,6 +43,10 @@ def load_module_class(ref: str) -> type[Module]:
         cls = getattr(importlib.import_module(mod_name), cls_name)
     except (ImportError, AttributeError) as e:
         raise ValueError(f"module '{ref}' cannot be loaded from {path}: {e}") from None
+    from stack.runtime.module import Module
+
+    if not (isinstance(cls, type) and issubclass(cls, Module)):
+        raise ValueError(f"module '{ref}': {path} is not a stack Module class")
     return cls
 
 

@@ -80,7 +80,8 @@ def test_a_float_array_with_one_non_finite_item_keeps_the_others():
 
 @pytest.mark.parametrize(("name", "msg_type"), TYPES)
 def test_schemas_use_only_what_foxglove_reads(name, msg_type):
-    """Foxglove's parseJsonSchema: object at the top, one type name per field, arrays with typed items."""
+    """Foxglove's parseJsonSchema: object at the top, one type name per field, arrays with typed items
+    (scalars, or objects for nested structs, which it reads as nested message definitions)."""
     schema = json.loads(codec_for(msg_type).schema)
     assert schema["type"] == "object" and schema["title"] == name
     assert list(schema["properties"]) == list(msg_type.__struct_fields__)
@@ -88,7 +89,10 @@ def test_schemas_use_only_what_foxglove_reads(name, msg_type):
     for field, prop in schema["properties"].items():
         assert prop["type"] in ("boolean", "string", "number", "integer", "array"), field
         if prop["type"] == "array":
-            assert prop["items"]["type"] in ("boolean", "string", "number", "integer"), field
+            items = prop["items"]
+            assert items["type"] in ("boolean", "string", "number", "integer", "object"), field
+            if items["type"] == "object":  # a list of nested structs: each item an object of scalar fields
+                assert {p["type"] for p in items["properties"].values()} <= {"boolean", "string", "number", "integer"}
         if isinstance(info[field].type, msgspec.inspect.FloatType):
             assert prop["type"] == "number"
     assert '"NaN"' in schema["description"]
