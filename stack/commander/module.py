@@ -18,10 +18,13 @@ import msgspec
 
 from stack.commander import land_detector
 from stack.commander.health import CommanderInputs
+from stack.commander.home import HomePosition as Home
 from stack.commander.land_detector import LandDetectorInputs, MulticopterLandDetector
 from stack.commander.modes import nav_state_from_custom_mode
 from stack.commander.state_machine import PARAMS as COMMANDER_PARAMS
 from stack.commander.state_machine import Commander
+from stack.commander.state_machine import NavigationRequest as Navigation
+from stack.msg.navigation import NavigationRequest
 from stack.msg.setpoints import TakeoffStatus
 from stack.msg.system import (
     HomePosition,
@@ -65,6 +68,38 @@ def offboard_control_flags(ocm: OffboardControlMode) -> dict[str, bool]:
     return flags
 
 
+def navigation_request(nav: Navigation) -> NavigationRequest:
+    north, east, down, yaw = nav.reposition if nav.reposition is not None else (math.nan,) * 4
+    return NavigationRequest(
+        takeoff_altitude=nav.takeoff_altitude,
+        takeoff_yaw=nav.takeoff_yaw,
+        reposition=(north, east, down),
+        reposition_yaw=yaw,
+        reposition_speed=nav.reposition_speed,
+        reposition_counter=nav.reposition_counter,
+        mission_start_index=nav.mission_start_index,
+        mission_start_counter=nav.mission_start_counter,
+    )
+
+
+def home_position_message(home: Home, update_count: int, now: int) -> HomePosition:
+    global_valid = home.global_valid
+    return HomePosition(
+        timestamp=now,
+        lat=home.lat,
+        lon=home.lon,
+        alt=home.alt,
+        x=home.x,
+        y=home.y,
+        z=home.z,
+        yaw=home.yaw,
+        valid_alt=math.isfinite(home.alt),
+        valid_hpos=global_valid,
+        valid_lpos=True,
+        update_count=update_count,
+    )
+
+
 class CommanderModule(Module):
     NAME = "commander"
     DESCRIPTION = "Arming, flight modes, commands and failsafes (PX4 commander)"
@@ -93,17 +128,21 @@ class CommanderModule(Module):
             "trajectory_setpoint",
             "hover_thrust_estimate",
             "takeoff_status",
+            "mission_result",
         ):
             self.subscribe(topic)
         for topic in ("actuator_armed", "vehicle_status", "vehicle_control_mode", "vehicle_command_ack"):
             self.advertise(topic)
         self.advertise("home_position")
         self.advertise("vehicle_land_detected")
+        self.advertise("navigation_request")
         self.commander = Commander(self.params.values())
         self.land_detector = MulticopterLandDetector(self.params.values())
         self.land = VehicleLandDetected()
         self._last_publish = 0
+        self._home: Home | None = None
         self._home_count = 0
+        self._navigation: NavigationRequest | None = None
         self._last_gcs = 0
         self._offboard_flags: dict[str, bool] | None = None
 
@@ -115,9 +154,11 @@ class CommanderModule(Module):
         now = self.now_us()
         self.land = VehicleLandDetected(**self.land_detector.update(now, self._land_inputs())._asdict())
         self.publish("vehicle_land_detected", self.land)
+        inputs = self._inputs(now)
+        self.commander.set_inputs(now, inputs)
         for cmd in self.take("vehicle_command"):
             self._handle(cmd, now)
-        out = self.commander.update(now, self._inputs(now))
+        out = self.commander.update(now, inputs)
         for event in out.events:
             self.log.info("%s", event)
         control = out.vehicle_control_mode
@@ -131,35 +172,25 @@ class CommanderModule(Module):
                 control = msgspec.structs.replace(
                     VehicleControlMode(flag_armed=control.flag_armed, source_id=control.source_id), **flags
                 )
-        if changed or now - self._last_publish >= REPUBLISH_US:
+        navigation = navigation_request(out.navigation)
+        home_changed = out.home != self._home
+        republish = now - self._last_publish >= REPUBLISH_US
+        if home_changed:
+            self._home = out.home
+            self._home_count += 1
+        # Late subscribers (a CLI, a restarted module) learn the state within REPUBLISH_US.
+        if changed or home_changed or navigation != self._navigation or republish:
             self._last_publish = now
-            # PX4 publishes actuator_armed before vehicle_status.
+            self._navigation = navigation
+            # PX4 publishes actuator_armed before vehicle_status; the navigator reads its request with the mode.
             self.publish("actuator_armed", msgspec.structs.replace(out.actuator_armed, timestamp=now))
+            self.publish("navigation_request", msgspec.structs.replace(navigation, timestamp=now))
             self.publish("vehicle_status", msgspec.structs.replace(out.vehicle_status, timestamp=now))
             self.publish("vehicle_control_mode", msgspec.structs.replace(control, timestamp=now))
-        if out.home is not None and out.home.update_count != self._home_count:
-            self._home_count = out.home.update_count
-            h = out.home
-            self.publish(
-                "home_position",
-                HomePosition(
-                    lat=h.lat,
-                    lon=h.lon,
-                    alt=h.alt,
-                    x=h.x,
-                    y=h.y,
-                    z=h.z,
-                    yaw=h.yaw,
-                    valid_alt=True,
-                    valid_hpos=True,
-                    valid_lpos=True,
-                    update_count=h.update_count,
-                ),
-            )
+            if self._home is not None:
+                self.publish("home_position", home_position_message(self._home, self._home_count, now))
 
     def _handle(self, cmd: VehicleCommand, now: int) -> None:
-        if cmd.from_external:
-            self._last_gcs = max(self._last_gcs, now)
         if self._wants_offboard(cmd) and self._offboard(now) is None:
             ack = VehicleCommandAck(
                 command=cmd.command,
@@ -205,6 +236,7 @@ class CommanderModule(Module):
         gps = latest("sensor_gps")
         battery = latest("battery_status")
         telemetry = latest("telemetry_status")
+        mission = latest("mission_result")
         if telemetry is not None and (telemetry.heartbeat_type_gcs or telemetry.heartbeat_type_onboard_controller):
             self._last_gcs = max(self._last_gcs, telemetry.timestamp)
         imu_alive = imu is not None and imu.gyro_rate_hz > 0.0
@@ -223,6 +255,8 @@ class CommanderModule(Module):
             maybe_landed=land.maybe_landed,
             battery_warning=battery.warning if battery is not None else 0,
             last_gcs_heartbeat_us=self._last_gcs,
+            mission_count=mission.seq_total if mission is not None and mission.valid else 0,
+            mission_finished=mission is not None and mission.valid and mission.finished,
         )
 
     def _land_inputs(self) -> LandDetectorInputs:

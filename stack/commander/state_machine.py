@@ -30,11 +30,13 @@ Commands (MAVLink ids; PX4 encodings):
   Hold. Our extension DO_REPOSITION_LOCAL (100192, PX4-internal id range): the same with param5/6/7 the
   local north, east, down [m]. Refused when not flying or outside the geofence.
 * MISSION_START (300): param1 first item (−1: current); needs a valid mission; arms when disarmed.
+* INJECT_FAILURE (420): param1 the MAVLink FAILURE_UNIT, param2 the FAILURE_TYPE; accepted when
+  SYS_FAILURE_EN is 1 (the simulator acts on it, as PX4's simulated sensors do), denied otherwise.
 
 Modes follow PX4's rules: disarmed, any mode may be selected (except Land/Return, which could not arm);
 armed, only a mode whose requirements are met; Takeoff only from the ground; Mission only with a mission.
-Home is set on arming from the local position (or, if there was none, when one first appears on the
-ground). Takeoff ends in Hold (COM_TAKEOFF_ACT 0) or Mission (1) once within NAV_MC_ALT_RAD of the takeoff
+Home is set from the local position when one first appears on the ground, and again on arming.
+Takeoff ends in Hold (COM_TAKEOFF_ACT 0) or Mission (1) once within NAV_MC_ALT_RAD of the takeoff
 altitude. Auto-disarm: COM_DISARM_LAND seconds after landing (not mid-mission), COM_DISARM_PRFLT seconds
 after arming without taking off. The command link counts as lost COM_DL_LOSS_T seconds after the last
 ground-station/companion message, once one has been seen.
@@ -97,6 +99,7 @@ OWN_PARAMS: tuple[Param, ...] = (
     Param("SYS_HAS_BARO", 1, 0, 1, "", "A barometer is fitted and required to arm", choices=(0, 1)),
     Param("SYS_HAS_MAG", 1, 0, 1, "", "A magnetometer is fitted and required to arm", choices=(0, 1)),
     Param("SYS_HAS_GPS", 1, 0, 1, "", "A GNSS receiver is fitted", choices=(0, 1)),
+    Param("SYS_FAILURE_EN", 0, 0, 1, "", "Accept failure injection commands (simulation)", choices=(0, 1)),
     Param("MIS_TAKEOFF_ALT", 2.5, 0.0, None, "m", "Takeoff altitude above home when a takeoff gives none"),
     Param("NAV_MC_ALT_RAD", 0.8, 0.05, 200.0, "m", "Vertical acceptance radius (takeoff altitude reached)"),
 )
@@ -223,6 +226,7 @@ class Commander:
             CMD.VEHICLE_CMD_DO_REPOSITION: self._cmd_reposition_global,
             VEHICLE_CMD_DO_REPOSITION_LOCAL: self._cmd_reposition_local,
             CMD.VEHICLE_CMD_MISSION_START: self._cmd_mission_start,
+            CMD.VEHICLE_CMD_INJECT_FAILURE: self._cmd_inject_failure,
         }
         self.set_params(params or {})
         self._takeoff_altitude = float(self._p["MIS_TAKEOFF_ALT"])
@@ -270,6 +274,12 @@ class Commander:
         self._step(now_us)
         return self._outputs()
 
+    def set_inputs(self, now_us: int, inputs: CommanderInputs) -> None:
+        """Take the latest inputs before handling this cycle's commands (``update`` then runs the cycle),
+        so a command is judged on what is known now, not at the previous cycle."""
+        self._inputs = inputs
+        self._failing = failing_requirements(now_us, inputs, self._health, self._home is not None)
+
     def handle_command(self, cmd: VehicleCommand, now_us: int) -> VehicleCommandAck:
         """Execute a ``vehicle_command`` and return its acknowledgement."""
         handler = self._handlers.get(cmd.command)
@@ -303,7 +313,7 @@ class Commander:
         if armed and not inp.landed and not self._have_taken_off:
             self._have_taken_off = True
             self._takeoff_time_us = now_us
-        if armed and self._home is None and position_known and inp.landed and lpos is not None:
+        if self._home is None and position_known and inp.landed and lpos is not None:
             self._set_home(lpos)
             self._failing &= ~Requirement.HOME
 
@@ -645,6 +655,15 @@ class Commander:
             self._mission_start_index = round(first)
             self._mission_start_counter += 1
         return verdict
+
+    def _cmd_inject_failure(self, cmd: VehicleCommand, now_us: int) -> _Verdict:
+        if not self._p["SYS_FAILURE_EN"]:
+            return _denied("Failure injection is disabled (SYS_FAILURE_EN 0)")
+        for index, value in ((1, cmd.param1), (2, cmd.param2)):
+            if not math.isfinite(value) or value != round(value) or value < 0:
+                return _denied(f"Failure injection: param{index} must be a non-negative integer, got {value:g}", index)
+        self._events.append(f"Failure injected: unit {round(cmd.param1)}, type {round(cmd.param2)}")
+        return _ACCEPTED
 
     # ------------------------------------------------------------------ outputs
 

@@ -108,6 +108,11 @@ class MissionTracker:
     def current(self) -> MissionItem | None:
         return self._items[self._seq] if self._items else None
 
+    @property
+    def progress(self) -> MissionProgress:
+        """The state as of the last ``start`` or ``update``."""
+        return self._progress()
+
     def start(
         self, now_us: int, position: Vec3, first_index: int = 0, home_ned: Vec3 = (0.0, 0.0, 0.0)
     ) -> MissionProgress:

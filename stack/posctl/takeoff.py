@@ -191,3 +191,16 @@ class Takeoff:
         if self._state == TakeoffState.RAMPUP:
             return TakeoffSetpoint(position, velocity, (acceleration[0], acceleration[1], math.nan), False)
         return TakeoffSetpoint(position, velocity, acceleration, False)
+
+
+TAKEOFF_MIN_ALTITUDE = 0.2
+"""A position setpoint this far above the vehicle [m] asks for a takeoff (PX4 ``FlightTask::_checkTakeoff``)."""
+TAKEOFF_MIN_CLIMB_RATE = 0.3
+"""An upward velocity setpoint faster than this [m/s] asks for a takeoff."""
+
+
+def wants_takeoff(position_sp_z: float, velocity_sp_z: float, z: float) -> bool:
+    """Whether a setpoint asks to leave the ground (NED: up is negative; NaN setpoints ask nothing)."""
+    by_position = math.isfinite(position_sp_z) and math.isfinite(z) and position_sp_z < z - TAKEOFF_MIN_ALTITUDE
+    by_velocity = math.isfinite(velocity_sp_z) and velocity_sp_z < -TAKEOFF_MIN_CLIMB_RATE
+    return by_position or by_velocity

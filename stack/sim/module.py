@@ -1,17 +1,21 @@
 """The simulator module: the default plant, and the lockstep coordinator of a simulated stack.
 
 Each step it reads the latest ``actuator_outputs_sim``, advances the physics by one IMU period and
-publishes the sensors that fell due (accelerometer before gyro, the estimator's trigger) and the
-ground truth. In lockstep it drives simulated time; with ``--realtime`` it is paced by the wall clock.
+publishes the sensors that fell due (accelerometer before gyro, the estimator's trigger), the
+ground truth and, at 10 Hz, the battery (PX4's battery simulator: drains while armed). In lockstep it drives
+simulated time; with ``--realtime`` it is paced by the wall clock.
 """
 
 from __future__ import annotations
 
 import math
 
+from stack.commander import battery
+from stack.commander.battery import BatteryModel
 from stack.mathlib.vector import Vec3
 from stack.msg.sensors import SensorAccel, SensorBaro, SensorGps, SensorGyro, SensorMag
 from stack.msg.simulation import SimGroundtruth
+from stack.msg.system import BatteryStatus, VehicleCommand
 from stack.runtime.module import Arg, Module
 from stack.runtime.params import Param
 from stack.sim.sensors import BaroSample, GpsSample, ImuSample, MagSample
@@ -20,6 +24,7 @@ from stack.sim.wind import WindParams
 
 # Device ids as PX4's simulated drivers report them (SIH's IMU id; the others distinct).
 IMU_DEVICE_ID = 1310988
+BATTERY_PERIOD_US = 100_000
 MAG_DEVICE_ID = 197388
 BARO_DEVICE_ID = 6620172
 GPS_DEVICE_ID = 11469064
@@ -47,6 +52,7 @@ class SimulatorModule(Module):
         Param("SIM_WIND_DIR", 0.0, 0.0, 360.0, "deg", "Direction the wind blows from (ArduPilot SIM_WIND_DIR)"),
         Param("SIM_WIND_GUST", 0.0, 0.0, 20.0, "m/s", "Horizontal gust standard deviation"),
         Param("SIM_WIND_GUST_T", 2.0, 0.1, 60.0, "s", "Gust correlation time"),
+        *battery.PARAMS,
     )
 
     def __init__(self, rt) -> None:
@@ -66,8 +72,13 @@ class SimulatorModule(Module):
         self.sim.set_gps_enabled(int(p["SIM_GPS_USED"]) >= 4)
         self.motor_count = self.sim.model.rotor_count
         self.subscribe("actuator_outputs_sim")
+        self.subscribe("actuator_armed")
+        self.subscribe("vehicle_command", queue=True)
         for topic in ("sensor_accel", "sensor_gyro", "sensor_mag", "sensor_baro", "sensor_gps", "sim_groundtruth"):
             self.advertise(topic)
+        self.advertise("battery_status")
+        self.battery = BatteryModel(self.params.values())
+        self._battery_due_us = 0
         self.epoch_us: int | None = None
         self.log.info(
             "vehicle %s: %d rotors, %.3f kg, hover thrust fraction %.3f",
@@ -96,9 +107,27 @@ class SimulatorModule(Module):
             self.log.info("GPS %s", "restored" if enabled else "lost (fewer than 4 satellites)")
         if changed & {"SIM_WIND_SPD", "SIM_WIND_DIR", "SIM_WIND_GUST", "SIM_WIND_GUST_T"}:
             self.sim.set_wind(self._wind_params())
+        if changed & {p.name for p in battery.PARAMS}:
+            self.battery.set_params(self.params.values())
 
     def step_period_us(self) -> int:
         return self.sim.imu_period_us
+
+    def _inject_failures(self) -> None:
+        """PX4's ``failure`` command (MAV_CMD_INJECT_FAILURE) as the simulated sensors implement it: GPS off/ok."""
+        for cmd in self.take("vehicle_command"):
+            if cmd.command != VehicleCommand.VEHICLE_CMD_INJECT_FAILURE:
+                continue
+            unit, kind = cmd.param1, cmd.param2
+            if unit != VehicleCommand.FAILURE_UNIT_SENSOR_GPS or kind not in (
+                VehicleCommand.FAILURE_TYPE_OK,
+                VehicleCommand.FAILURE_TYPE_OFF,
+            ):
+                self.log.warning("failure injection unit %g type %g is not simulated (only GPS off/ok)", unit, kind)
+                continue
+            enabled = kind == VehicleCommand.FAILURE_TYPE_OK
+            self.sim.set_gps_enabled(enabled)
+            self.log.info("GPS %s (failure injection)", "restored" if enabled else "off")
 
     def motor_commands(self) -> tuple[float, ...]:
         outputs = self.latest("actuator_outputs_sim")
@@ -113,6 +142,7 @@ class SimulatorModule(Module):
             # Simulated sample times map onto the stack's clock: identical in lockstep, wall time otherwise.
             self.epoch_us = now - (self.sim.time_us + self.sim.imu_period_us)
         epoch = self.epoch_us
+        self._inject_failures()
         for sample in self.sim.advance(self.motor_commands()):
             if isinstance(sample, ImuSample):
                 self._publish_imu(sample, epoch)
@@ -123,6 +153,9 @@ class SimulatorModule(Module):
             elif isinstance(sample, GpsSample):
                 self._publish_gps(sample, epoch)
         self._publish_truth(epoch)
+        if self.sim.time_us >= self._battery_due_us:
+            self._battery_due_us = self.sim.time_us + BATTERY_PERIOD_US
+            self._publish_battery(epoch)
 
     def _publish_imu(self, s: ImuSample, epoch: int) -> None:
         t = epoch + s.time_us
@@ -179,6 +212,11 @@ class SimulatorModule(Module):
                 satellites_used=s.satellites,
             ),
         )
+
+    def _publish_battery(self, epoch: int) -> None:
+        armed = self.latest("actuator_armed")
+        state = self.battery.update(BATTERY_PERIOD_US * 1e-6, armed is not None and armed.armed)
+        self.publish("battery_status", BatteryStatus(**state._asdict()))
 
     def _publish_truth(self, epoch: int) -> None:
         t = self.sim.truth()

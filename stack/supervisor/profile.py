@@ -36,6 +36,16 @@ def launch_dirs() -> list[Path]:
         if d.is_dir() and d not in seen:
             seen.append(d)
     return seen
+
+
+def find_launch_file(relative: str) -> Path:
+    """A file shipped under launch/ (e.g. ``missions/box.plan``), from the first launch directory holding it."""
+    for d in launch_dirs():
+        if (d / relative).is_file():
+            return d / relative
+    raise FileNotFoundError(f"launch/{relative} not found in {', '.join(str(d) for d in launch_dirs())}")
+
+
 RESTART_POLICIES = ("no", "on-failure", "always")
 FLAGS = ("lockstep", "realtime", "plot", "record")
 

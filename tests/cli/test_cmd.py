@@ -1,12 +1,13 @@
-"""`stack cmd` against the default profile: the commander's acknowledgements, refusals with their reasons,
-and input refused before anything is sent. The profile has no position estimate and no navigator."""
+"""`stack cmd` against the first-flight stack (the default profile without position estimation and
+navigation): the commander's acknowledgements, refusals with their reasons, and input refused before
+anything is sent."""
 
 import json
 import time
 
 import pytest
 
-from tests.support.harness import REPO, RunningStack, run_cli, wait_no_processes
+from tests.support.harness import REPO, RunningStack, attitude_only_profile, run_cli, wait_no_processes
 
 NOWHERE = "tcp/127.0.0.1:9"
 """An endpoint nothing listens on: a command that reaches for the bus cannot succeed there."""
@@ -14,8 +15,9 @@ NOWHERE = "tcp/127.0.0.1:9"
 
 @pytest.fixture(scope="module")
 def stack(tmp_path_factory):
-    home = tmp_path_factory.mktemp("cmd") / "home"
-    running = RunningStack(home, REPO / "launch" / "sitl_quad.toml", "--quiet")
+    tmp = tmp_path_factory.mktemp("cmd")
+    home = tmp / "home"
+    running = RunningStack(home, attitude_only_profile(tmp / "first_flight.toml"), "--quiet")
     running.wait_up()
     wait_sim_time(running, 10.0)
     yield running

@@ -1,4 +1,4 @@
-"""`stack cmd` with a stand-in navigator and a fixed position estimate added to the default profile: the
+"""`stack cmd` with a stand-in navigator and a fixed position estimate added to the first-flight stack: the
 mission upload protocol end to end, missions placed about the vehicle's home, and --wait."""
 
 import json
@@ -10,7 +10,7 @@ from stack.mathlib.geo import MapProjection
 from stack.mission.items import Mission
 from stack.mission.transfer import mission_from_message
 from stack.msg import navigation
-from tests.support.harness import REPO, RunningStack, wait_no_processes, write_profile
+from tests.support.harness import REPO, RunningStack, attitude_only_profile, wait_no_processes
 
 PLAN = REPO / "tests" / "mission" / "data" / "square.plan"
 PLANNED_HOME = (47.3977419, 8.5455938, 488.0)
@@ -23,10 +23,9 @@ def stack(tmp_path_factory):
     tmp = tmp_path_factory.mktemp("cmd_mission")
     received = tmp / "received.jsonl"
     lat, lon, alt = VEHICLE
-    profile = write_profile(
+    profile = attitude_only_profile(
         tmp / "with_navigator.toml",
-        (REPO / "launch" / "sitl_quad.toml").read_text()
-        + f"""
+        f"""
 [[module]]
 module = "tests.cli.standins:FixedPosition"
 args = {{ lat = {lat}, lon = {lon}, alt = {alt} }}

@@ -10,6 +10,7 @@ import subprocess
 import sys
 import threading
 import time
+import tomllib
 from pathlib import Path
 
 import psutil
@@ -178,3 +179,36 @@ module = "tests.support.modules:Pacer"
 {extra}
 """,
     )
+
+
+AUTONOMY_MODULES = ("local_position_estimator", "mc_hover_thrust_estimator", "flight_mode_manager", "mc_pos_control")
+
+
+def attitude_only_profile(path: Path, extra: str = "") -> Path:
+    """The default profile without position estimation, position control and navigation (the first-flight
+    stack), keeping only the shared parameters its modules still have; ``extra`` is appended."""
+    from stack.runtime.spec import load_module_class
+
+    doc = tomllib.loads((REPO / "launch" / "sitl_quad.toml").read_text())
+    doc["module"] = [m for m in doc["module"] if m["module"] not in AUTONOMY_MODULES]
+    declared = {p.name for m in doc["module"] for p in load_module_class(m["module"]).PARAMS}
+    doc["params"] = {k: v for k, v in doc["params"].items() if k in declared}
+    return write_profile(path, toml_text(doc) + extra)
+
+
+def toml_text(doc: dict) -> str:
+    """TOML for a profile-shaped document: tables of scalars, inline tables, and an array of tables."""
+
+    def value(v: object) -> str:
+        if isinstance(v, dict):
+            return "{ " + ", ".join(f"{k} = {value(x)}" for k, x in v.items()) + " }"
+        return json.dumps(v)
+
+    lines: list[str] = []
+    for name, table in doc.items():
+        rows = table if isinstance(table, list) else [table]
+        for row in rows:
+            lines.append(f"[[{name}]]" if isinstance(table, list) else f"[{name}]")
+            lines.extend(f"{k} = {value(v)}" for k, v in row.items())
+            lines.append("")
+    return "\n".join(lines)

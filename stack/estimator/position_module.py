@@ -1,0 +1,136 @@
+"""local_position_estimator: the position Kalman filter as a module, at a third of the IMU rate.
+
+Like EKF2's IMU down-sampling, it runs on a timer (every 12 ms, three 250 Hz IMU periods) and
+predicts with the mean specific force of the accelerometer samples since its previous run, rotated
+by the latest attitude estimate (which carries the magnetometer's heading), then fuses the
+barometer and GPS samples that arrived. It publishes ``vehicle_local_position`` (the position
+controller's trigger) and ``vehicle_global_position``.
+"""
+
+from __future__ import annotations
+
+import math
+
+from stack.estimator.position_kf import PARAMS as KF_PARAMS
+from stack.estimator.position_kf import LocalPositionEstimate, LocalPositionKF
+from stack.mathlib.atmosphere import isa_altitude_m
+from stack.mathlib.quaternion import yaw
+from stack.msg.estimation import VehicleGlobalPosition, VehicleLocalPosition
+from stack.runtime.module import Module, Timer
+from stack.runtime.params import Param
+
+PERIOD_US = 12_000
+_UNITS = {"LPE_GPS_DELAY": "s", "EKF2_ABL_LIM": "m/s^2", "EKF2_ABIAS_INIT": "m/s^2"}
+PARAMS = tuple(
+    Param(name, default, lo, hi, _UNITS.get(name, ""), "See stack/estimator/position_kf.py")
+    for name, (default, lo, hi) in KF_PARAMS.items()
+)
+
+
+def local_position_message(est: LocalPositionEstimate, heading: float, now_us: int) -> VehicleLocalPosition:
+    x, y, z = est.position
+    vx, vy, vz = est.velocity
+    ax, ay, az = est.acceleration
+    return VehicleLocalPosition(
+        timestamp=now_us,
+        timestamp_sample=est.timestamp_sample,
+        xy_valid=est.xy_valid,
+        z_valid=est.z_valid,
+        v_xy_valid=est.v_xy_valid,
+        v_z_valid=est.v_z_valid,
+        x=x,
+        y=y,
+        z=z,
+        delta_xy=est.delta_xy,
+        xy_reset_counter=est.xy_reset_counter % 256,
+        delta_z=est.delta_z,
+        z_reset_counter=est.z_reset_counter % 256,
+        vx=vx,
+        vy=vy,
+        vz=vz,
+        z_deriv=vz,
+        delta_vxy=est.delta_vxy,
+        vxy_reset_counter=est.vxy_reset_counter % 256,
+        delta_vz=est.delta_vz,
+        vz_reset_counter=est.vz_reset_counter % 256,
+        ax=ax,
+        ay=ay,
+        az=az,
+        heading=heading,
+        heading_good_for_control=math.isfinite(heading),
+        xy_global=est.xy_global,
+        z_global=est.z_global,
+        ref_timestamp=est.ref_timestamp,
+        ref_lat=est.ref_lat,
+        ref_lon=est.ref_lon,
+        ref_alt=est.ref_alt,
+        eph=est.eph,
+        epv=est.epv,
+        evh=est.evh,
+        evv=est.evv,
+        dead_reckoning=est.dead_reckoning,
+    )
+
+
+def global_position_message(est: LocalPositionEstimate, now_us: int) -> VehicleGlobalPosition:
+    return VehicleGlobalPosition(
+        timestamp=now_us,
+        timestamp_sample=est.timestamp_sample,
+        lat=est.lat,
+        lon=est.lon,
+        alt=est.alt,
+        alt_ellipsoid=est.alt,
+        lat_lon_valid=est.xy_global and est.xy_valid,
+        alt_valid=est.z_valid,
+        delta_alt=est.delta_z,
+        lat_lon_reset_counter=est.xy_reset_counter % 256,
+        alt_reset_counter=est.z_reset_counter % 256,
+        eph=est.eph,
+        epv=est.epv,
+        dead_reckoning=est.dead_reckoning,
+    )
+
+
+class LocalPositionEstimatorModule(Module):
+    NAME = "local_position_estimator"
+    DESCRIPTION = "Position and velocity Kalman filter fusing IMU, GPS and barometer (PX4 LPE)"
+    TRIGGER = Timer(1e6 / PERIOD_US)
+    DT_RANGE = (0.002, 0.05)
+    PARAMS = PARAMS
+
+    def __init__(self, rt) -> None:
+        super().__init__(rt)
+        self.subscribe("sensor_accel", queue=True)
+        self.subscribe("sensor_baro", queue=True)
+        self.subscribe("sensor_gps", queue=True)
+        self.subscribe("vehicle_attitude")
+        self.advertise("vehicle_local_position")
+        self.advertise("vehicle_global_position")
+        self.kf = LocalPositionKF(**self._kf_params())
+
+    def _kf_params(self) -> dict[str, float]:
+        return {name: float(self.params[name]) for name in KF_PARAMS}
+
+    def on_params_changed(self, changed: set[str]) -> None:
+        self.kf.set_params(**self._kf_params())
+
+    def run(self, msg: None, dt: float) -> None:
+        attitude = self.latest("vehicle_attitude")
+        samples = self.take("sensor_accel")
+        if attitude is None or not samples:
+            for topic in ("sensor_baro", "sensor_gps"):
+                self.take(topic)
+            return
+        n = len(samples)
+        mean = (sum(s.x for s in samples) / n, sum(s.y for s in samples) / n, sum(s.z for s in samples) / n)
+        if not self.kf.predict(samples[-1].timestamp_sample, mean, attitude.q):
+            self.reject("accelerometer sample not usable for prediction (non-finite, out of range or not advancing)")
+        for baro in self.take("sensor_baro"):
+            if baro.pressure > 0.0:
+                self.kf.fuse_baro(isa_altitude_m(baro.pressure))
+        for gps in self.take("sensor_gps"):
+            self.kf.fuse_gps(gps)
+        est = self.kf.estimate()
+        now = self.now_us()
+        self.publish("vehicle_local_position", local_position_message(est, yaw(attitude.q), now))
+        self.publish("vehicle_global_position", global_position_message(est, now))

@@ -1,0 +1,57 @@
+"""Checks a mission must pass before the navigator accepts it (PX4 navigator ``MissionFeasibilityChecker``).
+
+A mission is refused, with the item and the reason, when it is empty, when an item that flies to a
+position has no usable position, when a waypoint lies outside the geofence cylinder about home
+(GF_MAX_HOR_DIST, GF_MAX_VER_DIST; 0 disables a limit), when an item follows a landing, or when a
+position lies further than MIS_DIST_1WP from home (the first waypoint) or MIS_DIST_WPS from the
+previous one (PX4's sanity limits against a mistyped coordinate).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+
+from stack.mission.items import MAV_CMD_NAV_LAND, MAV_CMD_NAV_TAKEOFF, Mission
+from stack.runtime.params import Param
+
+PARAMS: tuple[Param, ...] = (
+    Param("MIS_DIST_1WP", 900.0, 0.0, 10000.0, "m", "Largest distance of the first waypoint from home (0: no limit)"),
+    Param("MIS_DIST_WPS", 900.0, 0.0, 10000.0, "m", "Largest distance between waypoints (0: no limit)"),
+)
+DEFAULTS: dict[str, object] = {p.name: p.default for p in PARAMS} | {"GF_MAX_HOR_DIST": 0.0, "GF_MAX_VER_DIST": 0.0}
+
+
+def mission_problem(mission: Mission, params: Mapping[str, object]) -> str:
+    """Why the mission cannot be flown, or "" when it can. Positions are local NED about home."""
+    p = {**DEFAULTS, **params}
+    if len(mission) == 0:
+        return "the mission has no items"
+    max_hor, max_ver = float(p["GF_MAX_HOR_DIST"]), float(p["GF_MAX_VER_DIST"])
+    first_limit, leg_limit = float(p["MIS_DIST_1WP"]), float(p["MIS_DIST_WPS"])
+    previous: tuple[float, float] | None = None
+    after_landing = False
+    for item in mission:
+        where = f"item {item.index} ({item.name})"
+        if after_landing:
+            return f"{where} follows a landing"
+        if not item.has_position:
+            continue
+        here = item.command in (MAV_CMD_NAV_LAND, MAV_CMD_NAV_TAKEOFF)
+        if not here and not (math.isfinite(item.north) and math.isfinite(item.east) and math.isfinite(item.down)):
+            return f"{where} has no position"
+        if math.isfinite(item.north) and math.isfinite(item.east):
+            distance = math.hypot(item.north, item.east)
+            if max_hor > 0.0 and distance > max_hor:
+                return f"{where} is {distance:.1f} m from home, outside the geofence (GF_MAX_HOR_DIST {max_hor:g} m)"
+            if previous is None and first_limit > 0.0 and distance > first_limit:
+                return f"{where} is {distance:.1f} m from home, beyond MIS_DIST_1WP {first_limit:g} m"
+            if previous is not None and leg_limit > 0.0:
+                leg = math.hypot(item.north - previous[0], item.east - previous[1])
+                if leg > leg_limit:
+                    return f"{where} is {leg:.1f} m from the previous waypoint, beyond MIS_DIST_WPS {leg_limit:g} m"
+            previous = (item.north, item.east)
+        if math.isfinite(item.down) and max_ver > 0.0 and -item.down > max_ver:
+            return f"{where} is {-item.down:.1f} m above home, above the geofence (GF_MAX_VER_DIST {max_ver:g} m)"
+        after_landing = item.command == MAV_CMD_NAV_LAND
+    return ""

@@ -1,0 +1,73 @@
+"""mc_hover_thrust_estimator: learns the collective thrust that holds altitude, on every local position.
+
+It compares the estimator's vertical acceleration with the thrust the position controller asked
+for (``vehicle_local_position_setpoint``) while armed and in the air, and publishes
+``hover_thrust_estimate``, which the position controller adopts once valid, so the vehicle holds
+altitude whatever its mass.
+"""
+
+from __future__ import annotations
+
+from stack.msg.setpoints import HoverThrustEstimate
+from stack.posctl.hover_thrust_estimator import HoverThrustEstimator, HoverThrustEstimatorParams
+from stack.runtime.module import Module, Trigger
+from stack.runtime.params import Param
+
+PARAMS = (
+    Param("MPC_THR_HOVER", 0.5, 0.1, 0.8, "", "Hover thrust: where the estimate starts, the centre of its range"),
+    Param("HTE_HT_NOISE", 0.0036, 0.0001, 1.0, "1/s", "Hover thrust process noise"),
+    Param("HTE_ACC_GATE", 3.0, 1.0, 10.0, "SD", "Acceleration innovation gate"),
+    Param("HTE_HT_ERR_INIT", 0.1, 0.0, 1.0, "", "Initial hover thrust uncertainty (1 sigma)"),
+    Param("HTE_VXY_THR", 10.0, 1.0, 20.0, "m/s", "Horizontal speed above which measurements are de-weighted"),
+    Param("HTE_VZ_THR", 2.0, 1.0, 10.0, "m/s", "Vertical speed above which measurements are de-weighted"),
+    Param("HTE_THR_RANGE", 0.2, 0.01, 0.4, "", "Largest deviation of the estimate from MPC_THR_HOVER"),
+)
+
+
+class HoverThrustEstimatorModule(Module):
+    NAME = "mc_hover_thrust_estimator"
+    DESCRIPTION = "Hover thrust estimation from vertical acceleration and thrust (PX4 mc_hover_thrust_estimator)"
+    TRIGGER = Trigger("vehicle_local_position")
+    DT_RANGE = (0.002, 0.1)
+    PARAMS = PARAMS
+
+    def __init__(self, rt) -> None:
+        super().__init__(rt)
+        self.subscribe("vehicle_local_position_setpoint")
+        self.subscribe("vehicle_land_detected")
+        self.subscribe("actuator_armed")
+        self.advertise("hover_thrust_estimate")
+        self.estimator = HoverThrustEstimator(self._estimator_params())
+
+    def _estimator_params(self) -> HoverThrustEstimatorParams:
+        p = self.params
+        return HoverThrustEstimatorParams(
+            mpc_thr_hover=float(p["MPC_THR_HOVER"]),
+            hte_ht_noise=float(p["HTE_HT_NOISE"]),
+            hte_acc_gate=float(p["HTE_ACC_GATE"]),
+            hte_ht_err_init=float(p["HTE_HT_ERR_INIT"]),
+            hte_vxy_thr=float(p["HTE_VXY_THR"]),
+            hte_vz_thr=float(p["HTE_VZ_THR"]),
+            hte_thr_range=float(p["HTE_THR_RANGE"]),
+        )
+
+    def on_params_changed(self, changed: set[str]) -> None:
+        self.estimator.set_params(self._estimator_params())
+
+    def run(self, lpos, dt: float) -> None:
+        armed = self.latest("actuator_armed")
+        land = self.latest("vehicle_land_detected")
+        setpoint = self.latest("vehicle_local_position_setpoint")
+        thrust_z = setpoint.thrust[2] if setpoint is not None else float("nan")
+        estimate = self.estimator.update(
+            lpos.timestamp_sample,
+            armed=armed is not None and armed.armed,
+            in_air=land is not None and not land.landed,
+            velocity=(lpos.vx, lpos.vy, lpos.vz),
+            acc_z=lpos.az if lpos.v_z_valid else float("nan"),
+            thrust_z=thrust_z,
+        )
+        self.publish(
+            "hover_thrust_estimate",
+            HoverThrustEstimate(timestamp_sample=lpos.timestamp_sample, **estimate._asdict()),
+        )
