@@ -17,7 +17,7 @@ from stack.mathlib.scalar import constrain
 from stack.msg.setpoints import VehicleAttitudeSetpoint
 from stack.msg.system import OffboardControlMode, TelemetryStatus, VehicleCommand
 from stack.scenario.catalogue import Check, Scenario
-from stack.scenario.metrics import rms, step_response, unwrap_degrees
+from stack.scenario.metrics import rms, step_response, unwrap_degrees, value_at
 from stack.scenario.script import ScenarioError, ScriptContext, Wait
 
 STEP_DEG = 10.0
@@ -105,7 +105,7 @@ def evaluate(ctx: ScriptContext) -> dict[str, Any]:
         series = unwrap_degrees([math.degrees(e[axis]) for e in euler])
         worst_rise, worst_overshoot = 0.0, 0.0
         for t_step, direction in zip(steps[name], (1.0, -1.0), strict=True):
-            start = _value_at(times, series, t_step)
+            start = value_at(times, series, t_step)
             rise, overshoot = step_response(times, series, t_step, start, start + direction * STEP_DEG)
             worst_rise = max(worst_rise, rise) if rise == rise else math.nan
             worst_overshoot = max(worst_overshoot, overshoot)
@@ -119,16 +119,6 @@ def evaluate(ctx: ScriptContext) -> dict[str, Any]:
         else math.nan
     )
     return metrics
-
-
-def _value_at(times: list[float], values: list[float], t: float) -> float:
-    """The last sample at or before t (the value the step starts from)."""
-    best = values[0]
-    for ti, v in zip(times, values, strict=True):
-        if ti > t:
-            break
-        best = v
-    return best
 
 
 def _estimate_error(ctx: ScriptContext, since: float) -> float:

@@ -42,9 +42,10 @@ class Scenario:
 
 
 def scenarios() -> dict[str, Scenario]:
-    from stack.scenario import attitude_step
+    from stack.scenario import attitude_step, failsafes, gps_loss, mission_box, takeoff_land
 
-    return {s.name: s for s in (attitude_step.SCENARIO,)}
+    flights = (attitude_step, takeoff_land, mission_box, gps_loss, failsafes)
+    return {s.name: s for s in (f.SCENARIO for f in flights)}
 
 
 def get_scenario(name: str) -> Scenario:

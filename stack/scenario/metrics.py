@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+import bisect
 import math
 from collections.abc import Sequence
+from typing import Any
 
 
 def step_response(
@@ -35,6 +37,12 @@ def step_response(
         prev = (t, r)
         peak = max(peak, r)
     return t90 - t10, max(0.0, (peak - 1.0) * 100.0)
+
+
+def value_at(times: Sequence[float], values: Sequence[Any], t: float) -> Any:
+    """The last sample at or before ``t`` (the first sample if ``t`` precedes them all)."""
+    i = bisect.bisect_right(times, t) - 1
+    return values[max(i, 0)]
 
 
 def rms(values: Sequence[float]) -> float:

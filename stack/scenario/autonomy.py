@@ -1,0 +1,148 @@
+"""What the autonomous-flight scenarios share: getting ready, taking off, landing, and judging positions.
+
+Positions are compared about home: the estimator's local frame has its own origin (where GPS first
+fixed, at the height of the first barometer sample), the simulator's ground truth another (the
+simulated home point on the ground). Both are taken relative to the vehicle's position when home was
+set (at arming), which is what a pilot means by "5 m above home" and what return-to-launch aims for.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Generator
+from typing import Any
+
+from stack.mathlib import quaternion as quat
+from stack.mathlib.vector import Vec3
+from stack.msg.system import VehicleCommand, VehicleStatus
+from stack.scenario.metrics import value_at
+from stack.scenario.script import ScenarioError, ScriptContext, Series, Wait
+
+NS = VehicleStatus
+CMD = VehicleCommand
+READY_TIMEOUT_S = 60.0
+GPS_SETTLE_S = 10.0
+"""Time on the ground after the position estimate turns valid, as EKF2 wants 10 s of good GPS before it
+uses it: the origin is one GPS fix, and the estimate needs some fixes to average its noise out."""
+# Topics every autonomous scenario records (all samples) and watches (latest value).
+RECORD = ("sim_groundtruth", "vehicle_local_position", "trajectory_setpoint", "vehicle_status", "home_position")
+WATCH = ("vehicle_land_detected", "mission_result")
+
+
+def position_ready(ctx: ScriptContext) -> bool:
+    lpos = ctx.latest.get("vehicle_local_position")
+    return lpos is not None and lpos.xy_valid and lpos.z_valid and lpos.v_xy_valid and "home_position" in ctx.latest
+
+
+def nav_state(ctx: ScriptContext) -> int:
+    status = ctx.latest.get("vehicle_status")
+    return status.nav_state if status is not None else -1
+
+
+def armed(ctx: ScriptContext) -> bool:
+    status = ctx.latest.get("vehicle_status")
+    return status is not None and status.arming_state == NS.ARMING_STATE_ARMED
+
+
+def wait_ready(ctx: ScriptContext) -> Generator[Wait, None, None]:
+    """Until the position estimate is valid and home is known, as a pilot waits for GPS lock."""
+    yield ctx.until(lambda: position_ready(ctx), READY_TIMEOUT_S, "a valid position estimate and home")
+    yield ctx.wait(GPS_SETTLE_S)
+    ctx.log("position estimate valid and settled, home known")
+
+
+def take_off(ctx: ScriptContext, altitude: float) -> Generator[Wait, None, None]:
+    """NAV_TAKEOFF to ``altitude`` above home (arms the vehicle) and wait for Hold."""
+    yield from ctx.command(CMD.VEHICLE_CMD_NAV_TAKEOFF, param2=1.0, param7=altitude)
+    ctx.state["armed_at"] = ctx.now
+    yield ctx.until(lambda: nav_state(ctx) == NS.NAVIGATION_STATE_AUTO_LOITER, 60.0, "the takeoff to complete")
+    ctx.log(f"takeoff to {altitude:g} m complete")
+
+
+def settled(ctx: ScriptContext, target_z: float, tolerance: float = 0.05) -> bool:
+    """The trajectory setpoint has arrived at ``target_z`` (local NED) and stopped."""
+    sp = ctx.latest.get("trajectory_setpoint")
+    return (
+        sp is not None
+        and abs(sp.position[2] - target_z) < tolerance
+        and all(abs(v) < 0.02 for v in sp.velocity if math.isfinite(v))
+    )
+
+
+def land(ctx: ScriptContext, timeout: float = 90.0) -> Generator[Wait, None, None]:
+    yield from ctx.command(CMD.VEHICLE_CMD_NAV_LAND)
+    yield from wait_disarmed(ctx, timeout)
+
+
+def wait_disarmed(ctx: ScriptContext, timeout: float) -> Generator[Wait, None, None]:
+    yield ctx.until(lambda: not armed(ctx), timeout, "landing and disarming")
+    ctx.state["disarmed_at"] = ctx.now
+    ctx.log("landed and disarmed")
+
+
+def landed_and_disarmed(ctx: ScriptContext) -> bool:
+    land = ctx.latest.get("vehicle_land_detected")
+    truth = ctx.latest.get("sim_groundtruth")
+    return not armed(ctx) and land is not None and land.landed and truth is not None and truth.on_ground
+
+
+class Frames:
+    """Ground truth and estimate/setpoints about home (see the module docstring)."""
+
+    def __init__(self, ctx: ScriptContext) -> None:
+        home = ctx.latest.get("home_position")
+        truth = ctx.series.get("sim_groundtruth")
+        if home is None or truth is None or not truth.times:
+            raise ScenarioError("no home position or no ground truth was received")
+        self.truth = truth
+        self.home: Vec3 = (home.x, home.y, home.z)
+        armed_at = ctx.state.get("armed_at", truth.times[0])
+        self.truth_home: Vec3 = truth_at(truth, armed_at).position
+
+    def truth_about_home(self, position: Vec3) -> Vec3:
+        h = self.truth_home
+        return (position[0] - h[0], position[1] - h[1], position[2] - h[2])
+
+    def local_about_home(self, position: Vec3) -> Vec3:
+        h = self.home
+        return (position[0] - h[0], position[1] - h[1], position[2] - h[2])
+
+
+def truth_at(series: Series, t: float) -> Any:
+    """The ground-truth sample at or just before ``t``."""
+    return value_at(series.times, series.values, t)
+
+
+def estimate_error_rms(ctx: ScriptContext, frames: Frames, t0: float, t1: float) -> float:
+    """RMS distance between the position estimate and the truth (both about home) over [t0, t1]."""
+    estimates = ctx.series.get("vehicle_local_position")
+    if estimates is None:
+        raise ScenarioError("no position estimate was received")
+    by_sample = {m.timestamp_sample: m.position for m in frames.truth.values}
+    squares = []
+    for t, e in zip(estimates.times, estimates.values, strict=True):
+        truth = by_sample.get(e.timestamp_sample)
+        if truth is None or not (t0 <= t <= t1):
+            continue
+        est = frames.local_about_home((e.x, e.y, e.z))
+        tru = frames.truth_about_home(truth)
+        squares.append(sum((a - b) ** 2 for a, b in zip(est, tru, strict=True)))
+    if not squares:
+        raise ScenarioError("no position estimate matched the ground truth samples")
+    return math.sqrt(sum(squares) / len(squares))
+
+
+def max_tilt_deg(frames: Frames, t0: float, t1: float) -> float:
+    tilts = [
+        math.degrees(quat.tilt(m.q))
+        for t, m in zip(frames.truth.times, frames.truth.values, strict=True)
+        if t0 <= t <= t1
+    ]
+    return max(tilts, default=math.nan)
+
+
+def setpoints_between(ctx: ScriptContext, t0: float, t1: float) -> list[tuple[float, Any]]:
+    series = ctx.series.get("trajectory_setpoint")
+    if series is None:
+        raise ScenarioError("no trajectory setpoint was received")
+    return [(t, m) for t, m in zip(series.times, series.values, strict=True) if t0 <= t <= t1]
