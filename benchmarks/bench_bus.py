@@ -48,12 +48,12 @@ from msgspec.msgpack import encode
 
 from stack.bus.config import BusConfig
 from stack.bus.node import Node, wall_clock_us
+from stack.bus.ports import free_port
 from stack.bus.topics import HEADER
 from stack.msg.base import Message
 from stack.msg.registry import register_topic
 from stack.msg.sensors import SensorGyro
 from stack.runtime.runner import LOCKSTEP_QUEUE
-from stack.supervisor.supervisor import free_port
 
 PROBE_BASE = -2000  # handshake probes count down from PROBE_BASE; end markers are END_BASE - phase
 END_BASE = -1000

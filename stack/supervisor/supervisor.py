@@ -14,7 +14,6 @@ import json
 import logging
 import os
 import signal
-import socket
 import subprocess
 import sys
 import threading
@@ -28,6 +27,7 @@ import zenoh
 
 from stack.bus import keys
 from stack.bus.config import LOOPBACK_ANY_PORT, BusConfig
+from stack.bus.ports import free_port
 from stack.msg.internal import ModuleHeartbeat
 from stack.runtime.spec import ModuleSpec
 from stack.supervisor import state as run_state
@@ -393,8 +393,3 @@ class Supervisor:
         with (self.run_dir / "supervisor.log").open("a") as f:
             f.write(f"{time.strftime('%H:%M:%S')} {text}\n")
 
-
-def free_port() -> int:
-    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]

@@ -25,6 +25,8 @@ from pathlib import Path
 import rerun as rr
 import rerun.blueprint as rrb
 
+from stack.bus.ports import free_port
+
 LOOPBACK = "127.0.0.1"
 LOOPBACK_NAMES = ("127.0.0.1", "localhost", "::1")
 DEFAULT_GRPC_PORT = 9876
@@ -62,12 +64,6 @@ def viewer_environment() -> dict[str, str]:
     env = dict(os.environ)
     env.setdefault("CI", "1")
     return env
-
-
-def free_port(host: str = LOOPBACK) -> int:
-    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
-        s.bind((host, 0))
-        return int(s.getsockname()[1])
 
 
 def accepts_connections(host: str, port: int) -> bool:

@@ -6,7 +6,7 @@ import sys
 import time
 
 from stack.bus.node import stable_publisher_id
-from stack.supervisor.supervisor import free_port
+from stack.bus.ports import free_port
 from tests.support.harness import REPO, RunningStack, chain_profile, stack_env, wait_no_processes
 
 

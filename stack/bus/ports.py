@@ -1,0 +1,52 @@
+"""Free TCP ports for listeners the stack starts (module endpoints, the rendezvous, viewers).
+
+A port is picked outside the kernel's ephemeral range: the local ports of outgoing connections come
+from that range, so a port picked there (for example by binding port 0) can be taken by one of the
+many connections modules open to each other before the module that was given it binds it.
+"""
+
+from __future__ import annotations
+
+import random
+import socket
+from pathlib import Path
+
+_EPHEMERAL_RANGE_FILE = Path("/proc/sys/net/ipv4/ip_local_port_range")
+_DEFAULT_EPHEMERAL = (32768, 60999)
+_LOWEST = 10000
+_ATTEMPTS = 500
+_given: set[int] = set()
+_random = random.SystemRandom()
+
+
+def ephemeral_range() -> tuple[int, int]:
+    """The kernel's range of local ports for outgoing connections (inclusive)."""
+    try:
+        low, high = (int(v) for v in _EPHEMERAL_RANGE_FILE.read_text().split())
+        return low, high
+    except (OSError, ValueError):
+        return _DEFAULT_EPHEMERAL
+
+
+def free_port(host: str = "127.0.0.1") -> int:
+    """A port nobody listens on now, below the ephemeral range and not given out before by this process."""
+    low, high = ephemeral_range()
+    candidates = (_LOWEST, low) if low - _LOWEST >= 1000 else (high + 1, 65536)
+    for _ in range(_ATTEMPTS):
+        port = _random.randrange(*candidates)
+        if port in _given or not _bindable(host, port):
+            continue
+        _given.add(port)
+        return port
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
+        s.bind((host, 0))
+        return int(s.getsockname()[1])
+
+
+def _bindable(host: str, port: int) -> bool:
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
+        try:
+            s.bind((host, port))
+        except OSError:
+            return False
+    return True
