@@ -286,6 +286,10 @@ class LockstepCoordinator:
             events, self._events = self._events, []
         for kind, m in events:
             if kind == "join":
+                if m.publisher_id in self.members:
+                    # A liveliness subscriber with history can report a token declared while it
+                    # started both from its history and live: count each member once.
+                    continue
                 self.members[m.publisher_id] = m
                 if m.trigger is not None:
                     self._triggered_by.setdefault(m.trigger, []).append(m.publisher_id)
