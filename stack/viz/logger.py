@@ -63,8 +63,10 @@ TOPICS: tuple[str, ...] = (
     "sensor_baro",
     "vehicle_status",
     "vehicle_command_ack",
+    "home_position",
+    "mission",
 )
-EVENT_TOPICS = frozenset({"vehicle_status", "vehicle_command_ack"})
+EVENT_TOPICS = frozenset({"vehicle_status", "vehicle_command_ack", "home_position", "mission"})
 
 
 def _names(cls: type, prefix: str) -> dict[int, str]:
@@ -250,6 +252,8 @@ class FlightLogger:
         self._now = 0
         self._latest: dict[str, Any] = {}
         self._status: tuple[int, int, bool] | None = None
+        self._home: Vec3 = (0.0, 0.0, 0.0)
+        self._mission_offsets: list[Vec3] = []
         self._pose_bucket = -1
         self._trail_bucket = -1
         self._truth_trail_bucket = -1
@@ -274,7 +278,7 @@ class FlightLogger:
         )
         rec.log(lay.TRAIL_TRUTH, rr.LineStrips3D.from_fields(colors=[colors[lay.TRUTH]], radii=[0.015]), static=True)
         rec.log(lay.SETPOINT_MARKER, rr.Points3D.from_fields(colors=[colors[lay.SETPOINT]], radii=[0.08]), static=True)
-        self.log_home((0.0, 0.0, 0.0))
+        self.log_home(self._home)
 
     def _build_batches(self) -> None:
         def per_axis(path_of: Callable[[str, str], str], axes: tuple[str, ...], source: str) -> tuple[str, ...]:
@@ -526,3 +530,23 @@ class FlightLogger:
         result = RESULT_NAMES.get(m.result, str(m.result))
         text = f"command {command} ({m.command}): {result}" + (f", {m.reason}" if m.reason else "")
         self._event(t, w, text, "INFO" if m.result in ACK_OK else "WARN")
+
+    def _on_home_position(self, m: Any, t: int, w: int | None) -> None:
+        home = (m.x, m.y, m.z)
+        if m.valid_lpos and home != self._home:
+            self._home = home
+            self.log_home(home)
+            if self._mission_offsets:
+                self._log_mission_about_home()
+
+    def _on_mission(self, m: Any, t: int, w: int | None) -> None:
+        # Items are about home; one without a position (a takeoff or land where the vehicle is) is not drawn.
+        self._mission_offsets = [
+            (i.north, i.east, i.down) for i in m.items if math.isfinite(i.north) and math.isfinite(i.east)
+        ]
+        self._log_mission_about_home()
+
+    def _log_mission_about_home(self) -> None:
+        hx, hy, hz = self._home
+        waypoints = [(hx + n, hy + e, hz + (d if math.isfinite(d) else 0.0)) for n, e, d in self._mission_offsets]
+        self.log_mission(waypoints, home=self._home)

@@ -132,7 +132,7 @@ def test_stack_plot_attaches_to_a_running_stack(tmp_path):
     assert not wait_no_processes(home)
     rrd = read_rrd(out)
     times = rrd.times(lay.rates_path("roll", lay.ESTIMATE))
-    assert len(times) > 10
+    assert len(times) >= 3  # how many depends on the machine's load: the stack runs as fast as it can
     # lockstep: sim_time is the simulated clock (4 ms steps), decimated to 50 Hz buckets
     assert all(t % 4000 == 0 for t in times)
     assert len({t // 20000 for t in times}) == len(times)

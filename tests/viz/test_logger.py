@@ -17,7 +17,8 @@ from stack.msg.setpoints import (
     VehicleTorqueSetpoint,
 )
 from stack.msg.simulation import SimGroundtruth
-from stack.msg.system import VehicleCommandAck, VehicleStatus
+from stack.msg.navigation import Mission, MissionItemEntry
+from stack.msg.system import HomePosition, VehicleCommandAck, VehicleStatus
 from stack.viz import layout as lay
 from stack.viz.logger import TOPICS, FlightLogger, new_recording
 from tests.viz.rrd import read_rrd
@@ -103,6 +104,8 @@ def test_every_drawn_topic_fills_its_entities(tmp_path):
         "sensor_baro": SensorBaro(timestamp=t, pressure=95000.0),
         "vehicle_status": VehicleStatus(timestamp=t),
         "vehicle_command_ack": VehicleCommandAck(timestamp=t, command=400),
+        "home_position": HomePosition(timestamp=t, x=1.0, valid_lpos=True),
+        "mission": Mission(timestamp=t, items=[MissionItemEntry(north=5.0, east=0.0, down=-5.0)]),
     }
     assert set(msgs) == set(TOPICS)
     for topic, msg in msgs.items():
@@ -290,3 +293,24 @@ def test_rejects_nonsense_rates(tmp_path):
         FlightLogger(rec, plot_rate_hz=-1.0)
     with pytest.raises(ValueError):
         FlightLogger(rec, pose_rate_hz=0.0)
+
+
+def test_mission_and_home_topics_are_drawn_about_home(tmp_path):
+    logger, path = open_logger(tmp_path, plot_rate_hz=0.0)
+    items = [
+        MissionItemEntry(command=22, down=-10.0),  # takeoff where the vehicle is: not drawn
+        MissionItemEntry(north=20.0, east=0.0, down=-10.0),
+        MissionItemEntry(north=20.0, east=20.0, down=-10.0),
+    ]
+    assert logger.log_message("mission", 0, Mission(timestamp=1_000_000, items=items))
+    home = HomePosition(timestamp=3_000_000, x=2.0, y=-1.0, z=0.5, valid_lpos=True)
+    assert logger.log_message("home_position", 0, home)
+    assert logger.log_message("home_position", 0, HomePosition(timestamp=4_000_000, x=9.0, valid_lpos=False))
+    close(logger)
+    rrd = read_rrd(path)
+    assert rrd.times(lay.MISSION_WAYPOINTS) == [1_000_000, 3_000_000]
+    assert rrd.values(lay.MISSION_WAYPOINTS, "Points3D:positions")[-1] == [[22.0, -1.0, -9.5], [22.0, 19.0, -9.5]]
+    assert rrd.values(lay.MISSION_PATH, "LineStrips3D:strips")[-1][0][0] == [2.0, -1.0, 0.5]
+    homes = rrd.temporal[lay.HOME]
+    assert [h[1]["Points3D:positions"] for h in homes][-1] == [[2.0, -1.0, 0.5]]
+    assert [t for t, _ in homes][-1] == 3_000_000
