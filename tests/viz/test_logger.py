@@ -7,6 +7,7 @@ import pytest
 from stack.mathlib.quaternion import from_euler
 from stack.msg.actuators import ActuatorMotors, ActuatorOutputs, ControlAllocatorStatus
 from stack.msg.estimation import VehicleAngularVelocity, VehicleAttitude, VehicleLocalPosition
+from stack.msg.navigation import Mission, MissionItemEntry
 from stack.msg.sensors import SensorBaro, SensorGps
 from stack.msg.setpoints import (
     TrajectorySetpoint,
@@ -17,7 +18,6 @@ from stack.msg.setpoints import (
     VehicleTorqueSetpoint,
 )
 from stack.msg.simulation import SimGroundtruth
-from stack.msg.navigation import Mission, MissionItemEntry
 from stack.msg.system import HomePosition, VehicleCommandAck, VehicleStatus
 from stack.viz import layout as lay
 from stack.viz.logger import TOPICS, FlightLogger, new_recording
