@@ -52,7 +52,12 @@ def find_stack(vehicle: str | None, endpoint: str | None) -> tuple[str, BusConfi
 @contextmanager
 def connect(vehicle: str | None, endpoint: str | None, name: str = "cli") -> Iterator[Node]:
     vehicle, bus = find_stack(vehicle, endpoint)
-    with Node(bus, vehicle, name, stable_id=False) as node:
+    try:
+        node = Node(bus, vehicle, name, stable_id=False)
+    except zenoh.ZError as e:
+        where = ", ".join(bus.connect)
+        fail(f"cannot reach the stack at {where} ({str(e).split(' at ')[0].strip()}); is it running?")
+    with node:
         yield node
 
 

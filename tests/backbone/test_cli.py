@@ -5,7 +5,8 @@ import time
 
 import pytest
 
-from tests.support.harness import RunningStack, chain_profile, wait_no_processes
+from stack.bus.ports import free_port
+from tests.support.harness import RunningStack, chain_profile, run_cli, wait_no_processes
 
 
 @pytest.fixture(scope="module")
@@ -96,3 +97,11 @@ def test_parameters_change_while_running_and_the_module_sees_it(stack):
     ]
     assert all(x > 45 for x in xs)
     assert json.loads(stack.cli("param", "get", "TEST_OFFSET", "--json").stdout)[0]["value"] == 50.0
+
+
+def test_an_unreachable_endpoint_is_one_line_not_a_traceback(tmp_path):
+    endpoint = f"tcp/127.0.0.1:{free_port()}"  # nobody listens there
+    out = run_cli(tmp_path / "home", "topic", "list", "--endpoint", endpoint)
+    assert out.returncode == 1
+    assert out.stderr.startswith(f"error: cannot reach the stack at {endpoint}")
+    assert "Traceback" not in out.stderr and len(out.stderr.strip().splitlines()) == 1
