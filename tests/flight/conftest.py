@@ -10,17 +10,20 @@ from collections.abc import Callable
 
 import pytest
 
-from tests.flight.flights import Flight, fly_attitude_step
+from tests.flight.flights import Flight, fly_scenario
 
 
 @pytest.fixture(scope="session")
 def fly(tmp_path_factory: pytest.TempPathFactory) -> Callable[..., Flight]:
-    """``fly(seed, run=0)``: the flight of that seed (``run`` tells repeated flights apart)."""
-    flights: dict[tuple[int, int], Flight] = {}
+    """``fly(seed, run=0, scenario="attitude_step")``: the flight of that scenario and seed on the
+    default profile (``run`` tells repeated flights apart)."""
+    flights: dict[tuple[str, int, int], Flight] = {}
 
-    def flight(seed: int, run: int = 0) -> Flight:
-        if (seed, run) not in flights:
-            flights[(seed, run)] = fly_attitude_step(tmp_path_factory.mktemp(f"fly-seed{seed}-run{run}"), seed)
-        return flights[(seed, run)]
+    def flight(seed: int, run: int = 0, scenario: str = "attitude_step") -> Flight:
+        key = (scenario, seed, run)
+        if key not in flights:
+            home = tmp_path_factory.mktemp(f"fly-{scenario}-seed{seed}-run{run}")
+            flights[key] = fly_scenario(home, scenario, seed)
+        return flights[key]
 
     return flight

@@ -1,4 +1,4 @@
-"""Flying ``stack fly attitude_step`` through the real CLI, and reading what its recording says."""
+"""Flying ``stack fly`` scenarios through the real CLI, and reading what their recordings say."""
 
 from __future__ import annotations
 
@@ -33,12 +33,12 @@ class Flight:
         return self.messages("vehicle_attitude_setpoint")[-1].pub_time_us
 
 
-def fly_attitude_step(home: Path, seed: int) -> Flight:
-    """``stack fly attitude_step --seed SEED`` with a report and a recording, in STACK_HOME ``home``."""
+def fly_scenario(home: Path, scenario: str, seed: int, profile: str = "sitl_quad") -> Flight:
+    """``stack fly SCENARIO --profile PROFILE --seed SEED`` with a report and a recording, in STACK_HOME ``home``."""
     report, recording = home / "report.json", home / "flight.mcap"
     out = run_cli(
         home,
-        *("fly", "attitude_step", "--seed", str(seed), "--quiet"),
+        *("fly", scenario, "--profile", profile, "--seed", str(seed), "--quiet"),
         *("--report", str(report), "--record", str(recording)),
         timeout=FLY_TIMEOUT_S,
     )
