@@ -3,8 +3,8 @@
 Run with ``python benchmarks/bench_lockstep.py`` (``--quick``: one short run of each). Every run
 uses a temporary ``STACK_HOME`` (never ``~/.stack``) and the real CLI in a fresh interpreter:
 
-- ``fly``: ``stack fly attitude_step --profile P`` (armed flight; its report gives the scenario's
-  own real-time factor);
+- ``fly``: ``stack fly SCENARIO --profile P`` (an armed flight, ``attitude_step`` unless
+  ``--scenario`` says otherwise; its report gives the scenario's own real-time factor);
 - ``up``: ``stack up P --duration S`` (disarmed, plain lockstep);
 - ``floor``: ``stack up`` of the test chain in ``tests/support/modules.py`` (a 250 Hz clock and three
   modules doing almost nothing): what the runtime, the bus and the lockstep cost by themselves.
@@ -289,6 +289,7 @@ def main() -> None:
     parser.add_argument("--runs", type=int, default=3, help="runs of each kind")
     parser.add_argument("--duration", type=float, default=15.0, help="wall seconds of each `stack up` run")
     parser.add_argument("--seed", type=int, default=1, help="seed of the flights")
+    parser.add_argument("--scenario", default="attitude_step", help="scenario of the `stack fly` runs")
     parser.add_argument("--no-floor", action="store_true", help="skip the trivial-module floor runs")
     parser.add_argument("--quick", action="store_true", help="one run of each kind, 6 s `stack up` runs")
     args = parser.parse_args()
@@ -307,7 +308,7 @@ def main() -> None:
         flights, ups, floors = [], [], []
         for i in range(args.runs):
             report = home / f"report{i}.json"
-            fly_args = ["fly", "attitude_step", "--profile", args.profile, "--seed", str(args.seed), "-q"]
+            fly_args = ["fly", args.scenario, "--profile", args.profile, "--seed", str(args.seed), "-q"]
             flight = run_stack("fly", [*fly_args, "--report", str(report)], vehicle, home, timeout)
             flight.report = json.loads(report.read_text())
             flights.append(flight)
