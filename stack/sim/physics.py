@@ -22,11 +22,12 @@ One :meth:`MulticopterPhysics.step` of length dt:
 3. Body rates are clamped (SIH: ±6π rad/s), the quaternion is renormalised, and ground contact
    is resolved.
 
-Ground contact: the vehicle rests on the ground (velocity and body rates zero, attitude levelled to
-its heading, horizontal position held by static friction) as long as the free motion would take it
-below z = 0; it lifts off as soon as the net force points up. A touchdown at any speed stops it in
-the step where it reaches the ground, without penetration or bounce (SIH's "full stop" for
-multicopters).
+Ground contact: the vehicle rests on the ground (velocity zero, horizontal position held by static
+friction) as long as the free motion would take it below z = 0; it lifts off as soon as the net force
+points up. A touchdown at any speed stops it in the step where it reaches the ground, without
+penetration or bounce (SIH's "full stop" for multicopters). A vehicle that touches down tilted (in
+wind, say) tips onto its legs, turning level about its heading at up to GROUND_TIP_RATE: the body
+rates of that rotation are real, so the gyro measures it and an attitude estimate follows it.
 
 The sums over rotors that the aerodynamic terms need are formed once per step (they depend only on
 the held motor states), so each RK4 stage costs the same for 4 or 6 rotors.
@@ -37,12 +38,22 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 
-from stack.mathlib.quaternion import IDENTITY, Quat, rotate_inv
+from stack.mathlib.quaternion import (
+    IDENTITY,
+    Quat,
+    conj,
+    from_rotation_vector,
+    mul,
+    normalized,
+    rotate_inv,
+    to_rotation_vector,
+)
 from stack.mathlib.scalar import CONSTANTS_ONE_G
 from stack.mathlib.vector import ZERO3, Vec3
 from stack.sim.vehicle import VehicleModel
 
 SIH_MAX_BODY_RATE = 6.0 * math.pi
+GROUND_TIP_RATE = 3.0  # rad/s: how fast a vehicle resting tilted on the ground tips onto its legs
 
 
 def _derivative_basic(
@@ -231,6 +242,26 @@ class MulticopterPhysics:
         self._angular_velocity = ZERO3
         self._on_ground = True
 
+    def _tip_onto_legs(self, attitude: Quat, dt: float) -> None:
+        """On the ground: turn toward level about the heading, at most GROUND_TIP_RATE, with those rates."""
+        w, x, y, z = attitude
+        half_yaw = 0.5 * math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
+        level = (math.cos(half_yaw), 0.0, 0.0, math.sin(half_yaw))
+        ex, ey, ez = to_rotation_vector(mul(conj(attitude), level))  # body frame
+        angle = math.sqrt(ex * ex + ey * ey + ez * ez)
+        most = GROUND_TIP_RATE * dt
+        if angle < 1e-9:  # resting level
+            self._angular_velocity = ZERO3
+            return
+        if angle <= most:
+            self._attitude = level
+            self._angular_velocity = (ex / dt, ey / dt, ez / dt)
+            return
+        f = most / angle
+        turn = (ex * f, ey * f, ez * f)
+        self._attitude = normalized(mul(attitude, from_rotation_vector(turn)))
+        self._angular_velocity = (turn[0] / dt, turn[1] / dt, turn[2] / dt)
+
     def step(self, dt: float, motor_commands: Sequence[float], wind_ned: Vec3 = ZERO3) -> None:
         """Advance the plant by dt seconds with the motor commands held and the given wind (NED, m/s)."""
         if dt != self._alpha_dt:
@@ -330,12 +361,14 @@ class MulticopterPhysics:
         self._previous_angular_velocity = self._angular_velocity
         self._last_dt = dt
         if z >= 0.0:
-            if self._on_ground:
-                # Still pressed onto the ground: stay put (static friction, no rotation).
-                self._velocity = ZERO3
-                self._angular_velocity = ZERO3
-                return
-            self._rest_on_ground(x, y, (qw, qx, qy, qz))
+            if not self._on_ground:
+                self._position = (x, y, 0.0)
+                self._on_ground = True
+                attitude = normalized((qw, qx, qy, qz))
+            else:
+                attitude = self._attitude  # pressed onto the ground: static friction holds it
+            self._velocity = ZERO3
+            self._tip_onto_legs(attitude, dt)
             return
         self._on_ground = False
         m = self._max_rate

@@ -6,9 +6,9 @@ import math
 
 import pytest
 
-from stack.mathlib.quaternion import from_euler, to_euler
+from stack.mathlib.quaternion import angle_between, from_euler, from_rotation_vector, mul, to_euler
 from stack.mathlib.vector import cross
-from stack.sim.physics import MulticopterPhysics
+from stack.sim.physics import GROUND_TIP_RATE, MulticopterPhysics
 from stack.sim.vehicle import VehicleModel, load_vehicle
 
 G = 9.80665
@@ -306,10 +306,33 @@ def test_touchdown_stops_without_penetration(name: str) -> None:
                 touchdown = p.position
             assert p.position == touchdown
             assert p.velocity == (0.0, 0.0, 0.0)
-            assert p.angular_velocity == (0.0, 0.0, 0.0)
     assert touched and p.on_ground
+    assert p.angular_velocity == (0.0, 0.0, 0.0)
     roll, pitch, _ = to_euler(p.attitude)
     assert (roll, pitch) == (0.0, 0.0)
+
+
+@pytest.mark.parametrize("roll_deg", [5.0, 30.0])
+def test_a_tilted_touchdown_tips_onto_the_legs_with_rates_the_gyro_sees(roll_deg: float) -> None:
+    model = load_vehicle("sih_quad")
+    p = MulticopterPhysics(model)
+    start = from_euler(math.radians(roll_deg), 0.0, 0.7)
+    p.reset(position=(0.0, 0.0, -0.01), velocity=(0.0, 0.0, 1.0), attitude=start)
+    tipping = 0
+    for _ in range(200):
+        before = p.attitude
+        p.step(DT, (0.0,) * model.rotor_count)
+        if not p.on_ground:
+            continue
+        w = p.angular_velocity
+        assert math.sqrt(sum(c * c for c in w)) <= GROUND_TIP_RATE + 1e-9
+        tipping += w != (0.0, 0.0, 0.0)
+        # The step's rotation is the body rates over dt: what a gyro measures explains the attitude.
+        assert angle_between(mul(before, from_rotation_vector(tuple(c * DT for c in w))), p.attitude) < 1e-6
+    roll, pitch, yaw = to_euler(p.attitude)
+    assert (roll, pitch) == (0.0, 0.0) and yaw == pytest.approx(0.7, abs=1e-3)
+    assert p.angular_velocity == (0.0, 0.0, 0.0)
+    assert tipping >= math.ceil(math.radians(roll_deg) / (GROUND_TIP_RATE * DT))
 
 
 def test_reset_below_ground_puts_the_vehicle_on_the_ground() -> None:
