@@ -19,7 +19,7 @@ WIND_SPEED = 5.0
 WIND_PARAMS: dict[str, object] = {
     "SIM_WIND_SPD": WIND_SPEED,
     "SIM_WIND_DIR": 270.0,
-    "SIM_WIND_GUST": 1.5,
+    "SIM_WIND_GUST": 1.0,
     "SIM_WIND_GUST_T": 2.0,
 }
 """The issue's "5 m/s with gusts": a westerly at 5 m/s with 1.5 m/s (1 σ) gusts of 2 s correlation time."""
