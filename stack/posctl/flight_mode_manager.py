@@ -47,6 +47,13 @@ from stack.runtime.params import Param
 
 NS = VehicleStatus
 YAW_TOWARD_WAYPOINT, YAW_TOWARD_HOME, YAW_AWAY_FROM_HOME, YAW_ALONG_TRAJECTORY, YAW_HOLD = range(5)
+_AUTO_NAV_STATES = (
+    NS.NAVIGATION_STATE_AUTO_TAKEOFF,
+    NS.NAVIGATION_STATE_AUTO_LOITER,
+    NS.NAVIGATION_STATE_AUTO_MISSION,
+    NS.NAVIGATION_STATE_AUTO_RTL,
+    NS.NAVIGATION_STATE_AUTO_LAND,
+)
 _YAW_ALONG_MIN_SPEED = 0.5
 
 OWN_PARAMS: tuple[Param, ...] = (
@@ -222,6 +229,9 @@ class FlightModeManager:
             return None
         key = (inp.nav_state, inp.armed)
         if key != self._active:
+            if inp.nav_state in _AUTO_NAV_STATES and not _position_known(inp.state):
+                # An auto mode takes its targets from the position: descend until it is known, then start.
+                return self._descend(inp.state, inp.home, dt)
             previous, self._active = self._active, key
             if not self._activate(inp, previous[0] if previous is not None else None):
                 self._active = None
@@ -246,13 +256,7 @@ class FlightModeManager:
             return True
         if nav == NS.NAVIGATION_STATE_DESCEND:
             return True
-        if nav not in (
-            NS.NAVIGATION_STATE_AUTO_TAKEOFF,
-            NS.NAVIGATION_STATE_AUTO_LOITER,
-            NS.NAVIGATION_STATE_AUTO_MISSION,
-            NS.NAVIGATION_STATE_AUTO_RTL,
-            NS.NAVIGATION_STATE_AUTO_LAND,
-        ):
+        if nav not in _AUTO_NAV_STATES:
             return False
         if after_takeoff:
             # Like PX4's navigator, Hold after a takeoff keeps the takeoff point; the trajectory goes on.

@@ -110,7 +110,9 @@ class ManualPositionTask(ManualAltitudeTask):
             vx, vy = heading_to_ned(sticks.forward * speed, sticks.right * speed, yaw)
         else:
             vx = vy = 0.0
-            if self._lock_xy is None and math.hypot(state.velocity[0], state.velocity[1]) < p["MPC_HOLD_MAX_XY"]:
+            # A lock taken without a position (NaN) is taken again once there is one, as for the altitude.
+            unlocked = self._lock_xy is None or math.isnan(self._lock_xy[0])
+            if unlocked and math.hypot(state.velocity[0], state.velocity[1]) < p["MPC_HOLD_MAX_XY"]:
                 self._lock_xy = (state.position[0], state.position[1])
             if self._lock_xy is not None:
                 x, y = self._lock_xy
