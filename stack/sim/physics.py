@@ -234,19 +234,15 @@ class MulticopterPhysics:
         self._last_dt = 0.0
 
     def _rest_on_ground(self, north: float, east: float, attitude: Quat) -> None:
-        w, x, y, z = attitude
-        half_yaw = 0.5 * math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
         self._position = (north, east, 0.0)
         self._velocity = ZERO3
-        self._attitude = (math.cos(half_yaw), 0.0, 0.0, math.sin(half_yaw))
+        self._attitude = _level_about_heading(attitude)
         self._angular_velocity = ZERO3
         self._on_ground = True
 
     def _tip_onto_legs(self, attitude: Quat, dt: float) -> None:
         """On the ground: turn toward level about the heading, at most GROUND_TIP_RATE, with those rates."""
-        w, x, y, z = attitude
-        half_yaw = 0.5 * math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
-        level = (math.cos(half_yaw), 0.0, 0.0, math.sin(half_yaw))
+        level = _level_about_heading(attitude)
         ex, ey, ez = to_rotation_vector(mul(conj(attitude), level))  # body frame
         angle = math.sqrt(ex * ex + ey * ey + ez * ez)
         most = GROUND_TIP_RATE * dt
@@ -440,3 +436,10 @@ class MulticopterPhysics:
         """What an ideal accelerometer reads, in body FRD (m/s²): R^T·(a − g); (0, 0, −g) at rest level."""
         ax, ay, az = self.acceleration
         return rotate_inv(self._attitude, (ax, ay, az - self._gravity))
+
+
+def _level_about_heading(attitude: Quat) -> Quat:
+    """The level attitude with the same heading (yaw) as ``attitude``."""
+    w, x, y, z = attitude
+    half_yaw = 0.5 * math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
+    return (math.cos(half_yaw), 0.0, 0.0, math.sin(half_yaw))
