@@ -352,8 +352,14 @@ class PositionControl:
         ey = self._vel_sp[1] - self._vel[1]
         ez = self._vel_sp[2] - self._vel[2]
         vdx, vdy, vdz = self._vel_dot
-        asx = add_if_not_nan(self._acc_sp[0], ex * kpx + vel_int[0] - vdx * kdx)
-        asy = add_if_not_nan(self._acc_sp[1], ey * kpy + vel_int[1] - vdy * kdy)
+        if _isfinite(self._vel[0]) and _isfinite(self._vel[1]):
+            asx = add_if_not_nan(self._acc_sp[0], ex * kpx + vel_int[0] - vdx * kdx)
+            asy = add_if_not_nan(self._acc_sp[1], ey * kpy + vel_int[1] - vdy * kdy)
+        else:
+            # Flying blind horizontally, the frozen integrator is the last measure of the wind:
+            # keep leaning into it rather than fly level and drift downwind.
+            asx = self._acc_sp[0] + vel_int[0]
+            asy = self._acc_sp[1] + vel_int[1]
         asz = add_if_not_nan(self._acc_sp[2], ez * kpz + vel_int[2] - vdz * kdz)
         self._acc_sp = (asx, asy, asz)
 

@@ -242,6 +242,18 @@ def test_reset_integral():
     assert pc.velocity_integral == (0.0, 0.0, 0.0)
 
 
+def test_blind_horizontal_flight_keeps_leaning_into_the_learned_wind():
+    pc = PositionControl()
+    for _ in range(200):  # a steady northward velocity error stands for a wind from the north
+        _run(pc, ZERO3, pos=ZERO3, vel=(-0.5, 0.0, 0.0))
+    wind_lean = pc.velocity_integral[0]
+    assert wind_lean == pytest.approx(2.0 * 0.5 * 0.4)  # seconds × error × MPC_XY_VEL_I_ACC
+    # Velocity estimate lost: zero horizontal acceleration plus the frozen integrator.
+    assert _run(pc, NAN3, (NAN, NAN, 0.7), (0.0, 0.0, NAN), pos=NAN3, vel=(NAN, NAN, 0.7))
+    assert pc.local_position_setpoint().acceleration[:2] == pytest.approx((wind_lean, 0.0))
+    assert pc.velocity_integral[0] == wind_lean
+
+
 def test_yaw_falls_back_to_current_heading():
     pc = PositionControl()
     assert _run(pc, ZERO3, yaw=1.2, yaw_sp=NAN, yawspeed_sp=0.3)
