@@ -227,13 +227,13 @@ def print_modules(kind: str, runs: list[Run]) -> None:
             cpu, busy = totals.setdefault(m, [0.0, 0.0])
             totals[m] = [cpu + b.cpu[m] - a.cpu[m], busy + r.in_run(m, a, b)]
     print(f"\nCPU per module, {kind} ({len(runs)} run(s), {sim:.1f} s simulated in {wall:.1f} s)")
-    print(f"{'module':<22} {'CPU s/sim s':>11} {'% of a core':>11} {'run()/CPU':>9}")
+    print(f"{'module':<26} {'CPU s/sim s':>11} {'% of a core':>11} {'run()/CPU':>9}")
     for m, (cpu, busy) in sorted(totals.items(), key=lambda kv: -kv[1][0]):
         share = f"{busy / cpu * 100:.0f} %" if cpu > 0 and m != "supervisor" else "-"
-        print(f"{m:<22} {cpu / sim:>11.3f} {cpu / wall * 100:>10.1f}% {share:>9}")
+        print(f"{m:<26} {cpu / sim:>11.3f} {cpu / wall * 100:>10.1f}% {share:>9}")
     cpu = sum(v[0] for v in totals.values())
     busy = sum(v[1] for v in totals.values())
-    print(f"{'total':<22} {cpu / sim:>11.3f} {cpu / wall * 100:>10.1f}% {busy / cpu * 100:>7.0f} %")
+    print(f"{'total':<26} {cpu / sim:>11.3f} {cpu / wall * 100:>10.1f}% {busy / cpu * 100:>7.0f} %")
 
 
 def algorithms_cpu_per_step(profile: Profile, seed: int, steps: int = 2500) -> float:

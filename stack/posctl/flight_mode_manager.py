@@ -507,7 +507,8 @@ class FlightModeManager:
         return max(self._land_vz - step, min(self._land_vz + step, target))
 
     def _descend(self, state: VehicleState, home: HomePosition | None, dt: float) -> TrajectoryCommand:
-        """Level, descending at the landing rate: what is left without a horizontal position."""
+        """Descending at the landing rate with no horizontal acceleration: all that is left without a position
+        (the position controller still leans into the wind it had learned)."""
         self._land_vz = self._slew_descent(self._p["MPC_LAND_SPEED"], dt)
         yaw, yawspeed = self._hold_heading(dt)
         return TrajectoryCommand(
