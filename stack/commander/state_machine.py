@@ -89,6 +89,10 @@ TAKEOFF_ALTITUDE_RELATIVE = 1
 _POSITION_KNOWN = int(Requirement.LOCAL_POSITION_RELAXED | Requirement.LOCAL_ALT)
 _POSITION_AND_ALTITUDE = int(Requirement.LOCAL_POSITION | Requirement.LOCAL_ALT)
 
+# Shared with the simulator, which acts on an injected failure only when it is enabled.
+FAILURE_INJECTION_PARAM = Param(
+    "SYS_FAILURE_EN", 0, 0, 1, "", "Accept failure injection commands (simulation)", choices=(0, 1)
+)
 OWN_PARAMS: tuple[Param, ...] = (
     Param("COM_DISARM_LAND", 2.0, -1.0, 20.0, "s", "Disarm this long after landing (≤ 0: never)"),
     Param("COM_DISARM_PRFLT", 10.0, -1.0, 20.0, "s", "Disarm this long after arming without taking off (≤ 0: never)"),
@@ -99,7 +103,7 @@ OWN_PARAMS: tuple[Param, ...] = (
     Param("SYS_HAS_BARO", 1, 0, 1, "", "A barometer is fitted and required to arm", choices=(0, 1)),
     Param("SYS_HAS_MAG", 1, 0, 1, "", "A magnetometer is fitted and required to arm", choices=(0, 1)),
     Param("SYS_HAS_GPS", 1, 0, 1, "", "A GNSS receiver is fitted", choices=(0, 1)),
-    Param("SYS_FAILURE_EN", 0, 0, 1, "", "Accept failure injection commands (simulation)", choices=(0, 1)),
+    FAILURE_INJECTION_PARAM,
     Param("MIS_TAKEOFF_ALT", 2.5, 0.0, None, "m", "Takeoff altitude above home when a takeoff gives none"),
     Param("NAV_MC_ALT_RAD", 0.8, 0.05, 200.0, "m", "Vertical acceptance radius (takeoff altitude reached)"),
 )

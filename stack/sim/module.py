@@ -12,6 +12,7 @@ import math
 
 from stack.commander import battery
 from stack.commander.battery import BatteryModel
+from stack.commander.state_machine import FAILURE_INJECTION_PARAM
 from stack.mathlib.vector import Vec3
 from stack.msg.sensors import SensorAccel, SensorBaro, SensorGps, SensorGyro, SensorMag
 from stack.msg.simulation import SimGroundtruth
@@ -52,6 +53,7 @@ class SimulatorModule(Module):
         Param("SIM_WIND_DIR", 0.0, 0.0, 360.0, "deg", "Direction the wind blows from (ArduPilot SIM_WIND_DIR)"),
         Param("SIM_WIND_GUST", 0.0, 0.0, 20.0, "m/s", "Horizontal gust standard deviation"),
         Param("SIM_WIND_GUST_T", 2.0, 0.1, 60.0, "s", "Gust correlation time"),
+        FAILURE_INJECTION_PARAM,
         *battery.PARAMS,
     )
 
@@ -117,6 +119,9 @@ class SimulatorModule(Module):
         """PX4's ``failure`` command (MAV_CMD_INJECT_FAILURE) as the simulated sensors implement it: GPS off/ok."""
         for cmd in self.take("vehicle_command"):
             if cmd.command != VehicleCommand.VEHICLE_CMD_INJECT_FAILURE:
+                continue
+            if not self.params["SYS_FAILURE_EN"]:
+                self.log.warning("failure injection ignored: SYS_FAILURE_EN is 0 (the commander denies it)")
                 continue
             unit, kind = cmd.param1, cmd.param2
             if unit != VehicleCommand.FAILURE_UNIT_SENSOR_GPS or kind not in (

@@ -250,7 +250,7 @@ def inject_gps(kind: int, unit: int = CMD.FAILURE_UNIT_SENSOR_GPS) -> VehicleCom
 
 
 def test_inject_failure_switches_the_simulated_gps_off_and_back_on():
-    module, rt = simulator_module()
+    module, rt = simulator_module(SYS_FAILURE_EN=1)
     command(rt, inject_gps(CMD.FAILURE_TYPE_OFF))
     run(module, rt, 0.5)
     assert not module.sim.gps_enabled
@@ -269,11 +269,23 @@ def test_inject_failure_switches_the_simulated_gps_off_and_back_on():
     ],
 )
 def test_other_commands_and_unsimulated_failures_leave_the_gps_on(cmd):
-    module, rt = simulator_module()
+    module, rt = simulator_module(SYS_FAILURE_EN=1)
     command(rt, cmd)
     run(module, rt, 0.2)
     assert module.sim.gps_enabled
     assert all(m.fix_type == 3 for m in rt.published("sensor_gps"))
+
+
+def test_failure_injection_is_ignored_while_sys_failure_en_is_0():
+    module, rt = simulator_module()  # the commander denies it too
+    command(rt, inject_gps(CMD.FAILURE_TYPE_OFF))
+    run(module, rt, 0.2)
+    assert module.sim.gps_enabled
+    rt.params.set("SYS_FAILURE_EN", 1)
+    module.on_params_changed(rt.params.take_changes())
+    command(rt, inject_gps(CMD.FAILURE_TYPE_OFF))
+    run(module, rt, 0.004)
+    assert not module.sim.gps_enabled
 
 
 def test_sim_gps_used_below_4_satellites_is_a_gps_loss():
