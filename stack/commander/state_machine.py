@@ -439,9 +439,8 @@ class Commander:
         self._auto_disarm.force(False)
         lpos = self._inputs.local_position
         position_known = not int(self._failing) & _POSITION_KNOWN
-        self._home = None
         if position_known and lpos is not None:
-            self._set_home(lpos)
+            self._set_home(lpos)  # without a position now, the home set before stays, as in PX4
         self._events.append("Armed (forced: pre-arm checks skipped)" if forced else "Armed")
         return ""
 

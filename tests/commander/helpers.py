@@ -53,13 +53,19 @@ def healthy(t_us: int, position: tuple[float, float, float] = (0.0, 0.0, 0.0), l
 class Clock:
     """A commander stepped at a fixed rate with inputs made by a function of time."""
 
-    def __init__(self, commander: Commander, t_us: int = 1_000_000, period_us: int = 10_000) -> None:
+    def __init__(
+        self,
+        commander: Commander,
+        t_us: int = 1_000_000,
+        period_us: int = 10_000,
+        overrides: dict[str, object] | None = None,
+    ) -> None:
         self.commander = commander
         self.t = t_us
         self.period = period_us
         self.position = (0.0, 0.0, 0.0)
         self.landed = True
-        self.overrides: dict[str, object] = {}
+        self.overrides: dict[str, object] = dict(overrides or {})
         self.events: list[str] = []
         self.last: CommanderOutputs = commander.update(self.t, self.inputs())
 

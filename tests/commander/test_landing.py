@@ -1,8 +1,8 @@
 from stack.commander import commands as C
-from stack.commander.state_machine import ArmDisarmReason
+from stack.commander.state_machine import ArmDisarmReason, Commander
 from stack.msg.system import VehicleCommandAck as ACK
 from stack.msg.system import VehicleStatus as NS
-from tests.commander.helpers import make_clock
+from tests.commander.helpers import Clock, make_clock
 
 
 def _hovering(**params):
@@ -62,8 +62,7 @@ def test_return_mode_reaches_the_ground_and_disarms():
 
 
 def test_home_is_set_when_a_position_first_appears_on_the_ground():
-    clock = make_clock()
-    clock.overrides = {"local_position": None}
+    clock = Clock(Commander({"COM_FAIL_ACT_T": 0.0}), overrides={"local_position": None})
     clock.step()
     clock.send(C.set_mode_command("stabilized"))
     clock.send(C.arm_command())
