@@ -51,8 +51,11 @@ class ManualAltitudeTask:
         self.p = {k: float(v) for k, v in params.items()}  # type: ignore[arg-type]
 
     def activate(self, state: VehicleState) -> None:
+        """Lock where the vehicle is if it is (nearly) still; a moving vehicle first brakes, then locks."""
         self._yaw = state.yaw
-        self._lock_z = state.position[2]
+        vz = state.velocity[2]
+        slow = not math.isfinite(vz) or abs(vz) < self.p["MPC_HOLD_MAX_Z"]
+        self._lock_z = state.position[2] if slow else NAN
 
     def _vertical(self, sticks: Sticks, state: VehicleState) -> tuple[float, float]:
         """(position z, velocity z) from the throttle stick with the altitude lock."""
@@ -96,7 +99,8 @@ class ManualPositionTask(ManualAltitudeTask):
 
     def activate(self, state: VehicleState) -> None:
         super().activate(state)
-        self._lock_xy = (state.position[0], state.position[1])
+        slow = math.hypot(state.velocity[0], state.velocity[1]) < self.p["MPC_HOLD_MAX_XY"]
+        self._lock_xy = (state.position[0], state.position[1]) if slow else None
 
     def update(self, state: VehicleState, manual: ManualControlSetpoint | None, dt: float) -> TrajectoryCommand:
         p = self.p

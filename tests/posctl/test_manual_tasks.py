@@ -146,6 +146,15 @@ def test_released_throttle_locks_the_altitude_only_once_slower_than_mpc_hold_max
     assert fly(task, sticks(), state(position=(1.0, 2.0, -9.7))).position[2] == -9.5
 
 
+def test_a_mode_entered_at_speed_brakes_before_it_locks():
+    task = position_task(at=state(velocity=(8.0, 0.0, -2.0)))  # e.g. switching from a mission leg
+    braking = fly(task, sticks(), state(position=(9.0, 2.0, -7.0), velocity=(3.0, 0.0, -1.0)))
+    assert math.isnan(braking.position[0]) and math.isnan(braking.position[2])
+    assert braking.velocity == (0.0, 0.0, 0.0)
+    stopped = fly(task, sticks(), state(position=(11.0, 2.0, -7.5), velocity=(0.2, 0.0, 0.1)))
+    assert stopped.position == (11.0, 2.0, -7.5)
+
+
 def test_invalid_sticks_hold_even_when_deflected():
     task = position_task()
     command = fly(task, ManualControlSetpoint(valid=False, pitch=1.0, roll=1.0, throttle=1.0, yaw=1.0))
