@@ -5,6 +5,11 @@ and restart policy, plus the vehicle namespace and bus settings. Everything is c
 process starts; a problem is reported in one line naming the file, the key and what is wrong::
 
     launch/sitl_quad.toml: module[3].params.MC_ROLLRATE_P: 0.9 is above the maximum 0.5
+
+A profile may start from another (``extends = "sitl_quad"``, looked up beside it, then by name) and
+give only what differs: its tables are merged into the base's key by key, and each ``[[module]]`` it
+lists changes the base's module of the same name (its ``params`` and ``args`` merged likewise) or, if
+the base has none, is started after the base's modules.
 """
 
 from __future__ import annotations
@@ -107,22 +112,82 @@ def load_profile(profile: str | Path, *, flags: dict[str, bool] | None = None) -
     return _Loader(path).load(flags or {})
 
 
+def merge_documents(base: dict, child: dict) -> dict:
+    """``child`` over ``base``: tables merged key by key, ``[[module]]`` entries matched by name."""
+    merged = dict(base)
+    for key, value in child.items():
+        if key == "module" and isinstance(value, list) and isinstance(base.get(key), list):
+            merged[key] = _merge_modules(base[key], value)
+        elif isinstance(value, dict) and isinstance(base.get(key), dict):
+            merged[key] = merge_documents(base[key], value)
+        else:
+            merged[key] = value
+    return merged
+
+
+def _merge_modules(base: list, child: list) -> list:
+    merged = list(base)
+    index = {_entry_name(e): i for i, e in enumerate(base)}
+    for entry in child:
+        i = index.get(_entry_name(entry))
+        if i is None or not isinstance(entry, dict) or not isinstance(merged[i], dict):
+            merged.append(entry)
+        else:
+            merged[i] = merge_documents(merged[i], entry)
+    return merged
+
+
+def _entry_name(entry: object) -> object:
+    """The name a ``[[module]]`` entry will run under (its ``name``, else its module's NAME)."""
+    if not isinstance(entry, dict):
+        return None
+    if "name" in entry:
+        return entry["name"]
+    ref = entry.get("module")
+    if not isinstance(ref, str):
+        return None
+    try:
+        return load_module_class(ref).NAME or ref
+    except ValueError:
+        return ref  # refused with its reason when the entry itself is checked
+
+
 class _Loader:
     def __init__(self, path: Path) -> None:
         self.path = path
+        self.bases: list[Path] = []  # the profiles it extends, nearest first
 
     def fail(self, key: str, problem: str) -> ProfileError:
-        where = f"{self.path}: {key}: " if key else f"{self.path}: "
-        return ProfileError(where + problem)
+        source = f"{self.path} (extends {' < '.join(str(b) for b in self.bases)})" if self.bases else str(self.path)
+        return ProfileError(f"{source}: {key}: {problem}" if key else f"{source}: {problem}")
+
+    def _document(self, path: Path, extended_by: tuple[Path, ...]) -> dict:
+        """The TOML document of ``path`` merged onto the profile it extends, recursively."""
+        try:
+            doc = tomllib.loads(path.read_text())
+        except tomllib.TOMLDecodeError as e:
+            raise ProfileError(f"{path}: TOML syntax error: {e}") from None
+        base_name = doc.pop("extends", None)
+        if base_name is None:
+            return doc
+        if not isinstance(base_name, str):
+            raise ProfileError(f"{path}: extends: expected a profile name or path, got {base_name!r}")
+        beside = path.parent / (base_name if base_name.endswith(".toml") else f"{base_name}.toml")
+        base = beside if beside.exists() else resolve_path(base_name)
+        if not base.exists():
+            known = ", ".join(available_profiles())
+            raise ProfileError(f"{path}: extends: no such profile '{base_name}' (available: {known})")
+        chain = (*extended_by, path.resolve())
+        if base.resolve() in chain:
+            raise ProfileError(f"{path}: extends: '{base_name}' leads back to this profile")
+        self.bases.append(base)
+        return merge_documents(self._document(base, chain), doc)
 
     def load(self, flags: dict[str, bool]) -> Profile:
         if not self.path.exists():
             known = ", ".join(available_profiles())
             raise ProfileError(f"{self.path}: no such profile (available: {known})")
-        try:
-            doc = tomllib.loads(self.path.read_text())
-        except tomllib.TOMLDecodeError as e:
-            raise self.fail("", f"TOML syntax error: {e}") from None
+        doc = self._document(self.path, ())
         self._only(doc, "", {"stack", "bus", "params", "module", "scenario"})
         stack = self._table(doc, "stack")
         self._only(stack, "stack", {"vehicle", "description", "lockstep", "seed", "airframe", "stall_timeout_s"})

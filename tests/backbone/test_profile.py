@@ -73,6 +73,72 @@ def test_a_broken_profile_is_refused_naming_file_key_and_problem(tmp_path, chang
     assert problem in message
 
 
+def test_a_profile_extends_another_giving_only_what_differs(tmp_path):
+    write_profile(tmp_path / "good.toml", GOOD)
+    child = write_profile(
+        tmp_path / "child.toml",
+        """extends = "good"
+[stack]
+seed = 9
+
+[params]
+TEST_OFFSET = 4.0
+
+[[module]]
+module = "tests.support.modules:TickSource"
+params = { TEST_GAIN = 3.0 }
+
+[[module]]
+module = "tests.support.modules:Summer"
+""",
+    )
+    p = load_profile(child)
+    assert p.vehicle == "t1" and p.seed == 9
+    assert [m.name for m in p.modules] == ["tick_source", "doubler", "summer"]
+    tick, doubler, _ = p.modules
+    assert tick.params == {"TEST_GAIN": 3.0} and tick.args["rate_hz"] == 100.0 and tick.critical
+    assert doubler.params == {"TEST_OFFSET": 4.0} and doubler.restart == "on-failure"
+    assert load_profile(tmp_path / "good.toml").seed == 3
+
+
+def test_the_vehicle_profiles_extend_sitl_quad_changing_only_airframe_and_tuning():
+    quad = load_profile("sitl_quad")
+    for name in ("sitl_hummingbird", "sitl_pelican", "sitl_firefly"):
+        vehicle = load_profile(name)
+        assert [m.name for m in vehicle.modules] == [m.name for m in quad.modules]
+        assert vehicle.modules[0].args["vehicle"] == vehicle.airframe != quad.airframe
+        commander = next(m for m in vehicle.modules if m.name == "commander")
+        assert commander.params["NAV_DLL_ACT"] == 2  # inherited failsafe setting
+        rate = next(m for m in vehicle.modules if m.name == "mc_rate_control")
+        assert rate.params["MC_ROLLRATE_K"] != next(m for m in quad.modules if m.name == "mc_rate_control").params[
+            "MC_ROLLRATE_K"
+        ]
+
+
+@pytest.mark.parametrize(
+    ("child", "problem"),
+    [
+        ('extends = "nowhere"\n', "extends: no such profile 'nowhere'"),
+        ("extends = 3\n", "extends: expected a profile name or path"),
+        ('extends = "child"\n', "extends: 'child' leads back to this profile"),
+    ],
+)
+def test_a_broken_extends_is_refused_naming_the_file(tmp_path, child, problem):
+    path = write_profile(tmp_path / "child.toml", child)
+    with pytest.raises(ProfileError) as err:
+        load_profile(path)
+    assert str(err.value).startswith(f"{path}: ")
+    assert problem in str(err.value)
+
+
+def test_a_problem_in_an_extended_profile_names_both_files(tmp_path):
+    base = write_profile(tmp_path / "good.toml", GOOD)
+    child = write_profile(tmp_path / "child.toml", 'extends = "good"\n[params]\nTEST_OFFSET = 500\n')
+    with pytest.raises(ProfileError) as err:
+        load_profile(child)
+    assert str(err.value).startswith(f"{child} (extends {base}): params.TEST_OFFSET: ")
+
+
 def test_stack_up_refuses_a_broken_profile_before_starting_anything(tmp_path):
     path = write_profile(tmp_path / "broken.toml", GOOD.replace("TEST_GAIN = 2.0", "TEST_GAIN = 20.0"))
     home = tmp_path / "home"
