@@ -15,15 +15,16 @@ from tests.flight.flights import Flight, fly_scenario
 
 @pytest.fixture(scope="session")
 def fly(tmp_path_factory: pytest.TempPathFactory) -> Callable[..., Flight]:
-    """``fly(seed, run=0, scenario="attitude_step")``: the flight of that scenario and seed on the
-    default profile (``run`` tells repeated flights apart)."""
-    flights: dict[tuple[str, int, int], Flight] = {}
+    """``fly(seed, run=0, scenario="attitude_step", wind=False)``: the flight of that scenario and seed
+    on the default profile (``run`` tells repeated flights apart; ``wind`` flies ``--wind``)."""
+    flights: dict[tuple[str, int, int, bool], Flight] = {}
 
-    def flight(seed: int, run: int = 0, scenario: str = "attitude_step") -> Flight:
-        key = (scenario, seed, run)
+    def flight(seed: int, run: int = 0, scenario: str = "attitude_step", wind: bool = False) -> Flight:
+        key = (scenario, seed, run, wind)
         if key not in flights:
-            home = tmp_path_factory.mktemp(f"fly-{scenario}-seed{seed}-run{run}")
-            flights[key] = fly_scenario(home, scenario, seed)
+            windy = "-wind" if wind else ""
+            home = tmp_path_factory.mktemp(f"fly-{scenario}-seed{seed}-run{run}{windy}")
+            flights[key] = fly_scenario(home, scenario, seed, wind=wind)
         return flights[key]
 
     return flight

@@ -33,13 +33,15 @@ class Flight:
         return self.messages("vehicle_attitude_setpoint")[-1].pub_time_us
 
 
-def fly_scenario(home: Path, scenario: str, seed: int, profile: str = "sitl_quad") -> Flight:
-    """``stack fly SCENARIO --profile PROFILE --seed SEED`` with a report and a recording, in STACK_HOME ``home``."""
+def fly_scenario(home: Path, scenario: str, seed: int, profile: str = "sitl_quad", wind: bool = False) -> Flight:
+    """``stack fly SCENARIO --profile PROFILE --seed SEED [--wind]`` with a report and a recording, in
+    STACK_HOME ``home``."""
     report, recording = home / "report.json", home / "flight.mcap"
     out = run_cli(
         home,
         *("fly", scenario, "--profile", profile, "--seed", str(seed), "--quiet"),
         *("--report", str(report), "--record", str(recording)),
+        *(["--wind"] if wind else []),
         timeout=FLY_TIMEOUT_S,
     )
     output = out.stdout + out.stderr
