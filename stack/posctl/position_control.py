@@ -128,6 +128,8 @@ class PositionControl:
     and ``local_position_setpoint()``. ``update`` returns False when the setpoint cannot be executed
     (an axis without any finite setpoint, x/y given unpaired, a missing state estimate for a
     controlled quantity, or a non-finite result); the caller then feeds ``failsafe_setpoint``.
+    One departure from PX4: without a horizontal velocity estimate the frozen velocity integrator is
+    still added to the acceleration, so a blind descent keeps leaning into the wind it had learned.
     """
 
     __slots__ = (
