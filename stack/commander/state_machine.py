@@ -51,6 +51,7 @@ from typing import NamedTuple
 
 from stack.commander.failsafe import ACTION_NAMES, Failsafe, FailsafeAction, FailsafeConditions
 from stack.commander.failsafe import PARAMS as FAILSAFE_PARAMS
+from stack.commander.failure_injection import FAILURE_INJECTION_PARAM
 from stack.commander.geofence import PARAMS as GEOFENCE_PARAMS
 from stack.commander.geofence import CylinderGeofence
 from stack.commander.health import (
@@ -89,10 +90,6 @@ TAKEOFF_ALTITUDE_RELATIVE = 1
 _POSITION_KNOWN = int(Requirement.LOCAL_POSITION_RELAXED | Requirement.LOCAL_ALT)
 _POSITION_AND_ALTITUDE = int(Requirement.LOCAL_POSITION | Requirement.LOCAL_ALT)
 
-# Shared with the simulator, which acts on an injected failure only when it is enabled.
-FAILURE_INJECTION_PARAM = Param(
-    "SYS_FAILURE_EN", 0, 0, 1, "", "Accept failure injection commands (simulation)", choices=(0, 1)
-)
 OWN_PARAMS: tuple[Param, ...] = (
     Param("COM_DISARM_LAND", 2.0, -1.0, 20.0, "s", "Disarm this long after landing (≤ 0: never)"),
     Param("COM_DISARM_PRFLT", 10.0, -1.0, 20.0, "s", "Disarm this long after arming without taking off (≤ 0: never)"),

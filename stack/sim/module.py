@@ -12,7 +12,7 @@ import math
 
 from stack.commander import battery
 from stack.commander.battery import BatteryModel
-from stack.commander.state_machine import FAILURE_INJECTION_PARAM
+from stack.commander.failure_injection import FAILURE_INJECTION_PARAM
 from stack.mathlib.vector import Vec3
 from stack.msg.sensors import SensorAccel, SensorBaro, SensorGps, SensorGyro, SensorMag
 from stack.msg.simulation import SimGroundtruth

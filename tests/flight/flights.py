@@ -11,6 +11,17 @@ from tests.support.harness import run_cli, wait_no_processes
 
 # Generous: a flight takes 10-30 s of wall time, several times that on a loaded machine.
 FLY_TIMEOUT_S = 600.0
+# The first-flight issue's targets: 10° steps rise (10–90 %) within 80 ms in roll and pitch and 200 ms
+# in yaw, overshoot at most 10 %, and the attitude estimate stays within 1° RMS of the truth.
+ATTITUDE_STEP_TARGETS = {
+    "roll_rise_time_s": 0.08,
+    "roll_overshoot_pct": 10.0,
+    "pitch_rise_time_s": 0.08,
+    "pitch_overshoot_pct": 10.0,
+    "yaw_rise_time_s": 0.20,
+    "yaw_overshoot_pct": 10.0,
+    "attitude_est_error_rms_deg": 1.0,
+}
 
 
 @dataclass(frozen=True)

@@ -7,22 +7,12 @@ from collections.abc import Callable
 
 import pytest
 
+from tests.flight.flights import ATTITUDE_STEP_TARGETS as TARGETS
 from tests.flight.flights import Flight
 
 pytestmark = pytest.mark.flight
 Fly = Callable[..., Flight]
 
-# The targets: 10° steps rise (10–90 %) within 80 ms in roll and pitch and 200 ms in yaw,
-# overshoot at most 10 %, and the attitude estimate stays within 1° RMS of the truth.
-TARGETS = {
-    "roll_rise_time_s": 0.08,
-    "roll_overshoot_pct": 10.0,
-    "pitch_rise_time_s": 0.08,
-    "pitch_overshoot_pct": 10.0,
-    "yaw_rise_time_s": 0.20,
-    "yaw_overshoot_pct": 10.0,
-    "attitude_est_error_rms_deg": 1.0,
-}
 REPORT_KEYS = {
     "scenario",
     "profile",

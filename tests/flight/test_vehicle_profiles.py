@@ -8,21 +8,11 @@ from __future__ import annotations
 
 import pytest
 
+from tests.flight.flights import ATTITUDE_STEP_TARGETS as ISSUE_LIMITS
 from tests.flight.flights import Flight, fly_scenario
 
 pytestmark = pytest.mark.flight
 
-# The issue's limits: 10° steps rise (10–90 %) within 80 ms in roll and pitch and 200 ms in yaw,
-# overshoot at most 10 %, and the attitude estimate stays within 1° RMS of the truth.
-ISSUE_LIMITS = {
-    "roll_rise_time_s": 0.08,
-    "roll_overshoot_pct": 10.0,
-    "pitch_rise_time_s": 0.08,
-    "pitch_overshoot_pct": 10.0,
-    "yaw_rise_time_s": 0.20,
-    "yaw_overshoot_pct": 10.0,
-    "attitude_est_error_rms_deg": 1.0,
-}
 # launch/sitl_firefly.toml, [scenario.attitude_step]: the time-optimal yaw rise with the collective
 # at hover is 0.296 s on the Firefly, as it is 0.199 s on the SIH quad the issue's 0.20 s was set for.
 OVERRIDES = {"sitl_firefly": {"yaw_rise_time_s": 0.30}}
