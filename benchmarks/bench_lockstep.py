@@ -149,17 +149,16 @@ def cpu_seconds(procs: dict[str, psutil.Process]) -> dict[str, float] | None:
         return None  # a process has just exited
 
 
-def watch(proc: subprocess.Popen, vehicle: str, run: Run, timeout: float) -> None:
+def watch(proc: subprocess.Popen, run: Run, timeout: float) -> None:
     """Follow a running stack's heartbeats until its process ends, sampling CPU on the clock's beats."""
     deadline = time.monotonic() + timeout
-    while not any(s.get("vehicle") == vehicle for s in run_state.running_stacks()):
+    while not (state := next((s for s in run_state.running_stacks() if s["pid"] == proc.pid), None)):
         if proc.poll() is not None or time.monotonic() > deadline:
             raise SystemExit(f"{run.kind}: the stack did not come up")
         time.sleep(0.05)
-    state = json.loads(run_state.state_path(vehicle).read_text())
     decoder = msgspec.msgpack.Decoder(ModuleHeartbeat)
-    with connect(vehicle, None, name="bench") as node:
-        sub = node.session.declare_subscriber(keys.heartbeat_all(vehicle))
+    with connect(run_state.stack_name(state), None, name="bench") as node:
+        sub = node.session.declare_subscriber(keys.heartbeat_all(node.vehicle))
         try:
             while proc.poll() is None:
                 if time.monotonic() > deadline:
@@ -180,7 +179,7 @@ def watch(proc: subprocess.Popen, vehicle: str, run: Run, timeout: float) -> Non
             sub.undeclare()
 
 
-def run_stack(kind: str, args: list[str], vehicle: str, home: Path, timeout: float) -> Run:
+def run_stack(kind: str, args: list[str], home: Path, timeout: float) -> Run:
     run = Run(kind)
     log = home / f"{kind}.out"
     with log.open("w") as out:
@@ -188,7 +187,7 @@ def run_stack(kind: str, args: list[str], vehicle: str, home: Path, timeout: flo
             [sys.executable, "-m", "stack", *args], env=stack_env(home), stdout=out, stderr=subprocess.STDOUT, cwd=REPO
         )
         try:
-            watch(proc, vehicle, run, timeout)
+            watch(proc, run, timeout)
             proc.wait(timeout=60.0)
         finally:
             if proc.poll() is None:
@@ -296,7 +295,6 @@ def main() -> None:
     if args.quick:
         args.runs, args.duration = 1, 6.0
     profile = load_profile(args.profile)
-    vehicle = profile.vehicle
     load = os.getloadavg()
     print(f"load average {load[0]:.2f} {load[1]:.2f} {load[2]:.2f} on {os.cpu_count()} CPUs; profile {args.profile}")
     timeout = 300.0
@@ -309,14 +307,14 @@ def main() -> None:
         for i in range(args.runs):
             report = home / f"report{i}.json"
             fly_args = ["fly", args.scenario, "--profile", args.profile, "--seed", str(args.seed), "-q"]
-            flight = run_stack("fly", [*fly_args, "--report", str(report)], vehicle, home, timeout)
+            flight = run_stack("fly", [*fly_args, "--report", str(report)], home, timeout)
             flight.report = json.loads(report.read_text())
             flights.append(flight)
             up_args = ["up", args.profile, "--duration", str(args.duration), "-q"]
-            ups.append(run_stack("up", up_args, vehicle, home, timeout))
+            ups.append(run_stack("up", up_args, home, timeout))
             if not args.no_floor:
                 floor_args = ["up", str(floor_profile), "--duration", str(args.duration), "-q"]
-                floors.append(run_stack("floor", floor_args, FLOOR_VEHICLE, home, timeout))
+                floors.append(run_stack("floor", floor_args, home, timeout))
             print(f"run {i + 1}/{args.runs} done", flush=True)
     print_runs([*flights, *ups, *floors])
     print_modules("fly", flights)

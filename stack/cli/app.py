@@ -51,9 +51,9 @@ def up(
     except ProfileError as e:
         fail(str(e), code=2)
     add_observers(prof, plot=plot_, web=web, save=save, record=record)
-    for running in run_state.running_stacks():
-        if running["vehicle"] == prof.vehicle:
-            fail(f"a stack for vehicle '{prof.vehicle}' is already running (pid {running['pid']}); `stack down` first")
+    running = run_state.addressed_stacks(prof.vehicle)
+    if running:
+        fail(f"a stack for vehicle '{prof.vehicle}' is already running (pid {running[0]['pid']}); `stack down` first")
     run_dir = run_state.new_run_dir(prof.name, prof.vehicle)
     supervisor = Supervisor(prof, UpOptions(duration=duration, log_level=log_level, echo_logs=not quiet), run_dir)
     if record is not None:
@@ -66,16 +66,17 @@ def down(
     vehicle: str | None = VehicleOption,
     timeout: float = typer.Option(30.0, help="Seconds to wait for the stack to stop"),
 ) -> None:
-    """Stop a running stack (its supervisor stops the modules in reverse order)."""
-    stacks = [s for s in run_state.running_stacks() if vehicle is None or s["vehicle"] == vehicle]
+    """Stop the running `stack up` stacks, or the flights if none runs, or the one named (its supervisor
+    stops the modules in reverse order)."""
+    stacks = run_state.addressed_stacks(vehicle)
     if not stacks:
         fail("no running stack found")
     for s in stacks:
-        pid = int(s["pid"])
+        pid, name = int(s["pid"]), run_state.stack_name(s)
         os.kill(pid, signal.SIGTERM)
-        typer.echo(f"stopping stack '{s['vehicle']}' (supervisor pid {pid})")
+        typer.echo(f"stopping stack '{name}' (supervisor pid {pid})")
         if not _wait_exit(pid, timeout):
-            fail(f"stack '{s['vehicle']}' did not stop within {timeout:g} s")
+            fail(f"stack '{name}' did not stop within {timeout:g} s")
     typer.echo("stopped")
 
 

@@ -17,7 +17,12 @@ from stack.bus.config import BusConfig
 from stack.bus.node import Node
 from stack.supervisor import state as run_state
 
-VehicleOption = typer.Option(None, "--vehicle", "-v", help="Vehicle namespace (default: the running stack's)")
+VehicleOption = typer.Option(
+    None,
+    "--vehicle",
+    "-v",
+    help="The stack: its vehicle, or a flight's <vehicle>-fly-<pid> (default: the `stack up` one, else the flight)",
+)
 EndpointOption = typer.Option(
     None, "--endpoint", "-e", envvar="STACK_ENDPOINT", help="Zenoh endpoint of the stack (default: from stack up)"
 )
@@ -33,14 +38,12 @@ def find_stack(vehicle: str | None, endpoint: str | None) -> tuple[str, BusConfi
     """The vehicle and bus settings to reach a running stack."""
     if endpoint:
         return vehicle or "v1", BusConfig(mode="client", connect=(endpoint,), listen=())
-    stacks = run_state.running_stacks()
-    if vehicle is not None:
-        stacks = [s for s in stacks if s["vehicle"] == vehicle]
+    stacks = run_state.addressed_stacks(vehicle)
     if not stacks:
-        which = f" for vehicle '{vehicle}'" if vehicle else ""
+        which = f" named '{vehicle}'" if vehicle else ""
         fail(f"no running stack found{which} (start one with `stack up`, or pass --endpoint)")
     if len(stacks) > 1:
-        names = ", ".join(str(s["vehicle"]) for s in stacks)
+        names = ", ".join(run_state.stack_name(s) for s in stacks)
         fail(f"several stacks are running ({names}): choose one with --vehicle")
     found = stacks[0]
     bus = BusConfig.from_json(json.dumps(found["bus"]))

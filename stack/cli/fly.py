@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import os
 from pathlib import Path
 
 import typer
@@ -41,7 +42,11 @@ def fly(
         False, "--wind", help=f"Fly in {WIND_SPEED:g} m/s wind with gusts; the limits are doubled"
     ),
 ) -> None:
-    """Fly a scripted scenario (in lockstep, deterministic for a seed) and report how well the stack flew."""
+    """Fly a scripted scenario (in lockstep, deterministic for a seed) and report how well the stack flew.
+
+    Each flight is a stack of its own (bus, ports, run directory, state) named <vehicle>-fly-<pid>;
+    it runs beside `stack up` and other flights, and other terminals reach it with --vehicle <name>.
+    """
     known = scenarios()
     if list_ or not scenario:
         for s in known.values():
@@ -53,11 +58,9 @@ def fly(
         prof = load_profile(profile, flags={"plot": plot_ or web, "record": record is not None})
     except ProfileError as e:
         fail(str(e), code=2)
-    for running in run_state.running_stacks():
-        if running["vehicle"] == prof.vehicle:
-            fail(f"a stack for vehicle '{prof.vehicle}' is already running (pid {running['pid']}); `stack down` first")
     if seed is not None:
         prof.seed = seed
+    prof.port = 0  # the flight's own router, on a free port
     chosen = known[scenario]
     try:
         set_params(prof, chosen.params)
@@ -65,14 +68,18 @@ def fly(
             set_params(prof, WIND_PARAMS)
     except ValueError as e:
         fail(f"scenario {scenario}: {e}", code=2)
-    run_dir = run_state.new_run_dir(f"fly-{scenario}", prof.vehicle)
+    name = run_state.flight_name(prof.vehicle, os.getpid())
+    run_dir = run_state.new_run_dir(scenario, name)
     result_path = run_dir / "scenario_result.json"
     limits = dict(prof.scenario_limits.get(scenario, {}))
     if wind:
         limits = windy_limits(chosen.checks, limits)
     add_scenario(prof, scenario, result_path, limits)
-    add_observers(prof, plot=plot_, web=web, save=save, record=record)
-    options = UpOptions(log_level=log_level, echo_logs=not quiet, echo_only=("scenario",) if quiet else ())
+    add_observers(prof, plot=plot_, web=web, save=save, record=record, own_ports=True)
+    options = UpOptions(
+        log_level=log_level, echo_logs=not quiet, echo_only=("scenario",) if quiet else (), kind=run_state.FLY
+    )
+    typer.echo(f"[stack] flight '{name}' (another terminal addresses it with --vehicle {name})")
     code = Supervisor(prof, options, run_dir).run()
     if not result_path.exists():
         fail(f"the scenario produced no result (supervisor exit code {code}); see the logs in {run_dir}")

@@ -205,6 +205,4 @@ def _default_vehicle(recorded: str, endpoint: str | None) -> str | None:
     """With an endpoint, the recorded vehicle; otherwise the recorded vehicle's stack if it runs."""
     if endpoint is not None:
         return recorded or None
-    if any(s["vehicle"] == recorded for s in run_state.running_stacks()):
-        return recorded
-    return None
+    return recorded if run_state.addressed_stacks(recorded) else None

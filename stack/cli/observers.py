@@ -24,12 +24,19 @@ def _entry(name: str, args: dict[str, object]) -> ModuleEntry:
     )
 
 
-def add_observers(prof: Profile, *, plot: bool, web: bool, save: str | None, record: Path | None) -> None:
-    """Insert the recorder first (it stops last, so it records to the end) and the plot bridge last."""
+def add_observers(
+    prof: Profile, *, plot: bool, web: bool, save: str | None, record: Path | None, own_ports: bool = False
+) -> None:
+    """Insert the recorder first (it stops last, so it records to the end) and the plot bridge last.
+
+    ``own_ports``: the viewer listens on free ports of its own (a flight beside others) instead of the
+    usual ones, where the plots of ``stack up`` join a viewer already open."""
     if record is not None:
         prof.modules.insert(0, _entry("recorder", {"path": str(record.resolve())}))
     if plot or web or save:
         args: dict[str, object] = {"web": web, "spawn": not web}
+        if own_ports:
+            args.update(grpc_port=0, web_port=0)
         if save:
             args["save"] = str(Path(save).resolve())
         prof.modules.append(_entry("rerun_bridge", args))

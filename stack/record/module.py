@@ -225,10 +225,8 @@ class RecordingPump:
 def profile_name(vehicle: str, supervisor_pid: int) -> str:
     """The launch profile of the running stack, from the state file its supervisor wrote."""
     try:
-        state = json.loads(run_state.state_path(vehicle).read_text())
+        state = json.loads(run_state.state_path(vehicle, supervisor_pid).read_text())
     except (OSError, json.JSONDecodeError):
-        return ""
-    if state.get("pid") != supervisor_pid:
         return ""
     return Path(str(state.get("profile", ""))).stem
 

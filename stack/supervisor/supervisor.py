@@ -46,6 +46,7 @@ class UpOptions:
     log_level: str = "INFO"
     echo_logs: bool = True
     echo_only: tuple[str, ...] = ()
+    kind: str = run_state.UP  # the command that started the stack, registered in its state
     extra_args: dict[str, dict[str, object]] = field(default_factory=dict)
 
 
@@ -139,6 +140,7 @@ class Supervisor:
     def state_record(self) -> dict[str, object]:
         return {
             "pid": os.getpid(),
+            "kind": self.options.kind,
             "vehicle": self.vehicle,
             "profile": str(self.profile.path),
             "endpoint": self.endpoint,

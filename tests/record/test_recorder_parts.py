@@ -15,6 +15,7 @@ from stack.record.provenance import git_commit
 from stack.record.recorder import RecordingInfo, RecordingReader, RecordingWriter
 from stack.record.replay import ReplayClock
 from stack.record.selection import TopicSelection
+from stack.supervisor.state import write_state
 
 
 class Bytes:
@@ -151,8 +152,7 @@ def test_git_commit_is_read_from_the_work_tree(tmp_path):
 
 def test_profile_name_comes_from_the_supervisor_state(tmp_path, monkeypatch):
     monkeypatch.setenv("STACK_HOME", str(tmp_path))
-    (tmp_path / "state").mkdir()
-    (tmp_path / "state" / "v1.json").write_text('{"pid": 321, "profile": "/x/launch/sitl_quad.toml"}')
+    write_state("v1", {"pid": 321, "profile": "/x/launch/sitl_quad.toml"})
     assert profile_name("v1", 321) == "sitl_quad"
     assert profile_name("v1", 999) == "" and profile_name("v2", 321) == ""
 

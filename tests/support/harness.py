@@ -38,14 +38,15 @@ def run_cli(home: Path, *args: str, timeout: float = 60.0) -> subprocess.Complet
 
 
 class RunningStack:
-    """`stack up PROFILE ...` in the background, with its output collected line by line."""
+    """`stack up PROFILE ...` (or `stack fly SCENARIO ...` with ``command="fly"``) in the background, with its
+    output collected line by line."""
 
-    def __init__(self, home: Path, profile: Path | str, *args: str) -> None:
+    def __init__(self, home: Path, profile: Path | str, *args: str, command: str = "up") -> None:
         self.home = home
         self.lines: list[str] = []
         self._cond = threading.Condition()
         self.proc = subprocess.Popen(
-            [sys.executable, "-m", "stack", "up", str(profile), *args],
+            [sys.executable, "-m", "stack", command, str(profile), *args],
             env=stack_env(home),
             stdout=subprocess.PIPE,
             stderr=subprocess.STDOUT,
