@@ -28,6 +28,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import dataclass
 from enum import IntEnum
+from functools import cache
 from typing import NamedTuple
 
 from stack.commander.battery import BatteryWarning
@@ -166,6 +167,7 @@ class FailsafeResult(NamedTuple):
     user_takeover: bool
 
 
+@cache
 def _from_dll_param(value: int) -> _Options:
     if value == 1:
         return _Options(FailsafeAction.HOLD, Clear.ON_MODE_CHANGE_OR_DISARM)
@@ -180,6 +182,7 @@ def _from_dll_param(value: int) -> _Options:
     return _Options(FailsafeAction.NONE)
 
 
+@cache
 def _from_geofence_param(value: int) -> _Options:
     action = GeofenceAction(value)
     if action == GeofenceAction.NONE:
@@ -195,6 +198,7 @@ def _from_geofence_param(value: int) -> _Options:
     return _Options(FailsafeAction.WARN)
 
 
+@cache
 def _from_battery_param(value: int, warning: int) -> _Options:
     if warning == BatteryWarning.CRITICAL:
         action = {1: FailsafeAction.RTL, 2: FailsafeAction.LAND, 3: FailsafeAction.RTL}.get(value, FailsafeAction.WARN)
@@ -225,17 +229,20 @@ def mode_fallback(failing: Requirement, intended: int) -> tuple[FailsafeAction, 
     return action, intended
 
 
+_FALLBACK_CHAIN = (
+    FailsafeAction.FALLBACK_POSCTL,
+    FailsafeAction.FALLBACK_ALTCTL,
+    FailsafeAction.FALLBACK_STAB,
+    FailsafeAction.HOLD,
+    FailsafeAction.RTL,
+    FailsafeAction.LAND,
+    FailsafeAction.DESCEND,
+)
+
+
 def runnable_action(action: FailsafeAction, failing: Requirement) -> FailsafeAction:
     """The action itself if its mode can run, else the next one down PX4's fallback chain."""
-    chain = (
-        FailsafeAction.FALLBACK_POSCTL,
-        FailsafeAction.FALLBACK_ALTCTL,
-        FailsafeAction.FALLBACK_STAB,
-        FailsafeAction.HOLD,
-        FailsafeAction.RTL,
-        FailsafeAction.LAND,
-        FailsafeAction.DESCEND,
-    )
+    chain = _FALLBACK_CHAIN
     if action not in chain:
         return action
     for candidate in chain[chain.index(action) :]:

@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import cache
 
 from stack.commander.battery import BatteryWarning
 from stack.commander.modes import MODES, REQUIREMENT_CAUSE, REQUIREMENT_TEXT, RUN_REQUIREMENTS, Requirement
@@ -91,10 +92,11 @@ _POS_RELAXED = int(Requirement.LOCAL_POSITION_RELAXED)
 _ALT = int(Requirement.LOCAL_ALT)
 _MISSION = int(Requirement.MISSION)
 _HOME = int(Requirement.HOME)
-# Plain-int masks: IntFlag arithmetic costs about a microsecond per operation.
+# Plain-int masks: IntFlag arithmetic and construction cost about a microsecond per operation.
 _RUN_MASKS: dict[int, int] = {state: int(m.requirements & RUN_REQUIREMENTS) for state, m in MODES.items()}
 _PREVENTS_ARMING = frozenset(s for s, m in MODES.items() if m.requirements & Requirement.PREVENT_ARMING)
 _REQUIREMENT_ORDER: tuple[tuple[int, Requirement], ...] = tuple((int(r), r) for r in REQUIREMENT_TEXT)
+_as_requirement = cache(Requirement)
 
 
 def failing_requirements(now_us: int, inp: CommanderInputs, params: HealthParams, home_valid: bool) -> Requirement:
@@ -122,7 +124,7 @@ def failing_requirements(now_us: int, inp: CommanderInputs, params: HealthParams
         failing |= _MISSION
     if not home_valid:
         failing |= _HOME
-    return Requirement(failing)
+    return _as_requirement(failing)
 
 
 def can_run(nav_state: int, failing: Requirement) -> bool:
@@ -173,7 +175,7 @@ def arming_denial(now_us: int, nav_state: int, failing: Requirement, inp: Comman
         return "Arming denied: no angular velocity estimate"
     if failing_bits & _ATT:
         return "Arming denied: attitude estimate invalid"
-    missing = first_missing(nav_state, Requirement(failing_bits & ~_HOME))
+    missing = first_missing(nav_state, _as_requirement(failing_bits & ~_HOME))
     if missing:
         return f"Arming denied: {mode.name} mode requires {missing}"
     needs_position = bool(_RUN_MASKS[nav_state] & (_POS | _POS_RELAXED))

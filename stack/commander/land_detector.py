@@ -115,16 +115,23 @@ class MulticopterLandDetector:
     ``vehicle_local_position``, at least every 50 ms). Publish the result when it changes, or at 1 Hz."""
 
     __slots__ = (
+        "_alt_gnd",
         "_freefall",
         "_ground_contact",
         "_ground_effect",
         "_hover_estimate_valid",
         "_in_descend",
         "_landed",
+        "_manual_thrust_min",
         "_maybe_landed",
         "_min_thrust_fallback",
-        "_p",
+        "_rot_max",
         "_stage_time_us",
+        "_stage_us",
+        "_thr_hover",
+        "_thr_min",
+        "_use_hte",
+        "_xy_vel_max",
         "_z_vel_max",
         "state",
     )
@@ -146,10 +153,18 @@ class MulticopterLandDetector:
 
     def set_params(self, params: Mapping[str, object]) -> None:
         p = {**DEFAULTS, **params}
-        self._p = p
         # PX4 rewrites LNDMC_Z_VEL_MAX when it exceeds the slowest landing speed / 1.2.
         ceiling = min(float(p["MPC_LAND_CRWL"]), float(p["MPC_LAND_SPEED"])) / 1.2
         self._z_vel_max = min(float(p["LNDMC_Z_VEL_MAX"]), ceiling)
+        self._xy_vel_max = float(p["LNDMC_XY_VEL_MAX"])
+        self._rot_max = math.radians(float(p["LNDMC_ROT_MAX"]))
+        self._alt_gnd = float(p["LNDMC_ALT_GND"])
+        self._thr_min = float(p["MPC_THR_MIN"])
+        self._thr_hover = float(p["MPC_THR_HOVER"])
+        # Manual-thrust modes idle at MPC_MANTHR_MIN; climb-rate modes at MPC_THR_MIN.
+        self._manual_thrust_min = float(p["MPC_MANTHR_MIN"]) + 0.01
+        self._use_hte = bool(p["MPC_USE_HTE"])
+        self._stage_us = round(float(p["LNDMC_TRIG_TIME"]) * 1e6 / 3.0)
         self._stage_time_us = -1
 
     @property
@@ -158,14 +173,13 @@ class MulticopterLandDetector:
         return self._z_vel_max
 
     def _set_stage_time(self, factor: int) -> None:
-        stage_us = round(float(self._p["LNDMC_TRIG_TIME"]) * 1e6 / 3.0) * factor
+        stage_us = self._stage_us * factor
         if stage_us != self._stage_time_us:
             self._stage_time_us = stage_us
             for h in (self._ground_contact, self._maybe_landed, self._landed):
                 h.set_hysteresis_time_from(False, stage_us)
 
     def update(self, now_us: int, inp: LandDetectorInputs) -> LandDetectorState:
-        p = self._p
         armed = inp.armed
         # A range finder that is fitted but out of range makes every stage three times slower.
         self._set_stage_time(3 if inp.dist_bottom_observable and not inp.dist_bottom_valid else 1)
@@ -183,16 +197,14 @@ class MulticopterLandDetector:
             (inp.v_z_valid and abs(inp.vz) < vz_limit) or (inp.z_valid and abs(inp.z_deriv) < vz_limit)
         )
         vertical_movement = not still_z
-        horizontal_movement = (
-            lpos_available and inp.v_xy_valid and math.hypot(inp.vx, inp.vy) > float(p["LNDMC_XY_VEL_MAX"])
-        )
-        alt_gnd = float(p["LNDMC_ALT_GND"])
+        horizontal_movement = lpos_available and inp.v_xy_valid and math.hypot(inp.vx, inp.vy) > self._xy_vel_max
+        alt_gnd = self._alt_gnd
         below_ground_effect = lpos_available and inp.dist_bottom_valid and alt_gnd > 0.0 and inp.dist_bottom < alt_gnd
 
-        thr_min = float(p["MPC_THR_MIN"])
-        hover = float(p["MPC_THR_HOVER"])
+        thr_min = self._thr_min
+        hover = self._thr_hover
         estimate_fresh = False
-        if p["MPC_USE_HTE"] and math.isfinite(inp.hover_thrust):
+        if self._use_hte and math.isfinite(inp.hover_thrust):
             hover = inp.hover_thrust
             estimate_fresh = now_us - inp.hover_thrust_timestamp_us < HOVER_ESTIMATE_TIMEOUT_US
         # Keep using a valid estimate through a descent even if it stops updating.
@@ -216,13 +228,11 @@ class MulticopterLandDetector:
             not armed or (close_or_skipped and contact and not horizontal_movement and not vertical_movement), now_us
         )
 
-        # Manual-thrust modes idle at MPC_MANTHR_MIN; climb-rate modes at MPC_THR_MIN.
-        manual_min = float(p["MPC_MANTHR_MIN"]) + 0.01
-        min_thrust = thr_min + (hover - thr_min) * 0.1 if inp.climb_rate_control else manual_min
+        min_thrust = thr_min + (hover - thr_min) * 0.1 if inp.climb_rate_control else self._manual_thrust_min
         minimum_thrust_now = inp.throttle <= min_thrust
         fallback = self._min_thrust_fallback.set_state_and_update(minimum_thrust_now, now_us)
         wx, wy, _ = inp.angular_velocity
-        rotational_movement = math.hypot(wx, wy) > math.radians(float(p["LNDMC_ROT_MAX"])) * widen
+        rotational_movement = math.hypot(wx, wy) > self._rot_max * widen
         vertical_estimate = lpos_available and inp.v_z_valid
         maybe_landed = self._maybe_landed.set_state_and_update(
             not armed

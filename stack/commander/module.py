@@ -1,13 +1,16 @@
-"""The commander module: arming, modes, commands, failsafes and land detection, on a 50 Hz timer.
+"""The commander module: arming, modes, commands and failsafes every 10 ms, land detection every 20 ms.
 
-It answers every ``vehicle_command`` with a ``vehicle_command_ack`` and publishes ``actuator_armed``,
-``vehicle_status`` and ``vehicle_control_mode`` (the flags the controllers obey) on change and at
-2 Hz, plus ``home_position``. In Offboard the control flags follow the offboard controller's
+Like PX4's ``src/modules/commander/Commander.cpp`` it runs at 100 Hz (COMMANDER_MONITORING_INTERVAL),
+answers every ``vehicle_command`` with a ``vehicle_command_ack`` and publishes ``actuator_armed``,
+``vehicle_status`` and ``vehicle_control_mode`` (the flags the controllers obey) on change and at 2 Hz,
+plus ``home_position``. In Offboard the control flags follow the offboard controller's
 ``offboard_control_mode``, which must keep arriving (COM_OF_LOSS_T) or the switch is refused.
 
-PX4's land detector runs in the same process, on the same tick, and publishes
-``vehicle_land_detected``: in PX4 both read the 250 Hz attitude and IMU topics in-process for free;
-here they read the estimator's 10 Hz ``estimator_status`` and ``vehicle_imu_status`` summaries.
+PX4's land detector runs in the same process on every second tick, at its 50 Hz
+(LAND_DETECTOR_UPDATE_INTERVAL in ``src/modules/land_detector/LandDetector.h``), and publishes
+``vehicle_land_detected`` when its result changes or at 1 Hz, as ``LandDetector.cpp`` does. In PX4 both
+read the 250 Hz attitude and IMU topics in-process for free; here they read the estimator's 10 Hz
+``estimator_status`` and ``vehicle_imu_status`` summaries.
 """
 
 from __future__ import annotations
@@ -40,7 +43,10 @@ from stack.runtime.module import Module, Timer
 from stack.runtime.params import Param
 
 NS = VehicleStatus
+RATE_HZ = 100.0
 REPUBLISH_US = 500_000
+LAND_DETECTOR_PERIOD_US = 20_000
+LAND_DETECTED_REPUBLISH_US = 1_000_000
 OFFBOARD_PARAMS = (
     Param("COM_OF_LOSS_T", 1.0, 0.0, 60.0, "s", "Offboard signal counts as lost after this long without one"),
 )
@@ -103,7 +109,7 @@ def home_position_message(home: Home, update_count: int, now: int) -> HomePositi
 class CommanderModule(Module):
     NAME = "commander"
     DESCRIPTION = "Arming, flight modes, commands and failsafes (PX4 commander)"
-    TRIGGER = Timer(50.0)
+    TRIGGER = Timer(RATE_HZ)
     DT_RANGE = (0.001, 0.1)
     PARAMS = (
         COMMANDER_PARAMS
@@ -138,26 +144,32 @@ class CommanderModule(Module):
         self.advertise("navigation_request")
         self.commander = Commander(self.params.values())
         self.land_detector = MulticopterLandDetector(self.params.values())
-        self.land = VehicleLandDetected()
+        self._land_due = 0
+        self._land_published: tuple[bool, ...] | None = None
+        self._land_published_at = 0
         self._last_publish = 0
         self._home: Home | None = None
         self._home_count = 0
-        self._navigation: NavigationRequest | None = None
+        self._navigation: Navigation | None = None
         self._last_gcs = 0
         self._offboard_flags: dict[str, bool] | None = None
 
     def on_params_changed(self, changed: set[str]) -> None:
         self.commander.set_params(self.params.values())
-        self.land_detector = MulticopterLandDetector(self.params.values())
+        self.land_detector.set_params(self.params.values())
 
     def run(self, msg: None, dt: float) -> None:
         now = self.now_us()
-        self.land = VehicleLandDetected(**self.land_detector.update(now, self._land_inputs())._asdict())
-        self.publish("vehicle_land_detected", self.land)
+        if now >= self._land_due:
+            # On the first tick of each 20 ms interval, so every second tick at 100 Hz.
+            self._land_due = now - now % LAND_DETECTOR_PERIOD_US + LAND_DETECTOR_PERIOD_US
+            self._detect_landing(now)
         inputs = self._inputs(now)
-        self.commander.set_inputs(now, inputs)
-        for cmd in self.take("vehicle_command"):
-            self._handle(cmd, now)
+        commands = self.take("vehicle_command")
+        if commands:
+            self.commander.set_inputs(now, inputs)
+            for cmd in commands:
+                self._handle(cmd, now)
         out = self.commander.update(now, inputs)
         for event in out.events:
             self.log.info("%s", event)
@@ -172,23 +184,38 @@ class CommanderModule(Module):
                 control = msgspec.structs.replace(
                     VehicleControlMode(flag_armed=control.flag_armed, source_id=control.source_id), **flags
                 )
-        navigation = navigation_request(out.navigation)
+        navigation = out.navigation
         home_changed = out.home != self._home
-        republish = now - self._last_publish >= REPUBLISH_US
         if home_changed:
             self._home = out.home
             self._home_count += 1
         # Late subscribers (a CLI, a restarted module) learn the state within REPUBLISH_US.
-        if changed or home_changed or navigation != self._navigation or republish:
+        if changed or home_changed or navigation != self._navigation or now - self._last_publish >= REPUBLISH_US:
             self._last_publish = now
             self._navigation = navigation
             # PX4 publishes actuator_armed before vehicle_status; the navigator reads its request with the mode.
             self.publish("actuator_armed", msgspec.structs.replace(out.actuator_armed, timestamp=now))
-            self.publish("navigation_request", msgspec.structs.replace(navigation, timestamp=now))
+            self.publish("navigation_request", msgspec.structs.replace(navigation_request(navigation), timestamp=now))
             self.publish("vehicle_status", msgspec.structs.replace(out.vehicle_status, timestamp=now))
             self.publish("vehicle_control_mode", msgspec.structs.replace(control, timestamp=now))
             if self._home is not None:
                 self.publish("home_position", home_position_message(self._home, self._home_count, now))
+
+    def _detect_landing(self, now: int) -> None:
+        state = self.land_detector.update(now, self._land_inputs())
+        # LandDetector.cpp publishes when one of these changes, or at 1 Hz.
+        key = (
+            state.landed,
+            state.freefall,
+            state.maybe_landed,
+            state.ground_contact,
+            state.in_ground_effect,
+            state.at_rest,
+        )
+        if key != self._land_published or now - self._land_published_at >= LAND_DETECTED_REPUBLISH_US:
+            self._land_published = key
+            self._land_published_at = now
+            self.publish("vehicle_land_detected", VehicleLandDetected(timestamp=now, **state._asdict()))
 
     def _handle(self, cmd: VehicleCommand, now: int) -> None:
         if self._wants_offboard(cmd) and self._offboard(now) is None:
@@ -225,31 +252,27 @@ class CommanderModule(Module):
 
     def _inputs(self, now: int) -> CommanderInputs:
         latest = self.latest
-
-        def stamp(topic: str) -> int:
-            m = latest(topic)
-            return m.timestamp if m is not None else 0
-
         est = latest("estimator_status")
         imu = latest("vehicle_imu_status")
-        land = self.land
+        baro = latest("sensor_baro")
+        mag = latest("sensor_mag")
         gps = latest("sensor_gps")
         battery = latest("battery_status")
         telemetry = latest("telemetry_status")
         mission = latest("mission_result")
+        land = self.land_detector.state
         if telemetry is not None and (telemetry.heartbeat_type_gcs or telemetry.heartbeat_type_onboard_controller):
             self._last_gcs = max(self._last_gcs, telemetry.timestamp)
-        imu_alive = imu is not None and imu.gyro_rate_hz > 0.0
         return CommanderInputs(
             attitude_timestamp_us=est.attitude_timestamp if est is not None and est.attitude_valid else 0,
             attitude_q=est.q if est is not None else (1.0, 0.0, 0.0, 0.0),
             angular_velocity_timestamp_us=est.angular_velocity_timestamp if est is not None else 0,
             local_position=latest("vehicle_local_position"),
-            gyro_timestamp_us=imu.timestamp if imu_alive else 0,
+            gyro_timestamp_us=imu.timestamp if imu is not None and imu.gyro_rate_hz > 0.0 else 0,
             accel_timestamp_us=imu.timestamp if imu is not None and imu.accel_rate_hz > 0.0 else 0,
-            baro_timestamp_us=stamp("sensor_baro"),
-            mag_timestamp_us=stamp("sensor_mag"),
-            gps_timestamp_us=stamp("sensor_gps"),
+            baro_timestamp_us=baro.timestamp if baro is not None else 0,
+            mag_timestamp_us=mag.timestamp if mag is not None else 0,
+            gps_timestamp_us=gps.timestamp if gps is not None else 0,
             gps_fix_type=gps.fix_type if gps is not None else 0,
             landed=land.landed,
             maybe_landed=land.maybe_landed,

@@ -87,6 +87,7 @@ VEHICLE_CMD_SET_NAV_STATE = CMD.VEHICLE_CMD_SET_NAV_STATE
 VEHICLE_CMD_DO_REPOSITION_LOCAL = CMD.VEHICLE_CMD_DO_REPOSITION_LOCAL
 TAKEOFF_ALTITUDE_RELATIVE = 1
 """NAV_TAKEOFF param2 value saying param7 is metres above home rather than AMSL (our extension)."""
+PREFLIGHT_CHECK_PERIOD_US = 100_000
 _POSITION_KNOWN = int(Requirement.LOCAL_POSITION_RELAXED | Requirement.LOCAL_ALT)
 _POSITION_AND_ALTITUDE = int(Requirement.LOCAL_POSITION | Requirement.LOCAL_ALT)
 
@@ -198,6 +199,8 @@ class Commander:
         self._home: HomePosition | None = None
         self._failing = Requirement.NONE
         self._preflight_ok = False
+        self._preflight_checked: tuple[int, int, int, int] | None = None
+        self._preflight_checked_us = 0
         self._gcs_lost = False
         self._gcs_lost_counter = 0
         self._geofence_violation = ""
@@ -215,6 +218,8 @@ class Commander:
         self._mission_start_counter = 0
         self._events: list[str] = []
         self._published_key: tuple | None = None
+        self._can_set: dict[int, int] = {}
+        """``can_set_nav_states_mask`` by failing requirements, which change rarely."""
         self._messages: tuple[VehicleStatus, VehicleControlMode, ActuatorArmed] | None = None
         self._handlers: dict[int, Callable[[VehicleCommand, int], _Verdict]] = {
             CMD.VEHICLE_CMD_COMPONENT_ARM_DISARM: self._cmd_arm_disarm,
@@ -237,6 +242,8 @@ class Commander:
     def set_params(self, params: Mapping[str, object]) -> None:
         p = {**DEFAULTS, **params}
         self._p = p
+        self._disarm_land_us = round(float(p["COM_DISARM_LAND"]) * 1e6)
+        self._disarm_preflight_us = round(float(p["COM_DISARM_PRFLT"]) * 1e6)
         self._failsafe.set_params(p)
         self._geofence.set_params(p)
         self._health = HealthParams(
@@ -354,7 +361,13 @@ class Commander:
             self._nav_state_timestamp_us = now_us
 
         self._update_auto_disarm(now_us)
-        self._preflight_ok = not arming_denial(now_us, self.user_intended_nav_state, self._failing, inp, self._health)
+        # PX4 Commander.cpp runs the arming checks at 10 Hz, and at once when the state changed.
+        intended = self.user_intended_nav_state
+        checked = (self.arming_state, intended, self.nav_state, int(self._failing))
+        if checked != self._preflight_checked or now_us - self._preflight_checked_us >= PREFLIGHT_CHECK_PERIOD_US:
+            self._preflight_checked = checked
+            self._preflight_checked_us = now_us
+            self._preflight_ok = not arming_denial(now_us, intended, self._failing, inp, self._health)
 
     def _update_link(self, now_us: int) -> None:
         last = self._inputs.last_gcs_heartbeat_us
@@ -395,16 +408,14 @@ class Commander:
         if not self.armed:
             self._auto_disarm.force(False)
             return
-        p = self._p
         inp = self._inputs
-        land_s = float(p["COM_DISARM_LAND"])
-        preflight_s = float(p["COM_DISARM_PRFLT"])
+        land_us, preflight_us = self._disarm_land_us, self._disarm_preflight_us
         amid_mission = self.nav_state == NS.NAVIGATION_STATE_AUTO_MISSION and not inp.mission_finished
-        if land_s > 0.0 and self._have_taken_off and not amid_mission:
-            self._auto_disarm.set_hysteresis_time_from(False, round(land_s * 1e6))
+        if land_us > 0 and self._have_taken_off and not amid_mission:
+            self._auto_disarm.set_hysteresis_time_from(False, land_us)
             self._auto_disarm.set_state_and_update(inp.landed, now_us)
-        elif preflight_s > 0.0 and not self._have_taken_off:
-            self._auto_disarm.set_hysteresis_time_from(False, round(preflight_s * 1e6))
+        elif preflight_us > 0 and not self._have_taken_off:
+            self._auto_disarm.set_hysteresis_time_from(False, preflight_us)
             self._auto_disarm.set_state_and_update(True, now_us)
         if self._auto_disarm.state:
             reason = ArmDisarmReason.AUTO_DISARM_LAND if self._have_taken_off else ArmDisarmReason.AUTO_DISARM_PREFLIGHT
@@ -669,10 +680,11 @@ class Commander:
 
     def _outputs(self) -> CommanderOutputs:
         armed = self.armed
-        can_set = 0
-        for state in MODES:
-            if can_run(state, self._failing):
-                can_set |= 1 << state
+        failing = int(self._failing)
+        can_set = self._can_set.get(failing)
+        if can_set is None:
+            can_set = sum(1 << state for state in MODES if can_run(state, self._failing))
+            self._can_set[failing] = can_set
         key = (
             self.arming_state,
             self.nav_state,

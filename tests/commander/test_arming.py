@@ -78,6 +78,19 @@ def test_magnetometer_check_follows_sys_has_mag():
     assert clock.send(C.arm_command()).result == ACK.VEHICLE_CMD_RESULT_ACCEPTED
 
 
+def test_pre_flight_checks_rerun_at_10_hz_between_state_changes():
+    """PX4 Commander.cpp: the arming checks run at 10 Hz (and at once on a state change), not every cycle."""
+    clock = make_clock()
+    clock.step(0.2)
+    assert clock.status.pre_flight_checks_pass
+    clock.overrides = {"baro_timestamp_us": clock.t - 1_500_000}
+    clock.step(0.05)
+    assert clock.status.pre_flight_checks_pass
+    clock.step(0.05)
+    assert not clock.status.pre_flight_checks_pass
+    assert not clock.last.actuator_armed.ready_to_arm
+
+
 def test_arming_accepted_when_healthy_sets_home_and_status():
     clock = make_clock()
     clock.position = (3.0, -2.0, -0.1)

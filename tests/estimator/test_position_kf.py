@@ -128,7 +128,7 @@ def simulate(
     stamped with its true sample time (``gps_stamp="sample"``) or its arrival time ("arrival").
     ``start_s`` continues an earlier run of the same filter; the baro jumps by ``baro_step[1]`` metres
     from ``baro_step[0]`` seconds on, the GPS altitude likewise with ``gps_alt_step``.
-    ``imu_per_predict`` = 3 runs the filter like its module: every 12 ms with the mean accelerometer
+    ``imu_per_predict`` = 5 runs the filter like its module: every 20 ms with the mean accelerometer
     sample, then the baro and GPS samples that arrived meanwhile."""
     rng = np.random.default_rng(seed)
     truth_map = MapProjection(LAT0, LON0)
@@ -224,14 +224,14 @@ def height_error_since(run: Run, t_arm: float) -> np.ndarray:
 
 def flight_like(kf: LocalPositionKF, seconds: float, **kwargs) -> Run:
     """The simulator's sensors (baro σ 0.09 m at 20 Hz, GPS altitude σ 0.5 m at 10 Hz, IMU σ 0.063 m/s²)
-    and the module's 12 ms prediction with averaged accelerometer samples, along ``takeoff``."""
+    and the module's 20 ms prediction with averaged accelerometer samples, along ``takeoff``."""
     options = {
         "trajectory": takeoff,
         "gps_every": GPS_EVERY_10HZ,
         "baro_sigma": 0.09,
         "baro_offset": 0.0,
         "accel_sigma": 0.063,
-        "imu_per_predict": 3,
+        "imu_per_predict": 5,
     } | kwargs
     return simulate(kf, seconds, **options)
 
