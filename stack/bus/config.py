@@ -25,7 +25,9 @@ class BusConfig:
     listen: tuple[str, ...] = (LOOPBACK_ANY_PORT,)
     # Zenoh's low-latency transport saves ~25 % per hop; every session of a stack must agree on it.
     low_latency: bool = True
-    lease_ms: int = 3000
+    # Zenoh's default. A crashed process's links close with its sockets at once; the lease only
+    # decides when a silent link counts as dead, and a shorter one dropped links on a loaded machine.
+    lease_ms: int = 10000
     gossip: bool = False
     extra: dict[str, object] = field(default_factory=dict)
 
@@ -61,6 +63,9 @@ class BusConfig:
             "connect/retry", json.dumps({"period_init_ms": 50, "period_max_ms": 1000, "period_increase_factor": 2})
         )
         conf.insert_json5("transport/link/tx/lease", str(self.lease_ms))
+        # Zenoh's own shared-memory transport keeps files in /dev/shm that outlive a killed process; the
+        # stack's same-host traffic has its own fast path (stack.fastpath), which leaves nothing behind.
+        conf.insert_json5("transport/shared_memory/enabled", "false")
         if self.low_latency:
             conf.insert_json5("transport/unicast/lowlatency", "true")
             conf.insert_json5("transport/unicast/qos/enabled", "false")

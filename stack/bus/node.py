@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import os
 import random
@@ -12,7 +13,8 @@ from collections.abc import Callable
 import zenoh
 
 from stack.bus import keys
-from stack.bus.config import BusConfig
+from stack.bus.config import LOOPBACK_ANY_PORT, BusConfig
+from stack.bus.ports import port_taken
 from stack.bus.topics import TELEMETRY_TOPICS, TopicPublisher, TopicSubscriber
 from stack.msg.registry import fingerprint, message_type
 
@@ -39,19 +41,22 @@ class Node:
         stable_id: bool = True,
         clock: Callable[[], int] = wall_clock_us,
         session: zenoh.Session | None = None,
+        run_id: int = 0,
     ) -> None:
         self.vehicle = keys.check_name("vehicle", vehicle)
         self.name = keys.check_name("module", name)
         self.publisher_id = stable_publisher_id(vehicle, name) if stable_id else random.getrandbits(32) | 1
         self.now_us = clock
         self.header_flags = 0
+        # The lockstep run this node takes part in (0: none); see stack.bus.topics.HEADER.
+        self.run_id = run_id
         self.seq = 0
         self.touched: set[TopicPublisher] = set()
         self.publishers: list[TopicPublisher] = []
         self.subscribers: list[TopicSubscriber] = []
         self._tokens: list[zenoh.LivelinessToken] = []
         self._owns_session = session is None
-        self.session = session if session is not None else zenoh.open(bus.zenoh_config(name))
+        self.session = session if session is not None else _open(bus, name)
 
     def __enter__(self) -> Node:
         return self
@@ -71,7 +76,7 @@ class Node:
         pub = TopicPublisher(self, topic, instance, msg_type, reliable)
         self.publishers.append(pub)
         if announce:
-            self._announce("pub", topic, instance)
+            self.announce("pub", topic, instance)
         return pub
 
     def subscriber(
@@ -80,10 +85,12 @@ class Node:
         sub = TopicSubscriber(self, topic, instance, message_type(topic), capacity, keep_last)
         self.subscribers.append(sub)
         if announce:
-            self._announce("sub", topic, instance)
+            self.announce("sub", topic, instance)
         return sub
 
-    def _announce(self, role: str, topic: str, instance: int) -> None:
+    def announce(self, role: str, topic: str, instance: int) -> None:
+        """Say in the topic graph that this node publishes or subscribes to a topic (a tool reading a topic
+        through its own subscriber must, or a fast-path run does not put the topic on Zenoh for it)."""
         msg_type = message_type(topic)
         key = keys.graph_token(self.vehicle, self.name, role, topic, instance, msg_type.__name__, fingerprint(msg_type))
         self.declare_token(key)
@@ -109,6 +116,19 @@ class Node:
             except zenoh.ZError as e:
                 # Zenoh gives up closing after a timeout (e.g. a peer stopped reading); the process exits anyway.
                 logging.getLogger("stack.bus").warning("closing the Zenoh session: %s", e)
+
+
+def _open(bus: BusConfig, name: str) -> zenoh.Session:
+    """A session; a loopback port taken since the supervisor picked it (a stack starting beside this one
+    took it first) is replaced by any free port: the others still reach this module through the router."""
+    try:
+        return zenoh.open(bus.zenoh_config(name))
+    except zenoh.ZError as e:
+        loopback = bus.listen and all(ep.startswith("tcp/127.0.0.1:") for ep in bus.listen)
+        if not (loopback and port_taken(e)):
+            raise
+        logging.getLogger("stack.bus").warning("%s: %s taken, listening on another port", name, ", ".join(bus.listen))
+        return zenoh.open(dataclasses.replace(bus, listen=(LOOPBACK_ANY_PORT,)).zenoh_config(name))
 
 
 def pid_tag() -> str:

@@ -11,6 +11,8 @@ import random
 import socket
 from pathlib import Path
 
+import zenoh
+
 _EPHEMERAL_RANGE_FILE = Path("/proc/sys/net/ipv4/ip_local_port_range")
 _DEFAULT_EPHEMERAL = (32768, 60999)
 _LOWEST = 10000
@@ -50,3 +52,8 @@ def _bindable(host: str, port: int) -> bool:
         except OSError:
             return False
     return True
+
+
+def port_taken(error: zenoh.ZError) -> bool:
+    """Whether Zenoh failed to listen because the port is in use (another process bound it first)."""
+    return "in use" in str(error)

@@ -1,11 +1,17 @@
 """Typed publishers and subscribers over Zenoh, with the stack's message header.
 
-Every sample carries a 33-byte attachment (``HEADER``): the schema fingerprint of its type, the
+Every sample carries a 41-byte attachment (``HEADER``): the schema fingerprint of its type, the
 publisher id, a per-publisher sequence number shared by all its topics, the index of the message
-on its topic (1, 2, ... per publisher), the publication time (µs) and flags (bit 0: the time is
-lockstep simulated time). The fingerprint lets a subscriber built from a different definition detect
-the mismatch and drop the sample instead of mis-decoding it; the sequence number, topic index and
-time make lockstep deterministic.
+on its topic (1, 2, ... per publisher), the publication time (µs), flags (bit 0: the time is
+lockstep simulated time) and the lockstep run's random id (0 outside lockstep). The fingerprint lets
+a subscriber built from a different definition detect the mismatch and drop the sample instead of
+mis-decoding it; the sequence number, topic index and time make lockstep deterministic; the run id
+lets a lockstep module tell its run's messages from any other sender claiming a lockstep time
+(counted as ``foreign`` and dropped).
+
+On the same-host fast path (:mod:`stack.fastpath`) a publisher writes each message into its shared-
+memory ring and puts it on Zenoh only while something outside the fast path subscribes to the topic;
+a topic nobody reads is not even encoded.
 """
 
 from __future__ import annotations
@@ -23,8 +29,9 @@ from stack.msg.registry import fingerprint
 
 if TYPE_CHECKING:
     from stack.bus.node import Node
+    from stack.fastpath.ring import RingWriter
 
-HEADER = struct.Struct("<QIQIqB")
+HEADER = struct.Struct("<QIQIqBQ")
 FLAG_LOCKSTEP_TIME = 1
 # A probe carries no message: a publisher sends probes at start-up so each subscriber can tell that
 # the publisher's samples reach it (see stack.runtime.runner: the lockstep start-up sync).
@@ -45,7 +52,22 @@ Received = tuple[int, int, int, Any, int]
 
 
 class TopicPublisher:
-    __slots__ = ("_node", "_pub", "count", "encoder", "fingerprint", "instance", "key", "msg_type", "suffix", "topic")
+    """Publishes one topic. On the fast path, ``fast`` is its ring and ``fast_read`` whether any process reads it."""
+
+    __slots__ = (
+        "_node",
+        "_pub",
+        "count",
+        "encoder",
+        "fast",
+        "fast_read",
+        "fingerprint",
+        "instance",
+        "key",
+        "msg_type",
+        "suffix",
+        "topic",
+    )
 
     def __init__(self, node: Node, topic: str, instance: int, msg_type: type[Message], reliable: bool) -> None:
         self._node = node
@@ -57,6 +79,8 @@ class TopicPublisher:
         self.fingerprint = fingerprint(msg_type)
         self.encoder = msgspec.msgpack.Encoder()
         self.count = 0
+        self.fast: RingWriter | None = None
+        self.fast_read = False
         self._pub = node.session.declare_publisher(
             self.key,
             congestion_control=zenoh.CongestionControl.BLOCK if reliable else zenoh.CongestionControl.DROP,
@@ -71,14 +95,31 @@ class TopicPublisher:
             msg.timestamp = now_us
         node.seq += 1
         self.count += 1
-        header = HEADER.pack(self.fingerprint, node.publisher_id, node.seq, self.count, now_us, node.header_flags)
-        self._pub.put(self.encoder.encode(msg), attachment=header)
+        fast = self.fast
+        if fast is None:
+            self._put(self.encoder.encode(msg), now_us)
+        else:
+            outside = fast.zenoh_wanted()
+            if self.fast_read or outside:
+                data = self.encoder.encode(msg)
+                if self.fast_read:
+                    fast.write(data, self.count, now_us, node.seq)
+                if outside:
+                    self._put(data, now_us)
         node.on_published(self)
+
+    def _put(self, data: bytes, now_us: int) -> None:
+        node = self._node
+        header = HEADER.pack(
+            self.fingerprint, node.publisher_id, node.seq, self.count, now_us, node.header_flags, node.run_id
+        )
+        self._pub.put(data, attachment=header)
 
     def probe(self) -> None:
         """Send a probe (not a message: subscribers note the publisher and deliver nothing)."""
         node = self._node
-        self._pub.put(b"", attachment=HEADER.pack(self.fingerprint, node.publisher_id, 0, 0, 0, FLAG_PROBE))
+        header = HEADER.pack(self.fingerprint, node.publisher_id, 0, 0, 0, FLAG_PROBE, node.run_id)
+        self._pub.put(b"", attachment=header)
 
     def matching(self) -> bool:
         """Whether any subscriber is known for this topic."""
@@ -93,10 +134,12 @@ class TopicSubscriber:
 
     __slots__ = (
         "_decoder",
+        "_run_id",
         "_sub",
         "_warned",
         "decode_errors",
         "fingerprint",
+        "foreign",
         "instance",
         "key",
         "msg_type",
@@ -127,6 +170,8 @@ class TopicSubscriber:
         self.probed_by: set[int] = set()
         self.decode_errors = 0
         self.schema_errors = 0
+        self.foreign = 0
+        self._run_id = node.run_id
         self._warned = False
         handler = zenoh.handlers.RingChannel(capacity) if keep_last else zenoh.handlers.FifoChannel(capacity)
         self._sub = node.session.declare_subscriber(self.key, handler)
@@ -140,7 +185,12 @@ class TopicSubscriber:
         if len(raw) != HEADER.size:
             self._reject_schema(f"malformed header of {len(raw)} bytes")
             return None
-        fp, pub_id, seq, index, pub_time, flags = HEADER.unpack(raw)
+        fp, pub_id, seq, index, pub_time, flags, run = HEADER.unpack(raw)
+        if self._run_id and flags & (FLAG_LOCKSTEP_TIME | FLAG_PROBE) and run != self._run_id:
+            self.foreign += 1
+            if self.foreign == 1 or self.foreign % 1000 == 0:
+                log.warning("%s: dropped a lockstep message from outside this run (%d so far)", self.key, self.foreign)
+            return None
         if flags & FLAG_PROBE:
             self.probed_by.add(pub_id)
             return None

@@ -13,7 +13,17 @@ import typer
 
 from stack.bus import keys
 from stack.cli import cmd, fly, log, param, plot, topic
-from stack.cli.common import EndpointOption, JsonOption, VehicleOption, connect, fail, print_table, query_json
+from stack.cli.common import (
+    EndpointOption,
+    JsonOption,
+    TransportOption,
+    VehicleOption,
+    choose_transport,
+    connect,
+    fail,
+    print_table,
+    query_json,
+)
 from stack.cli.observers import add_observers
 from stack.supervisor import state as run_state
 from stack.supervisor.profile import DEFAULT_PROFILE, ProfileError, load_profile
@@ -44,12 +54,14 @@ def up(
     web: bool = typer.Option(False, "--web", help="Serve the Rerun web viewer on 127.0.0.1 and print its URL"),
     save: str | None = typer.Option(None, "--save", help="Write the live plots to this .rrd file"),
     record: Path | None = typer.Option(None, "--record", help="Record every topic to this MCAP file"),
+    transport: str | None = TransportOption,
 ) -> None:
     """Start a stack from a launch profile and supervise it until Ctrl-C, SIGTERM or --duration."""
     try:
         prof = load_profile(profile, flags={"realtime": realtime, "plot": plot_ or web, "record": record is not None})
     except ProfileError as e:
         fail(str(e), code=2)
+    choose_transport(prof, transport)
     add_observers(prof, plot=plot_, web=web, save=save, record=record)
     running = run_state.addressed_stacks(prof.vehicle)
     if running:

@@ -20,7 +20,7 @@ import typer
 
 from stack.bus.node import Node
 from stack.bus.topics import TopicPublisher
-from stack.cli.common import EndpointOption, VehicleOption, connect, fail
+from stack.cli.common import EndpointOption, VehicleOption, connect, fail, wait_until_sent
 from stack.commander import commands
 from stack.commander.modes import MODES, mode_name, nav_state_from_name
 from stack.mathlib.geo import MapProjection
@@ -78,6 +78,7 @@ class _Link:
         self.timeout = timeout
         self._acks = node.subscriber("vehicle_command_ack", keep_last=True)
         self._watched = {topic: node.subscriber(topic, keep_last=True) for topic in watch}
+        wait_until_sent(node, [("vehicle_command_ack", 0), *((topic, 0) for topic in watch)])
         self._after: tuple[int, int] | None = None
         self.latest: dict[str, Any] = {}
 

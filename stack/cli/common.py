@@ -4,8 +4,10 @@ from __future__ import annotations
 
 import json
 import math
+import os
 import sys
-from collections.abc import Iterator, Sequence
+import time
+from collections.abc import Iterable, Iterator, Sequence
 from contextlib import contextmanager
 from typing import NoReturn
 
@@ -13,9 +15,11 @@ import msgspec
 import typer
 import zenoh
 
+from stack.bus import keys
 from stack.bus.config import BusConfig
 from stack.bus.node import Node
 from stack.supervisor import state as run_state
+from stack.supervisor.profile import LOCKSTEP_TRANSPORTS, Profile
 
 VehicleOption = typer.Option(
     None,
@@ -27,11 +31,27 @@ EndpointOption = typer.Option(
     None, "--endpoint", "-e", envvar="STACK_ENDPOINT", help="Zenoh endpoint of the stack (default: from stack up)"
 )
 JsonOption = typer.Option(False, "--json", help="Machine-readable JSON output")
+TransportOption = typer.Option(
+    None,
+    "--lockstep-transport",
+    help="How lockstep messages travel, overriding the profile: shm (same-host shared memory) or zenoh",
+)
 
 
 def fail(message: str, code: int = 1) -> NoReturn:
     typer.echo(f"error: {message}", err=True)
     raise typer.Exit(code)
+
+
+OUTSIDE_WAIT_S = 2.0
+
+
+def choose_transport(prof: Profile, transport: str | None) -> None:
+    if transport is None:
+        return
+    if transport not in LOCKSTEP_TRANSPORTS:
+        fail(f"--lockstep-transport must be one of {', '.join(LOCKSTEP_TRANSPORTS)}, not '{transport}'", code=2)
+    prof.lockstep_transport = transport
 
 
 def find_stack(vehicle: str | None, endpoint: str | None) -> tuple[str, BusConfig]:
@@ -56,12 +76,25 @@ def find_stack(vehicle: str | None, endpoint: str | None) -> tuple[str, BusConfi
 def connect(vehicle: str | None, endpoint: str | None, name: str = "cli") -> Iterator[Node]:
     vehicle, bus = find_stack(vehicle, endpoint)
     try:
-        node = Node(bus, vehicle, name, stable_id=False)
+        # Unique in the topic graph, where each tool's subscriptions are its own.
+        node = Node(bus, vehicle, f"{name}-{os.getpid()}", stable_id=False)
     except zenoh.ZError as e:
         where = ", ".join(bus.connect)
         fail(f"cannot reach the stack at {where} ({str(e).split(' at ')[0].strip()}); is it running?")
     with node:
         yield node
+
+
+def wait_until_sent(node: Node, topics: Iterable[tuple[str, int]], timeout: float = OUTSIDE_WAIT_S) -> None:
+    """Wait until the stack puts ``topics``, which this tool has subscribed to (and announced in the topic
+    graph), on Zenoh: a fast-path run sends a topic over Zenoh only while something outside subscribes."""
+    wanted = {f"{topic}/{instance}" for topic, instance in topics}
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        answers = query_json(node.session, keys.supervisor_key(node.vehicle, "outside"))
+        if not answers or not answers[0]["fast_path"] or wanted <= set(answers[0]["topics"]):
+            return
+        time.sleep(0.01)
 
 
 def query_json(session: zenoh.Session, key: str, payload: dict | None = None, timeout: float = 2.0) -> list[dict]:

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import typer
 
-from stack.cli.common import fail, print_table
+from stack.cli.common import TransportOption, choose_transport, fail, print_table
 from stack.cli.observers import add_observers
 from stack.runtime.spec import load_module_class
 from stack.scenario.catalogue import Check, scenarios
@@ -41,6 +41,7 @@ def fly(
     wind: bool = typer.Option(
         False, "--wind", help=f"Fly in {WIND_SPEED:g} m/s wind with gusts; the limits are doubled"
     ),
+    transport: str | None = TransportOption,
 ) -> None:
     """Fly a scripted scenario (in lockstep, deterministic for a seed) and report how well the stack flew.
 
@@ -58,6 +59,7 @@ def fly(
         prof = load_profile(profile, flags={"plot": plot_ or web, "record": record is not None})
     except ProfileError as e:
         fail(str(e), code=2)
+    choose_transport(prof, transport)
     if seed is not None:
         prof.seed = seed
     prof.port = 0  # the flight's own router, on a free port

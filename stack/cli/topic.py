@@ -27,6 +27,7 @@ from stack.cli.common import (
     format_value,
     print_table,
     to_jsonable,
+    wait_until_sent,
 )
 from stack.msg.base import Message
 from stack.msg.registry import TOPICS, UnknownTopic, fingerprint, message_type, schema_text
@@ -64,6 +65,13 @@ def _measure(session: zenoh.Session, vehicle: str, window: float) -> dict[tuple[
     return traffic
 
 
+def _ask_for(node: Node, topics: list[tuple[str, int]]) -> None:
+    """Subscribe in the topic graph, so that a fast-path run puts these topics on Zenoh."""
+    for topic, instance in topics:
+        node.announce("sub", topic, instance)
+    wait_until_sent(node, topics)
+
+
 @app.command("list")
 def list_topics(
     window: float = typer.Option(1.0, help="Seconds to measure rates over"),
@@ -75,6 +83,7 @@ def list_topics(
     """Topics with type, instance, publishers, subscribers, rate and message size (like `uorb top -1`)."""
     with connect(vehicle, endpoint) as node:
         graph = read_graph(node.session, node.vehicle)
+        _ask_for(node, [key for key, g in graph.items() if g.publishers])
         traffic = _measure(node.session, node.vehicle, window)
     rows = []
     names = set(graph) | set(traffic)
@@ -120,6 +129,8 @@ def list_topics(
 
 def _subscribe(node: Node, topic: str, instance: int) -> tuple[zenoh.Subscriber, queue.Queue[Received]]:
     msg_type = _topic_type(topic)
+    node.announce("sub", topic, instance)
+    wait_until_sent(node, [(topic, instance)])
     decoder = msgspec.msgpack.Decoder(msg_type)
     expected = fingerprint(msg_type)
     q: queue.Queue[Received] = queue.Queue()
@@ -129,7 +140,7 @@ def _subscribe(node: Node, topic: str, instance: int) -> tuple[zenoh.Subscriber,
         att = sample.attachment
         if att is None or len(att) != HEADER.size:
             return
-        fp, pub, seq, index, t, _flags = HEADER.unpack(att.to_bytes())
+        fp, pub, seq, index, t, _flags, _run = HEADER.unpack(att.to_bytes())
         if fp != expected:
             if not warned:
                 warned.append(1)

@@ -25,6 +25,7 @@ class ModuleHeartbeat(Message):
     decode_errors: int = 0
     schema_errors: int = 0
     rejected: int = 0
+    foreign: int = 0
     loop_avg_us: float = 0.0
     loop_max_us: float = 0.0
     trigger_rate_hz: float = 0.0
@@ -41,8 +42,10 @@ class LockstepClock(Message):
     of each topic it reads, so what every module sees is independent of process scheduling. As the
     counts are cumulative, a member that only needs the latest clock may drop older ones.
     ``members`` lists the publisher ids of the modules expected to act (and acknowledge) at this step.
+    ``run`` is the run's random id (see stack.bus.topics.HEADER): members ignore clocks of other runs.
     """
 
+    run: int = 0
     step: int = 0
     counts: list[tuple[int, str, int]] = msgspec.field(default_factory=list)
     members: list[int] = msgspec.field(default_factory=list)
@@ -51,6 +54,7 @@ class LockstepClock(Message):
 class LockstepAck(Message):
     """A member finished one run at ``timestamp``; ``published`` holds its new per-topic totals."""
 
+    run: int = 0
     member: str = ""
     publisher_id: int = 0
     trigger_publisher: int = 0

@@ -1,11 +1,13 @@
 """The ``recorder`` module: every topic of the vehicle into an MCAP file, like PX4's logger.
 
-It is passive: it never joins the lockstep and the simulation does not wait for it, but its
-subscription is declared before the stack starts, and the bus blocks rather than drops (its queue
-is large, and once full, lockstep publishers wait), so nothing is lost. One wildcard subscriber
-on ``stack/<vehicle>/*/*`` feeds a queue that a writer thread drains: the module's main thread
-can be interrupted by a stop signal at any instruction, so the file is only ever written by that
-thread, which on stop drains what is still queued, then writes the summary.
+It is passive: it never joins the lockstep and the simulation does not wait for its runs, but it
+never loses a message either. On the same-host fast path (:mod:`stack.fastpath`) it reads every
+ring directly and is a lossless reader: lockstep time waits for it only when it falls far behind.
+Over Zenoh its subscription is declared before the stack starts and the bus blocks rather than drops
+(its queue is large, and once full, lockstep publishers wait). Messages from outside the run come
+through one wildcard subscriber on ``stack/<vehicle>/*/*``. Both feed a writer thread: the module's
+main thread can be interrupted by a stop signal at any instruction, so the file is only ever written
+by that thread, which on stop drains what is still queued, then writes the summary.
 
 List it first in a profile: the supervisor stops modules in reverse order, so it then records
 until every other module has stopped (listed last, it stops while the others still publish).
@@ -21,6 +23,7 @@ Arguments: ``path`` (required) the MCAP file to write, replaced if it exists; ``
 
 from __future__ import annotations
 
+import collections
 import json
 import logging
 import threading
@@ -35,6 +38,7 @@ import zenoh
 from stack.bus import keys
 from stack.bus.node import wall_clock_us
 from stack.bus.topics import FLAG_LOCKSTEP_TIME, FLAG_PROBE, HEADER
+from stack.fastpath.alltopics import AllTopicsReader
 from stack.msg.registry import TOPICS, fingerprint
 from stack.record.provenance import git_commit
 from stack.record.recorder import RecordingWriter, new_recording_info
@@ -43,6 +47,9 @@ from stack.runtime.module import Arg, Module, Timer
 from stack.supervisor import state as run_state
 
 QUEUE_CAPACITY = 1 << 16
+# Fast-path records read but not written yet: past this the module stops reading, so lockstep time
+# waits for the writer rather than memory growing.
+FAST_BACKLOG = 1 << 15
 IDLE_SLEEP_S = 0.002
 STOP_QUIET_S = 0.2  # on stop, drain until the queue has been empty this long...
 STOP_DRAIN_S = 1.5  # ...or this long at most (the stack may still be publishing)
@@ -82,7 +89,10 @@ class SampleRecorder:
         self.clock = clock
         self.sim_now_us = 0
         self.without_header = 0
+        # Publishers whose messages come from the fast path: their Zenoh copies are skipped.
+        self.fast_publishers: frozenset[int] = frozenset()
         self._routes: dict[str, _Route | None] = {}
+        self._suffix_routes: dict[str, _Route | None] = {}
 
     def _route(self, key: str) -> _Route | None:
         parsed = keys.parse_topic_key(key)
@@ -91,6 +101,20 @@ class SampleRecorder:
             route = _Route(parsed[1], parsed[2])
         self._routes[key] = route
         return route
+
+    def handle_fast(self, suffix: str, fp: int, publisher: int, index: int, pub_time: int, payload: bytes) -> None:
+        """A record read from the fast path: lockstep time, logged at its publication time."""
+        try:
+            route = self._suffix_routes[suffix]
+        except KeyError:
+            topic, _, instance = suffix.rpartition("/")
+            route = _Route(topic, int(instance)) if (topic, int(instance)) in self.selection else None
+            self._suffix_routes[suffix] = route
+        if route is None:
+            return
+        if pub_time > self.sim_now_us:
+            self.sim_now_us = pub_time
+        self._record(route, fp, publisher, index, pub_time, FLAG_LOCKSTEP_TIME, pub_time, payload)
 
     def handle(self, sample: zenoh.Sample) -> None:
         key = str(sample.key_expr)
@@ -105,16 +129,28 @@ class SampleRecorder:
         if len(header) != HEADER.size:
             self.without_header += 1
             return
-        fp, publisher, _seq, index, pub_time, flags = HEADER.unpack(header)
-        if flags & FLAG_PROBE:
-            return  # a publisher announcing itself at start-up, not a message
+        fp, publisher, _seq, index, pub_time, flags, _run = HEADER.unpack(header)
+        if flags & FLAG_PROBE or publisher in self.fast_publishers:
+            return  # a publisher announcing itself at start-up, or a copy of a fast-path record
         if self.lockstep:
             if flags & FLAG_LOCKSTEP_TIME and pub_time > self.sim_now_us:
                 self.sim_now_us = pub_time
             log_time = self.sim_now_us
         else:
             log_time = self.clock()
-        payload = sample.payload.to_bytes()
+        self._record(route, fp, publisher, index, pub_time, flags, log_time, sample.payload.to_bytes())
+
+    def _record(
+        self,
+        route: _Route,
+        fp: int,
+        publisher: int,
+        index: int,
+        pub_time: int,
+        flags: int,
+        log_time: int,
+        payload: bytes,
+    ) -> None:
         if fp == route.fingerprint:
             try:
                 msg = route.decoder.decode(payload)
@@ -142,6 +178,8 @@ class RecordingPump:
     def __init__(self, sub: Any, sink: SampleRecorder, log: logging.Logger) -> None:
         self._sub = sub
         self._sink = sink
+        # Records the module's thread read from the fast path, waiting for this thread.
+        self.fast: collections.deque[tuple[str, int, int, int, int, bytes]] = collections.deque()
         self._log = log
         self._stop = threading.Event()
         self._stop_deadline = 0.0
@@ -183,6 +221,10 @@ class RecordingPump:
         handled = 0
         last_sample = time.monotonic()
         while True:
+            if self.fast:
+                self._drain_fast()
+                busy = True
+                continue
             sample = try_recv()
             if sample is not None:
                 busy = True
@@ -207,10 +249,26 @@ class RecordingPump:
             writer.flush_if_due()
             time.sleep(IDLE_SLEEP_S)
 
+    def _drain_fast(self) -> None:
+        handle = self._sink.handle_fast
+        pending = self.fast
+        while pending:
+            record = pending.popleft()
+            try:
+                handle(*record)
+            except OSError:
+                raise
+            except Exception:
+                self.errors += 1
+                if self.errors <= 10 or self.errors % 1000 == 0:
+                    self._log.exception("failed to record a message on %s (%d so far)", record[0], self.errors)
+
     def _discard(self) -> None:
         while not self._stop.is_set():
             while self._sub.try_recv() is not None:
                 self.discarded += 1
+            self.discarded += len(self.fast)
+            self.fast.clear()
             time.sleep(IDLE_SLEEP_S)
 
     def _end_info(self) -> dict[str, str]:
@@ -235,6 +293,7 @@ class RecorderModule(Module):
     NAME = "recorder"
     DESCRIPTION = "Records every topic of the vehicle into an MCAP file (Foxglove, PlotJuggler, stack replay)"
     PASSIVE = True
+    LOSSLESS = True
     TRIGGER = Timer(20.0)
     ARGS = (
         Arg("path", "", doc="MCAP file to write (replaced if it exists)"),
@@ -262,19 +321,34 @@ class RecorderModule(Module):
             keys.all_topics(spec.vehicle), zenoh.handlers.FifoChannel(QUEUE_CAPACITY)
         )
         self.pump = RecordingPump(self._sub, self.sink, self.log)
+        self.fast: AllTopicsReader | None = None
+        if rt.fast is not None:
+            rt.read_all_topics()
+            self.fast = AllTopicsReader(rt.fast)
         self.pump.start()
         self._next_status = time.monotonic() + STATUS_PERIOD_S
         what = "all topics" if selection.everything else f"topics {self.args['topics']}"
         self.log.info("recording %s of vehicle '%s' to %s", what, spec.vehicle, path)
 
     def run(self, msg: None, dt: float) -> None:
+        if self.fast is not None and len(self.pump.fast) < FAST_BACKLOG:
+            self._read_fast(final=False)
         now = time.monotonic()
         if now >= self._next_status:
             self._next_status = now + STATUS_PERIOD_S
             w = self.writer
             self.log.info("recorded %d messages (%d undecoded) to %s", w.messages, w.raw_messages, w.path.name)
 
+    def _read_fast(self, final: bool) -> None:
+        assert self.fast is not None
+        self.fast.read(self.pump.fast.append, final)
+        self.sink.fast_publishers = self.fast.publisher_ids
+
     def close(self) -> None:
+        if self.fast is not None:
+            self._read_fast(final=True)
+            if self.fast.lost:
+                self.log.error("%d messages were overwritten on the fast path before being recorded", self.fast.lost)
         finished = self.pump.stop()
         w = self.writer
         if finished:

@@ -118,7 +118,7 @@ class BusReplayer:
         node.seq += 1
         index = self._index.get(key, 0) + 1
         self._index[key] = index
-        header = HEADER.pack(m.fingerprint, node.publisher_id, node.seq, index, m.pub_time_us, m.flags)
+        header = HEADER.pack(m.fingerprint, node.publisher_id, node.seq, index, m.pub_time_us, m.flags, 0)
         pub.put(m.wire_payload(), attachment=header)
         self.sent += 1
 

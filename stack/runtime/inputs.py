@@ -33,6 +33,22 @@ class InputBuffer:
         # may sit on a ring buffer that drops old messages: the barrier only needs the newest to be in.
         self.last_index: dict[int, int] = {}
 
+    @property
+    def received(self) -> int:
+        return self.sub.received
+
+    @property
+    def decode_errors(self) -> int:
+        return self.sub.decode_errors
+
+    @property
+    def schema_errors(self) -> int:
+        return self.sub.schema_errors
+
+    @property
+    def foreign(self) -> int:
+        return self.sub.foreign
+
     def pull(self) -> None:
         """Move everything Zenoh has delivered into the pending list."""
         poll = self.sub.poll
@@ -54,6 +70,11 @@ class InputBuffer:
         self.latest = self._pending[-1][3]
         self._new = True
         self._pending.clear()
+
+    def take_in_everything(self) -> None:
+        """Make every message received so far visible (a passive module's last look before it stops)."""
+        self.pull()
+        self.promote_all()
 
     def promote_visible(self, now: int, trigger_pub: int, trigger_seq: int, members: frozenset[int]) -> None:
         """Lockstep: make visible exactly the messages the rules in the module docstring allow."""
@@ -95,3 +116,8 @@ class InputBuffer:
         self._queue.clear()
         self._new = False
         return msgs
+
+
+def sample_time(msg: Any) -> int:
+    """The time a message's data refers to: ``timestamp_sample`` when it has one (PX4's dt source)."""
+    return getattr(msg, "timestamp_sample", 0) or msg.timestamp

@@ -1,7 +1,10 @@
-"""Lockstep: simulated time advances only when every module triggered by the last step is done.
+"""Lockstep over Zenoh: simulated time advances only when every module triggered by the last step is done.
 
-This is PX4 SITL's lockstep (px4.md §4.5) spread over processes. One module, the simulator,
-drives it as the *coordinator*; every other triggered or timed module is a *member*.
+This is PX4 SITL's lockstep spread over processes. One module, the simulator, drives it as the
+*coordinator*; every other triggered or timed module is a *member*. A run whose modules are all
+started by one supervisor on one host uses the shared-memory fast path instead (:mod:`stack.fastpath`,
+the same rules with other means); this transport serves profiles that choose
+``lockstep_transport = "zenoh"``, e.g. for members on several hosts.
 
 - Each member declares a liveliness token naming its trigger topic or its timer period.
 - The coordinator publishes a clock message per step (the new time, the members expected to act,
@@ -18,17 +21,22 @@ drives it as the *coordinator*; every other triggered or timed module is a *memb
   this makes every run see the same inputs whatever the process scheduling, so lockstep runs with
   the same seed are identical.
 
-A member that dies is dropped (and named) at once; one that stalls is named after a timeout and the
-coordinator stops with an error rather than hang silently.
+A member that dies is dropped (and named) at once; if the supervisor restarts it, time waits until
+it is back, and it joins at the current step, waiting only for messages published after it joined.
+One that stalls is named after a timeout and the coordinator stops with an error rather than hang
+silently. The protocol's own messages carry the run's id: a message that does not decode, or comes
+from another run, is counted and ignored, so nothing sent on the bus can stop the run.
 """
 
 from __future__ import annotations
 
+import json
 import logging
 import threading
 import time
 from collections.abc import Iterable
 from dataclasses import dataclass
+from typing import Generic, TypeVar
 
 import msgspec
 import zenoh
@@ -42,16 +50,42 @@ from stack.runtime.inputs import InputBuffer
 log = logging.getLogger("stack.lockstep")
 
 TIMER = "@timer"
-CLOCK_RING = 8
+# Clocks wait in a FIFO that is drained on every trigger: garbage on the key can delay a clock but
+# never push it out.
+CLOCK_QUEUE = 1 << 14
 SLOW_WAIT_S = 2.0
+VERDICT_TIMEOUT_S = 5.0
 _WAKE = "@wake"
-_clock_decoder = msgspec.msgpack.Decoder(LockstepClock)
-_ack_decoder = msgspec.msgpack.Decoder(LockstepAck)
 _encoder = msgspec.msgpack.Encoder()
+
+P = TypeVar("P", LockstepClock, LockstepAck)
 
 
 class LockstepError(RuntimeError):
     """The lockstep cannot continue (a member stalled past the timeout)."""
+
+
+class ProtocolDecoder(Generic[P]):
+    """Decodes the lockstep's own messages; what does not decode or belongs to another run is counted and dropped."""
+
+    def __init__(self, kind: type[P], run_id: int, where: str) -> None:
+        self._decoder = msgspec.msgpack.Decoder(kind)
+        self._run_id = run_id
+        self._where = where
+        self.rejected = 0
+
+    def decode(self, sample: zenoh.Sample) -> P | None:
+        try:
+            msg = self._decoder.decode(sample.payload.to_bytes())
+        except msgspec.DecodeError:
+            msg = None
+        if msg is not None and msg.run == self._run_id:
+            return msg
+        self.rejected += 1
+        if self.rejected == 1 or self.rejected % 1000 == 0:
+            why = "does not decode" if msg is None else "is from outside this run"
+            log.warning("%s: ignored a message that %s (%d so far)", self._where, why, self.rejected)
+        return None
 
 
 def timer_due(t: int, last_fire: int | None, period_us: int) -> bool:
@@ -110,9 +144,10 @@ class LockstepMember:
     """The member side: follows the clock, holds the barrier, acknowledges runs.
 
     A timed member blocks on its own tick key (``next_clock``). A triggered member blocks on its
-    trigger topic; its clock subscription is a small ring (the counts in each clock are cumulative,
-    so older clocks may be dropped) read when a trigger arrives (``advance_to``). Neither is woken
-    by clocks it does not need.
+    trigger topic; its clock subscription is read when a trigger arrives (``advance_to``; the counts in
+    each clock are cumulative, so only the newest matters). Neither is woken by clocks it does not need.
+    The first clock that admits the member sets its floor: it never waits for a message published
+    before it joined (a restarted member would wait forever for those).
     """
 
     def __init__(self, node: Node, inputs: Iterable[InputBuffer], trigger: str, timed: bool) -> None:
@@ -126,14 +161,10 @@ class LockstepMember:
         self.heard_coordinator = False
         self.members: frozenset[int] = frozenset()
         self.barrier = Barrier(inputs)
-        if timed:
-            self._clock_sub = node.session.declare_subscriber(
-                keys.lockstep_tick_key(node.vehicle, node.name), zenoh.handlers.FifoChannel(4096)
-            )
-        else:
-            self._clock_sub = node.session.declare_subscriber(
-                keys.lockstep_clock_key(node.vehicle), zenoh.handlers.RingChannel(CLOCK_RING)
-            )
+        self._floor: dict[tuple[int, str], int] | None = None
+        key = keys.lockstep_tick_key(node.vehicle, node.name) if timed else keys.lockstep_clock_key(node.vehicle)
+        self._clock_sub = node.session.declare_subscriber(key, zenoh.handlers.FifoChannel(CLOCK_QUEUE))
+        self._clocks = ProtocolDecoder(LockstepClock, node.run_id, key)
         self._ack_pub = node.session.declare_publisher(
             keys.lockstep_ack_key(node.vehicle), congestion_control=zenoh.CongestionControl.BLOCK, express=True
         )
@@ -146,42 +177,63 @@ class LockstepMember:
 
     def poll_startup(self) -> None:
         """Before the first step: note whether the coordinator's pre-start clocks reach this member."""
-        while self._clock_sub.try_recv() is not None:
-            self.heard_coordinator = True
+        sample = self._clock_sub.try_recv()
+        while sample is not None:
+            if self._clocks.decode(sample) is not None:
+                self.heard_coordinator = True
+            sample = self._clock_sub.try_recv()
 
     def ack_reachable(self) -> bool:
         """Whether this session knows the coordinator's acknowledgement subscriber (else an ack is lost)."""
         return self._ack_pub.matching_status.matching
 
-    def _take(self, clk: LockstepClock) -> None:
-        require = self.barrier.require
-        for pub, suffix, total in clk.counts:
-            require(pub, suffix, total)
+    @property
+    def rejected(self) -> int:
+        return self._clocks.rejected
+
+    def _take(self, sample: zenoh.Sample) -> None:
+        clk = self._clocks.decode(sample)
+        if clk is None or clk.step <= self.step:
+            return
         self.members = frozenset(clk.members)
         self.admitted = self.node.publisher_id in self.members
+        if self.admitted and self._floor is None:
+            self._floor = {(pub, suffix): total for pub, suffix, total in clk.counts}
+            self._continue_counts()
+        floor = self._floor or {}
+        require = self.barrier.require
+        for pub, suffix, total in clk.counts:
+            if total > floor.get((pub, suffix), 0):
+                require(pub, suffix, total)
         self.step = clk.step
         self.now = clk.timestamp
 
+    def _continue_counts(self) -> None:
+        """A restarted member numbers its messages on from where its previous process stopped, so that
+        every count the run keeps stays monotonic (the clock carries them)."""
+        me = self.node.publisher_id
+        assert self._floor is not None
+        for pub in self.node.publishers:
+            pub.count = max(pub.count, self._floor.get((me, pub.suffix), 0))
+
     def next_clock(self) -> None:
         """Block until the next tick and take it in (timed members); pre-start clocks are skipped."""
-        while True:
-            clk = _clock_decoder.decode(self._clock_sub.recv().payload.to_bytes())
-            if clk.step > 0:
-                self._take(clk)
-                return
+        step = self.step
+        while self.step == step:
+            self._take(self._clock_sub.recv())
 
     def advance_to(self, t: int) -> None:
         """Take in the newest clock, waiting until one has reached ``t`` (triggered members)."""
         sub = self._clock_sub
         sample = sub.try_recv()
         while sample is not None:
-            self._take(_clock_decoder.decode(sample.payload.to_bytes()))
+            self._take(sample)
             sample = sub.try_recv()
         while self.now < t:
             sample = sub.try_recv()
             if sample is None:
                 sample = self._slow_clock(t)
-            self._take(_clock_decoder.decode(sample.payload.to_bytes()))
+            self._take(sample)
 
     def _slow_clock(self, t: int) -> zenoh.Sample:
         """Block for the clock of time ``t``, saying so in the log if it is long in coming."""
@@ -212,6 +264,7 @@ class LockstepMember:
             _encoder.encode(
                 LockstepAck(
                     timestamp=self.now,
+                    run=self.node.run_id,
                     member=self.node.name,
                     publisher_id=self.node.publisher_id,
                     trigger_publisher=trigger_publisher,
@@ -253,6 +306,8 @@ class LockstepCoordinator:
         self._events_lock = threading.Lock()
         self._waiting_since: float | None = None
         self._closed = threading.Event()
+        self._awaited: dict[str, float] = {}  # members that left, until the supervisor's word on them
+        self._acks = ProtocolDecoder(LockstepAck, node.run_id, keys.lockstep_ack_key(node.vehicle))
         vehicle = node.vehicle
         self._clock_pub = node.session.declare_publisher(
             keys.lockstep_clock_key(vehicle), congestion_control=zenoh.CongestionControl.BLOCK, express=True
@@ -291,11 +346,13 @@ class LockstepCoordinator:
                     # started both from its history and live: count each member once.
                     continue
                 self.members[m.publisher_id] = m
+                self._awaited.pop(m.name, None)
                 if m.trigger is not None:
                     self._triggered_by.setdefault(m.trigger, []).append(m.publisher_id)
                 log.info("lockstep member %s joined at t=%.3f s", m.name, self.now / 1e6)
             elif m.publisher_id in self.members:
                 self._drop(m.publisher_id, f"lockstep member {m.name} left at t={self.now / 1e6:.3f} s")
+                self._awaited[m.name] = time.monotonic()
 
     def _drop(self, publisher_id: int, why: str) -> None:
         m = self.members.pop(publisher_id)
@@ -314,7 +371,7 @@ class LockstepCoordinator:
         """Before the first step: an empty clock (step 0) on the clock key and every timed member's tick
         key, so that members can tell the coordinator reaches them before they declare themselves synced."""
         self._apply_membership()
-        clock = _encoder.encode(LockstepClock(timestamp=0, step=0, counts=[], members=[]))
+        clock = _encoder.encode(LockstepClock(timestamp=0, run=self.node.run_id, step=0, counts=[], members=[]))
         self._clock_pub.put(clock)
         for m in self.members.values():
             if m.period_us is not None:
@@ -323,17 +380,53 @@ class LockstepCoordinator:
     def begin_step(self, t: int) -> None:
         """Announce time ``t``: publish the clock. Publish this step's own messages right after."""
         self._apply_membership()
+        if self._awaited:
+            self._await_restarts()
         self.now = t
         self.step += 1
         counts = [(pub, suffix, total) for (pub, suffix), total in self._totals.items()]
         member_ids = [*self.members, self.node.publisher_id]
-        clock = _encoder.encode(LockstepClock(timestamp=t, step=self.step, counts=counts, members=member_ids))
+        clock = _encoder.encode(
+            LockstepClock(timestamp=t, run=self.node.run_id, step=self.step, counts=counts, members=member_ids)
+        )
         self._clock_pub.put(clock)
         for m in self.members.values():
             if m.period_us is not None and timer_due(t, m.last_fire, m.period_us):
                 m.last_fire = t
                 self._expect(m.publisher_id, TIMER, 1)
                 self._tick_publisher(m).put(clock)
+
+    def _await_restarts(self) -> None:
+        """Time waits while a member that left is being restarted by the supervisor (asked every 50 ms)."""
+        logged = False
+        while self._awaited:
+            states = self._supervisor_states()
+            now = time.monotonic()
+            for name, since in list(self._awaited.items()):
+                state = states.get(name, "")
+                if state in ("failed", "exited", "stopping") or (
+                    state == "running" and now - since > VERDICT_TIMEOUT_S
+                ):
+                    del self._awaited[name]  # not coming back (or no word on it): time goes on
+            if not self._awaited:
+                return
+            if not logged and now - min(self._awaited.values()) > SLOW_WAIT_S:
+                logged = True
+                waiting = ", ".join(self._awaited)
+                log.warning("lockstep time waits at t=%.3f s for %s to restart", self.now / 1e6, waiting)
+            time.sleep(0.05)
+            self._apply_membership()
+
+    def _supervisor_states(self) -> dict[str, str]:
+        """Module name → state, from the supervisor's status."""
+        for reply in self.node.session.get(keys.supervisor_key(self.node.vehicle, "status"), timeout=1.0):
+            if reply.ok is not None:
+                try:
+                    rows = json.loads(reply.ok.payload.to_string())["modules"]
+                    return {str(r["module"]): str(r["state"]) for r in rows}
+                except (ValueError, KeyError, TypeError):
+                    pass
+        return {}
 
     def _tick_publisher(self, m: _Member) -> zenoh.Publisher:
         pub = self._tick_pubs.get(m.publisher_id)
@@ -352,6 +445,8 @@ class LockstepCoordinator:
 
     def _account(self, publisher_id: int, published: Iterable[tuple[str, int]]) -> None:
         for suffix, total in published:
+            if not isinstance(total, int) or total < 0:
+                continue
             key = (publisher_id, suffix)
             runs = total - self._totals.get(key, 0)
             self._totals[key] = total
@@ -365,6 +460,7 @@ class LockstepCoordinator:
         key = (member, what)
         left = self._pending.get(key, 0) + n
         if left:
+            # Negative while a run's acknowledgement arrived before the one announcing its trigger.
             self._pending[key] = left
         else:
             del self._pending[key]
@@ -377,7 +473,9 @@ class LockstepCoordinator:
                 self._apply_membership()
                 if not self._pending:
                     break
-                self._handle_ack(_ack_decoder.decode(self._ack_sub.recv().payload.to_bytes()))
+                ack = self._acks.decode(self._ack_sub.recv())
+                if ack is not None:
+                    self._handle_ack(ack)
             self.barrier.wait()
         finally:
             self._waiting_since = None
@@ -406,7 +504,7 @@ class LockstepCoordinator:
         )
 
     def _wake(self) -> None:
-        self.node.session.put(self._ack_key, _encoder.encode(LockstepAck(trigger_topic=_WAKE)))
+        self.node.session.put(self._ack_key, _encoder.encode(LockstepAck(run=self.node.run_id, trigger_topic=_WAKE)))
 
     def _watch(self) -> None:
         while not self._closed.wait(0.5):

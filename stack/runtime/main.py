@@ -7,11 +7,13 @@ asks the kernel to send it SIGTERM if the supervisor dies, so no module is ever 
 
 from __future__ import annotations
 
+import cProfile
 import ctypes
 import logging
 import os
 import signal
 import sys
+import time
 from pathlib import Path
 from types import FrameType
 
@@ -21,6 +23,9 @@ from stack.runtime.runner import Runtime, Shutdown
 from stack.runtime.spec import ModuleSpec
 
 PR_SET_PDEATHSIG = 1
+# Where each module writes its cProfile statistics (<module>.prof) when it stops, if set: for finding
+# where a module's main thread spends its CPU time (`python -m pstats DIR/simulator.prof`).
+PROFILE_ENV = "STACK_PROFILE_DIR"
 _stopping = False
 
 
@@ -55,8 +60,12 @@ def main(argv: list[str] | None = None) -> int:
     signal.signal(signal.SIGTERM, _on_signal)
     signal.signal(signal.SIGINT, _on_signal)
     log = logging.getLogger(spec.name)
+    profile_dir = os.environ.get(PROFILE_ENV)
+    profiler = cProfile.Profile(time.thread_time) if profile_dir else None
     try:
         _die_with_parent(spec.supervisor_pid)
+        if profiler is not None:
+            profiler.enable()
         Runtime(spec).run()
     except Shutdown as stop:
         log.info("stopped (%s)", stop)
@@ -67,6 +76,10 @@ def main(argv: list[str] | None = None) -> int:
     except Exception:
         log.exception("crashed")
         return 1
+    finally:
+        if profiler is not None:
+            profiler.disable()
+            profiler.dump_stats(Path(str(profile_dir)) / f"{spec.name}.prof")
     return 0
 
 

@@ -83,6 +83,9 @@ class Module:
     # A passive module (recorder, plot bridge) only observes: it never joins the lockstep, runs on the
     # wall clock, and the simulation does not wait for it. It still syncs at start so it misses nothing.
     PASSIVE: ClassVar[bool] = False
+    # A passive module that must not lose messages (the recorder): on the same-host fast path,
+    # lockstep time waits for it whenever it falls far behind.
+    LOSSLESS: ClassVar[bool] = False
 
     def __init__(self, rt: Runtime) -> None:
         self.rt = rt

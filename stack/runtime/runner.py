@@ -15,9 +15,14 @@ from typing import Any
 from stack.bus import keys
 from stack.bus.node import Node, wall_clock_us
 from stack.bus.topics import FLAG_LOCKSTEP_TIME, Received, TopicPublisher
+from stack.fastpath.attach import Attachment
+from stack.fastpath.inputs import FastInput
+from stack.fastpath.layout import SUB_QUEUE, SUB_TRIGGER, Region
+from stack.msg.registry import fingerprint
 from stack.msg.system import ParameterUpdate
 from stack.runtime import startup
-from stack.runtime.inputs import InputBuffer
+from stack.runtime.fastrun import FastDriver
+from stack.runtime.inputs import InputBuffer, sample_time
 from stack.runtime.lockstep import TIMER, LockstepCoordinator, LockstepMember
 from stack.runtime.module import Module, Timer, Trigger
 from stack.runtime.params import ParamStore
@@ -28,6 +33,9 @@ log = logging.getLogger("stack.runtime")
 
 LOCKSTEP_QUEUE = 1 << 14
 LATEST_RING = 8
+# Outside messages reaching a fast-path module over Zenoh wait in a FIFO it drains every run: a flood
+# blocks Zenoh's delivery to this process, never displaces a message (the lockstep does not use Zenoh).
+OUTSIDE_QUEUE = 1024
 
 
 class Shutdown(BaseException):
@@ -48,6 +56,7 @@ class Runtime:
         self.runs = 0
         self.errors = 0
         self.rejected = 0
+        self.outside_triggers = 0
         self._now = 0
         self._loop_sum = 0.0
         self._loop_max = 0.0
@@ -55,6 +64,10 @@ class Runtime:
         self._last_beat = time.monotonic()
         self._param_instance = 0
         self._trigger_buf: InputBuffer | None = None
+        # The same-host fast path (stack.fastpath), when the supervisor gave this process its region.
+        self.fast: Attachment | None = None
+        self.trigger_input: FastInput | None = None
+        self.reads_all_topics = False
         self.node: Node
         self.module: Module
 
@@ -66,34 +79,60 @@ class Runtime:
     # -- declarations used by Module -----------------------------------------------------------------
 
     def add_input(self, topic: str, instance: int, queue: bool, capacity: int) -> None:
-        if queue:
+        if self.fast is not None:
+            sub = self.node.subscriber(topic, instance, capacity=OUTSIDE_QUEUE)
+            self.fast.subscription(sub.suffix, SUB_QUEUE if queue else 0)
+            keep = capacity if self.module_cls.PASSIVE and not self.module_cls.LOSSLESS else 0
+            self.inputs[(topic, instance)] = FastInput(self.fast.region, sub, queue, keep)
+            return
+        if queue or self.lockstep:
+            # In lockstep a latest-value input is a FIFO too, drained every run: a ring would let
+            # dropped garbage push out the message the barrier waits for.
             sub = self.node.subscriber(topic, instance, capacity=max(capacity, LOCKSTEP_QUEUE if self.lockstep else 0))
         else:
-            # Latest-value inputs keep the last few messages only. In lockstep a publisher sends a topic
-            # about once per step, so the newest message visible at a run is always among them.
+            # Real time: the last few messages only; the newest is all a latest-value input needs.
             sub = self.node.subscriber(topic, instance, capacity=LATEST_RING, keep_last=True)
         self.inputs[(topic, instance)] = InputBuffer(sub, queue)
 
     def add_output(self, topic: str, instance: int, reliable: bool | None) -> None:
-        self.outputs[(topic, instance)] = self.node.publisher(
-            topic, instance, reliable=True if self.lockstep else reliable
-        )
+        pub = self.node.publisher(topic, instance, reliable=True if self.lockstep else reliable)
+        if self.fast is not None:
+            sample = len(pub.encoder.encode(pub.msg_type()))
+            pub.fast = self.fast.publication(pub.suffix, fingerprint(pub.msg_type), sample)
+        self.outputs[(topic, instance)] = pub
+
+    def read_all_topics(self) -> None:
+        """A passive module that reads every topic of the run (the recorder): publishers never skip one."""
+        self.reads_all_topics = True
 
     # -- lifecycle ---------------------------------------------------------------------------------
 
     def run(self) -> None:
-        with Node(self.spec.bus, self.spec.vehicle, self.name, clock=self.now_us) as node:
+        spec = self.spec
+        run_id = spec.run_id if spec.lockstep else 0
+        with Node(spec.bus, spec.vehicle, self.name, clock=self.now_us, run_id=run_id) as node:
             self.node = node
             if self.lockstep:
                 node.header_flags = FLAG_LOCKSTEP_TIME
             services: list[Any] = []
             lockstep_part: LockstepMember | LockstepCoordinator | None = None
+            region = Region(spec.fastpath_fd) if spec.lockstep and spec.fastpath_fd >= 0 else None
             try:
+                if region is not None:
+                    if region.nonce != spec.run_id:
+                        raise ValueError(f"fd {spec.fastpath_fd} is the fast-path region of another run")
+                    self.fast = Attachment(region, self.name, node.publisher_id)
                 self._declare_trigger()
                 self.module = self.module_cls(self)
-                self._param_pub = node.publisher("parameter_update", reliable=False)
+                self._param_pub = node.publisher("parameter_update", reliable=self.lockstep)
                 services.append(ParamService(node.session, node.vehicle, self.name, self.params))
                 services.append(Heartbeat(node.session, node.vehicle, self.name, self.snapshot))
+                if self.fast is not None:
+                    node.declare_token(keys.alive_token(node.vehicle, self.name, os.getpid()))
+                    self.state = "running"
+                    log.info("%s ready (%s, shared-memory fast path)", self.name, self.describe_trigger())
+                    FastDriver(self).run()
+                    return
                 lockstep_part = self._make_lockstep()
                 node.declare_token(keys.alive_token(node.vehicle, self.name, os.getpid()))
                 if self.spec.lockstep:
@@ -114,6 +153,8 @@ class Runtime:
                     service.close()
                 if lockstep_part is not None:
                     lockstep_part.close()
+                if region is not None:
+                    region.close()
 
     def describe_trigger(self) -> str:
         trigger = self.module_cls.TRIGGER
@@ -128,6 +169,12 @@ class Runtime:
     def _declare_trigger(self) -> None:
         trigger = self.module_cls.TRIGGER
         if not isinstance(trigger, Trigger):
+            return
+        if self.fast is not None:
+            sub = self.node.subscriber(trigger.topic, trigger.instance, capacity=OUTSIDE_QUEUE)
+            self.fast.subscription(sub.suffix, SUB_TRIGGER)
+            self.trigger_input = FastInput(self.fast.region, sub, False)
+            self.inputs[(trigger.topic, trigger.instance)] = self.trigger_input
             return
         if self.lockstep:
             sub = self.node.subscriber(trigger.topic, trigger.instance, capacity=LOCKSTEP_QUEUE)
@@ -215,12 +262,12 @@ class Runtime:
         while True:
             item = buf.sub.recv()
             t, pub, seq, msg = item[0], item[1], item[2], item[3]
+            if t < 0:
+                self._ignore_outside_trigger(suffix)
+                continue
             self._take_trigger(buf, item)
-            if t >= 0:
-                member.advance_to(t)
-                self._now = t
-            else:
-                self._now = member.now
+            member.advance_to(t)
+            self._now = t
             member.barrier.wait()
             members = member.members
             now = self._now
@@ -300,6 +347,13 @@ class Runtime:
         self.state = "running"
         log.info("lockstep starting with %s", ", ".join(sorted(roster)))
 
+    def _ignore_outside_trigger(self, suffix: str) -> None:
+        """In lockstep only the run's own publishers trigger runs (time and triggers come from the run)."""
+        self.rejected += 1
+        self.outside_triggers += 1
+        if self.outside_triggers == 1:
+            log.warning("%s: ignoring messages from outside the lockstep run on its trigger %s", self.name, suffix)
+
     # -- one run ---------------------------------------------------------------------------------------
 
     def _take_trigger(self, buf: InputBuffer, item: Received) -> None:
@@ -351,10 +405,11 @@ class Runtime:
             "state": self.state,
             "trigger": self.describe_trigger(),
             "runs": self.runs,
-            "msgs_in": sum(buf.sub.received for buf in self.inputs.values()),
+            "msgs_in": sum(buf.received for buf in self.inputs.values()),
             "msgs_out": sum(p.count for p in self.outputs.values()),
-            "decode_errors": sum(buf.sub.decode_errors for buf in self.inputs.values()),
-            "schema_errors": sum(buf.sub.schema_errors for buf in self.inputs.values()),
+            "decode_errors": sum(buf.decode_errors for buf in self.inputs.values()),
+            "schema_errors": sum(buf.schema_errors for buf in self.inputs.values()),
+            "foreign": sum(buf.foreign for buf in self.inputs.values()),
             "rejected": self.rejected + self.errors,
             "loop_avg_us": avg,
             "loop_max_us": self._loop_max * 1e6,
@@ -366,8 +421,3 @@ class Runtime:
         self._loop_runs = 0
         self._last_beat = now
         return status
-
-
-def sample_time(msg: Any) -> int:
-    """The time a message's data refers to: ``timestamp_sample`` when it has one (PX4's dt source)."""
-    return getattr(msg, "timestamp_sample", 0) or msg.timestamp

@@ -74,6 +74,10 @@ class ModuleSpec:
     run_dir: str = ""
     # A restart while the stack runs: join the lockstep without the start-up probe handshake.
     late_join: bool = False
+    # The lockstep run's random id (stack.bus.topics.HEADER) and, on the same-host fast path, the
+    # inherited file descriptor of its shared-memory region (stack.fastpath); -1 when over Zenoh.
+    run_id: int = 0
+    fastpath_fd: int = -1
 
     def to_json(self) -> str:
         d = asdict(self)

@@ -52,6 +52,9 @@ def find_launch_file(relative: str) -> Path:
 
 
 RESTART_POLICIES = ("no", "on-failure", "always")
+# How lockstep messages travel: shared memory between the processes of one supervisor (stack.fastpath),
+# or Zenoh, for a lockstep run whose modules are not all started by this supervisor on this host.
+LOCKSTEP_TRANSPORTS = ("shm", "zenoh")
 FLAGS = ("lockstep", "realtime", "plot", "record")
 
 
@@ -83,6 +86,7 @@ class Profile:
     bus: BusConfig
     port: int
     stall_timeout_s: float = 10.0
+    lockstep_transport: str = "shm"
     modules: list[ModuleEntry] = field(default_factory=list)
     scenario_limits: dict[str, dict[str, float | bool]] = field(default_factory=dict)
 
@@ -190,7 +194,11 @@ class _Loader:
         doc = self._document(self.path, ())
         self._only(doc, "", {"stack", "bus", "params", "module", "scenario"})
         stack = self._table(doc, "stack")
-        self._only(stack, "stack", {"vehicle", "description", "lockstep", "seed", "airframe", "stall_timeout_s"})
+        self._only(
+            stack,
+            "stack",
+            {"vehicle", "description", "lockstep", "lockstep_transport", "seed", "airframe", "stall_timeout_s"},
+        )
         vehicle = self._get(stack, "stack", "vehicle", str, "v1")
         try:
             keys.check_name("vehicle", vehicle)
@@ -198,6 +206,9 @@ class _Loader:
             raise self.fail("stack.vehicle", str(e)) from None
         lockstep = self._get(stack, "stack", "lockstep", bool, True) and not flags.get("realtime", False)
         airframe = self._get(stack, "stack", "airframe", str, "")
+        transport = self._get(stack, "stack", "lockstep_transport", str, "shm")
+        if transport not in LOCKSTEP_TRANSPORTS:
+            raise self.fail("stack.lockstep_transport", f"'{transport}' is not one of {', '.join(LOCKSTEP_TRANSPORTS)}")
         bus, port = self._bus(self._table(doc, "bus"))
         profile = Profile(
             path=self.path,
@@ -209,6 +220,7 @@ class _Loader:
             bus=bus,
             port=port,
             stall_timeout_s=float(self._get(stack, "stack", "stall_timeout_s", float, 10.0)),
+            lockstep_transport=transport,
         )
         shared = self._airframe_params(airframe)
         given_shared = self._table(doc, "params")
@@ -273,7 +285,7 @@ class _Loader:
                 connect=connect,
                 listen=listen,
                 low_latency=self._get(table, "bus", "low_latency", bool, True),
-                lease_ms=self._get(table, "bus", "lease_ms", int, 3000),
+                lease_ms=self._get(table, "bus", "lease_ms", int, BusConfig.lease_ms),
             )
         except ValueError as e:
             raise self.fail("bus.mode", str(e)) from None

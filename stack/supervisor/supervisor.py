@@ -13,6 +13,7 @@ from __future__ import annotations
 import json
 import logging
 import os
+import secrets
 import signal
 import subprocess
 import sys
@@ -27,7 +28,8 @@ import zenoh
 
 from stack.bus import keys
 from stack.bus.config import LOOPBACK_ANY_PORT, BusConfig
-from stack.bus.ports import free_port
+from stack.bus.ports import free_port, port_taken
+from stack.fastpath.host import FastPathHost
 from stack.msg.internal import ModuleHeartbeat
 from stack.runtime.spec import ModuleSpec
 from stack.supervisor import state as run_state
@@ -38,6 +40,9 @@ log = logging.getLogger("stack.supervisor")
 START_TIMEOUT_S = 60.0
 STOP_GRACE_S = 5.0
 BACKOFF_MAX_S = 10.0
+# How often the supervisor checks its modules (and applies topic-graph changes to a fast-path run).
+MONITOR_PERIOD_S = 0.05
+ROUTER_PORT_ATTEMPTS = 5
 
 
 @dataclass
@@ -74,15 +79,7 @@ class Supervisor:
         self.options = options
         self.run_dir = run_dir
         self.vehicle = profile.vehicle
-        self.port = profile.port or free_port()
-        self.endpoint = f"tcp/127.0.0.1:{self.port}"
-        self.module_bus = BusConfig(
-            mode=profile.bus.mode,
-            connect=(self.endpoint, *profile.bus.connect),
-            listen=profile.bus.listen,
-            low_latency=profile.bus.low_latency,
-            lease_ms=profile.bus.lease_ms,
-        )
+        self._set_port(profile.port or free_port())
         local_mesh = profile.bus.mode == "peer" and profile.bus.listen == (LOOPBACK_ANY_PORT,)
         self.module_endpoints = {e.name: f"tcp/127.0.0.1:{free_port()}" for e in profile.modules} if local_mesh else {}
         self.modules = [
@@ -90,6 +87,10 @@ class Supervisor:
         ]
         self.roster_complete = False
         self.failed = False
+        # The lockstep run's id, and its same-host shared-memory fast path (stack.fastpath) unless the
+        # profile sends lockstep traffic over Zenoh.
+        self.run_id = secrets.randbits(63) | 1
+        self.fast: FastPathHost | None = None
         self._stop = threading.Event()
         self._alive: dict[str, int] = {}
         self._alive_changed = threading.Condition()
@@ -97,32 +98,62 @@ class Supervisor:
         self._print_lock = threading.Lock()
         self._hb_decoder = msgspec.msgpack.Decoder(ModuleHeartbeat)
 
+    def _set_port(self, port: int) -> None:
+        self.port = port
+        self.endpoint = f"tcp/127.0.0.1:{port}"
+        bus = self.profile.bus
+        self.module_bus = BusConfig(
+            mode=bus.mode,
+            connect=(self.endpoint, *bus.connect),
+            listen=bus.listen,
+            low_latency=bus.low_latency,
+            lease_ms=bus.lease_ms,
+        )
+
+    def _open_router(self) -> zenoh.Session:
+        """The rendezvous router; a port taken since it was picked (another stack starting at the same
+        moment) is picked again, unless the profile fixed it."""
+        for attempt in range(ROUTER_PORT_ATTEMPTS):
+            bus = BusConfig(
+                mode="router",
+                connect=self.profile.bus.connect,
+                listen=(self.endpoint,),
+                low_latency=self.profile.bus.low_latency,
+                lease_ms=self.profile.bus.lease_ms,
+            )
+            try:
+                return zenoh.open(bus.zenoh_config("supervisor"))
+            except zenoh.ZError as e:
+                if self.profile.port or attempt + 1 == ROUTER_PORT_ATTEMPTS or not port_taken(e):
+                    raise
+                self._set_port(free_port())
+        raise AssertionError("unreachable")
+
     # -- entry -------------------------------------------------------------------------------------
 
     def run(self) -> int:
         signal.signal(signal.SIGINT, self._on_signal)
         signal.signal(signal.SIGTERM, self._on_signal)
-        bus = BusConfig(
-            mode="router",
-            connect=self.profile.bus.connect,
-            listen=(self.endpoint,),
-            low_latency=self.profile.bus.low_latency,
-            lease_ms=self.profile.bus.lease_ms,
-        )
-        session = zenoh.open(bus.zenoh_config("supervisor"))
+        session = self._open_router()
         entities = []
+        if self.profile.lockstep and self.profile.lockstep_transport == "shm":
+            self.fast = FastPathHost([m.entry.name for m in self.modules], self.run_id)
+            self.fast.watch_graph(session, self.vehicle)
         try:
             entities = [
                 session.declare_queryable(keys.supervisor_key(self.vehicle, "roster"), self._on_roster_query),
                 session.declare_queryable(keys.supervisor_key(self.vehicle, "status"), self._on_status_query),
                 session.liveliness().declare_subscriber(keys.alive_query(self.vehicle), self._on_alive, history=True),
                 session.declare_subscriber(keys.heartbeat_all(self.vehicle), self._on_heartbeat),
+                session.declare_queryable(keys.supervisor_key(self.vehicle, "outside"), self._on_outside_query),
             ]
             run_state.write_state(self.vehicle, self.state_record())
             self._say(f"run directory {self.run_dir}")
             self._say(f"bus rendezvous {self.endpoint}, vehicle '{self.vehicle}'")
             if self._start_all():
                 self.roster_complete = True
+                if self.fast is not None:
+                    self.fast.roster_complete()
                 self._say(f"all {len(self.modules)} modules up" + (" (lockstep)" if self.profile.lockstep else ""))
                 self._monitor()
             else:
@@ -131,6 +162,8 @@ class Supervisor:
             self._stop_all()
             for entity in entities:
                 entity.undeclare()
+            if self.fast is not None:
+                self.fast.close()
             session.close()
             run_state.remove_state(self.vehicle, os.getpid())
         code = 1 if self.failed or any(m.failures for m in self.modules) else 0
@@ -147,6 +180,7 @@ class Supervisor:
             "bus": json.loads(self.module_bus.to_json()),
             "run_dir": str(self.run_dir),
             "lockstep": self.profile.lockstep,
+            "lockstep_transport": self.profile.lockstep_transport if self.profile.lockstep else None,
             "started": time.time(),
         }
 
@@ -198,6 +232,8 @@ class Supervisor:
             stall_timeout_s=self.profile.stall_timeout_s,
             run_dir=str(self.run_dir),
             late_join=m.restarts > 0,
+            run_id=self.run_id,
+            fastpath_fd=self.fast.region.fd if self.fast is not None else -1,
         )
 
     def _spawn(self, m: ModuleProcess) -> None:
@@ -212,6 +248,7 @@ class Supervisor:
             stderr=subprocess.STDOUT,
             env=env,
             process_group=0,
+            pass_fds=self.fast.pass_fds() if self.fast is not None else (),
         )
         m.state = "starting"
         self._say(f"starting {m.entry.name} (pid {m.proc.pid})")
@@ -264,8 +301,10 @@ class Supervisor:
 
     def _monitor(self) -> None:
         deadline = None if self.options.duration is None else time.monotonic() + self.options.duration
-        while not self._stop.wait(0.05):
+        while not self._stop.wait(MONITOR_PERIOD_S):
             now = time.monotonic()
+            if self.fast is not None:
+                self.fast.update_outside()
             if deadline is not None and now >= deadline:
                 self._say(f"duration of {self.options.duration:g} s reached")
                 return
@@ -276,7 +315,10 @@ class Supervisor:
                     m.restarts += 1
                     self._say(f"restarting {m.entry.name} (restart {m.restarts})")
                     self._spawn(m)
-                    if not self._wait_ready(m):
+                    if self._wait_ready(m):
+                        if self.fast is not None:
+                            self.fast.restart_over(m.entry.name)
+                    else:
                         self._plan_restart_or_give_up(m)
             for m in self.modules:
                 if m.entry.critical and m.state in ("failed", "exited"):
@@ -298,11 +340,15 @@ class Supervisor:
             self._plan_restart_or_give_up(m)
         else:
             m.state = "exited" if m.exit_code == 0 else "failed"
+        if self.fast is not None:
+            self.fast.exit_handled(m.entry.name, m.state == "restarting")
 
     def _plan_restart_or_give_up(self, m: ModuleProcess) -> None:
         if m.restarts >= m.entry.max_restarts:
             self._say(f"{m.entry.name}: giving up after {m.restarts} restarts")
             m.state = "failed"
+            if self.fast is not None:
+                self.fast.restart_over(m.entry.name)
             return
         delay = min(0.5 * 2**m.restarts, BACKOFF_MAX_S)
         m.state = "restarting"
@@ -347,6 +393,12 @@ class Supervisor:
         modules = {m.entry.name: m.pid for m in self.modules if m.state == "running"}
         reply = {"complete": self.roster_complete, "modules": modules}
         query.reply(keys.supervisor_key(self.vehicle, "roster"), json.dumps(reply))
+
+    def _on_outside_query(self, query: zenoh.Query) -> None:
+        """Which topics the stack puts on Zenoh for subscribers outside it: a tool that has just subscribed
+        waits until its topics are among them (with no fast path, every topic always is)."""
+        reply = {"fast_path": self.fast is not None, "topics": self.fast.outside_topics() if self.fast else []}
+        query.reply(keys.supervisor_key(self.vehicle, "outside"), json.dumps(reply))
 
     def _on_status_query(self, query: zenoh.Query) -> None:
         query.reply(keys.supervisor_key(self.vehicle, "status"), json.dumps(self.status()))

@@ -1,18 +1,20 @@
 """rerun_bridge: live Rerun plots of a running stack, as one more (passive) module.
 
-It never holds the stack back: it is PASSIVE (outside the lockstep, on the wall clock), and its
-subscriptions are drop-oldest ring buffers filled by Zenoh's own threads, so a slow Python side loses
-its oldest samples instead of filling a queue that would block lockstep publishers (they use
-blocking congestion control). It subscribes only to the topics it draws, since every subscriber
-costs each publisher one more send; its CPU use still competes with the stack's (see
-benchmarks/bench_viz.py).
+It never holds the stack back: it is PASSIVE (outside the lockstep, on the wall clock). On the
+same-host fast path (:mod:`stack.fastpath`) it reads the rings of the topics it draws directly, and a
+ring that laps it costs it its oldest samples, never the stack any time. Over Zenoh its subscriptions
+are drop-oldest ring buffers filled by Zenoh's own threads, so a slow Python side loses its oldest
+samples instead of filling a queue that would block lockstep publishers (they use blocking congestion
+control). It subscribes only to the topics it draws, since every subscriber costs each publisher one
+more send; its CPU use still competes with the stack's (see benchmarks/bench_viz.py).
 
-Every tick (5 Hz wall, the latency of Rerun's own batching) it takes what arrived, feeds it to
-:class:`stack.viz.logger.FlightLogger` in timestamp order and flushes the batches: the flush costs
-~25 µs per entity, so its rate, not the message rate, sets most of the bridge's Python CPU. A buffer
-found full is reported as an overrun. The ``wall_time`` of a sample is the tick that took it
-(200 ms resolution). The vehicle is drawn with
-the rotor geometry of whichever module serves ``CA_ROTOR*`` parameters, asked once on the first tick.
+Every tick (25 Hz wall, often enough to read the fast path's rings before they wrap at ten times real
+time) it takes what arrived and feeds it to :class:`stack.viz.logger.FlightLogger` in timestamp
+order; every fifth tick (5 Hz, the latency of Rerun's own batching) it flushes the batches: the flush
+costs ~25 µs per entity, so its rate, not the message rate, sets most of the bridge's Python CPU. A
+buffer found full is reported as an overrun. The ``wall_time`` of a sample is the tick that took it
+(40 ms resolution). The vehicle is drawn with
+the rotor geometry of whichever module serves ``CA_ROTOR*`` parameters, asked once at start.
 
 Rerun is imported when the module is built, so processes that only read the module's declaration
 (the supervisor, the CLI) never pay its ~0.5 s and ~90 MB.
@@ -21,6 +23,7 @@ Rerun is imported when the module is built, so processes that only read the modu
 from __future__ import annotations
 
 import json
+import threading
 import time
 from operator import itemgetter
 from pathlib import Path
@@ -36,6 +39,7 @@ if TYPE_CHECKING:
     from stack.runtime.runner import Runtime
 
 OVERRUN_LOG_EVERY = 100
+FLUSH_EVERY_TICKS = 5
 
 
 def wall_time_us() -> int:
@@ -69,7 +73,7 @@ class RerunBridgeModule(Module):
     NAME = "rerun_bridge"
     DESCRIPTION = "Live Rerun plots: attitude, rates, control, motors, position, estimator, sensors, 3D view"
     PASSIVE = True
-    TRIGGER = Timer(5.0)
+    TRIGGER = Timer(25.0)
     ARGS = (
         Arg("spawn", True, "Open the native Rerun viewer when a display exists (ignored with web)"),
         Arg("web", False, "Serve the Rerun web viewer and log its URL"),
@@ -113,7 +117,8 @@ class RerunBridgeModule(Module):
         self.topics = TOPICS
         self.logger: Any = None
         self.overruns = 0
-        self._rotors_checked = False
+        self._rotors: tuple[tuple[float, float, float], ...] | None = None
+        self._asking: threading.Thread | None = None
         if not self.sinks.active:
             self.log.warning("nothing to plot to: no viewer, no web viewer, no file; the bridge stays idle")
             return
@@ -132,19 +137,30 @@ class RerunBridgeModule(Module):
         )
         node = rt.node
         for topic in TOPICS:
-            sub = node.subscriber(topic, capacity=self.capacity, keep_last=True)
-            rt.inputs[(topic, 0)] = InputBuffer(sub, True)
+            if rt.fast is not None:
+                self.subscribe(topic, queue=True, capacity=self.capacity)
+            else:
+                sub = node.subscriber(topic, capacity=self.capacity, keep_last=True)
+                rt.inputs[(topic, 0)] = InputBuffer(sub, True)
+        self._ticks = 0
+        # Asked beside the plotting (the answer can take a second; the flight's data must not wait).
+        self._asking = threading.Thread(target=self._ask_rotors, name="rotor-query", daemon=True)
+        self._asking.start()
+
+    def _ask_rotors(self) -> None:
+        self._rotors = query_rotors(self.rt.node.session, self.rt.node.vehicle)
 
     def run(self, msg: None, dt: float) -> None:
         if self.logger is None:
             return
-        if not self._rotors_checked:
-            self._rotors_checked = True
-            rotors = query_rotors(self.rt.node.session, self.rt.node.vehicle)
-            if rotors is not None:
-                self.logger.set_rotors(rotors)
+        if self._asking is not None and not self._asking.is_alive():
+            self._asking = None
+            if self._rotors is not None:
+                self.logger.set_rotors(self._rotors)
         self._feed()
-        self.logger.flush()
+        self._ticks += 1
+        if self._ticks % FLUSH_EVERY_TICKS == 0:
+            self.logger.flush()
 
     def _feed(self) -> None:
         """Log everything taken from the buffers since the last tick, oldest first."""
@@ -172,9 +188,7 @@ class RerunBridgeModule(Module):
     def close(self) -> None:
         if self.logger is not None:
             for topic in self.topics:
-                buf = self.rt.inputs[(topic, 0)]
-                buf.pull()
-                buf.promote_all()
+                self.rt.inputs[(topic, 0)].take_in_everything()
             self._feed()
             self.logger.flush()
             lg = self.logger

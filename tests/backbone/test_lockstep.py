@@ -1,17 +1,25 @@
-"""Lockstep: time advances only when triggered work is done; runs are deterministic; stalls are named."""
+"""Lockstep: time advances only when triggered work is done; runs are deterministic; stalls are named.
+
+Each behaviour holds on both transports: the same-host shared-memory fast path (the default) and Zenoh.
+"""
 
 import json
 import os
+import re
 import signal
 import subprocess
+import sys
 import time
 
-from tests.support.harness import RunningStack, chain_profile, wait_no_processes
+import pytest
+
+from tests.support.harness import REPO, RunningStack, chain_profile, stack_env, wait_no_processes
 
 STEPS = 3000
+TRANSPORTS = ("shm", "zenoh")
 
 
-def run_chain(tmp_path, name: str, seed: int = 7, load: bool = False) -> list:
+def run_chain(tmp_path, name: str, seed: int = 7, load: bool = False, transport: str = "shm") -> list:
     home = tmp_path / f"home-{name}"
     trace = tmp_path / f"{name}.json"
     probe = tmp_path / f"{name}-probe.json"
@@ -20,8 +28,9 @@ def run_chain(tmp_path, name: str, seed: int = 7, load: bool = False) -> list:
         seed=seed,
         tick_args=f'trace = "{trace}", steps = {STEPS}',
         extra=f'[[module]]\nmodule = "tests.support.modules:Probe"\nargs = {{ out = "{probe}" }}\n',
+        transport=transport,
     )
-    hogs = [subprocess.Popen(["python3", "-c", "while True: pass"]) for _ in range(2)] if load else []
+    hogs = [subprocess.Popen([sys.executable, "-c", "while True: pass"]) for _ in range(2)] if load else []
     try:
         stack = RunningStack(home, profile)
         code = stack.wait(timeout=300)
@@ -35,12 +44,13 @@ def run_chain(tmp_path, name: str, seed: int = 7, load: bool = False) -> list:
     return json.loads(trace.read_text()), json.loads(probe.read_text())
 
 
-def test_lockstep_is_deterministic_whatever_the_scheduling(tmp_path):
+def test_lockstep_is_deterministic_whatever_the_scheduling_and_the_transport(tmp_path):
     trace_a, probe_a = run_chain(tmp_path, "a")
     trace_b, probe_b = run_chain(tmp_path, "b", load=True)
+    trace_z, probe_z = run_chain(tmp_path, "z", load=True, transport="zenoh")
     assert len(trace_a) == STEPS - 1
-    assert trace_a == trace_b
-    assert probe_a[: STEPS - 1] == probe_b[: STEPS - 1]
+    assert trace_a == trace_b == trace_z
+    assert probe_a[: STEPS - 1] == probe_b[: STEPS - 1] == probe_z[: STEPS - 1]
     trace_c, _ = run_chain(tmp_path, "c", seed=8)
     assert trace_c != trace_a
 
@@ -60,31 +70,64 @@ def test_lockstep_is_deterministic_whatever_the_scheduling(tmp_path):
         assert dt == 0.004
 
 
-def test_a_member_that_dies_is_named_and_the_rest_go_on(tmp_path):
+def sim_time(stack: RunningStack) -> int:
+    return max(m["sim_time_us"] for m in stack.status()["modules"])
+
+
+@pytest.mark.parametrize("transport", TRANSPORTS)
+def test_a_member_that_dies_is_named_and_the_rest_go_on(tmp_path, transport):
     home = tmp_path / "home"
-    stack = RunningStack(home, chain_profile(tmp_path / "chain.toml"))
+    stack = RunningStack(home, chain_profile(tmp_path / "chain.toml", transport=transport))
     try:
         stack.wait_up()
         stack.wait_for(r"lockstep starting")
         pids = stack.module_pids()
         time.sleep(1.0)
         os.kill(pids["pacer"], signal.SIGKILL)
-        stack.wait_for(r"lockstep member pacer left at t=", timeout=30)
+        stack.wait_for(r"lockstep member pacer (left|died) at t=", timeout=30)
         stack.wait_for(r"pacer failed with exit code -9")
-        t1 = max(m["sim_time_us"] for m in stack.status()["modules"])
+        t1 = sim_time(stack)
         time.sleep(2.0)
-        t2 = max(m["sim_time_us"] for m in stack.status()["modules"])
-        assert t2 > t1
+        assert sim_time(stack) > t1
     finally:
         assert stack.stop() == 1
     assert not wait_no_processes(home)
 
 
-def test_a_stalled_member_is_named_and_the_stack_stops(tmp_path):
+@pytest.mark.parametrize("transport", TRANSPORTS)
+def test_a_restarted_member_rejoins_at_the_step_it_left_and_time_waits_for_it(tmp_path, transport):
+    home = tmp_path / "home"
+    profile = chain_profile(
+        tmp_path / "chain.toml", transport=transport, doubler='restart = "on-failure"\nmax_restarts = 2'
+    )
+    stack = RunningStack(home, profile)
+    try:
+        stack.wait_up()
+        stack.wait_for(r"lockstep starting")
+        time.sleep(1.0)
+        os.kill(stack.module_pids()["doubler"], signal.SIGKILL)
+        left = float(stack.wait_for(r"lockstep member doubler (?:left|died) at t=([\d.]+) s", timeout=30).group(1))
+        stack.wait_for(r"restarting doubler")
+        back = stack.wait_for(r"lockstep(?: member doubler joined|: doubler admitted) at t=([\d.]+) s", timeout=60)
+        assert float(back.group(1)) - left <= 0.004 + 1e-9  # no simulated time passed without it
+        t1 = sim_time(stack)
+        time.sleep(2.0)
+        assert sim_time(stack) > t1 + 1_000_000
+        doubler = next(m for m in stack.status()["modules"] if m["module"] == "doubler")
+        assert doubler["restarts"] == 1 and doubler["runs"] > 100
+    finally:
+        assert stack.stop() == 1  # the doubler failed once
+    assert "stalled" not in stack.output
+    assert not wait_no_processes(home)
+
+
+@pytest.mark.parametrize("transport", TRANSPORTS)
+def test_a_stalled_member_is_named_and_the_stack_stops(tmp_path, transport):
     home = tmp_path / "home"
     profile = chain_profile(
         tmp_path / "chain.toml",
         extra='[[module]]\nmodule = "tests.support.modules:Staller"\nargs = { stall_at = 300 }\n',
+        transport=transport,
     )
     stack = RunningStack(home, profile)
     code = stack.wait(timeout=120)
@@ -93,4 +136,35 @@ def test_a_stalled_member_is_named_and_the_stack_stops(tmp_path):
     assert stack_line.group(2) == "staller (sensor_gyro/0)"
     assert abs(float(stack_line.group(1)) - 300 * 0.004) < 1e-6
     assert "critical module tick_source failed" in stack.output
+    assert not wait_no_processes(home)
+
+
+@pytest.mark.parametrize("transport", TRANSPORTS)
+def test_nothing_sent_on_the_bus_stops_the_lockstep(tmp_path, transport):
+    """Garbage and forged messages on the lockstep's own keys, a trigger forged with a far-future lockstep
+    time, an outside trigger and a flood of garbage on a latest-value input, with both cores busy."""
+    home = tmp_path / "home"
+    stack = RunningStack(home, chain_profile(tmp_path / "chain.toml", transport=transport))
+    hogs = [subprocess.Popen([sys.executable, "-c", "while True: pass"]) for _ in range(4)]
+    try:
+        stack.wait_up()
+        stack.wait_for(r"lockstep starting")
+        attack = subprocess.run(
+            [sys.executable, "-m", "tests.support.peers", "attack", "doubler", "summer", "pacer"],
+            env=stack_env(home),
+            cwd=REPO,
+            timeout=120,
+        )
+        assert attack.returncode == 0
+        t1 = sim_time(stack)
+        time.sleep(3.0)
+        assert sim_time(stack) > t1
+        assert all(m["state"] == "running" for m in stack.status()["modules"])
+    finally:
+        for h in hogs:
+            h.kill()
+            h.wait()
+        code = stack.stop()
+    assert code == 0, stack.output
+    assert not re.search(r"stalled|Traceback|crashed", stack.output), stack.output
     assert not wait_no_processes(home)

@@ -14,6 +14,7 @@ def coordinator_without_bus() -> LockstepCoordinator:
     c._triggered_by = {}
     c._events = []
     c._events_lock = threading.Lock()
+    c._awaited = {}
     return c
 
 

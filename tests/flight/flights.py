@@ -6,6 +6,7 @@ import json
 from dataclasses import dataclass
 from pathlib import Path
 
+from stack.bus.node import stable_publisher_id
 from stack.record.recorder import RecordedMessage, RecordingReader
 from tests.support.harness import run_cli, wait_no_processes
 
@@ -41,17 +42,20 @@ class Flight:
         Every message stamped up to then was produced by a complete lockstep step, so it is
         deterministic; afterwards the supervisor stops the modules on the wall clock.
         """
-        return self.messages("vehicle_attitude_setpoint")[-1].pub_time_us
+        scenario = stable_publisher_id(self.report.get("vehicle", "v1"), "scenario")
+        return [m for m in self.messages("vehicle_attitude_setpoint") if m.publisher_id == scenario][-1].pub_time_us
 
 
-def fly_scenario(home: Path, scenario: str, seed: int, profile: str = "sitl_quad", wind: bool = False) -> Flight:
-    """``stack fly SCENARIO --profile PROFILE --seed SEED [--wind]`` with a report and a recording, in
-    STACK_HOME ``home``."""
+def fly_scenario(
+    home: Path, scenario: str, seed: int, profile: str = "sitl_quad", wind: bool = False, transport: str = "shm"
+) -> Flight:
+    """``stack fly SCENARIO --profile PROFILE --seed SEED [--wind] --lockstep-transport TRANSPORT`` with a
+    report and a recording, in STACK_HOME ``home``."""
     report, recording = home / "report.json", home / "flight.mcap"
     out = run_cli(
         home,
         *("fly", scenario, "--profile", profile, "--seed", str(seed), "--quiet"),
-        *("--report", str(report), "--record", str(recording)),
+        *("--report", str(report), "--record", str(recording), "--lockstep-transport", transport),
         *(["--wind"] if wind else []),
         timeout=FLY_TIMEOUT_S,
     )

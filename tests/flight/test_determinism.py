@@ -1,9 +1,10 @@
-"""Lockstep flights are deterministic: the same seed gives the same ground truth, bit for bit.
+"""Lockstep flights are deterministic: the same seed gives the same flight, bit for bit, on either transport.
 
-Two ``stack fly attitude_step --seed 3`` runs are compared through their recordings (read with the
-stack's RecordingReader): every ``sim_groundtruth`` message up to the scenario's last tick, with its
-bus header and every field, must be identical, and none may be missing. A different seed draws
-different sensor noise, so the estimates, and through the control loops the trajectory, differ.
+Two ``stack fly attitude_step --seed 3`` runs, one on the shared-memory fast path and one with the
+lockstep over Zenoh, are compared through their recordings (read with the stack's RecordingReader):
+every message any module published up to the scenario's last tick, with its bus header and every
+field, must be identical, and none may be missing. A different seed draws different sensor noise, so
+the estimates, and through the control loops the trajectory, differ.
 """
 
 from __future__ import annotations
@@ -33,8 +34,18 @@ def ground_truth(flight: Flight, until_us: int) -> list[tuple[int, int, int, int
     ]
 
 
-def test_same_seed_gives_the_same_trajectory(fly: Fly) -> None:
-    a, b = fly(3, 0), fly(3, 1)
+def every_message(flight: Flight, until_us: int) -> list[tuple[str, int, int, int, int, int, bytes]]:
+    """(topic, instance, publisher, topic index, publication time, flags, encoded message) of each message."""
+    messages = [
+        (m.topic, m.instance, m.publisher_id, m.index, m.pub_time_us, m.flags, _encode(m.msg))
+        for m in flight.messages()
+        if m.pub_time_us <= until_us
+    ]
+    return sorted(messages)
+
+
+def test_same_seed_gives_the_same_flight_on_either_transport(fly: Fly) -> None:
+    a, b = fly(3, 0), fly(3, 0, transport="zenoh")
     end = a.scenario_end_us()
     assert b.scenario_end_us() == end
     truth_a, truth_b = ground_truth(a, end), ground_truth(b, end)
@@ -44,6 +55,9 @@ def test_same_seed_gives_the_same_trajectory(fly: Fly) -> None:
     assert len(truth_b) == len(truth_a)
     mismatch = next((i for i, (x, y) in enumerate(zip(truth_a, truth_b, strict=True)) if x != y), None)
     assert mismatch is None, f"ground truth differs from t = {truth_a[mismatch][0] / 1e6:.3f} s on"
+    all_a, all_b = every_message(a, end), every_message(b, end)
+    assert len(all_a) > 10 * len(truth_a)
+    assert all_a == all_b
     assert a.report["metrics"] == b.report["metrics"]
     assert a.report["sim_time_s"] == b.report["sim_time_s"]
 

@@ -182,7 +182,7 @@ def test_replay_republishes_exactly_what_was_recorded(tmp_path):
     for seq, ((key, attachment, payload), m) in enumerate(zip(heard, recorded, strict=True), 1):
         assert key == f"stack/t1/{m.topic}/{m.instance}"
         assert payload == m.wire_payload()  # byte for byte: NaN signs and infinities included
-        fp, publisher, sequence, idx, pub_time, flags = HEADER.unpack(attachment)
+        fp, publisher, sequence, idx, pub_time, flags, _run = HEADER.unpack(attachment)
         assert (fp, pub_time, flags) == (m.fingerprint, m.pub_time_us, m.flags)
         assert sequence == seq
         index[key] = index.get(key, 0) + 1

@@ -36,7 +36,7 @@ class FakeSample:
 
 
 def header(fp: int, publisher: int, index: int, t: int, flags: int = 1) -> bytes:
-    return HEADER.pack(fp, publisher, 1000 + index, index, t, flags)
+    return HEADER.pack(fp, publisher, 1000 + index, index, t, flags, 0)
 
 
 GYRO_FP = fingerprint(SensorGyro)
@@ -62,7 +62,7 @@ def test_samples_become_exact_records_with_the_lockstep_clock(tmp_path):
         FakeSample("stack/v1/sensor_gyro/0", payload, header(GYRO_FP, 5, 2, 4000)),
         FakeSample("stack/v1/sensor_gyro/0", payload, None),
         FakeSample("stack/v1/sensor_gyro/0", payload, b"short"),
-        FakeSample("stack/v1/sensor_gyro/0", b"", HEADER.pack(GYRO_FP, 9, 0, 0, 0, FLAG_PROBE)),
+        FakeSample("stack/v1/sensor_gyro/0", b"", HEADER.pack(GYRO_FP, 9, 0, 0, 0, FLAG_PROBE, 0)),
     ]
     sink, got, _ = record(tmp_path, samples)
     assert sink.without_header == 2

@@ -153,14 +153,25 @@ def write_profile(path: Path, text: str) -> Path:
     return path
 
 
-def chain_profile(path: Path, *, lockstep: bool = True, seed: int = 7, tick_args: str = "", extra: str = "") -> Path:
-    """The test processing chain: a tick source, a doubler, a summer and a timer module."""
+def chain_profile(
+    path: Path,
+    *,
+    lockstep: bool = True,
+    seed: int = 7,
+    tick_args: str = "",
+    extra: str = "",
+    transport: str = "shm",
+    doubler: str = "",
+) -> Path:
+    """The test processing chain: a tick source, a doubler, a summer and a timer module, with lockstep
+    traffic over ``transport`` (shm or zenoh); ``doubler`` is appended to the doubler's entry."""
     return write_profile(
         path,
         f"""
 [stack]
 vehicle = "t1"
 lockstep = {str(lockstep).lower()}
+lockstep_transport = "{transport}"
 seed = {seed}
 stall_timeout_s = 4.0
 
@@ -171,6 +182,7 @@ critical = true
 
 [[module]]
 module = "tests.support.modules:Doubler"
+{doubler}
 
 [[module]]
 module = "tests.support.modules:Summer"

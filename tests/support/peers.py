@@ -4,6 +4,10 @@
 - ``sub ENDPOINT N OUT``: connects to ENDPOINT, receives N vehicle_command messages, writes them as JSON.
 - ``rogue``: joins the running stack (found through STACK_HOME) and sends it bad samples on
   vehicle_command: malformed payloads, a foreign schema fingerprint, and samples without the stack header.
+- ``attack MEMBER...``: joins the running stack and goes for its lockstep (the test chain's): garbage and
+  forged messages on the lockstep's own keys (the tick keys of the named members), a sensor_gyro forged
+  as the simulator's with a lockstep time 10^12 µs ahead, an outside sensor_gyro, and a flood of garbage on
+  vehicle_rates_setpoint, a latest-value input of the chain.
 """
 
 from __future__ import annotations
@@ -17,10 +21,13 @@ import zenoh
 
 from stack.bus import keys
 from stack.bus.config import BusConfig
-from stack.bus.node import Node
-from stack.bus.topics import HEADER
+from stack.bus.node import Node, stable_publisher_id
+from stack.bus.topics import FLAG_LOCKSTEP_TIME, HEADER
 from stack.cli.common import find_stack
+from stack.msg.internal import LockstepAck, LockstepClock
 from stack.msg.registry import fingerprint
+from stack.msg.sensors import SensorGyro
+from stack.msg.setpoints import VehicleRatesSetpoint
 from stack.msg.system import VehicleCommand
 
 
@@ -54,14 +61,49 @@ def rogue() -> None:
         good_fp = fingerprint(VehicleCommand)
         for i in range(20):
             # The right header with a payload that is not a VehicleCommand.
-            pub.put(b"\xc1\x00garbage", attachment=HEADER.pack(good_fp, 99, i, i + 1, 0, 0))
+            pub.put(b"\xc1\x00garbage", attachment=HEADER.pack(good_fp, 99, i, i + 1, 0, 0, 0))
             # A well-formed message from a publisher built with another definition.
-            pub.put(msgspec.msgpack.encode(VehicleCommand()), attachment=HEADER.pack(good_fp ^ 1, 99, i, i + 1, 0, 0))
+            foreign = HEADER.pack(good_fp ^ 1, 99, i, i + 1, 0, 0, 0)
+            pub.put(msgspec.msgpack.encode(VehicleCommand()), attachment=foreign)
             # No stack header at all.
             pub.put(msgspec.msgpack.encode(VehicleCommand()))
             time.sleep(0.01)
         time.sleep(0.5)
         pub.undeclare()
+
+
+def attack(members: list[str]) -> None:
+    vehicle, bus = find_stack(None, None)
+    encode = msgspec.msgpack.encode
+    with zenoh.open(bus.zenoh_config("attacker")) as session:
+        time.sleep(0.5)
+        lockstep_keys = [keys.lockstep_ack_key(vehicle), keys.lockstep_clock_key(vehicle)]
+        lockstep_keys += [keys.lockstep_tick_key(vehicle, m) for m in members]
+        forged = [
+            encode(LockstepClock(timestamp=10**12, run=12345, step=10**9, counts=[(1, "sensor_gyro/0", 10**9)])),
+            encode(LockstepAck(timestamp=10**12, run=12345, member=members[0], publisher_id=1, trigger_topic="@timer")),
+        ]
+        for key in lockstep_keys:
+            for i in range(10):
+                session.put(key, b"\xc1garbage" * i)
+            for payload in forged:
+                session.put(key, payload)
+        gyro = keys.topic_key(vehicle, "sensor_gyro", 0)
+        simulator = stable_publisher_id(vehicle, "tick_source")
+        fp = fingerprint(SensorGyro)
+        session.put(
+            gyro,
+            encode(SensorGyro(timestamp=10**12, x=1e9)),
+            attachment=HEADER.pack(fp, simulator, 1, 1, 10**12, FLAG_LOCKSTEP_TIME, 12345),
+        )
+        session.put(gyro, encode(SensorGyro(timestamp=1, x=1e9)), attachment=HEADER.pack(fp, 4242, 1, 1, 1, 0, 0))
+        rates = keys.topic_key(vehicle, "vehicle_rates_setpoint", 0)
+        rates_fp = fingerprint(VehicleRatesSetpoint)
+        for i in range(1000):
+            session.put(rates, b"\xc1garbage", attachment=HEADER.pack(rates_fp, 4242, i, i + 1, 0, 0, 0))
+            if i % 100 == 0:
+                time.sleep(0.1)
+        time.sleep(0.5)
 
 
 if __name__ == "__main__":
@@ -72,5 +114,7 @@ if __name__ == "__main__":
         subscribe(sys.argv[2], int(sys.argv[3]), sys.argv[4])
     elif mode == "rogue":
         rogue()
+    elif mode == "attack":
+        attack(sys.argv[2:])
     else:
         sys.exit(f"unknown mode {mode}")

@@ -1,0 +1,405 @@
+"""Lockstep over the fast path: the coordinator (the simulator) and the members.
+
+A step at time ``t``: between steps the coordinator admits processes that have attached and drops
+those that died; it writes ``t``, ticks the timed members that are due, and runs its own module,
+whose publications wake the members they trigger, whose publications wake others in turn. A member
+runs once per tick or trigger record. When it has no work left it wakes the coordinator, unless a
+member it woke itself is still busy (that one will). The coordinator ends the step when a snapshot of
+the counters shows every admitted member idle with nothing left to take.
+
+Nothing here depends on a message arriving in time: the coordinator's waits time out every few
+milliseconds and then wake again any member with work left (a lost wake-up costs milliseconds, never
+the run). A member that dies is noticed through its pidfd at once and dropped; if the supervisor
+restarts it, time waits until the new process is admitted. A member that makes no progress for
+``stall_timeout_s`` is named and the run stops.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import logging
+import os
+import select
+import time
+from dataclasses import dataclass
+
+from stack.fastpath.attach import Attachment
+from stack.fastpath.layout import (
+    C_CONSUMED,
+    C_FINISHED,
+    C_PUBS,
+    C_STARTED,
+    C_TICKS,
+    FLAG_LOSSLESS,
+    H_COORDINATOR,
+    H_NOW,
+    H_ROSTER,
+    H_STEP,
+    H_TOPOLOGY,
+    ROLE_TIMED,
+    ROLE_TRIGGERED,
+    S_ADMIT_TIME,
+    S_ADMITTED,
+    S_BASE,
+    S_EXITS,
+    S_EXPECTED,
+    S_INCARNATION,
+    S_PID,
+    S_READ_TIME,
+    S_RESTART,
+)
+from stack.fastpath.ring import RingWriter
+from stack.fastpath.topology import Participant, Topology
+from stack.runtime.lockstep import LockstepError, timer_due
+
+log = logging.getLogger("stack.lockstep")
+
+WAIT_MS = 5
+SLOW_WAIT_S = 2.0
+START_TIMEOUT_S = 60.0
+VERDICT_TIMEOUT_S = 5.0
+LAG_WAKE_STEPS = 32
+ADMIT_SCAN_STEPS = 250
+LAG_MAX_STEPS = 128
+
+
+def drain(fd: int) -> None:
+    with contextlib.suppress(BlockingIOError):
+        os.eventfd_read(fd)
+
+
+@dataclass
+class _Watched:
+    name: str
+    pid: int
+    incarnation: int
+    pidfd: int
+    exits: int  # the supervisor's count of this module's exits when it was admitted
+
+
+@dataclass
+class _Awaited:
+    name: str
+    exits: int
+    since: float
+
+
+class FastCoordinator:
+    """The clock's side. Call :meth:`start` once, then :meth:`begin_step` and :meth:`finish_step` per step."""
+
+    def __init__(self, att: Attachment, period_us: int, stall_timeout_s: float) -> None:
+        self.att = att
+        self.region = region = att.region
+        self.w = region.words
+        self.period_us = period_us
+        self.stall_timeout_s = stall_timeout_s
+        self.now = 0
+        self.steps = 0
+        self._poll = select.poll()
+        self._poll.register(att.eventfd, select.POLLIN)
+        self._watched: dict[int, _Watched] = {}
+        self._pidfd_slot: dict[int, int] = {}
+        self._awaited: dict[int, _Awaited] = {}
+        self._gone: dict[int, int] = {}  # slot → the last incarnation seen to die (never admitted again)
+        self._last_fire: dict[int, int | None] = {}
+        self._topology = Topology(region)
+        # Completion checks, with counter indices relative to the counter block (as in a snapshot).
+        self._timed: list[tuple[Participant, int, int, int]] = []
+        self._triggered: list[tuple[Participant, int, int, list[tuple[int, int, int]]]] = []
+        self._passive: list[Participant] = []
+        self._lag_woken: dict[int, int] = {}
+        self.w[H_COORDINATOR] = att.slot + 1
+
+    # -- start -------------------------------------------------------------------------------------
+
+    def start(self) -> None:
+        """Block until the supervisor has started every module and each has attached, then admit them."""
+        region, w = self.region, self.w
+        deadline = time.monotonic() + START_TIMEOUT_S
+        while True:
+            missing = [
+                region.slot_name(s)
+                for s in range(region.slots)
+                if s != self.att.slot and w[region.slot_word(s, S_EXPECTED)] and not region.attached(s)
+            ]
+            if w[H_ROSTER] and not missing:
+                break
+            if time.monotonic() > deadline:
+                raise LockstepError(f"lockstep start timed out waiting for {', '.join(missing) or 'the supervisor'}")
+            self._reap(10)
+        w[region.slot_word(self.att.slot, S_ADMITTED)] = self.att.incarnation
+        self._admit_attached()
+        names = sorted(p.name for p in self._topology.participants)
+        log.info("lockstep starting with %s (shared-memory fast path)", ", ".join(names))
+
+    # -- between steps -----------------------------------------------------------------------------
+
+    def begin_step(self) -> int:
+        """Settle membership, then announce the next step's time and tick the due timed members."""
+        self._settle()
+        t = self.now + self.period_us
+        self.now = t
+        self.steps += 1
+        w = self.w
+        w[H_NOW] = t
+        w[H_STEP] = self.steps
+        last_fire = self._last_fire
+        counters = self.region.counters_word
+        for m, _, _, ticks in self._timed:
+            if timer_due(t, last_fire[m.slot], m.period_us):
+                last_fire[m.slot] = t
+                w[counters + ticks] += 1
+                os.eventfd_write(m.eventfd, 1)
+        return t
+
+    def _settle(self) -> None:
+        """Admit who attached; wait for restarts the supervisor announced and for lossless readers to catch up.
+
+        A passive reader that falls LAG_WAKE_STEPS behind is woken to read (before its rings wrap); time
+        waits only for a lossless one (the recorder), and only once it is LAG_MAX_STEPS behind.
+
+        Processes attach at start (all admitted then) or after a restart (announced by a death), so the
+        slots are scanned for newcomers only while a restart is awaited, and every ADMIT_SCAN_STEPS steps.
+        """
+        scan = bool(self._awaited) or self.steps % ADMIT_SCAN_STEPS == 0
+        if not (scan or self._passive):
+            return
+        started_waiting = 0.0
+        while True:
+            if scan:
+                self._admit_attached()
+            waiting = self._waiting_for()
+            if not waiting:
+                return
+            if not started_waiting:
+                started_waiting = time.monotonic()
+            elif started_waiting > 0 and time.monotonic() - started_waiting > SLOW_WAIT_S:
+                started_waiting = -1.0
+                log.warning("lockstep time waits at t=%.3f s for %s", self.now / 1e6, ", ".join(waiting))
+            self._reap(WAIT_MS)
+
+    def _waiting_for(self) -> list[str]:
+        region, w = self.region, self.w
+        waiting = []
+        for slot, a in list(self._awaited.items()):
+            verdict = w[region.slot_word(slot, S_EXITS)] > a.exits
+            restarting = w[region.slot_word(slot, S_RESTART)] != 0
+            if verdict and not restarting:
+                del self._awaited[slot]
+            elif not verdict and time.monotonic() - a.since > VERDICT_TIMEOUT_S:
+                log.warning("no word from the supervisor on %s after %.0f s: time goes on", a.name, VERDICT_TIMEOUT_S)
+                del self._awaited[slot]
+            else:
+                waiting.append(f"{a.name} to restart" if verdict else f"the supervisor's word on {a.name}")
+        lag_wake, lag_max = LAG_WAKE_STEPS * self.period_us, LAG_MAX_STEPS * self.period_us
+        for p in self._passive:
+            lag = self.now - int(w[region.slot_word(p.slot, S_READ_TIME)])
+            if lag >= lag_wake and self._lag_woken.get(p.slot) != self.steps:
+                self._lag_woken[p.slot] = self.steps
+                os.eventfd_write(p.eventfd, 1)
+            if lag >= lag_max and p.flags & FLAG_LOSSLESS:
+                waiting.append(f"{p.name} to catch up")
+        return waiting
+
+    def _admit_attached(self) -> None:
+        region, w = self.region, self.w
+        admitted = []
+        for slot in range(region.slots):
+            if slot == self.att.slot:
+                continue
+            watched = self._watched.get(slot)
+            incarnation = int(w[region.slot_word(slot, S_INCARNATION)])
+            if watched is not None and watched.incarnation != incarnation:
+                self._drop(slot, "was replaced")
+            if slot in self._watched or not region.attached(slot) or self._gone.get(slot) == incarnation:
+                continue
+            pid = int(w[region.slot_word(slot, S_PID)])
+            try:
+                pidfd = os.pidfd_open(pid)
+            except ProcessLookupError:
+                continue
+            name = region.slot_name(slot)
+            self._watched[slot] = _Watched(name, pid, incarnation, pidfd, int(w[region.slot_word(slot, S_EXITS)]))
+            self._pidfd_slot[pidfd] = slot
+            self._poll.register(pidfd, select.POLLIN)
+            self._awaited.pop(slot, None)
+            w[region.slot_word(slot, S_ADMIT_TIME)] = self.now + 1
+            w[region.slot_word(slot, S_ADMITTED)] = incarnation
+            admitted.append(slot)
+            if self.steps:
+                log.info("lockstep: %s admitted at t=%.3f s", name, self.now / 1e6)
+        if admitted:
+            self._rebuild(set(admitted))
+
+    def _drop(self, slot: int, why: str) -> None:
+        watched = self._watched.pop(slot)
+        self._gone[slot] = watched.incarnation
+        self._poll.unregister(watched.pidfd)
+        del self._pidfd_slot[watched.pidfd]
+        os.close(watched.pidfd)
+        self.w[self.region.slot_word(slot, S_ADMITTED)] = 0
+        self._awaited[slot] = _Awaited(watched.name, watched.exits, time.monotonic())
+        log.warning("lockstep member %s %s at t=%.3f s", watched.name, why, self.now / 1e6)
+        self._rebuild(set())
+
+    def _rebuild(self, new: set[int]) -> None:
+        """New topology: ticks and trigger bases for the newly admitted, the completion checks for all."""
+        region, w = self.region, self.w
+        w[H_TOPOLOGY] = w[H_TOPOLOGY] + 1
+        topo = self._topology = Topology(region)
+        publishers = {p.slot: p for p in topo.participants}
+        me = self.att.slot
+        self._timed, self._triggered = [], []
+        for m in topo.participants:
+            started, finished = region.counter_word(m.slot, C_STARTED), region.counter_word(m.slot, C_FINISHED)
+            snap = (started - region.counters_word, finished - region.counters_word)
+            if m.role == ROLE_TIMED:
+                ticks = region.counter_word(m.slot, C_TICKS)
+                if m.slot in new:
+                    w[ticks] = w[started]
+                    self._last_fire[m.slot] = None
+                self._timed.append((m, *snap, ticks - region.counters_word))
+            elif m.role == ROLE_TRIGGERED:
+                sources = []
+                for p in publishers.values():
+                    if p.slot == m.slot or m.trigger not in p.pubs:
+                        continue
+                    count = region.counter_word(p.slot, C_PUBS + p.pubs[m.trigger])
+                    base = region.slot_word(m.slot, S_BASE + p.slot)
+                    if m.slot in new or p.slot in new:
+                        w[base] = w[count]
+                    consumed = region.counter_word(m.slot, C_CONSUMED + p.slot)
+                    sources.append((count - region.counters_word, consumed - region.counters_word, int(w[base])))
+                self._triggered.append((m, *snap, sources))
+        self._passive = [p for p in topo.passive() if p.slot != me]
+
+    # -- the step ----------------------------------------------------------------------------------
+
+    def finish_step(self) -> None:
+        """Block until every run of the step has finished (see the module docstring)."""
+        last = b""
+        progress = time.monotonic()
+        while True:
+            snap = self.region.counter_snapshot()
+            if self._complete(snap):
+                return
+            if self._reap(WAIT_MS):
+                continue
+            raw = snap.obj
+            now = time.monotonic()
+            if raw != last:
+                last, progress = raw, now
+            elif now - progress > self.stall_timeout_s:
+                raise LockstepError(
+                    f"lockstep stalled at t={self.now / 1e6:.3f} s: no progress for {self.stall_timeout_s:.0f} s, "
+                    f"waiting for {', '.join(self._busy(snap))}"
+                )
+            self._rewake(snap)
+
+    def _complete(self, snap: memoryview) -> bool:
+        for _, started, finished, ticks in self._timed:
+            s = snap[started]
+            if s != snap[finished] or s != snap[ticks]:
+                return False
+        for _, started, finished, sources in self._triggered:
+            if snap[started] != snap[finished]:
+                return False
+            for count, consumed, base in sources:
+                c = snap[count]
+                if c > base and c > snap[consumed]:
+                    return False
+        return True
+
+    def _pending(self, snap: memoryview) -> list[tuple[Participant, bool]]:
+        """Members with work left: (member, whether it is in the middle of a run)."""
+        found = []
+        for m, started, finished, ticks in self._timed:
+            if snap[started] != snap[finished] or snap[ticks] != snap[started]:
+                found.append((m, snap[started] != snap[finished]))
+        for m, started, finished, sources in self._triggered:
+            waiting = any(snap[c] > b and snap[c] > snap[k] for c, k, b in sources)
+            if snap[started] != snap[finished] or waiting:
+                found.append((m, snap[started] != snap[finished]))
+        return found
+
+    def _rewake(self, snap: memoryview) -> None:
+        """A member with work and no run going may have missed its wake-up: wake it again (harmless if not)."""
+        for m, running in self._pending(snap):
+            if not running:
+                os.eventfd_write(m.eventfd, 1)
+
+    def _busy(self, snap: memoryview) -> list[str]:
+        names = {}
+        for p in self._topology.participants:
+            for pub in self.region.publications(p.slot):
+                names[pub.topic] = pub.name
+        return sorted(
+            f"{m.name} ({names.get(m.trigger, '?') if m.role == ROLE_TRIGGERED else '@timer'})"
+            for m, _ in self._pending(snap)
+        )
+
+    def _reap(self, timeout_ms: int) -> bool:
+        """Wait up to ``timeout_ms`` for a wake-up or a death, dropping members that died; False on timeout."""
+        events = self._poll.poll(timeout_ms)
+        for fd, _ in events:
+            if fd == self.att.eventfd:
+                drain(fd)
+                continue
+            slot = self._pidfd_slot.get(fd)
+            if slot is not None:
+                self._drop(slot, "died")
+        return bool(events)
+
+    def close(self) -> None:
+        for watched in self._watched.values():
+            os.close(watched.pidfd)
+        self._watched.clear()
+
+
+class FastMember:
+    """A member's side: sleep until woken, and after a batch of runs wake the coordinator if the step may be over."""
+
+    def __init__(self, att: Attachment) -> None:
+        self.att = att
+        self.region = region = att.region
+        self.w = region.words
+        self._poll = select.poll()
+        self._poll.register(att.eventfd, select.POLLIN)
+        me = att.slot
+        self.started = region.counter_word(me, C_STARTED)
+        self.finished = region.counter_word(me, C_FINISHED)
+        self.ticks = region.counter_word(me, C_TICKS)
+        self.topology_seen = -1
+        self.coordinator_fd = -1
+
+    def wait(self) -> None:
+        self._poll.poll()
+        drain(self.att.eventfd)
+
+    def admitted(self) -> bool:
+        return self.region.admitted(self.att.slot)
+
+    def on_topology(self, topo: Topology) -> None:
+        self.topology_seen = topo.generation
+        c = topo.coordinator()
+        self.coordinator_fd = c.eventfd if c is not None else -1
+
+    def base(self, publisher_slot: int) -> int:
+        return int(self.w[self.region.slot_word(self.att.slot, S_BASE + publisher_slot)])
+
+    def consumed_word(self, publisher_slot: int) -> int:
+        return self.region.counter_word(self.att.slot, C_CONSUMED + publisher_slot)
+
+    def done(self, touched: list[RingWriter]) -> None:
+        """After a batch of runs: wake the coordinator unless a member this batch woke is still at work."""
+        w, region, me = self.w, self.region, self.att.slot
+        for writer in touched:
+            count = w[writer.count_word]
+            for slot, _ in writer.wake:
+                consumed = w[region.counter_word(slot, C_CONSUMED + me)]
+                if consumed < count and w[region.slot_word(slot, S_BASE + me)] < count:
+                    return
+                if w[region.counter_word(slot, C_STARTED)] != w[region.counter_word(slot, C_FINISHED)]:
+                    return
+        if self.coordinator_fd >= 0:
+            os.eventfd_write(self.coordinator_fd, 1)

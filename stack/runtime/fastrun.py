@@ -1,0 +1,235 @@
+"""The module loops of a fast-path run (see :mod:`stack.fastpath`): coordinator, members, passive readers."""
+
+from __future__ import annotations
+
+import select
+from typing import TYPE_CHECKING, Any
+
+import msgspec
+
+from stack.fastpath.inputs import FastInput
+from stack.fastpath.layout import (
+    FLAG_LOSSLESS,
+    FLAG_READS_ALL,
+    H_NOW,
+    H_TOPOLOGY,
+    ROLE_COORDINATOR,
+    ROLE_PASSIVE,
+    ROLE_TIMED,
+    ROLE_TRIGGERED,
+    S_ADMIT_TIME,
+    S_READ_TIME,
+)
+from stack.fastpath.lockstep import FastCoordinator, FastMember, drain
+from stack.fastpath.ring import RingReader, wake_all
+from stack.fastpath.topology import Topology
+from stack.runtime.inputs import sample_time
+from stack.runtime.module import Timer, Trigger
+
+if TYPE_CHECKING:
+    from stack.runtime.runner import Runtime
+
+
+
+class FastDriver:
+    """Runs one module of a fast-path run until the process is stopped.
+
+    After each run it wakes the members its records trigger, also when the run stopped the process (a
+    scenario that ends, a coordinator at its last step): what a module wrote is always delivered.
+    """
+
+    def __init__(self, rt: Runtime) -> None:
+        att = rt.fast
+        assert att is not None
+        self.rt = rt
+        self.att = att
+        self.region = att.region
+        self.w = att.region.words
+        self.topology_seen = -1
+        self.topology: Topology | None = None
+        self.trigger = rt.trigger_input
+        self.data = [buf for buf in rt.inputs.values() if isinstance(buf, FastInput) and buf is not self.trigger]
+        self.member = FastMember(att)
+
+    # -- topology ----------------------------------------------------------------------------------
+
+    def refresh_topology(self) -> None:
+        """Re-read who is in the run if the coordinator changed it: rings to read, members to wake."""
+        generation = self.w[H_TOPOLOGY]
+        if generation == self.topology_seen:
+            return
+        topo = self.topology = Topology(self.region)
+        self.topology_seen = topo.generation
+        me, since = self.att.slot, int(self.w[self.region.slot_word(self.att.slot, S_ADMIT_TIME)])
+        for buf in self.data:
+            buf.resolve(topo.sources(buf.hash), topo.publisher_ids, since)
+        if self.trigger is not None:
+            # Trigger records count only from the publishers admitted now (so does the coordinator).
+            self.trigger.readers = []
+            self.trigger.resolve(topo.sources(self.trigger.hash, me), topo.publisher_ids, since)
+            for r in self.trigger.readers:
+                consumed = int(self.w[self.member.consumed_word(r.slot)])
+                r.taken = max(r.taken, consumed, self.member.base(r.slot))
+        for pub in self.rt.outputs.values():
+            if pub.fast is not None:
+                pub.fast_read = topo.read_by_anyone(pub.fast.topic, me)
+                pub.fast.wake = topo.woken_by(pub.fast.topic, me)
+        self.member.on_topology(topo)
+
+    # -- loops -------------------------------------------------------------------------------------
+
+    def run(self) -> None:
+        cls = self.rt.module_cls
+        if cls.LOCKSTEP_COORDINATOR:
+            self._run_coordinator()
+        elif cls.PASSIVE:
+            assert isinstance(cls.TRIGGER, Timer)
+            self._run_passive(cls.TRIGGER.period_us)
+        elif isinstance(cls.TRIGGER, Trigger):
+            self.att.ready(ROLE_TRIGGERED, trigger=f"{cls.TRIGGER.topic}/{cls.TRIGGER.instance}")
+            self._run_triggered()
+        elif isinstance(cls.TRIGGER, Timer):
+            self.att.ready(ROLE_TIMED, period_us=cls.TRIGGER.period_us)
+            self._run_timed()
+        else:
+            raise RuntimeError(f"{cls.__name__} declares neither a trigger nor a timer")
+
+    def _run_coordinator(self) -> None:
+        rt = self.rt
+        self.att.ready(ROLE_COORDINATOR)
+        coordinator = FastCoordinator(self.att, rt.module.step_period_us(), rt.spec.stall_timeout_s)
+        try:
+            rt.state = "waiting for modules"
+            coordinator.start()
+            rt.state = "running"
+            data = self.data
+            wakes = self.att.wakes
+            last = 0
+            while True:
+                t = coordinator.begin_step()
+                self.refresh_topology()
+                rt._now = t
+                for buf in data:
+                    buf.refresh(t)
+                try:
+                    last = rt._run(None, t, last)
+                finally:
+                    wake_all(wakes)
+                coordinator.finish_step()
+        finally:
+            coordinator.close()
+
+    def _run_timed(self) -> None:
+        rt, w, member, data = self.rt, self.w, self.member, self.data
+        started, finished, ticks = member.started, member.finished, member.ticks
+        touched, wakes = rt.node.touched, self.att.wakes
+        last = 0
+        while True:
+            member.wait()
+            self.refresh_topology()
+            if not member.admitted():
+                continue
+            while w[ticks] > w[started]:
+                w[started] += 1
+                now = int(w[H_NOW])
+                rt._now = now
+                for buf in data:
+                    buf.refresh(now)
+                try:
+                    last = rt._run(None, now, last)
+                finally:
+                    wake_all(wakes)
+                w[finished] += 1
+            member.done(fast_writers(touched))
+            touched.clear()
+
+    def _run_triggered(self) -> None:
+        rt, w, member, data = self.rt, self.w, self.member, self.data
+        trigger = self.trigger
+        assert trigger is not None
+        started, finished = member.started, member.finished
+        decode = msgspec.msgpack.Decoder(trigger.sub.msg_type).decode
+        touched, wakes = rt.node.touched, self.att.wakes
+        last = 0
+        while True:
+            member.wait()
+            self.refresh_topology()
+            if not member.admitted():
+                continue
+            self._drop_outside_triggers(trigger)
+            while True:
+                found = next_trigger(trigger.readers)
+                if found is None:
+                    break
+                reader, n, t, seq, rec = found
+                w[started] += 1
+                w[member.consumed_word(reader.slot)] = n
+                reader.taken = n
+                try:
+                    msg = decode(reader.payload(rec))
+                except msgspec.DecodeError:
+                    msg = None
+                if msg is None or not reader.still(n, rec):
+                    reader.lost += 1
+                    w[finished] += 1
+                    continue
+                trigger.latest = msg
+                rt._now = t
+                for buf in data:
+                    buf.refresh(t, reader.slot, seq)
+                try:
+                    last = rt._run(msg, sample_time(msg), last)
+                finally:
+                    wake_all(wakes)
+                w[finished] += 1
+            member.done(fast_writers(touched))
+            touched.clear()
+
+    def _drop_outside_triggers(self, trigger: FastInput) -> None:
+        while trigger.sub.poll() is not None:
+            self.rt._ignore_outside_trigger(trigger.sub.suffix)
+
+    def _run_passive(self, period_us: int) -> None:
+        """A passive module runs on its wall-clock timer, or sooner when the coordinator wakes a lossless
+        reader that fell behind (it marks how far it has read itself: see stack.fastpath.alltopics)."""
+        rt, w = self.rt, self.w
+        flags = (FLAG_LOSSLESS if rt.module_cls.LOSSLESS else 0) | (FLAG_READS_ALL if rt.reads_all_topics else 0)
+        self.att.ready(ROLE_PASSIVE, flags=flags)
+        poll = select.poll()
+        poll.register(self.att.eventfd, select.POLLIN)
+        read_time = self.region.slot_word(self.att.slot, S_READ_TIME)
+        last = 0
+        while True:
+            poll.poll(period_us // 1000)
+            drain(self.att.eventfd)
+            self.refresh_topology()
+            now = int(w[H_NOW])
+            for buf in self.data:
+                buf.refresh(now)
+            if self.data:
+                w[read_time] = now
+            last = rt._run(None, rt.now_us(), last)
+
+
+def next_trigger(readers: list[RingReader]) -> tuple[RingReader, int, int, int, int] | None:
+    """The earliest trigger record not taken yet, by (time, publisher id, sequence)."""
+    best: tuple[RingReader, int, int, int, int] | None = None
+    best_key = None
+    for r in readers:
+        count = r.count
+        n = r.taken + 1
+        while n <= count:
+            head = r.header(n)
+            if head is not None:
+                key = (head[1], r.publisher_id, head[2])
+                if best_key is None or key < best_key:
+                    best, best_key = (r, n, head[1], head[2], head[3]), key
+                break
+            r.lost += 1
+            r.taken = n
+            n += 1
+    return best
+
+
+def fast_writers(touched: set[Any]) -> list[Any]:
+    return [pub.fast for pub in touched if pub.fast is not None and pub.fast.wake]

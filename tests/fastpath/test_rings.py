@@ -1,0 +1,103 @@
+"""The fast path's region and rings, in one process: records, wrap-around, growth, restarts."""
+
+import msgspec
+import pytest
+
+from stack.fastpath.attach import Attachment
+from stack.fastpath.host import FastPathHost
+from stack.fastpath.layout import ROLE_TIMED, ROLE_TRIGGERED, S_ADMITTED, S_INCARNATION, Region, topic_hash
+from stack.fastpath.ring import RECORDS, RingReader
+from stack.fastpath.topology import Topology
+from stack.msg.navigation import Mission, MissionItemEntry
+from stack.msg.sensors import SensorGyro
+
+encode = msgspec.msgpack.Encoder().encode
+decode_gyro = msgspec.msgpack.Decoder(SensorGyro).decode
+
+
+@pytest.fixture
+def host():
+    h = FastPathHost(["sim", "est", "rec"], run_id=77)
+    yield h
+    h.close()
+
+
+def gyro(x: float) -> bytes:
+    return encode(SensorGyro(timestamp=1, x=x))
+
+
+def test_a_region_is_found_by_its_descriptor_and_refuses_another_file(host, tmp_path):
+    region = Region(host.region.fd)
+    assert region.slots == 3 and region.nonce == 77 and region.slot_name(1) == "est"
+    region.close()
+    other = tmp_path / "other"
+    other.write_bytes(b"\0" * 4096)
+    with other.open("r+b") as f, pytest.raises(ValueError, match="not a stack fast-path region"):
+        Region(f.fileno())
+
+
+def test_records_carry_their_header_and_payload(host):
+    sim = Attachment(host.region, "sim", publisher_id=11)
+    writer = sim.publication("sensor_gyro/0", 5, len(gyro(0.0)))
+    for i in range(3):
+        writer.write(gyro(float(i)), index=i + 1, time_us=4000 * (i + 1), seq=10 + i)
+    reader = RingReader(host.region, sim.slot, 0, publisher_id=11)
+    assert reader.count == 3
+    index, t, seq, rec = reader.header(2)
+    assert (index, t, seq) == (2, 8000, 11)
+    assert decode_gyro(reader.payload(rec)).x == 1.0
+    assert reader.header(4) is None
+
+
+def test_a_reader_lapped_by_its_ring_counts_what_it_lost(host):
+    sim = Attachment(host.region, "sim", publisher_id=11)
+    writer = sim.publication("sensor_gyro/0", 5, 20)
+    for i in range(RECORDS + 10):
+        writer.write(gyro(float(i)), i + 1, i, i)
+    reader = RingReader(host.region, sim.slot, 0, 11)
+    first = reader.oldest_readable(reader.count)
+    assert first == 11 and reader.lost == 10
+    assert reader.header(10) is None and reader.header(11) is not None
+
+
+def test_a_message_larger_than_its_record_moves_the_ring_and_keeps_the_older_records(host):
+    sim = Attachment(host.region, "sim", publisher_id=11)
+    small = encode(Mission(items=[]))
+    writer = sim.publication("mission/0", 5, len(small))
+    reader = RingReader(host.region, sim.slot, 0, 11)
+    writer.write(small, 1, 1000, 1)
+    big = encode(Mission(items=[MissionItemEntry(north=float(i)) for i in range(500)]))
+    assert len(big) > writer.payload_max
+    writer.write(big, 2, 2000, 2)
+    decode = msgspec.msgpack.Decoder(Mission).decode
+    assert decode(reader.payload(reader.header(1)[3])).items == []
+    assert len(decode(reader.payload(reader.header(2)[3])).items) == 500
+
+
+def test_a_restarted_module_keeps_its_rings_and_their_counts(host):
+    first = Attachment(host.region, "sim", publisher_id=11)
+    first.publication("sensor_gyro/0", 5, 20).write(gyro(1.0), 1, 4000, 1)
+    again = Attachment(host.region, "sim", publisher_id=11)
+    assert again.incarnation == first.incarnation + 1
+    writer = again.publication("sensor_gyro/0", 5, 20)
+    writer.write(gyro(2.0), 2, 8000, 2)
+    assert writer.count == 2
+    assert host.region.words[host.region.slot_word(again.slot, S_INCARNATION)] == 2
+
+
+def test_the_topology_says_who_reads_and_who_is_woken(host):
+    region = host.region
+    sim, est, rec = (Attachment(region, n, publisher_id=i + 1) for i, n in enumerate(["sim", "est", "rec"]))
+    sim.publication("sensor_gyro/0", 5, 20)
+    sim.publication("sensor_baro/0", 6, 20)
+    est.subscription("sensor_gyro/0", 1)
+    sim.ready(ROLE_TIMED, period_us=4000)
+    est.ready(ROLE_TRIGGERED, trigger="sensor_gyro/0")
+    for att in (sim, est):
+        region.words[region.slot_word(att.slot, S_ADMITTED)] = att.incarnation
+    topo = Topology(region)
+    gyro_topic, baro_topic = topic_hash("sensor_gyro/0"), topic_hash("sensor_baro/0")
+    assert topo.read_by_anyone(gyro_topic, sim.slot) and not topo.read_by_anyone(baro_topic, sim.slot)
+    assert topo.woken_by(gyro_topic, sim.slot) == ((est.slot, host.eventfds[est.slot]),)
+    assert topo.sources(gyro_topic, est.slot) == [(sim.slot, 0, 1)]
+    assert rec.slot not in {p.slot for p in topo.participants}  # never admitted
