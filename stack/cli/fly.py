@@ -10,20 +10,11 @@ import typer
 
 from stack.cli.common import TransportOption, choose_transport, fail, print_table
 from stack.cli.observers import add_observers
-from stack.runtime.spec import load_module_class
-from stack.scenario.catalogue import Check, scenarios
+from stack.scenario.catalogue import scenarios
+from stack.scenario.flight import WIND_SPEED, prepare_flight
 from stack.supervisor import state as run_state
-from stack.supervisor.profile import DEFAULT_PROFILE, ModuleEntry, Profile, ProfileError, load_profile
+from stack.supervisor.profile import DEFAULT_PROFILE, ProfileError, load_profile
 from stack.supervisor.supervisor import Supervisor, UpOptions
-
-WIND_SPEED = 5.0
-WIND_PARAMS: dict[str, object] = {
-    "SIM_WIND_SPD": WIND_SPEED,
-    "SIM_WIND_DIR": 270.0,
-    "SIM_WIND_GUST": 1.0,
-    "SIM_WIND_GUST_T": 2.0,
-}
-"""The issue's "5 m/s with gusts": a westerly at 5 m/s with 1.5 m/s (1 σ) gusts of 2 s correlation time."""
 
 
 def fly(
@@ -63,20 +54,13 @@ def fly(
     if seed is not None:
         prof.seed = seed
     prof.port = 0  # the flight's own router, on a free port
-    chosen = known[scenario]
-    try:
-        set_params(prof, chosen.params)
-        if wind:
-            set_params(prof, WIND_PARAMS)
-    except ValueError as e:
-        fail(f"scenario {scenario}: {e}", code=2)
     name = run_state.flight_name(prof.vehicle, os.getpid())
     run_dir = run_state.new_run_dir(scenario, name)
     result_path = run_dir / "scenario_result.json"
-    limits = dict(prof.scenario_limits.get(scenario, {}))
-    if wind:
-        limits = windy_limits(chosen.checks, limits)
-    add_scenario(prof, scenario, result_path, limits)
+    try:
+        prepare_flight(prof, scenario, result_path, wind)
+    except ValueError as e:
+        fail(f"scenario {scenario}: {e}", code=2)
     add_observers(prof, plot=plot_, web=web, save=save, record=record, own_ports=True)
     options = UpOptions(
         log_level=log_level, echo_logs=not quiet, echo_only=("scenario",) if quiet else (), kind=run_state.FLY
@@ -105,44 +89,6 @@ def fly(
     out.write_text(json.dumps(full, indent=2))
     _print_summary(full, out)
     raise typer.Exit(0 if full["passed"] else 1)
-
-
-def set_params(prof: Profile, params: dict[str, object]) -> None:
-    """Set parameters on every module of the profile that has them; one no module has is an error."""
-    for name, value in params.items():
-        holders = [m for m in prof.modules if any(p.name == name for p in m.cls.PARAMS)]
-        if not holders:
-            raise ValueError(f"no module of profile {prof.name} has parameter {name}")
-        for m in holders:
-            m.params[name] = next(p for p in m.cls.PARAMS if p.name == name).check(value)
-
-
-def windy_limits(checks: tuple[Check, ...], limits: dict[str, object]) -> dict[str, object]:
-    """The numeric upper limits doubled (the issue's rule for flights in wind), others unchanged."""
-    out = dict(limits)
-    for check in checks:
-        limit = out.get(check.metric, check.limit)
-        if isinstance(limit, int | float) and not isinstance(limit, bool) and not check.at_least:
-            out[check.metric] = 2.0 * limit
-    return out
-
-
-def add_scenario(prof: Profile, scenario: str, result_path: Path, limits: dict[str, object]) -> None:
-    """Append the scenario module to a profile (critical: the stack stops when the scenario ends)."""
-    cls = load_module_class("scenario")
-    prof.modules.append(
-        ModuleEntry(
-            name="scenario",
-            module="scenario",
-            cls=cls,
-            params={},
-            args={"name": scenario, "result": str(result_path), "limits": json.dumps(limits)},
-            condition="",
-            restart="no",
-            max_restarts=0,
-            critical=True,
-        )
-    )
 
 
 def _print_summary(report: dict, path: Path) -> None:
