@@ -80,9 +80,16 @@ class Node:
         return pub
 
     def subscriber(
-        self, topic: str, instance: int = 0, *, capacity: int = 256, keep_last: bool = False, announce: bool = True
+        self,
+        topic: str,
+        instance: int = 0,
+        *,
+        capacity: int = 256,
+        keep_last: bool = False,
+        announce: bool = True,
+        callback: bool = False,
     ) -> TopicSubscriber:
-        sub = TopicSubscriber(self, topic, instance, message_type(topic), capacity, keep_last)
+        sub = TopicSubscriber(self, topic, instance, message_type(topic), capacity, keep_last, callback)
         self.subscribers.append(sub)
         if announce:
             self.announce("sub", topic, instance)

@@ -16,6 +16,7 @@ a topic nobody reads is not even encoded.
 
 from __future__ import annotations
 
+import collections
 import logging
 import struct
 from typing import TYPE_CHECKING, Any
@@ -99,7 +100,7 @@ class TopicPublisher:
         if fast is None:
             self._put(self.encoder.encode(msg), now_us)
         else:
-            outside = fast.zenoh_wanted()
+            outside = fast.words[fast.zenoh_word]
             if self.fast_read or outside:
                 data = self.encoder.encode(msg)
                 if self.fast_read:
@@ -130,13 +131,19 @@ class TopicPublisher:
 
 
 class TopicSubscriber:
-    """A subscription drained by the owner's loop: ``recv`` blocks (GIL released), ``poll`` never does."""
+    """A subscription drained by the owner's loop: ``recv`` blocks (GIL released), ``poll`` never does.
+
+    With ``callback``, Zenoh's thread decodes each sample as it arrives and queues the valid ones in
+    ``arrived`` (at most ``capacity``, the oldest dropped): a loop that polls many inputs which almost
+    never receive anything (a fast-path module's outside messages) then only looks at an empty deque.
+    """
 
     __slots__ = (
         "_decoder",
         "_run_id",
         "_sub",
         "_warned",
+        "arrived",
         "decode_errors",
         "fingerprint",
         "foreign",
@@ -158,6 +165,7 @@ class TopicSubscriber:
         msg_type: type[Message],
         capacity: int = 256,
         keep_last: bool = False,
+        callback: bool = False,
     ) -> None:
         self.topic = topic
         self.instance = instance
@@ -173,8 +181,18 @@ class TopicSubscriber:
         self.foreign = 0
         self._run_id = node.run_id
         self._warned = False
-        handler = zenoh.handlers.RingChannel(capacity) if keep_last else zenoh.handlers.FifoChannel(capacity)
-        self._sub = node.session.declare_subscriber(self.key, handler)
+        self.arrived: collections.deque[Received] | None = None
+        if callback:
+            self.arrived = collections.deque(maxlen=capacity)
+            self._sub = node.session.declare_subscriber(self.key, self._on_sample)
+        else:
+            handler = zenoh.handlers.RingChannel(capacity) if keep_last else zenoh.handlers.FifoChannel(capacity)
+            self._sub = node.session.declare_subscriber(self.key, handler)
+
+    def _on_sample(self, sample: zenoh.Sample) -> None:
+        item = self._decode(sample)
+        if item is not None and self.arrived is not None:
+            self.arrived.append(item)
 
     def _decode(self, sample: zenoh.Sample) -> Received | None:
         attachment = sample.attachment
@@ -216,6 +234,8 @@ class TopicSubscriber:
 
     def poll(self) -> Received | None:
         """Next valid message, or None if none is waiting."""
+        if self.arrived is not None:
+            return self.arrived.popleft() if self.arrived else None
         sub = self._sub
         while True:
             sample = sub.try_recv()

@@ -27,13 +27,28 @@ Source = tuple[int, int, int]
 class FastInput(InputBuffer):
     """One subscribed topic of a fast-path process (the module API sees an :class:`InputBuffer`)."""
 
-    __slots__ = ("_decoder", "_fast_decode_errors", "_fast_received", "_inside", "hash", "keep", "readers", "region")
+    __slots__ = (
+        "_buckets",
+        "_decoder",
+        "_fast_decode_errors",
+        "_fast_received",
+        "_inside",
+        "every_us",
+        "hash",
+        "keep",
+        "readers",
+        "region",
+    )
 
     def __init__(self, region: Region, sub: TopicSubscriber, queue_mode: bool, keep: int = 0) -> None:
         """``keep``: a queue that may lose messages (a passive module's) takes at most the newest ``keep``
-        records of each publisher per refresh, like a ring buffer of that size dropping its oldest."""
+        records of each publisher per refresh, like a ring buffer of that size dropping its oldest.
+        ``every_us`` (set by a module that decimates anyway, the plot bridge): a queue takes only the
+        first record of each publisher in each period-aligned interval, and never decodes the others."""
         super().__init__(sub, queue_mode)
         self.keep = keep
+        self.every_us = 0
+        self._buckets: dict[int, int] = {}  # publisher slot → interval of its last record taken
         self.hash = topic_hash(sub.suffix)
         self.readers: list[RingReader] = []
         self._decoder = msgspec.msgpack.Decoder(sub.msg_type)
@@ -80,13 +95,14 @@ class FastInput(InputBuffer):
     def refresh(self, now: int, trigger_slot: int = -1, trigger_seq: int = 0) -> None:
         """Take in what a run at ``now`` may see (see the module docstring), then Zenoh's outside messages."""
         for r in self.readers:
-            count = r.count
+            count = r.words[r.count_word]
             if count > r.taken:
                 if self.queue_mode:
                     self._take_all(r, count, now, trigger_slot, trigger_seq)
                 else:
                     self._take_newest(r, count, now, trigger_slot, trigger_seq)
-        self._take_outside(now)
+        if self.sub.arrived:
+            self._take_outside(now)
 
     def take_in_everything(self) -> None:
         self.refresh(1 << 63)
@@ -117,6 +133,13 @@ class FastInput(InputBuffer):
                 _, t, seq, rec = head
                 if not (t < now or (r.slot == trigger_slot and seq < trigger_seq)):
                     return
+                if self.every_us:
+                    bucket = t // self.every_us
+                    if self._buckets.get(r.slot) == bucket:
+                        r.taken = n
+                        n += 1
+                        continue
+                    self._buckets[r.slot] = bucket
                 self._decode(r, n, rec, t, seq)
             r.taken = n
             n += 1
@@ -138,13 +161,12 @@ class FastInput(InputBuffer):
         self._accept((t, r.publisher_id, seq), msg)
 
     def _take_outside(self, now: int) -> None:
-        poll = self.sub.poll
+        arrived = self.sub.arrived
         inside = self._inside
-        item = poll()
-        while item is not None:
+        while arrived:
+            item = arrived.popleft()
             if item[1] not in inside:
                 self._accept((now, item[1], item[2]), item[3])
-            item = poll()
 
 
 def first_at_or_after(reader: RingReader, time_us: int) -> int:

@@ -16,7 +16,6 @@ restarts it, time waits until the new process is admitted. A member that makes n
 
 from __future__ import annotations
 
-import contextlib
 import logging
 import os
 import select
@@ -64,8 +63,8 @@ LAG_MAX_STEPS = 128
 
 
 def drain(fd: int) -> None:
-    with contextlib.suppress(BlockingIOError):
-        os.eventfd_read(fd)
+    """Reset an eventfd that poll() found readable (only its owner reads it, so this never blocks)."""
+    os.eventfd_read(fd)
 
 
 @dataclass
@@ -357,7 +356,13 @@ class FastCoordinator:
 
 
 class FastMember:
-    """A member's side: sleep until woken, and after a batch of runs wake the coordinator if the step may be over."""
+    """A member's side: sleep until woken, and after a batch of runs wake the coordinator if the step may be over.
+
+    It may be over when the members this batch woke have taken what it published and are idle, and no
+    other member is running or has a tick it has not started: then this member may be the last one
+    at work. Otherwise whichever member finishes last will say so (each wake costs the coordinator a
+    context switch, so a step is announced over once, not once per member).
+    """
 
     def __init__(self, att: Attachment) -> None:
         self.att = att
@@ -369,20 +374,31 @@ class FastMember:
         self.started = region.counter_word(me, C_STARTED)
         self.finished = region.counter_word(me, C_FINISHED)
         self.ticks = region.counter_word(me, C_TICKS)
+        self._admitted_word = region.slot_word(me, S_ADMITTED)
+        self._incarnation_word = region.slot_word(me, S_INCARNATION)
         self.topology_seen = -1
         self.coordinator_fd = -1
+        self._others: list[tuple[int, int, int]] = []  # (started, finished, ticks) words of the other members
 
     def wait(self) -> None:
         self._poll.poll()
-        drain(self.att.eventfd)
+        os.eventfd_read(self.att.eventfd)
 
     def admitted(self) -> bool:
-        return self.region.admitted(self.att.slot)
+        w = self.w
+        admitted = w[self._admitted_word]
+        return admitted != 0 and admitted == w[self._incarnation_word]
 
     def on_topology(self, topo: Topology) -> None:
         self.topology_seen = topo.generation
         c = topo.coordinator()
         self.coordinator_fd = c.eventfd if c is not None else -1
+        cw = self.region.counter_word
+        self._others = [
+            (cw(p.slot, C_STARTED), cw(p.slot, C_FINISHED), cw(p.slot, C_TICKS))
+            for p in topo.participants
+            if p.member and p.slot != self.att.slot
+        ]
 
     def base(self, publisher_slot: int) -> int:
         return int(self.w[self.region.slot_word(self.att.slot, S_BASE + publisher_slot)])
@@ -401,5 +417,9 @@ class FastMember:
                     return
                 if w[region.counter_word(slot, C_STARTED)] != w[region.counter_word(slot, C_FINISHED)]:
                     return
+        for started, finished, ticks in self._others:
+            s = w[started]
+            if s != w[finished] or w[ticks] > s:
+                return
         if self.coordinator_fd >= 0:
             os.eventfd_write(self.coordinator_fd, 1)

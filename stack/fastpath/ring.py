@@ -115,7 +115,6 @@ class RingWriter:
 
     __slots__ = (
         "_b",
-        "_w",
         "count_word",
         "entry",
         "payload_max",
@@ -127,22 +126,25 @@ class RingWriter:
         "topic",
         "wake",
         "wakes",
+        "words",
+        "zenoh_word",
     )
 
     def __init__(self, region: Region, slot: int, pub: int, wakes: set[int]) -> None:
         self.region = region
         self.slot = slot
-        self._w = region.words
+        self.words = region.words
         self._b = region.bytes
         self.entry = region.pub_word(slot, pub, 0)
-        self.topic = int(self._w[self.entry + P_TOPIC])
+        self.topic = int(self.words[self.entry + P_TOPIC])
+        self.zenoh_word = self.entry + P_ZENOH
         self.count_word = region.counter_word(slot, C_PUBS + pub)
         self.wake: tuple[tuple[int, int], ...] = ()
         self.wakes = wakes
         self._load()
 
     def _load(self) -> None:
-        w, e = self._w, self.entry
+        w, e = self.words, self.entry
         self.ring = int(w[e + P_RING])
         self.records = int(w[e + P_RECORDS])
         self.record = int(w[e + P_RECORD_BYTES])
@@ -150,14 +152,14 @@ class RingWriter:
 
     @property
     def count(self) -> int:
-        return int(self._w[self.count_word])
+        return int(self.words[self.count_word])
 
     def zenoh_wanted(self) -> bool:
-        return self._w[self.entry + P_ZENOH] != 0
+        return self.words[self.zenoh_word] != 0
 
     def write(self, data: bytes, index: int, time_us: int, seq: int) -> None:
         """Append a record and note the members this topic triggers."""
-        w = self._w
+        w = self.words
         n = w[self.count_word] + 1
         size = len(data)
         if size > self.payload_max:
@@ -180,7 +182,7 @@ class RingWriter:
         record = record_bytes_for(size)
         records = records_for(record)
         ring = allocate(self.region, self.slot, records * record)
-        w, b = self._w, self._b
+        w, b = self.words, self._b
         for n in range(max(1, next_n - min(records, self.records) + 1), next_n):
             old = self.ring + (n % self.records) * self.record
             if w[old >> 3] != n:
@@ -212,7 +214,6 @@ class RingReader:
 
     __slots__ = (
         "_b",
-        "_w",
         "count_word",
         "entry",
         "generation",
@@ -224,13 +225,14 @@ class RingReader:
         "ring",
         "slot",
         "taken",
+        "words",
     )
 
     def __init__(self, region: Region, slot: int, pub: int, publisher_id: int) -> None:
         self.region = region
         self.slot = slot
         self.publisher_id = publisher_id
-        self._w = region.words
+        self.words = region.words
         self._b = region.bytes
         self.entry = region.pub_word(slot, pub, 0)
         self.count_word = region.counter_word(slot, C_PUBS + pub)
@@ -239,7 +241,7 @@ class RingReader:
         self._load()
 
     def _load(self) -> None:
-        w, e = self._w, self.entry
+        w, e = self.words, self.entry
         self.generation = int(w[e + P_GENERATION])
         self.ring = int(w[e + P_RING])
         self.records = int(w[e + P_RECORDS])
@@ -247,13 +249,13 @@ class RingReader:
 
     @property
     def count(self) -> int:
-        return int(self._w[self.count_word])
+        return int(self.words[self.count_word])
 
     def header(self, n: int) -> tuple[int, int, int, int] | None:
         """(index, time, seq, offset of the record) of record ``n``, or None if it is not in the ring."""
         rec = self.ring + (n % self.records) * self.record
         q = rec >> 3
-        w = self._w
+        w = self.words
         if w[q] != n:
             if w[self.entry + P_GENERATION] == self.generation:
                 return None
@@ -265,12 +267,12 @@ class RingReader:
         return int(w[q + 1]), int(w[q + 2]), int(w[q + 3]), rec
 
     def payload(self, rec: int) -> memoryview:
-        size = int(self._w[(rec >> 3) + 4])
+        size = int(self.words[(rec >> 3) + 4])
         return self._b[rec + RECORD_HEADER : rec + RECORD_HEADER + size]
 
     def still(self, n: int, rec: int) -> bool:
         """Record ``n`` was not overwritten while it was read."""
-        return self._w[rec >> 3] == n
+        return self.words[rec >> 3] == n
 
     def oldest_readable(self, count: int) -> int:
         """The first record after ``taken`` that can still be in the ring; skipped ones count as lost."""

@@ -114,7 +114,8 @@ class FastDriver:
                 try:
                     last = rt._run(None, t, last)
                 finally:
-                    wake_all(wakes)
+                    if wakes:
+                        wake_all(wakes)
                 coordinator.finish_step()
         finally:
             coordinator.close()
@@ -126,7 +127,8 @@ class FastDriver:
         last = 0
         while True:
             member.wait()
-            self.refresh_topology()
+            if w[H_TOPOLOGY] != self.topology_seen:
+                self.refresh_topology()
             if not member.admitted():
                 continue
             while w[ticks] > w[started]:
@@ -138,7 +140,8 @@ class FastDriver:
                 try:
                     last = rt._run(None, now, last)
                 finally:
-                    wake_all(wakes)
+                    if wakes:
+                        wake_all(wakes)
                 w[finished] += 1
             member.done(fast_writers(touched))
             touched.clear()
@@ -150,20 +153,23 @@ class FastDriver:
         started, finished = member.started, member.finished
         decode = msgspec.msgpack.Decoder(trigger.sub.msg_type).decode
         touched, wakes = rt.node.touched, self.att.wakes
+        consumed = [member.consumed_word(slot) for slot in range(self.region.slots)]
         last = 0
         while True:
             member.wait()
-            self.refresh_topology()
+            if w[H_TOPOLOGY] != self.topology_seen:
+                self.refresh_topology()
             if not member.admitted():
                 continue
-            self._drop_outside_triggers(trigger)
+            if trigger.sub.arrived:
+                self._drop_outside_triggers(trigger)
             while True:
                 found = next_trigger(trigger.readers)
                 if found is None:
                     break
                 reader, n, t, seq, rec = found
                 w[started] += 1
-                w[member.consumed_word(reader.slot)] = n
+                w[consumed[reader.slot]] = n
                 reader.taken = n
                 try:
                     msg = decode(reader.payload(rec))
@@ -180,13 +186,16 @@ class FastDriver:
                 try:
                     last = rt._run(msg, sample_time(msg), last)
                 finally:
-                    wake_all(wakes)
+                    if wakes:
+                        wake_all(wakes)
                 w[finished] += 1
             member.done(fast_writers(touched))
             touched.clear()
 
     def _drop_outside_triggers(self, trigger: FastInput) -> None:
-        while trigger.sub.poll() is not None:
+        arrived = trigger.sub.arrived
+        while arrived:
+            arrived.popleft()
             self.rt._ignore_outside_trigger(trigger.sub.suffix)
 
     def _run_passive(self, period_us: int) -> None:
@@ -200,8 +209,8 @@ class FastDriver:
         read_time = self.region.slot_word(self.att.slot, S_READ_TIME)
         last = 0
         while True:
-            poll.poll(period_us // 1000)
-            drain(self.att.eventfd)
+            if poll.poll(period_us // 1000):
+                drain(self.att.eventfd)
             self.refresh_topology()
             now = int(w[H_NOW])
             for buf in self.data:
@@ -216,7 +225,7 @@ def next_trigger(readers: list[RingReader]) -> tuple[RingReader, int, int, int, 
     best: tuple[RingReader, int, int, int, int] | None = None
     best_key = None
     for r in readers:
-        count = r.count
+        count = r.words[r.count_word]
         n = r.taken + 1
         while n <= count:
             head = r.header(n)

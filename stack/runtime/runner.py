@@ -33,9 +33,10 @@ log = logging.getLogger("stack.runtime")
 
 LOCKSTEP_QUEUE = 1 << 14
 LATEST_RING = 8
-# Outside messages reaching a fast-path module over Zenoh wait in a FIFO it drains every run: a flood
-# blocks Zenoh's delivery to this process, never displaces a message (the lockstep does not use Zenoh).
+# Outside messages reaching a fast-path module over Zenoh: decoded on arrival (garbage is dropped there)
+# and queued, at most this many per input (a flood only displaces the flood's own oldest messages).
 OUTSIDE_QUEUE = 1024
+PASSIVE_NICENESS = 10
 
 
 class Shutdown(BaseException):
@@ -80,7 +81,7 @@ class Runtime:
 
     def add_input(self, topic: str, instance: int, queue: bool, capacity: int) -> None:
         if self.fast is not None:
-            sub = self.node.subscriber(topic, instance, capacity=OUTSIDE_QUEUE)
+            sub = self.node.subscriber(topic, instance, capacity=OUTSIDE_QUEUE, callback=True)
             self.fast.subscription(sub.suffix, SUB_QUEUE if queue else 0)
             keep = capacity if self.module_cls.PASSIVE and not self.module_cls.LOSSLESS else 0
             self.inputs[(topic, instance)] = FastInput(self.fast.region, sub, queue, keep)
@@ -117,6 +118,11 @@ class Runtime:
             services: list[Any] = []
             lockstep_part: LockstepMember | LockstepCoordinator | None = None
             region = Region(spec.fastpath_fd) if spec.lockstep and spec.fastpath_fd >= 0 else None
+            if self.module_cls.PASSIVE:
+                # An observer yields to the control loops (a lossless one that falls far behind makes
+                # lockstep time wait, see stack.fastpath.lockstep), yet still gets its share of a machine
+                # loaded by other programs (SCHED_IDLE would starve it there, and the run with it).
+                os.nice(PASSIVE_NICENESS)
             try:
                 if region is not None:
                     if region.nonce != spec.run_id:
@@ -171,7 +177,7 @@ class Runtime:
         if not isinstance(trigger, Trigger):
             return
         if self.fast is not None:
-            sub = self.node.subscriber(trigger.topic, trigger.instance, capacity=OUTSIDE_QUEUE)
+            sub = self.node.subscriber(trigger.topic, trigger.instance, capacity=OUTSIDE_QUEUE, callback=True)
             self.fast.subscription(sub.suffix, SUB_TRIGGER)
             self.trigger_input = FastInput(self.fast.region, sub, False)
             self.inputs[(trigger.topic, trigger.instance)] = self.trigger_input

@@ -317,6 +317,10 @@ class FlightLogger:
 
     # -- input -------------------------------------------------------------------------------------
 
+    def period_us(self, topic: str) -> int:
+        """The plot period of a topic: of its messages the logger draws the first in each period (0: all)."""
+        return self._topics[topic].period_us
+
     def log_message(self, topic: str, instance: int, msg: Any, wall_time_us: int | None = None) -> bool:
         """Take one message; returns True if it was drawn (not decimated, not an unknown topic).
 

@@ -139,6 +139,8 @@ class RerunBridgeModule(Module):
         for topic in TOPICS:
             if rt.fast is not None:
                 self.subscribe(topic, queue=True, capacity=self.capacity)
+                # The rings are read directly: skip what the logger would drop without decoding it.
+                rt.inputs[(topic, 0)].every_us = self.logger.period_us(topic)
             else:
                 sub = node.subscriber(topic, capacity=self.capacity, keep_last=True)
                 rt.inputs[(topic, 0)] = InputBuffer(sub, True)

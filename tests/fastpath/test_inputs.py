@@ -1,5 +1,6 @@
 """What a fast-path subscription lets a run see: the lockstep visibility rules on shared-memory rings."""
 
+from collections import deque
 from dataclasses import dataclass, field
 
 import msgspec
@@ -21,14 +22,11 @@ class OutsideSub:
 
     suffix: str = TOPIC
     msg_type: type = VehicleRatesSetpoint
-    waiting: list[Received] = field(default_factory=list)
+    arrived: deque[Received] = field(default_factory=deque)
     received: int = 0
     decode_errors: int = 0
     schema_errors: int = 0
     foreign: int = 0
-
-    def poll(self) -> Received | None:
-        return self.waiting.pop(0) if self.waiting else None
 
 
 @pytest.fixture
@@ -102,7 +100,9 @@ def test_outside_messages_are_seen_at_once_and_copies_of_ring_records_skipped(ru
     host, w, sources = run
     inp, sub = make_input(host, sources, queue=True)
     publish(w["a"], 1.0, 4000, 1)
-    sub.waiting = [(-1, 555, 1, VehicleRatesSetpoint(roll=7.0), 1), (4000, 101, 1, VehicleRatesSetpoint(roll=1.0), 1)]
+    sub.arrived.extend(
+        [(-1, 555, 1, VehicleRatesSetpoint(roll=7.0), 1), (4000, 101, 1, VehicleRatesSetpoint(roll=1.0), 1)]
+    )
     inp.refresh(8000)
     assert sorted(m.roll for m in inp.take()) == [1.0, 7.0]
 
