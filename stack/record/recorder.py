@@ -27,7 +27,7 @@ from typing import Any, BinaryIO
 import msgspec
 from mcap.opcode import Opcode
 from mcap.records import Channel, Schema
-from mcap.writer import LIBRARY_IDENTIFIER, CompressionType, Writer
+from mcap.writer import LIBRARY_IDENTIFIER, CompressionType
 
 import stack
 from stack.bus.node import wall_clock_us
@@ -48,6 +48,7 @@ from stack.record.mcapscan import (
     read_footer,
     read_summary,
 )
+from stack.record.mcapwrite import FastMessageWriter
 from stack.record.selection import TopicSelection
 
 _msgpack = msgspec.msgpack.Encoder()
@@ -184,7 +185,7 @@ class RecordingWriter:
         self.messages = 0
         self.raw_messages = 0
         self._file: BinaryIO = open(self.path, "wb")  # noqa: SIM115 - owned until close()
-        self._mcap = Writer(self._file, chunk_size=chunk_size, compression=kinds[compression])
+        self._mcap = FastMessageWriter(self._file, chunk_size=chunk_size, compression=kinds[compression])
         self._mcap.start(profile="", library=f"stack {stack.__version__}; {LIBRARY_IDENTIFIER}")
         self._mcap.add_metadata(fmt.META_RECORDING, info.to_metadata())
         self._file.flush()
