@@ -8,8 +8,9 @@ One table, :data:`MODES`, keyed by PX4's ``vehicle_status.nav_state`` numbers, h
   (rotary wing: Manual is stabilised like Stabilized). ``flag_control_allocation_enabled`` is set in every
   mode but Termination, as PX4's own modes leave the allocator on. Rattitude is seed 000's mode (removed
   from PX4 in 2021): manual, attitude and rates plus ``flag_control_rattitude_enabled``;
-* ``custom_mode`` — the PX4 custom main/sub mode (``px4_custom_mode.h``) QGroundControl and MAVLink send in
-  ``MAV_CMD_DO_SET_MODE`` param2/param3 (with param1 = MAV_MODE_FLAG_CUSTOM_MODE_ENABLED).
+* ``custom_mode`` — the PX4 custom main/sub mode (``px4_custom_mode.h``, from :mod:`stack.mavlink.px4_modes`)
+  QGroundControl and MAVLink send in ``MAV_CMD_DO_SET_MODE`` param2/param3 (with param1 =
+  MAV_MODE_FLAG_CUSTOM_MODE_ENABLED).
 
 Manual-control (RC) requirements are listed but not enforced: the stack has no RC-loss detection.
 """
@@ -17,8 +18,10 @@ Manual-control (RC) requirements are listed but not enforced: the stack has no R
 from __future__ import annotations
 
 from dataclasses import dataclass
-from enum import IntEnum, IntFlag
+from enum import IntFlag
 
+from stack.mavlink import px4_modes
+from stack.mavlink.px4_modes import MainMode
 from stack.msg.system import VehicleControlMode, VehicleStatus
 
 NS = VehicleStatus
@@ -73,31 +76,6 @@ RUN_REQUIREMENTS = Requirement(
 """The requirements checked by "can this mode run" (not arming prevention, not manual control)."""
 
 
-class Px4MainMode(IntEnum):
-    """``PX4_CUSTOM_MAIN_MODE_*``."""
-
-    MANUAL = 1
-    ALTCTL = 2
-    POSCTL = 3
-    AUTO = 4
-    ACRO = 5
-    OFFBOARD = 6
-    STABILIZED = 7
-    RATTITUDE_LEGACY = 8
-    TERMINATION = 10
-
-
-class Px4AutoSubMode(IntEnum):
-    """``PX4_CUSTOM_SUB_MODE_AUTO_*``."""
-
-    READY = 1
-    TAKEOFF = 2
-    LOITER = 3
-    MISSION = 4
-    RTL = 5
-    LAND = 6
-
-
 MAV_MODE_FLAG_CUSTOM_MODE_ENABLED = 1
 MAV_MODE_FLAG_AUTO_ENABLED = 4
 MAV_MODE_FLAG_GUIDED_ENABLED = 8
@@ -134,25 +112,26 @@ class ModeInfo:
     """The name ``commander mode`` takes (PX4's CLI spelling)."""
     requirements: Requirement
     control_flags: frozenset[str]
-    custom_mode: tuple[int, int]
-    """PX4 custom (main, sub) mode."""
     user_selectable: bool = True
     """False for the failsafe-only modes (Descend, Termination)."""
+
+    @property
+    def custom_mode(self) -> tuple[int, int]:
+        """PX4 custom (main, sub) mode (``stack.mavlink.px4_modes``)."""
+        mode = px4_modes.NAV_STATE_MODE[self.nav_state]
+        return mode.main_mode, mode.sub_mode
 
 
 MODES: dict[int, ModeInfo] = {
     m.nav_state: m
     for m in (
-        ModeInfo(
-            NS.NAVIGATION_STATE_MANUAL, "Manual", "manual", R.MANUAL_CONTROL, _STAB_FLAGS, (Px4MainMode.MANUAL, 0)
-        ),
+        ModeInfo(NS.NAVIGATION_STATE_MANUAL, "Manual", "manual", R.MANUAL_CONTROL, _STAB_FLAGS),
         ModeInfo(
             NS.NAVIGATION_STATE_STAB,
             "Stabilized",
             "stabilized",
             _AV_ATT | R.MANUAL_CONTROL,
             _STAB_FLAGS,
-            (Px4MainMode.STABILIZED, 0),
         ),
         ModeInfo(
             NS.NAVIGATION_STATE_ACRO,
@@ -160,7 +139,6 @@ MODES: dict[int, ModeInfo] = {
             "acro",
             R.ANGULAR_VELOCITY | R.MANUAL_CONTROL,
             frozenset({_MANUAL, _RATES, _ALLOCATION}),
-            (Px4MainMode.ACRO, 0),
         ),
         ModeInfo(
             NS.NAVIGATION_STATE_RATTITUDE,
@@ -168,7 +146,6 @@ MODES: dict[int, ModeInfo] = {
             "rattitude",
             _AV_ATT | R.MANUAL_CONTROL,
             _STAB_FLAGS | {_RATTITUDE},
-            (Px4MainMode.RATTITUDE_LEGACY, 0),
         ),
         ModeInfo(
             NS.NAVIGATION_STATE_ALTCTL,
@@ -176,7 +153,6 @@ MODES: dict[int, ModeInfo] = {
             "altctl",
             _AV_ATT | R.LOCAL_ALT | R.MANUAL_CONTROL,
             _STAB_FLAGS | {_ALTITUDE, _CLIMB_RATE},
-            (Px4MainMode.ALTCTL, 0),
         ),
         ModeInfo(
             NS.NAVIGATION_STATE_POSCTL,
@@ -184,7 +160,6 @@ MODES: dict[int, ModeInfo] = {
             "posctl",
             _AV_ATT | R.LOCAL_ALT | R.LOCAL_POSITION_RELAXED | R.MANUAL_CONTROL,
             _STAB_FLAGS | {_ALTITUDE, _CLIMB_RATE, _POSITION, _VELOCITY},
-            (Px4MainMode.POSCTL, 0),
         ),
         ModeInfo(
             NS.NAVIGATION_STATE_AUTO_MISSION,
@@ -192,7 +167,6 @@ MODES: dict[int, ModeInfo] = {
             "auto:mission",
             _AV_ATT | R.LOCAL_POSITION | R.LOCAL_ALT | R.MISSION,
             _AUTO_FLAGS,
-            (Px4MainMode.AUTO, Px4AutoSubMode.MISSION),
         ),
         ModeInfo(
             NS.NAVIGATION_STATE_AUTO_LOITER,
@@ -200,7 +174,6 @@ MODES: dict[int, ModeInfo] = {
             "auto:loiter",
             _AV_ATT | R.LOCAL_POSITION | R.LOCAL_ALT,
             _AUTO_FLAGS,
-            (Px4MainMode.AUTO, Px4AutoSubMode.LOITER),
         ),
         ModeInfo(
             NS.NAVIGATION_STATE_AUTO_RTL,
@@ -208,7 +181,6 @@ MODES: dict[int, ModeInfo] = {
             "auto:rtl",
             _AV_ATT | R.LOCAL_POSITION | R.LOCAL_ALT | R.HOME | R.PREVENT_ARMING,
             _AUTO_FLAGS,
-            (Px4MainMode.AUTO, Px4AutoSubMode.RTL),
         ),
         ModeInfo(
             NS.NAVIGATION_STATE_AUTO_TAKEOFF,
@@ -216,7 +188,6 @@ MODES: dict[int, ModeInfo] = {
             "auto:takeoff",
             _AV_ATT | R.LOCAL_ALT | R.LOCAL_POSITION,
             _AUTO_FLAGS,
-            (Px4MainMode.AUTO, Px4AutoSubMode.TAKEOFF),
         ),
         ModeInfo(
             NS.NAVIGATION_STATE_AUTO_LAND,
@@ -224,11 +195,13 @@ MODES: dict[int, ModeInfo] = {
             "auto:land",
             _AV_ATT | R.LOCAL_ALT | R.LOCAL_POSITION_RELAXED | R.PREVENT_ARMING,
             _AUTO_FLAGS,
-            (Px4MainMode.AUTO, Px4AutoSubMode.LAND),
         ),
         ModeInfo(
-            NS.NAVIGATION_STATE_OFFBOARD, "Offboard", "offboard", _AV_ATT,
-            frozenset({"flag_control_offboard_enabled", _ATTITUDE, _RATES, _ALLOCATION}), (Px4MainMode.OFFBOARD, 0),
+            NS.NAVIGATION_STATE_OFFBOARD,
+            "Offboard",
+            "offboard",
+            _AV_ATT,
+            frozenset({"flag_control_offboard_enabled", _ATTITUDE, _RATES, _ALLOCATION}),
         ),
         ModeInfo(
             NS.NAVIGATION_STATE_DESCEND,
@@ -236,7 +209,6 @@ MODES: dict[int, ModeInfo] = {
             "descend",
             _AV_ATT | R.PREVENT_ARMING,
             frozenset({_AUTO, _ATTITUDE, _RATES, _CLIMB_RATE, _ALLOCATION}),
-            (Px4MainMode.AUTO, Px4AutoSubMode.LAND),
             user_selectable=False,
         ),
         ModeInfo(
@@ -245,7 +217,6 @@ MODES: dict[int, ModeInfo] = {
             "termination",
             R.PREVENT_ARMING,
             frozenset({_TERMINATION}),
-            (Px4MainMode.TERMINATION, 0),
             user_selectable=False,
         ),
     )
@@ -290,11 +261,11 @@ def nav_state_from_custom_mode(main_mode: int, sub_mode: int) -> int | None:
 
     As in PX4, AUTO with sub mode 0 is Mission, Position's sub modes (1 Orbit, 2 Slow) are modes of their
     own (unsupported here), and the other main modes ignore the sub mode."""
-    if main_mode == Px4MainMode.AUTO and sub_mode == 0:
+    if main_mode == MainMode.AUTO and sub_mode == 0:
         return NS.NAVIGATION_STATE_AUTO_MISSION
-    if main_mode == Px4MainMode.POSCTL and sub_mode != 0:
+    if main_mode == MainMode.POSCTL and sub_mode != 0:
         return None
-    if main_mode != Px4MainMode.AUTO:
+    if main_mode != MainMode.AUTO:
         sub_mode = 0
     for state, mode in MODES.items():
         if mode.user_selectable and mode.custom_mode == (main_mode, sub_mode):
