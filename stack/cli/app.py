@@ -12,7 +12,7 @@ import psutil
 import typer
 
 from stack.bus import keys
-from stack.cli import cmd, fly, log, param, plot, topic
+from stack.cli import cmd, fly, log, param, pixhawk_sim, plot, topic
 from stack.cli.common import (
     EndpointOption,
     JsonOption,
@@ -41,6 +41,7 @@ app.add_typer(cmd.app, name="cmd")
 app.command("fly")(fly.fly)
 app.command("plot")(plot.plot)
 app.command("replay")(log.replay)
+app.command("pixhawk-sim")(pixhawk_sim.pixhawk_sim)
 
 
 @app.command()

@@ -1,0 +1,117 @@
+"""The simulated Pixhawk's parameters: PX4's names, each defined once in the stack and imported here.
+
+The controllers, the allocator, the land detector and the battery bring their own parameter tables; the
+commander's timeouts come from ``stack.commander``. Defined here are only the PX4 parameters nothing else
+in the stack uses: the Offboard-loss action and the failure detector's attitude limits. The airframe
+geometry (``CA_ROTOR*``, ``THR_MDL_FAC``, ``MPC_THR_HOVER``) comes from the vehicle model, as a launch
+profile's ``airframe`` gives it to the allocator.
+"""
+
+from __future__ import annotations
+
+import tomllib
+from collections.abc import Iterable, Mapping
+from enum import IntEnum
+from pathlib import Path
+
+from stack.attctl import attitude_control, rate_control
+from stack.commander import battery, land_detector
+from stack.commander import state_machine as commander
+from stack.commander.module import OFFBOARD_PARAMS
+from stack.estimator.attitude_module import GYRO_PARAMS
+from stack.mixer import allocation, effectiveness, output
+from stack.posctl import flight_mode_manager, pos_module
+from stack.runtime.params import Param, ParamError, ParamValue
+from stack.sim.module import SimulatorModule
+from stack.sim.vehicle import VehicleModel
+
+
+class OffboardLossAction(IntEnum):
+    """COM_OBL_RC_ACT (PX4 ``failsafe.h`` ``offboard_loss_failsafe_mode``)."""
+
+    POSITION = 0
+    ALTITUDE = 1
+    STABILIZED = 2
+    RETURN = 3
+    LAND = 4
+    HOLD = 5
+    TERMINATE = 6
+    DISARM = 7
+
+
+SIMULATED_OFFBOARD_LOSS_ACTIONS = tuple(a for a in OffboardLossAction if a is not OffboardLossAction.RETURN)
+"""Return mode is not simulated, so COM_OBL_RC_ACT 3 is refused."""
+
+OWN_PARAMS: tuple[Param, ...] = (
+    Param(
+        "COM_OBL_RC_ACT",
+        int(OffboardLossAction.POSITION),
+        0,
+        7,
+        "",
+        "Offboard loss action: 0 Position, 1 Altitude, 2 Stabilized (each falls back to Hold without RC), "
+        "4 Land, 5 Hold, 6 Terminate, 7 Disarm",
+        choices=tuple(int(a) for a in SIMULATED_OFFBOARD_LOSS_ACTIONS),
+    ),
+    Param("FD_FAIL_R", 60, 0, 180, "deg", "Roll beyond which the failure detector reports an attitude failure"),
+    Param("FD_FAIL_P", 60, 0, 180, "deg", "Pitch beyond which the failure detector reports an attitude failure"),
+)
+
+_COMMANDER_NAMES = ("COM_DISARM_LAND", "COM_DISARM_PRFLT")
+_SIMULATOR_NAMES = ("SIH_LOC_LAT0", "SIH_LOC_LON0", "SIH_LOC_H0")
+
+
+def _unique(groups: Iterable[Iterable[Param]]) -> tuple[Param, ...]:
+    """The first definition of each name (the land detector repeats a few MPC_* of position control)."""
+    seen: dict[str, Param] = {}
+    for group in groups:
+        for p in group:
+            seen.setdefault(p.name, p)
+    return tuple(seen.values())
+
+
+PARAMS: tuple[Param, ...] = _unique(
+    (
+        OWN_PARAMS,
+        OFFBOARD_PARAMS,
+        (p for p in commander.OWN_PARAMS if p.name in _COMMANDER_NAMES),
+        (p for p in SimulatorModule.PARAMS if p.name in _SIMULATOR_NAMES),
+        GYRO_PARAMS,
+        rate_control.PARAMS,
+        attitude_control.PARAMS,
+        pos_module.PARAMS,
+        flight_mode_manager.PARAMS,
+        land_detector.PARAMS,
+        effectiveness.PARAMS,
+        allocation.PARAMS,
+        output.PARAMS,
+        battery.PARAMS,
+    )
+)
+DEFINITIONS: dict[str, Param] = {p.name: p for p in PARAMS}
+
+
+def parameter_values(vehicle: VehicleModel, overrides: Mapping[str, object] | None = None) -> dict[str, ParamValue]:
+    """Defaults, then the vehicle's airframe table, then ``overrides``; each value checked against its definition.
+
+    An unknown name in ``overrides`` is an error (ParamError naming it)."""
+    values: dict[str, ParamValue] = {p.name: p.default for p in PARAMS}
+    for name, value in vehicle.airframe.items():
+        if name in DEFINITIONS:
+            values[name] = DEFINITIONS[name].check(value)
+    for name, value in (overrides or {}).items():
+        if name not in DEFINITIONS:
+            raise ParamError(f"unknown parameter '{name}' (the simulated Pixhawk does not use it)")
+        values[name] = DEFINITIONS[name].check(value)
+    return values
+
+
+def read_params_file(path: Path) -> tuple[dict[str, object], list[str]]:
+    """The ``[params]`` table of a TOML file (a launch profile qualifies): (the values this Pixhawk uses, the
+    names it does not use, which a launch profile has for the stack's other modules)."""
+    with path.open("rb") as f:
+        table = tomllib.load(f).get("params", {})
+    if not isinstance(table, dict):
+        raise ParamError(f"{path}: [params] is not a table")
+    used = {name: value for name, value in table.items() if name in DEFINITIONS}
+    return used, sorted(name for name in table if name not in DEFINITIONS)

@@ -1,0 +1,178 @@
+"""The simulated Pixhawk without its MAVLink side: the plant, its sensors and the autopilot flying it.
+
+:class:`SimulatedPixhawk` steps the stack's simulator (physics and sensors, PX4 SIH's IMU rate) and, on each
+IMU sample, the Pixhawk's commander, land detector (at PX4's 50 Hz) and control chain, whose motor commands
+drive the next step. Its clock is the autopilot's boot time: the simulated time plus any time the caller
+skipped because the wall clock ran ahead (:meth:`skip`), so sample times stay on the wall clock they are
+paced to. It is free of I/O; the MAVLink endpoint reads its state and hands it commands and setpoints.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import NamedTuple
+
+from pymavlink.dialects.v20 import common as mavlink
+
+from stack.commander.battery import BatteryModel, BatteryState
+from stack.commander.home import HomePosition
+from stack.commander.land_detector import LandDetectorInputs, LandDetectorState, MulticopterLandDetector
+from stack.mathlib import quaternion as quat
+from stack.mavlink.px4_modes import Px4Mode
+from stack.pixhawk_sim.commander import Condition, Px4Commander, Verdict
+from stack.pixhawk_sim.flight import ControlOutput, FlightControl, VehicleState
+from stack.pixhawk_sim.offboard import OffboardSetpoint, decode_attitude_target
+from stack.sim.sensors import BaroSample, GpsSample, ImuSample, MagSample
+from stack.sim.simulator import GroundTruth, Simulator
+from stack.sim.vehicle import VehicleModel
+
+IMU_RATE_HZ = 250.0
+"""The physics, sensor and rate-loop rate (PX4 SITL IMU_INTEG_RATE, the stack simulator's step)."""
+LAND_DETECTOR_DECIMATION = 5
+"""Land detector and commander every 5th IMU sample: PX4's 50 Hz land detector."""
+BATTERY_DECIMATION = 25
+"""Battery every 25th IMU sample: 10 Hz, as the stack's simulator publishes it."""
+
+
+class Sample(NamedTuple):
+    """A sensor sample with the autopilot's boot time [µs] of its measurement, and its sequence number."""
+
+    boot_us: int
+    value: ImuSample | MagSample | BaroSample | GpsSample
+    sequence: int
+
+
+class SimulatedPixhawk:
+    """See the module docstring."""
+
+    def __init__(self, model: VehicleModel, params: Mapping[str, object], seed: int = 0) -> None:
+        self.params = dict(params)
+        self.sim = Simulator(
+            model,
+            seed=seed,
+            imu_rate_hz=IMU_RATE_HZ,
+            home=(float(params["SIH_LOC_LAT0"]), float(params["SIH_LOC_LON0"]), float(params["SIH_LOC_H0"])),
+        )
+        self.commander = Px4Commander(params)
+        self.control = FlightControl(params, IMU_RATE_HZ)
+        self.land_detector = MulticopterLandDetector(params)
+        self.battery = BatteryModel(params)
+        self.battery_state: BatteryState = self.battery.update(0.0, False)
+        self.setpoint: OffboardSetpoint | None = None
+        self.samples: dict[type, Sample] = {}
+        self.skipped_us = 0
+        self.steps = 0
+        self.truth: GroundTruth = self.sim.truth()
+        self.home = self._home_here()
+        self._motors: tuple[float, ...] = (0.0,) * model.rotor_count
+        self._sequence = 0
+
+    @property
+    def time_us(self) -> int:
+        """The autopilot's boot time [µs]."""
+        return self.sim.time_us + self.skipped_us
+
+    @property
+    def period_us(self) -> int:
+        return self.sim.imu_period_us
+
+    @property
+    def landed(self) -> LandDetectorState:
+        return self.land_detector.state
+
+    @property
+    def output(self) -> ControlOutput:
+        return self.control.last
+
+    def skip(self, duration_us: int) -> None:
+        """The wall clock moved on by ``duration_us`` without the simulation (the caller fell behind)."""
+        self.skipped_us += duration_us
+
+    def step(self) -> None:
+        """Advance one IMU period and run the autopilot on the new samples."""
+        for value in self.sim.advance(self._motors):
+            self._sequence += 1
+            self.samples[type(value)] = Sample(value.time_us + self.skipped_us, value, self._sequence)
+        self.truth = truth = self.sim.truth()
+        now = self.time_us
+        commander = self.commander
+        if self.steps % LAND_DETECTOR_DECIMATION == 0:
+            self._detect_landing(now, truth)
+            commander.update(now, self.condition())
+        land = self.land_detector.state
+        imu = self.samples[ImuSample]
+        state = VehicleState(now, truth.position, truth.velocity, truth.q, self.home)
+        out = self.control.update(
+            imu.boot_us,
+            imu.value.gyro,
+            state,
+            mode=commander.mode,
+            armed=commander.armed,
+            landed=land.landed,
+            maybe_landed=land.maybe_landed,
+            setpoint=self.setpoint,
+        )
+        self._motors = out.motors
+        if self.steps % BATTERY_DECIMATION == 0:
+            self.battery_state = self.battery.update(BATTERY_DECIMATION / IMU_RATE_HZ, commander.armed)
+        self.steps += 1
+
+    def _detect_landing(self, now: int, truth: GroundTruth) -> None:
+        out = self.control.last
+        vx, vy, vz = truth.velocity
+        imu = self.samples[ImuSample].value
+        self.land_detector.update(
+            now,
+            LandDetectorInputs(
+                armed=self.commander.armed,
+                local_position_timestamp_us=now,
+                z_valid=True,
+                v_xy_valid=True,
+                v_z_valid=True,
+                vx=vx,
+                vy=vy,
+                vz=vz,
+                z_deriv=vz,
+                angular_velocity=self.control.body_rates,
+                acceleration=imu.accel,
+                throttle=-out.thrust_body[2],
+                climb_rate_control=self.commander.mode in (Px4Mode.AUTO_LOITER, Px4Mode.AUTO_LAND),
+                velocity_setpoint_z=out.velocity_sp_z,
+            ),
+        )
+
+    def condition(self) -> Condition:
+        land = self.land_detector.state
+        roll, pitch, _ = quat.to_euler(self.truth.q)
+        return Condition(land.landed, land.maybe_landed, roll, pitch)
+
+    # ------------------------------------------------------------------ commands and setpoints
+
+    def arm_disarm(self, arm: bool, force: bool) -> Verdict:
+        was_armed = self.commander.armed
+        verdict = self.commander.arm_disarm(arm, force, self.time_us, self.condition())
+        if self.commander.armed and not was_armed:
+            self.home = self._home_here()
+        return verdict
+
+    def _home_here(self) -> HomePosition:
+        """Home where the vehicle is (PX4 sets it on arming)."""
+        t = self.truth
+        x, y, z = t.position
+        return HomePosition(x, y, z, quat.yaw(t.q), t.lat, t.lon, t.alt)
+
+    def set_mode(self, mode: Px4Mode | None) -> Verdict:
+        return self.commander.set_mode(mode, self.time_us)
+
+    def attitude_target(self, msg: mavlink.MAVLink_set_attitude_target_message) -> None:
+        """A SET_ATTITUDE_TARGET for this vehicle: proof of life, and the setpoint when it carries one."""
+        now = self.time_us
+        self.commander.offboard_setpoint(now)
+        setpoint = decode_attitude_target(msg, now, self.setpoint)
+        if setpoint is not None:
+            self.setpoint = setpoint
+
+    @property
+    def flying_attitude(self) -> bool:
+        """Whether the attitude is controlled in Offboard (attitude setpoints rather than body rates)."""
+        return self.setpoint is not None and self.setpoint.is_attitude
