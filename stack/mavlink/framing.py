@@ -6,8 +6,9 @@ frame that fails to decode is skipped by one byte only and the scan resumes at t
 good frame after damage is recovered; only ``MAVLink.decode`` (header, length, CRC with CRC_EXTRA, signature) is
 pymavlink's.
 
-Errors are counted once per gap between two good frames: ``crc_errors`` when the gap is a whole frame whose CRC
-failed, ``parse_errors`` when it holds bytes that are not MAVLink or a frame cut short by the next one.
+Errors are counted once per gap between two good frames, when the gap begins: ``crc_errors`` when it begins with a
+whole frame whose CRC failed, ``parse_errors`` when with bytes that are not MAVLink or a frame cut short by the next
+one.
 """
 
 from __future__ import annotations
@@ -24,58 +25,60 @@ class FrameParser:
     def __init__(self, mav: mavlink2.MAVLink) -> None:
         self.mav = mav
         self.buf = bytearray()
-        self.base = 0  # stream offset of buf[0]
         self.crc_errors = 0
         self.parse_errors = 0
         self.unknown_messages = 0
         self.unknown_ids: dict[int, int] = {}
-        self._gap_open = False
-        self._gap_crc_end: int | None = None  # where the gap's first failed frame ended, if its CRC failed
+        self._in_gap = False  # bytes were dropped since the last good frame
 
     def feed(self, data: bytes) -> list[mavlink2.MAVLink_message]:
-        """Add bytes and return every good frame now complete, in order (MAVLink 1 and 2)."""
+        """Add bytes and return every good frame now complete, in order (MAVLink 1 and 2); frames of ids this
+        dialect does not know come as ``MAVLink_unknown`` (no fields, but their header)."""
         self.buf += data
         messages: list[mavlink2.MAVLink_message] = []
-        pos = 0
-        while pos < len(self.buf):
+        pos, end = 0, len(self.buf)
+        while pos < end:
             start = self._next_marker(pos)
             if start < 0:
-                self._skip()
-                pos = len(self.buf)
+                self._drop_junk()
+                pos = end
                 break
             if start > pos:
-                self._skip()
+                self._drop_junk()
             pos = start
             length = self._frame_length(pos)
             if length is None:  # header incomplete
                 break
             if length == 0:  # a marker byte that cannot start a frame
-                self._skip()
+                self._drop_junk()
                 pos += 1
                 continue
-            if len(self.buf) - pos < length:
+            if end - pos < length:
+                if self._good_frame_within(pos + 1, end):  # cut short by the next frame: do not wait for the rest
+                    self._drop_frame(crc=False)
+                    pos += 1
+                    continue
                 break
             frame = self.buf[pos : pos + length]
             try:
                 msg = self.mav.decode(frame)
             except mavlink2.MAVError as e:
-                self._skip(failed_end=self.base + pos + length, crc="CRC" in e.message)
+                self._drop_frame(crc="CRC" in e.message and not self._good_frame_within(pos + 1, pos + length))
                 pos += 1
                 continue
             if isinstance(msg, mavlink2.MAVLink_unknown):
                 if not self._followed_by_frame(pos + length):
-                    self._skip()
+                    self._drop_junk()
                     pos += 1
                     continue
                 self.unknown_messages += 1
-                msg_id = _msg_id(frame)
+                msg._header = _header(frame)
+                msg_id = msg._header.msgId
                 self.unknown_ids[msg_id] = self.unknown_ids.get(msg_id, 0) + 1
-            else:
-                messages.append(msg)
-            self._close_gap(self.base + pos)
+            messages.append(msg)
+            self._in_gap = False
             pos += length
         del self.buf[:pos]
-        self.base += pos
         return messages
 
     def _next_marker(self, pos: int) -> int:
@@ -96,28 +99,51 @@ class FrameParser:
         signature = mavlink2.MAVLINK_SIGNATURE_BLOCK_LEN if flags & mavlink2.MAVLINK_IFLAG_SIGNED else 0
         return V2_OVERHEAD + payload + signature
 
+    def _good_frame_within(self, start: int, end: int) -> bool:
+        """Whether a complete frame that decodes starts in buf[start:end] (only looked for after damage)."""
+        pos = self._next_marker(start)
+        while 0 <= pos < end:
+            length = self._frame_length(pos)
+            if length and pos + length <= len(self.buf):
+                try:
+                    msg = self.mav.decode(self.buf[pos : pos + length])
+                except mavlink2.MAVError:
+                    pass
+                else:
+                    if not isinstance(msg, mavlink2.MAVLink_unknown):
+                        return True
+            pos = self._next_marker(pos + 1)
+        return False
+
     def _followed_by_frame(self, end: int) -> bool:
         """An unknown id cannot be CRC-checked; junk that happens to start with a marker is told apart from a real
         frame of another dialect by what follows: a real stream carries the next frame at once."""
         return end >= len(self.buf) or self.buf[end] in (V1, V2)
 
-    def _skip(self, failed_end: int | None = None, crc: bool = False) -> None:
-        if not self._gap_open:
-            self._gap_open = True
-            self._gap_crc_end = failed_end if crc else None
-
-    def _close_gap(self, good_start: int) -> None:
-        if not self._gap_open:
-            return
-        if self._gap_crc_end is not None and self._gap_crc_end <= good_start:
-            self.crc_errors += 1
-        else:
+    def _drop_junk(self) -> None:
+        if not self._in_gap:
+            self._in_gap = True
             self.parse_errors += 1
-        self._gap_open = False
-        self._gap_crc_end = None
+
+    def _drop_frame(self, crc: bool) -> None:
+        if not self._in_gap:
+            self._in_gap = True
+            if crc:
+                self.crc_errors += 1
+            else:
+                self.parse_errors += 1
 
 
-def _msg_id(frame: bytes | bytearray) -> int:
+def _header(frame: bytes | bytearray) -> mavlink2.MAVLink_header:
+    """The header pymavlink leaves unset on a MAVLink_unknown, so its sender and sequence number still count."""
     if frame[0] == V1:
-        return frame[5]
-    return frame[7] | frame[8] << 8 | frame[9] << 16
+        return mavlink2.MAVLink_header(frame[5], mlen=frame[1], seq=frame[2], srcSystem=frame[3], srcComponent=frame[4])
+    return mavlink2.MAVLink_header(
+        frame[7] | frame[8] << 8 | frame[9] << 16,
+        incompat_flags=frame[2],
+        compat_flags=frame[3],
+        mlen=frame[1],
+        seq=frame[4],
+        srcSystem=frame[5],
+        srcComponent=frame[6],
+    )

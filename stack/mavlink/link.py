@@ -130,11 +130,16 @@ class MavlinkLink:
                 messages = self.parser.feed(data)
         now = self.clock_us()
         self._decay_quality_window(now)
+        known = []
         for msg in messages:
-            self._on_message(msg, now)
+            self.counters.packets_in += 1
+            self._count_sequence((msg.get_srcSystem(), msg.get_srcComponent()), msg.get_seq())
+            if not isinstance(msg, mavlink2.MAVLink_unknown):
+                self._on_message(msg, now)
+                known.append(msg)
         self._update_counters(now)
         self._send_due(now)
-        return messages
+        return known
 
     def close(self) -> None:
         if self.transport is not None:
@@ -193,12 +198,9 @@ class MavlinkLink:
             self.counters.send_drops += 1
 
     def _on_message(self, msg: mavlink2.MAVLink_message, now: int) -> None:
-        self.counters.packets_in += 1
-        source = (msg.get_srcSystem(), msg.get_srcComponent())
-        self._count_sequence(source, msg.get_seq())
         msg_id = msg.get_msgId()
         if msg_id == mavlink2.MAVLINK_MSG_ID_HEARTBEAT:
-            self._on_heartbeat(msg, source, now)
+            self._on_heartbeat(msg, (msg.get_srcSystem(), msg.get_srcComponent()), now)
         elif msg_id == mavlink2.MAVLINK_MSG_ID_TIMESYNC:
             self._on_timesync(msg, now)
 
@@ -218,7 +220,8 @@ class MavlinkLink:
         if source == (self.system_id, self.component_id):
             return
         is_autopilot = msg.autopilot != mavlink2.MAV_AUTOPILOT_INVALID
-        if self.peer is None or source == self.peer or (is_autopilot and not self.peer_is_autopilot):
+        # the peer is kept while connected; an autopilot is preferred to any other component (a GCS, a companion)
+        if not self.connected or source == self.peer or (is_autopilot and not self.peer_is_autopilot):
             self.peer = source
             self.peer_is_autopilot = is_autopilot
             self._last_peer_heartbeat_us = now

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import select
 import socket
 from collections.abc import Callable
 from typing import Protocol
@@ -84,11 +85,14 @@ class SerialTransport:
         return self.port.fd
 
     def read(self) -> bytes:
+        # pyserial's raw mode (VMIN = 0) makes an idle tty read as empty too: only empty after readiness is a hang-up
+        if not select.select([self.port.fd], [], [], 0)[0]:
+            return b""
         try:
             data = os.read(self.port.fd, READ_CHUNK)
         except BlockingIOError:
             return b""
-        if not data:  # a hung-up tty reads as end of file
+        if not data:
             raise ConnectionError("serial device disconnected")
         return data
 
