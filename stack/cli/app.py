@@ -12,7 +12,7 @@ import psutil
 import typer
 
 from stack.bus import keys
-from stack.cli import cmd, fly, log, param, pixhawk_sim, plot, topic
+from stack.cli import cmd, fly, log, mavlink, param, pixhawk_sim, plot, topic
 from stack.cli.common import (
     EndpointOption,
     JsonOption,
@@ -38,6 +38,7 @@ app.add_typer(topic.app, name="topic")
 app.add_typer(param.app, name="param")
 app.add_typer(log.app, name="log")
 app.add_typer(cmd.app, name="cmd")
+app.add_typer(mavlink.app, name="mavlink")
 app.command("fly")(fly.fly)
 app.command("plot")(plot.plot)
 app.command("replay")(log.replay)
