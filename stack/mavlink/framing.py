@@ -81,6 +81,11 @@ class FrameParser:
         del self.buf[:pos]
         return messages
 
+    def discard_partial_frame(self) -> None:
+        """Forget bytes waiting for the rest of their frame: the stream they came from is gone."""
+        self.buf.clear()
+        self._in_gap = False
+
     def _next_marker(self, pos: int) -> int:
         v2 = self.buf.find(V2, pos)
         v1 = self.buf.find(V1, pos, v2 if v2 >= 0 else len(self.buf))

@@ -66,6 +66,9 @@ class _LinkWriter:
 
 
 class MavlinkLink:
+    """One endpoint, one peer. Call ``poll()`` often (it also sends what is due); ``fileno()`` may change when the
+    transport is reopened. A udpin endpoint answers whoever sent last, and cannot send before someone has."""
+
     def __init__(
         self,
         endpoint: str | Endpoint,
@@ -164,6 +167,8 @@ class MavlinkLink:
         if self.transport is not None:
             self.transport.close()
         self.transport = None
+        self.parser.discard_partial_frame()
+        self._last_seq.clear()  # a replugged peer numbers its packets afresh
         self.error = f"{self.endpoint}: {error}"
         self._next_open_us = self.clock_us() + REOPEN_PERIOD_US
         self._set_disconnected()

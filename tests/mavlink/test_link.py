@@ -285,3 +285,47 @@ def test_tcp_server_takes_the_next_client_when_one_leaves() -> None:
         first.close()
         if second is not None:
             second.close()
+
+
+class FakeClock:
+    def __init__(self) -> None:
+        self.now_us = 1_000_000
+
+    def __call__(self) -> int:
+        return self.now_us
+
+
+def test_heartbeat_and_timesync_rates_and_the_loss_timeout_follow_the_clock() -> None:
+    clock = FakeClock()
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as peer:
+        peer.bind(("127.0.0.1", 0))
+        peer.settimeout(PATIENCE_S)
+        link = MavlinkLink(
+            f"udpout:127.0.0.1:{peer.getsockname()[1]}",
+            system_id=1,
+            component_id=191,
+            timesync=True,
+            link_timeout_s=1.5,
+            clock_us=clock,
+        )
+        mav = mavlink2.MAVLink(None, srcSystem=1, srcComponent=1)
+        peer.connect(link.transport.sock.getsockname())
+        peer.send(mav.heartbeat_encode(2, 12, 1, 0, 3).pack(mav))
+        sent = FrameParser(mavlink2.MAVLink(None))
+        kinds: list[str] = []
+        try:
+            pump([link], lambda: link.connected)
+            connected_at = clock.now_us
+            lost_at = None
+            for _ in range(100):  # 10 s in steps of 0.1 s
+                clock.now_us += 100_000
+                link.poll()
+                if lost_at is None and not link.connected:
+                    lost_at = clock.now_us
+            while len(kinds) < link.counters.packets_out:
+                kinds += [m.get_type() for m in sent.feed(peer.recv(4096))]
+        finally:
+            link.close()
+    assert lost_at is not None and 1_500_000 < lost_at - connected_at <= 1_600_000
+    assert kinds.count("HEARTBEAT") in (10, 11)
+    assert kinds.count("TIMESYNC") in (100, 101)
