@@ -2,7 +2,6 @@ import contextlib
 import json
 import socket
 import threading
-import time
 
 import pytest
 from pymavlink.dialects.v20 import common as mavlink2
@@ -158,10 +157,12 @@ def test_summary_rates_and_other_components() -> None:
     assert "ARMED, mode AUTO.LOITER" in text and "no AUTOPILOT_VERSION" in text and "12345 (2)" in text
 
 
-def test_inspects_a_fake_autopilot_over_udp() -> None:
+def test_inspects_a_fake_autopilot_over_udp_as_json() -> None:
     port = free_udp_port()
     with FakeAutopilot(port):
-        summary = inspect_endpoint(f"udp:127.0.0.1:{port}", seconds=3.0)
+        result = CliRunner().invoke(app, ["mavlink", "inspect", f"udp:127.0.0.1:{port}", "--seconds", "3", "--json"])
+    assert result.exit_code == 0, result.output
+    summary = json.loads(result.output)
     assert (summary["system_id"], summary["autopilot"], summary["vehicle_type"]) == (1, "PX4", "QUADROTOR")
     assert summary["armed"] and summary["mode"] == "AUTO.LOITER"
     assert summary["firmware"]["version"] == "1.14.3-official"
@@ -179,16 +180,9 @@ def test_falls_back_to_request_autopilot_capabilities() -> None:
     assert summary["firmware"]["version"] == "1.14.3-official"
 
 
-def test_cli_json_and_the_exit_code_without_heartbeat() -> None:
+def test_exit_codes_without_heartbeat_and_for_a_bad_endpoint() -> None:
     runner = CliRunner()
-    port = free_udp_port()
-    with FakeAutopilot(port):
-        result = runner.invoke(app, ["mavlink", "inspect", f"udp:127.0.0.1:{port}", "--seconds", "2", "--json"])
-    assert result.exit_code == 0, result.output
-    assert json.loads(result.output)["mode"] == "AUTO.LOITER"
-    started = time.monotonic()
     silent = runner.invoke(app, ["mavlink", "inspect", f"udp:127.0.0.1:{free_udp_port()}", "--seconds", "0.5"])
-    assert silent.exit_code == 1 and "no autopilot heartbeat" in silent.output
-    assert time.monotonic() - started < 30
+    assert silent.exit_code == 1 and "no autopilot heartbeat" in silent.output and "nothing received" in silent.output
     bad = runner.invoke(app, ["mavlink", "inspect", "serial:"])
     assert bad.exit_code == 2 and "expected serial:DEVICE" in bad.output
