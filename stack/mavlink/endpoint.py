@@ -10,7 +10,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 KINDS = ("serial", "udpin", "udpout", "tcp", "tcpin")
-DEFAULT_BAUD = 921600  # PX4's default on TELEM2 for a companion computer
+DEFAULT_BAUD = 921600  # the TELEM2 baud of PX4's companion-computer setup (SER_TEL2_BAUD)
 
 
 @dataclass(frozen=True)

@@ -18,7 +18,6 @@ from pymavlink.dialects.v20 import common as mavlink2
 V1, V2 = mavlink2.PROTOCOL_MARKER_V1, mavlink2.PROTOCOL_MARKER_V2
 V1_OVERHEAD = mavlink2.HEADER_LEN_V1 + 2
 V2_OVERHEAD = mavlink2.HEADER_LEN_V2 + 2
-MAX_FRAME = V2_OVERHEAD + 255 + mavlink2.MAVLINK_SIGNATURE_BLOCK_LEN
 
 
 class FrameParser:
