@@ -8,7 +8,7 @@ pymavlink's.
 
 Errors are counted once per gap between two good frames, when the gap begins: ``crc_errors`` when it begins with a
 whole frame whose CRC failed, ``parse_errors`` when with bytes that are not MAVLink or a frame cut short by the next
-one.
+one. Joining a stream mid-frame (opening a serial port while the autopilot talks) is no error.
 """
 
 from __future__ import annotations
@@ -18,6 +18,7 @@ from pymavlink.dialects.v20 import common as mavlink2
 V1, V2 = mavlink2.PROTOCOL_MARKER_V1, mavlink2.PROTOCOL_MARKER_V2
 V1_OVERHEAD = mavlink2.HEADER_LEN_V1 + 2
 V2_OVERHEAD = mavlink2.HEADER_LEN_V2 + 2
+LONGEST_FRAME = V2_OVERHEAD + 255 + mavlink2.MAVLINK_SIGNATURE_BLOCK_LEN
 
 
 class FrameParser:
@@ -29,6 +30,9 @@ class FrameParser:
         self.unknown_messages = 0
         self.unknown_ids: dict[int, int] = {}
         self._in_gap = False  # bytes were dropped since the last good frame
+        self._joined = False  # a good frame came since the stream began
+        self._lead_bytes = 0  # dropped before that
+        self._lead_counted = False
 
     def feed(self, data: bytes) -> list[mavlink2.MAVLink_message]:
         """Add bytes and return every good frame now complete, in order (MAVLink 1 and 2); frames of ids this
@@ -76,7 +80,13 @@ class FrameParser:
                 self.unknown_ids[msg_id] = self.unknown_ids.get(msg_id, 0) + 1
             messages.append(msg)
             self._in_gap = False
+            if not self._joined:
+                self._joined = True
+                self._count_lead(self._lead_bytes + pos)
             pos += length
+        if not self._joined:
+            self._lead_bytes += pos
+            self._count_lead(self._lead_bytes)
         del self.buf[:pos]
         return messages
 
@@ -84,6 +94,9 @@ class FrameParser:
         """Forget bytes waiting for the rest of their frame: the stream they came from is gone."""
         self.buf.clear()
         self._in_gap = False
+        self._joined = False
+        self._lead_bytes = 0
+        self._lead_counted = False
 
     def _next_marker(self, pos: int) -> int:
         v2 = self.buf.find(V2, pos)
@@ -124,13 +137,19 @@ class FrameParser:
         frame of another dialect by what follows: a real stream carries the next frame at once."""
         return end >= len(self.buf) or self.buf[end] in (V1, V2)
 
+    def _count_lead(self, dropped: int) -> None:
+        """A serial port opened mid-stream starts with the tail of a frame: no error unless more was dropped."""
+        if dropped > LONGEST_FRAME and not self._lead_counted:
+            self._lead_counted = True
+            self.parse_errors += 1
+
     def _drop_junk(self) -> None:
-        if not self._in_gap:
+        if self._joined and not self._in_gap:
             self._in_gap = True
             self.parse_errors += 1
 
     def _drop_frame(self, crc: bool) -> None:
-        if not self._in_gap:
+        if self._joined and not self._in_gap:
             self._in_gap = True
             if crc:
                 self.crc_errors += 1

@@ -46,6 +46,18 @@ def test_clean_stream_in_any_chunking() -> None:
         assert (parser.crc_errors, parser.parse_errors, parser.unknown_messages) == (0, 0, 0)
 
 
+def test_joining_a_stream_mid_frame_is_no_error_but_a_junk_start_is() -> None:
+    stream = b"".join(frames(10))
+    for chunk in (1, 16, None):
+        parser, messages = parse(stream[30:], chunk)
+        assert len(messages) >= 8 and (parser.crc_errors, parser.parse_errors) == (0, 0)
+    junk = bytes(random.Random(5).randrange(256) for _ in range(1000))
+    parser, messages = parse(junk + stream, 64)
+    assert len(messages) == 10 and (parser.crc_errors, parser.parse_errors) == (0, 1)
+    parser, messages = parse(junk, 64)
+    assert parser.parse_errors == 1
+
+
 def test_junk_burst_between_frames_loses_nothing() -> None:
     rng = random.Random(7)
     stream = frames(200)
