@@ -36,7 +36,6 @@ class OffboardSetpoint(NamedTuple):
     """Body rates [rad/s] for a rate setpoint, or (NaN, NaN, yaw feed-forward) for an attitude setpoint."""
     thrust_body: Vec3
     """Normalised thrust vector in FRD, (0, 0, −collective)."""
-    received_us: int
 
     @property
     def is_attitude(self) -> bool:
@@ -47,7 +46,7 @@ _NAN_Q = (math.nan, math.nan, math.nan, math.nan)
 
 
 def decode_attitude_target(
-    msg: mavlink.MAVLink_set_attitude_target_message, now_us: int, previous: OffboardSetpoint | None
+    msg: mavlink.MAVLink_set_attitude_target_message, previous: OffboardSetpoint | None
 ) -> OffboardSetpoint | None:
     """The setpoint a SET_ATTITUDE_TARGET carries, or None when it carries none (everything ignored, or a
     quaternion that is not a rotation)."""
@@ -66,9 +65,9 @@ def decode_attitude_target(
         if not (math.isfinite(norm) and norm > 0.5):
             return None
         yaw_ff = math.nan if mask & mavlink.ATTITUDE_TARGET_TYPEMASK_BODY_YAW_RATE_IGNORE else msg.body_yaw_rate
-        return OffboardSetpoint(quat.normalized(q), (math.nan, math.nan, yaw_ff), thrust_body, now_us)
+        return OffboardSetpoint(quat.normalized(q), (math.nan, math.nan, yaw_ff), thrust_body)
     if mask & _ALL_RATES_IGNORED == _ALL_RATES_IGNORED:
         return None
     values = (msg.body_roll_rate, msg.body_pitch_rate, msg.body_yaw_rate)
     rates = tuple(math.nan if mask & bit else float(v) for bit, v in zip(_RATE_IGNORE, values, strict=True))
-    return OffboardSetpoint(_NAN_Q, rates, thrust_body, now_us)
+    return OffboardSetpoint(_NAN_Q, rates, thrust_body)

@@ -166,9 +166,8 @@ class SimulatedPixhawk:
 
     def attitude_target(self, msg: mavlink.MAVLink_set_attitude_target_message) -> None:
         """A SET_ATTITUDE_TARGET for this vehicle: proof of life, and the setpoint when it carries one."""
-        now = self.time_us
-        self.commander.offboard_setpoint(now)
-        setpoint = decode_attitude_target(msg, now, self.setpoint)
+        self.commander.offboard_setpoint(self.time_us)
+        setpoint = decode_attitude_target(msg, self.setpoint)
         if setpoint is not None:
             self.setpoint = setpoint
 

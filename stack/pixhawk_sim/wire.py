@@ -138,8 +138,8 @@ class PtyUart:
             "pty": self.path,
             "link": str(self.link_path) if self.link_path is not None else None,
             "baud": self.baud,
-            "tx": vars(self.tx.counters),
-            "rx": vars(self.rx.counters),
+            "tx": {**vars(self.tx.counters), "queued": self.tx.queued},
+            "rx": {**vars(self.rx.counters), "queued": self.rx.queued},
             "unread_drops": self.unread_drops,
         }
 
