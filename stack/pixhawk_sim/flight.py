@@ -78,7 +78,6 @@ class FlightControl:
     """PX4's rate, attitude and position loops with the allocator, for one vehicle (see the module docstring)."""
 
     def __init__(self, params: Mapping[str, object], imu_rate_hz: float) -> None:
-        self.params = dict(params)
         self.rates = AngularVelocityFilter(
             float(params["IMU_GYRO_CUTOFF"]), float(params["IMU_DGYRO_CUTOFF"]), sample_rate_hz=imu_rate_hz
         )
@@ -119,7 +118,7 @@ class FlightControl:
         """One rate-loop cycle on a new gyro sample; returns the motor commands and what was flown."""
         rates, rates_derivative = self.rates.update(gyro_time_us, gyro)
         if mode is not self._mode:
-            self._enter(mode)
+            self._enter(mode, state)
         q_sp, thrust, velocity_sp_z = _NAN_Q, ZERO3, math.nan
         flying = armed and mode is not Px4Mode.TERMINATION
         if not flying:
@@ -133,7 +132,7 @@ class FlightControl:
             else:
                 rates_sp = setpoint.rates
         elif mode in (Px4Mode.AUTO_LOITER, Px4Mode.AUTO_LAND) and not landed:
-            q_sp, thrust, yaw_rate, velocity_sp_z = self._position(state, mode, armed)
+            q_sp, thrust, yaw_rate, velocity_sp_z = self._position(state, mode)
             self.attitude_control.set_attitude_setpoint(q_sp, yaw_rate)
             rates_sp = self.attitude_control.update(state.q)
         else:
@@ -149,26 +148,33 @@ class FlightControl:
         self.last = ControlOutput(out.sim, out.pwm, rates_sp, q_sp, thrust, velocity_sp_z)
         return self.last
 
-    def _enter(self, mode: Px4Mode) -> None:
+    def _enter(self, mode: Px4Mode, state: VehicleState) -> None:
+        """A new mode: position control starts afresh, and so does the navigator (a disarmed update resets its
+        task, so a Hold entered again brakes to its new stopping point)."""
         self._mode = mode
         self._position_tick = 0
         self.position_control.reset_integral()
         self.velocity_derivative.reset()
+        self.navigator.update(self._navigator_inputs(state, mode, armed=False), 0.0)
 
-    def _position(self, state: VehicleState, mode: Px4Mode, armed: bool) -> tuple[Quat, Vec3, float, float]:
+    @staticmethod
+    def _navigator_inputs(state: VehicleState, mode: Px4Mode, armed: bool) -> NavigatorInputs:
+        task_state = flight_task.VehicleState(
+            state.time_us, state.position, state.velocity, quat.yaw(state.q), False, True
+        )
+        return NavigatorInputs(task_state, px4_modes.to_nav_state(mode), armed, state.home, None, None)
+
+    def _position(self, state: VehicleState, mode: Px4Mode) -> tuple[Quat, Vec3, float, float]:
         """Hold or Land at PX4's local-position rate; the output is held in between."""
         self._position_tick -= 1
         if self._position_tick > 0:
             return self._position_sp
         self._position_tick = POSITION_DECIMATION
         dt = self._dt * POSITION_DECIMATION
-        yaw = quat.yaw(state.q)
-        nav_state = px4_modes.to_nav_state(mode)
-        task_state = flight_task.VehicleState(state.time_us, state.position, state.velocity, yaw, False, True)
-        command = self.navigator.update(NavigatorInputs(task_state, nav_state, armed, state.home, None, None), dt)
+        command = self.navigator.update(self._navigator_inputs(state, mode, armed=True), dt)
         velocity_dot = self.velocity_derivative.update(state.time_us, state.velocity)
         control = self.position_control
-        control.set_state(state.position, state.velocity, velocity_dot or ZERO3, yaw)
+        control.set_state(state.position, state.velocity, velocity_dot or ZERO3, quat.yaw(state.q))
         if command is not None:
             control.set_setpoint(
                 command.position, command.velocity, command.acceleration, command.yaw, command.yawspeed

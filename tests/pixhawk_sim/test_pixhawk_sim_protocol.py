@@ -261,6 +261,24 @@ def test_offboard_body_rates_and_hover_thrust_keep_it_level_then_hold_holds_it()
     assert any("offboard signal lost" in t for t in texts)
 
 
+def test_hold_entered_again_holds_where_it_began_again() -> None:
+    bench = Bench()
+    bench.rates(0.0)
+    mode = Px4Mode.OFFBOARD
+    bench.ack(mavlink.MAV_CMD_DO_SET_MODE, 1, mode.main_mode, mode.sub_mode)
+    bench.ack(mavlink.MAV_CMD_COMPONENT_ARM_DISARM, 1)
+    bench.run(1.5, lambda: bench.rates(0.65))
+    bench.run(6.0)  # Hold
+    assert bench.vehicle.commander.mode is Px4Mode.AUTO_LOITER
+    first = bench.vehicle.truth.position
+    bench.run(1.5, lambda: bench.rates(0.6))  # Offboard again: climb
+    assert bench.vehicle.commander.mode is Px4Mode.OFFBOARD
+    bench.run(10.0)  # Hold again, well above the first
+    second = bench.vehicle.truth.position
+    assert bench.vehicle.commander.mode is Px4Mode.AUTO_LOITER
+    assert second[2] < first[2] - 2.0 and math.hypot(*bench.vehicle.truth.velocity) < 0.3
+
+
 def test_offboard_attitude_setpoints_are_tracked() -> None:
     bench = Bench()
     q = quat.from_euler(math.radians(10.0), 0.0, 0.0)
