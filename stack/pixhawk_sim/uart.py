@@ -1,9 +1,11 @@
 """A UART's byte rate on a pseudo-terminal, which would otherwise carry any rate the processes can write.
 
 A 921600-baud 8N1 line carries 10 bits per byte (start, 8 data, stop): 92,160 bytes/s each way.
-:class:`UartPacer` is one direction of that line: bytes are queued whole frames at a time in a transmit
-buffer of :data:`TX_BUFFER_BYTES` and leave at the line rate; a frame that does not fit is dropped whole and
-counted, as PX4's MAVLink streams skip a message when ``get_free_tx_buf()`` is short rather than send half of it.
+:class:`UartPacer` is one direction of that line: bytes wait in a buffer and leave at the line rate. The
+Pixhawk's transmit side queues whole frames in :data:`TX_BUFFER_BYTES` and drops (and counts) a frame that does
+not fit, as PX4's MAVLink streams skip a message when ``get_free_tx_buf()`` is short rather than send half of it.
+The receive side stands for the companion's own UART: what it writes into the pty waits in
+:data:`RX_BUFFER_BYTES` (its serial driver's buffer) and arrives at the line rate; bytes beyond it are lost.
 An idle line accumulates no credit: after a pause bytes again leave at the line rate, not in a burst.
 """
 
@@ -16,6 +18,8 @@ BITS_PER_BYTE = 10
 """8N1: a start bit, 8 data bits, a stop bit."""
 TX_BUFFER_BYTES = 4096
 """The serial driver's buffer (NuttX boards give a TELEM port's TX buffer a few KB): ~44 ms at 921600 baud."""
+RX_BUFFER_BYTES = 65536
+"""The companion's side (a tty's transmit buffer and more): only a writer far beyond the line rate loses bytes."""
 
 
 @dataclass
@@ -47,15 +51,25 @@ class UartPacer:
     def offer(self, frame: bytes, now_s: float) -> bool:
         """Queue a frame whole; False (dropped, counted) when the buffer cannot take all of it."""
         self._advance(now_s)
-        c = self.counters
         if len(self._queue) + len(frame) > self.buffer_bytes:
-            c.frames_dropped += 1
-            c.bytes_dropped += len(frame)
+            self.counters.frames_dropped += 1
+            self.counters.bytes_dropped += len(frame)
             return False
-        self._queue += frame
-        c.bytes_in += len(frame)
-        c.max_queued = max(c.max_queued, len(self._queue))
+        self._enqueue(frame)
         return True
+
+    def offer_bytes(self, data: bytes, now_s: float) -> None:
+        """Queue what fits of a byte stream; the rest is lost (counted in ``bytes_dropped``)."""
+        self._advance(now_s)
+        room = max(0, self.buffer_bytes - len(self._queue))
+        self.counters.bytes_dropped += max(0, len(data) - room)
+        self._enqueue(data[:room])
+
+    def _enqueue(self, data: bytes) -> None:
+        self._queue += data
+        c = self.counters
+        c.bytes_in += len(data)
+        c.max_queued = max(c.max_queued, len(self._queue))
 
     def take(self, now_s: float) -> bytes:
         """The bytes the line has carried out of the buffer by ``now_s``."""

@@ -24,7 +24,7 @@ from typing import Protocol
 from stack.mavlink.endpoint import parse_endpoint
 from stack.mavlink.transport import READ_CHUNK, UdpInTransport, UdpOutTransport
 from stack.pixhawk_sim.faults import FaultInjector
-from stack.pixhawk_sim.uart import DEFAULT_BAUD, UartPacer
+from stack.pixhawk_sim.uart import DEFAULT_BAUD, RX_BUFFER_BYTES, UartPacer
 
 LOOPBACK = "127.0.0.1"
 
@@ -91,7 +91,7 @@ class PtyUart:
         self.path = os.ttyname(self.slave)
         self.baud = baud
         self.tx = UartPacer(baud)
-        self.rx = UartPacer(baud)
+        self.rx = UartPacer(baud, RX_BUFFER_BYTES)
         self.unread_drops = 0
         self.link_path = link_path
         if link_path is not None:
@@ -107,11 +107,11 @@ class PtyUart:
         while True:
             try:
                 data = os.read(self.master, READ_CHUNK)
-            except (BlockingIOError, OSError):
+            except OSError:  # nothing to read (EAGAIN)
                 break
             if not data:
                 break
-            self.rx.offer(data, now_s)
+            self.rx.offer_bytes(data, now_s)
         return self.rx.take(now_s)
 
     def write(self, data: bytes, now_s: float) -> bool:
