@@ -26,6 +26,7 @@ from stack.mavlink.link import MavlinkLink
 from stack.pixhawk_sim.control import ControlChannel
 from stack.pixhawk_sim.faults import FaultInjector, FaultSettings
 from stack.pixhawk_sim.protocol import Px4Protocol
+from stack.pixhawk_sim.telemetry import Message
 from stack.pixhawk_sim.vehicle import SimulatedPixhawk
 from stack.pixhawk_sim.wire import PhysicalLink, PtyUart, UdpLink, Wire
 from stack.sim.vehicle import VehicleModel
@@ -130,11 +131,8 @@ class PixhawkSim:
         self.options = options
         self.vehicle = SimulatedPixhawk(options.vehicle, options.params, seed=options.seed)
         self.period_ns = self.vehicle.period_us * 1000
-        self.start_ns = time.monotonic_ns()
-        self.boot_ns = self.start_ns - self.period_ns
+        self._start(time.monotonic_ns())
         self.faults = FaultInjector(options.faults, seed=options.seed)
-        if options.cut_at_s is not None:
-            self.faults.cut(self._now_s() + options.cut_at_s, options.cut_for_s)
         physical: PhysicalLink
         if options.pty_link is not None:
             physical = PtyUart(options.baud, options.pty_link)
@@ -158,11 +156,13 @@ class PixhawkSim:
         self.stats = StepStats()
         self._stop = False
 
-    def _send(self, msg) -> None:
-        self.link.send(msg)
+    def _start(self, start_ns: int) -> None:
+        """The first step is due at ``start_ns``; the autopilot booted one period before."""
+        self.start_ns = start_ns
+        self.boot_ns = start_ns - self.period_ns
 
-    def _now_s(self) -> float:
-        return time.monotonic_ns() * 1e-9
+    def _send(self, msg: Message) -> None:
+        self.link.send(msg)
 
     def boot_time_us(self) -> int:
         """The autopilot's boot time: the wall clock since one period before the first step."""
@@ -204,6 +204,10 @@ class PixhawkSim:
         print(self.describe_start(), flush=True)
         gc.collect()
         gc.freeze()
+        self._start(time.monotonic_ns())
+        self.stats = StepStats()
+        if self.options.cut_at_s is not None:
+            self.faults.cut(self.start_ns * 1e-9 + self.options.cut_at_s, self.options.cut_for_s)
         fds = self.wire.fds() + ([self.control.fileno()] if self.control is not None else [])
         period_ns = self.period_ns
         next_step_ns = self.start_ns
