@@ -30,23 +30,24 @@ def ephemeral_range() -> tuple[int, int]:
         return _DEFAULT_EPHEMERAL
 
 
-def free_port(host: str = "127.0.0.1") -> int:
-    """A port nobody listens on now, below the ephemeral range and not given out before by this process."""
+def free_port(host: str = "127.0.0.1", kind: socket.SocketKind = socket.SOCK_STREAM) -> int:
+    """A port nobody listens on now (TCP, or UDP with ``kind=SOCK_DGRAM``), below the ephemeral range and
+    not given out before by this process."""
     low, high = ephemeral_range()
     candidates = (_LOWEST, low) if low - _LOWEST >= 1000 else (high + 1, 65536)
     for _ in range(_ATTEMPTS):
         port = _random.randrange(*candidates)
-        if port in _given or not _bindable(host, port):
+        if port in _given or not _bindable(host, port, kind):
             continue
         _given.add(port)
         return port
-    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
+    with socket.socket(socket.AF_INET, kind) as s:
         s.bind((host, 0))
         return int(s.getsockname()[1])
 
 
-def _bindable(host: str, port: int) -> bool:
-    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
+def _bindable(host: str, port: int, kind: socket.SocketKind = socket.SOCK_STREAM) -> bool:
+    with socket.socket(socket.AF_INET, kind) as s:
         try:
             s.bind((host, port))
         except OSError:

@@ -12,7 +12,9 @@ for arming, the first reason in PX4's spirit ("Arming denied: ..."):
 * the mode's own requirements (a valid local position for Position and the auto modes, an altitude
   estimate, a mission);
 * a 3-D GPS fix when SYS_HAS_GPS and either COM_ARM_WO_GPS = 0 or the mode needs a position;
-* the battery warning is below CRITICAL (PX4: LOW only warns).
+* the battery warning is below CRITICAL (PX4: LOW only warns);
+* with COM_EXT_AP, the external autopilot (a Pixhawk the stack flies through) is connected, and armable
+  if it is in Offboard already.
 
 Validity: the attitude and angular velocity are valid when updated within 1 s; the local position is
 valid when updated within 1 s with ``xy_valid`` and ``v_xy_valid`` set and ``eph`` (when reported) below
@@ -30,9 +32,11 @@ from stack.commander.modes import MODES, REQUIREMENT_CAUSE, REQUIREMENT_TEXT, RU
 from stack.mathlib.quaternion import IDENTITY, Quat
 from stack.msg.estimation import VehicleLocalPosition
 from stack.msg.sensors import SensorGps
+from stack.msg.system import ExternalAutopilotStatus
 
 ESTIMATE_TIMEOUT_US = 1_000_000
 SENSOR_TIMEOUT_US = 1_000_000
+EXTERNAL_AUTOPILOT_TIMEOUT_US = 1_000_000
 QUATERNION_NORM_TOLERANCE = 0.05
 
 
@@ -63,6 +67,8 @@ class CommanderInputs:
     last_gcs_heartbeat_us: int = 0
     mission_count: int = 0
     mission_finished: bool = False
+    external_autopilot: ExternalAutopilotStatus | None = None
+    """The external autopilot the stack flies through (``external_autopilot_status``), when there is one."""
 
 
 @dataclass(slots=True)
@@ -79,6 +85,8 @@ class HealthParams:
     """COM_ARM_WO_GPS: allow arming without a GPS fix in modes that do not need a position."""
     com_pos_fs_eph: float = 5.0
     """COM_POS_FS_EPH: horizontal position error [m] above which the local position is invalid."""
+    com_ext_ap: bool = False
+    """COM_EXT_AP: the plant is an external autopilot (a Pixhawk), which must be connected and armable."""
 
 
 def _fresh(now_us: int, stamp_us: int, timeout_us: int) -> bool:
@@ -188,4 +196,24 @@ def arming_denial(now_us: int, nav_state: int, failing: Requirement, inp: Comman
         return "Arming denied: battery at emergency level"
     if inp.battery_warning >= BatteryWarning.CRITICAL:
         return "Arming denied: battery critically low"
+    if params.com_ext_ap:
+        return external_autopilot_denial(now_us, inp.external_autopilot)
+    return ""
+
+
+def external_autopilot_connected(now_us: int, ext: ExternalAutopilotStatus | None) -> bool:
+    return ext is not None and ext.connected and _fresh(now_us, ext.timestamp, EXTERNAL_AUTOPILOT_TIMEOUT_US)
+
+
+def external_autopilot_denial(now_us: int, ext: ExternalAutopilotStatus | None) -> str:
+    """Why the external autopilot cannot be armed now ("" if it can, as far as the stack can tell).
+
+    PX4's pre-arm check (SYS_STATUS) judges the mode it is in; it is arming in Offboard that counts, so the
+    check is taken only there (in another mode the hand-off switches to Offboard first, and a refusal then
+    comes with PX4's own reason)."""
+    if not external_autopilot_connected(now_us, ext):
+        return "Arming denied: no link to the external autopilot (Pixhawk)"
+    assert ext is not None
+    if ext.offboard and not ext.armable:
+        return f"Arming denied: the Pixhawk's pre-arm checks fail in {ext.mode}"
     return ""

@@ -135,6 +135,7 @@ class CommanderModule(Module):
             "hover_thrust_estimate",
             "takeoff_status",
             "mission_result",
+            "external_autopilot_status",
         ):
             self.subscribe(topic)
         for topic in ("actuator_armed", "vehicle_status", "vehicle_control_mode", "vehicle_command_ack"):
@@ -173,6 +174,8 @@ class CommanderModule(Module):
         out = self.commander.update(now, inputs)
         for event in out.events:
             self.log.info("%s", event)
+        for ack in out.acks:
+            self._acknowledge(ack)
         control = out.vehicle_control_mode
         changed = out.changed
         if self.commander.nav_state == NS.NAVIGATION_STATE_OFFBOARD:
@@ -228,8 +231,12 @@ class CommanderModule(Module):
             )
         else:
             ack = self.commander.handle_command(cmd, now)
+        if ack is not None:
+            self._acknowledge(ack)
+
+    def _acknowledge(self, ack: VehicleCommandAck) -> None:
         if ack.result != VehicleCommandAck.VEHICLE_CMD_RESULT_ACCEPTED:
-            self.log.warning("command %d refused: %s", cmd.command, ack.reason)
+            self.log.warning("command %d refused: %s", ack.command, ack.reason)
         self.publish("vehicle_command_ack", ack)
 
     @staticmethod
@@ -280,6 +287,7 @@ class CommanderModule(Module):
             last_gcs_heartbeat_us=self._last_gcs,
             mission_count=mission.seq_total if mission is not None and mission.valid else 0,
             mission_finished=mission is not None and mission.valid and mission.finished,
+            external_autopilot=latest("external_autopilot_status"),
         )
 
     def _land_inputs(self) -> LandDetectorInputs:

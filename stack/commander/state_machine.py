@@ -40,6 +40,13 @@ Takeoff ends in Hold (COM_TAKEOFF_ACT 0) or Mission (1) once within NAV_MC_ALT_R
 altitude. Auto-disarm: COM_DISARM_LAND seconds after landing (not mid-mission), COM_DISARM_PRFLT seconds
 after arming without taking off. The command link counts as lost COM_DL_LOSS_T seconds after the last
 ground-station/companion message, once one has been seen.
+
+With COM_EXT_AP the plant is an external autopilot (a PX4 Pixhawk the ``pixhawk`` module flies through,
+see :mod:`stack.mavlink.plant`): arming also needs it connected and armable; the commander arms, holds the
+arming command's acknowledgement until the autopilot reports itself armed (``external_autopilot_status``),
+and if the autopilot refuses, or has not armed within EXTERNAL_ARM_TIMEOUT_US, disarms and refuses the
+command with the autopilot's reason. The autopilot's own arming state is the truth: when it disarms, the
+commander disarms.
 """
 
 from __future__ import annotations
@@ -59,6 +66,7 @@ from stack.commander.health import (
     HealthParams,
     arming_denial,
     can_run,
+    external_autopilot_connected,
     failing_requirements,
     first_missing,
 )
@@ -88,7 +96,18 @@ VEHICLE_CMD_DO_REPOSITION_LOCAL = CMD.VEHICLE_CMD_DO_REPOSITION_LOCAL
 TAKEOFF_ALTITUDE_RELATIVE = 1
 """NAV_TAKEOFF param2 value saying param7 is metres above home rather than AMSL (our extension)."""
 PREFLIGHT_CHECK_PERIOD_US = 100_000
+EXTERNAL_ARM_TIMEOUT_US = 1_500_000
+"""How long the external autopilot has to confirm an arming (a stack command's answer waits for it)."""
 _POSITION_KNOWN = int(Requirement.LOCAL_POSITION_RELAXED | Requirement.LOCAL_ALT)
+_ESTIMATES = (
+    Requirement.ANGULAR_VELOCITY
+    | Requirement.ATTITUDE
+    | Requirement.LOCAL_POSITION
+    | Requirement.LOCAL_POSITION_RELAXED
+    | Requirement.LOCAL_ALT
+)
+EXTERNAL_LINK_GRACE_US = 1_500_000
+"""After the external autopilot's link comes back, its sensors have this long to make the estimates valid."""
 _POSITION_AND_ALTITUDE = int(Requirement.LOCAL_POSITION | Requirement.LOCAL_ALT)
 
 OWN_PARAMS: tuple[Param, ...] = (
@@ -104,6 +123,15 @@ OWN_PARAMS: tuple[Param, ...] = (
     FAILURE_INJECTION_PARAM,
     Param("MIS_TAKEOFF_ALT", 2.5, 0.0, None, "m", "Takeoff altitude above home when a takeoff gives none"),
     Param("NAV_MC_ALT_RAD", 0.8, 0.05, 200.0, "m", "Vertical acceptance radius (takeoff altitude reached)"),
+    Param(
+        "COM_EXT_AP",
+        0,
+        0,
+        1,
+        "",
+        "1: the plant is an external autopilot (module pixhawk), which must be connected, armable and armed too",
+        choices=(0, 1),
+    ),
 )
 PARAMS: tuple[Param, ...] = OWN_PARAMS + FAILSAFE_PARAMS + GEOFENCE_PARAMS
 DEFAULTS: dict[str, object] = {p.name: p.default for p in PARAMS}
@@ -157,6 +185,8 @@ class CommanderOutputs(NamedTuple):
     navigation: NavigationRequest
     events: tuple[str, ...]
     """Human-readable notices since the last update (arming, mode changes, failsafes)."""
+    acks: tuple[VehicleCommandAck, ...]
+    """Acknowledgements held back by ``handle_command`` and decided since the last update."""
 
 
 _Verdict = tuple[int, str, int]
@@ -217,6 +247,13 @@ class Commander:
         self._mission_start_index = 0
         self._mission_start_counter = 0
         self._events: list[str] = []
+        self._acks: list[VehicleCommandAck] = []
+        self._external_arming: tuple[int, int] | None = None
+        """(since µs, the autopilot's refusal count then) while its arming is awaited."""
+        self._held_acks: list[VehicleCommandAck] = []
+        self._external_armed_at = 0
+        self._external_link_up_at: int | None = None
+        """When the external autopilot's link (last) came up; None while it is down."""
         self._published_key: tuple | None = None
         self._can_set: dict[int, int] = {}
         """``can_set_nav_states_mask`` by failing requirements, which change rarely."""
@@ -252,6 +289,7 @@ class Commander:
             sys_has_gps=bool(p["SYS_HAS_GPS"]),
             com_arm_wo_gps=bool(p["COM_ARM_WO_GPS"]),
             com_pos_fs_eph=float(p["COM_POS_FS_EPH"]),
+            com_ext_ap=bool(p["COM_EXT_AP"]),
         )
 
     @property
@@ -288,9 +326,11 @@ class Commander:
         self._inputs = inputs
         self._failing = failing_requirements(now_us, inputs, self._health, self._home is not None)
 
-    def handle_command(self, cmd: VehicleCommand, now_us: int) -> VehicleCommandAck:
-        """Execute a ``vehicle_command`` and return its acknowledgement."""
+    def handle_command(self, cmd: VehicleCommand, now_us: int) -> VehicleCommandAck | None:
+        """Execute a ``vehicle_command`` and return its acknowledgement, or None when it waits for the external
+        autopilot to arm (it then comes out of ``update`` as one of ``acks``)."""
         handler = self._handlers.get(cmd.command)
+        awaiting = self._external_arming
         if handler is None:
             result, reason, param = (ACK.VEHICLE_CMD_RESULT_UNSUPPORTED, f"Unsupported command {cmd.command}", 0)
         else:
@@ -299,7 +339,7 @@ class Commander:
             self._step(now_us)
         elif reason:
             self._events.append(reason)
-        return VehicleCommandAck(
+        ack = VehicleCommandAck(
             timestamp=now_us,
             command=cmd.command,
             result=result,
@@ -309,6 +349,10 @@ class Commander:
             from_external=False,
             reason=reason,
         )
+        if awaiting is None and self._external_arming is not None:
+            self._held_acks.append(ack)  # this command armed the stack: answer once the autopilot has armed
+            return None
+        return ack
 
     def _step(self, now_us: int) -> None:
         inp = self._inputs
@@ -326,6 +370,9 @@ class Commander:
             self._failing &= ~Requirement.HOME
 
         self._update_link(now_us)
+        if self._p["COM_EXT_AP"]:
+            self._follow_external_autopilot(now_us)
+            armed = self.armed
         self._geofence_violation = ""
         if armed and self._home is not None and self._geofence.enabled and position_known and lpos is not None:
             self._geofence_violation = self._geofence.violation(self._home.position, lpos.x, lpos.y, lpos.z)
@@ -343,8 +390,11 @@ class Commander:
             self._events.append(f"Takeoff complete, switching to {mode_name(follow)}")
             self._set_intention(follow)
 
+        failing = self._failing
+        if self._external_link_down(now_us):
+            failing &= ~_ESTIMATES  # without the Pixhawk's sensors the estimates go; its own failsafe flies
         conditions = FailsafeConditions(
-            failing=self._failing,
+            failing=failing,
             gcs_connection_lost=self._gcs_lost,
             battery_warning=inp.battery_warning,
             geofence_breached=bool(self._geofence_violation),
@@ -378,6 +428,71 @@ class Commander:
         elif self._gcs_lost and not lost:
             self._events.append("Data link regained")
         self._gcs_lost = lost
+
+    def _external_link_down(self, now_us: int) -> bool:
+        """Armed with COM_EXT_AP, and the external autopilot's link is down or has just come back: its sensors,
+        hence the stack's estimates, are missing, and its own failsafe (COM_OF_LOSS_T) flies the vehicle."""
+        if not (self._p["COM_EXT_AP"] and self.armed):
+            return False
+        up_at = self._external_link_up_at
+        return up_at is None or now_us - up_at < EXTERNAL_LINK_GRACE_US
+
+    def _follow_external_autopilot(self, now_us: int) -> None:
+        """Await the external autopilot's arming, follow it when it disarms on its own, note its link."""
+        ext = self._inputs.external_autopilot
+        connected = external_autopilot_connected(now_us, ext)
+        if connected and self._external_link_up_at is None:
+            self._external_link_up_at = now_us
+            if self.armed:
+                self._events.append("Link to the Pixhawk regained")
+        elif not connected and self._external_link_up_at is not None:
+            self._external_link_up_at = None
+            if self.armed:
+                self._events.append(
+                    "Link to the Pixhawk lost: its own failsafe flies the vehicle (estimate failsafes held)"
+                )
+        awaiting = self._external_arming
+        if awaiting is not None:
+            since, refusals = awaiting
+            if not self.armed:
+                self._answer_held(
+                    ACK.VEHICLE_CMD_RESULT_CANCELLED, "Arming cancelled: disarmed before the Pixhawk armed"
+                )
+            elif ext is not None and ext.timestamp >= since and ext.armed and ext.in_control:
+                self._external_arming = None
+                self._external_armed_at = ext.timestamp
+                self._events.append(f"Pixhawk armed in {ext.mode}")
+                self._answer_held(ACK.VEHICLE_CMD_RESULT_ACCEPTED, "")
+            elif ext is not None and ext.refusals > refusals:
+                self._refuse_external(now_us, f"Arming denied: {ext.refusal}")
+            elif now_us - since > EXTERNAL_ARM_TIMEOUT_US:
+                why = "no link" if not external_autopilot_connected(now_us, ext) else "no confirmation"
+                self._refuse_external(
+                    now_us, f"Arming denied: the Pixhawk did not arm within {EXTERNAL_ARM_TIMEOUT_US / 1e6:g} s ({why})"
+                )
+        elif self.armed and ext is not None and ext.timestamp > self._external_armed_at and not ext.armed:
+            self._disarm(now_us, ArmDisarmReason.COMMAND_EXTERNAL, forced=True)
+            self._events.append(f"The Pixhawk disarmed on its own (in {ext.mode}): disarmed")
+
+    def _refuse_external(self, now_us: int, reason: str) -> None:
+        self._disarm(now_us, ArmDisarmReason.COMMAND_EXTERNAL, forced=True)
+        self._events.append(reason)
+        self._answer_held(ACK.VEHICLE_CMD_RESULT_TEMPORARILY_REJECTED, reason)
+
+    def _answer_held(self, result: int, reason: str) -> None:
+        self._external_arming = None
+        for ack in self._held_acks:
+            self._acks.append(
+                VehicleCommandAck(
+                    timestamp=ack.timestamp,
+                    command=ack.command,
+                    result=result,
+                    target_system=ack.target_system,
+                    target_component=ack.target_component,
+                    reason=reason,
+                )
+            )
+        self._held_acks.clear()
 
     def _takeoff_reached(self) -> bool:
         lpos = self._inputs.local_position
@@ -450,6 +565,9 @@ class Commander:
         if position_known and lpos is not None:
             self._set_home(lpos)  # without a position now, the home set before stays, as in PX4
         self._events.append("Armed (forced: pre-arm checks skipped)" if forced else "Armed")
+        if self._p["COM_EXT_AP"]:
+            ext = self._inputs.external_autopilot
+            self._external_arming = (now_us, ext.refusals if ext is not None else 0)
         return ""
 
     def _disarm(self, now_us: int, reason: ArmDisarmReason, forced: bool) -> str:
@@ -732,6 +850,8 @@ class Commander:
             self._messages = (status, control_mode(self.nav_state, armed), actuator_armed)
         events = tuple(self._events)
         self._events.clear()
+        acks = tuple(self._acks)
+        self._acks.clear()
         status, mode, actuator_armed = self._messages
         return CommanderOutputs(
             vehicle_status=status,
@@ -752,4 +872,5 @@ class Commander:
                 mission_start_counter=self._mission_start_counter,
             ),
             events=events,
+            acks=acks,
         )

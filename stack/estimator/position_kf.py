@@ -612,6 +612,8 @@ class LocalPositionKF:
             return False
         vel = (gps.vel_n_m_s, gps.vel_e_m_s, gps.vel_d_m_s)
         vel_ok = bool(gps.vel_ned_valid) and all(math.isfinite(v) for v in vel)
+        # A receiver reached through MAVLink's GPS_RAW_INT gives ground speed and course, no vertical velocity.
+        hvel_ok = not gps.vel_ned_valid and math.isfinite(vel[0]) and math.isfinite(vel[1])
 
         t_meas = min(gps.timestamp_sample - round(self.params["LPE_GPS_DELAY"] * 1e6), t_now)
         if self._last_gps_meas_us is not None and t_meas <= self._last_gps_meas_us:
@@ -625,7 +627,7 @@ class LocalPositionKF:
         epv = gps.epv if math.isfinite(gps.epv) else 0.0
         if self._map is None:
             init_ok = (
-                vel_ok
+                (vel_ok or not gps.vel_ned_valid)  # a receiver that gives no NED velocity (MAVLink's GPS_RAW_INT)
                 and gps.satellites_used >= GPS_INIT_MIN_SATS
                 and math.isfinite(gps.eph)
                 and math.isfinite(gps.epv)
@@ -647,11 +649,17 @@ class LocalPositionKF:
         x_before = self.x
 
         if self._map is None:
-            x, P = self._set_origin(base.x, base.P, lat, lon, alt, vel, var, t_meas)
+            x, P = self._set_origin(base.x, base.P, lat, lon, alt, vel if vel_ok else None, var, t_meas)
             resets = (True, False, True, True)
         else:
             north, east = self._map.project(lat, lon)
-            y = np.array((north, east, self._ref_alt - alt, *vel) if vel_ok else (north, east, self._ref_alt - alt))
+            y = np.array(
+                (north, east, self._ref_alt - alt, *vel)
+                if vel_ok
+                else (north, east, self._ref_alt - alt, *vel[:2])
+                if hvel_ok
+                else (north, east, self._ref_alt - alt)
+            )
             x, P, resets = self._gps_update(base.x, base.P, y, var, t_meas)
             if x is base.x:
                 return False
@@ -669,22 +677,24 @@ class LocalPositionKF:
         lat: float,
         lon: float,
         alt: float,
-        vel: Vec3,
+        vel: Vec3 | None,
         var: np.ndarray,
         t_meas: int,
     ) -> tuple[np.ndarray, np.ndarray]:
-        """Place the origin at this fix, reset xy and velocity to it, and tie GPS altitude to z."""
+        """Place the origin at this fix, reset xy and velocity (when the fix has one) to it, and tie GPS
+        altitude to z."""
         x = x.copy()
         P = P.copy()
         self._map = MapProjection(lat, lon)
         self._ref_timestamp = t_meas
-        for i in (X_X, X_Y, X_VX, X_VY, X_VZ):
+        for i in (X_X, X_Y) if vel is None else (X_X, X_Y, X_VX, X_VY, X_VZ):
             P[i, :] = P[:, i] = 0.0
         x[X_X] = x[X_Y] = 0.0
-        x[X_VX], x[X_VY], x[X_VZ] = vel
         P[X_X, X_X] = P[X_Y, X_Y] = var[0]
-        P[X_VX, X_VX] = P[X_VY, X_VY] = var[3]
-        P[X_VZ, X_VZ] = var[5]
+        if vel is not None:
+            x[X_VX], x[X_VY], x[X_VZ] = vel
+            P[X_VX, X_VX] = P[X_VY, X_VY] = var[3]
+            P[X_VZ, X_VZ] = var[5]
         if not self._baro_initialised:
             # No baro yet: GPS defines z (for good with the GPS reference, until the first baro
             # sample with the baro reference).

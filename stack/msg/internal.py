@@ -32,6 +32,8 @@ class ModuleHeartbeat(Message):
     cpu_percent: float = 0.0
     rss_bytes: int = 0
     sim_time_us: int = 0
+    extra: dict[str, float | int | str | bool] = msgspec.field(default_factory=dict)
+    """The module's own figures (``Module.status``), e.g. a MAVLink link's counters."""
 
 
 class LockstepClock(Message):

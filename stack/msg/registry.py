@@ -35,6 +35,7 @@ from stack.msg.simulation import SimGroundtruth
 from stack.msg.system import (
     ActuatorArmed,
     BatteryStatus,
+    ExternalAutopilotStatus,
     HomePosition,
     OffboardControlMode,
     ParameterUpdate,
@@ -89,6 +90,7 @@ TOPICS: dict[str, type[Message]] = {
     "mission": Mission,
     "mission_result": MissionResult,
     "navigation_request": NavigationRequest,
+    "external_autopilot_status": ExternalAutopilotStatus,
 }
 
 

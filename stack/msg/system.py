@@ -250,3 +250,30 @@ class HomePosition(Message):
     valid_lpos: bool = False
     manual_home: bool = False
     update_count: int = 0
+
+
+class ExternalAutopilotStatus(Message):
+    """An external autopilot the stack flies through (a PX4 Pixhawk over MAVLink, module ``pixhawk``).
+
+    Its own HEARTBEAT is the truth about its arming and mode (``custom_mode`` as PX4 encodes it, ``mode`` its
+    name, see :mod:`stack.mavlink.px4_modes`); ``armable`` is SYS_STATUS's pre-arm check bit (True when it
+    is not reported and the autopilot is in standby). ``in_control``: it is armed in Offboard and flies the
+    stack's setpoints. ``refusals`` counts the arming and Offboard requests it refused, ``refusal`` says
+    the last one and why. No PX4 topic describes another autopilot; this one follows PX4's naming.
+    """
+
+    connected: bool = False
+    system_id: int = 0
+    component_id: int = 0
+    autopilot: int = 0
+    armed: bool = False
+    custom_mode: int = 0
+    mode: str = ""
+    system_status: int = 0
+    armable: bool = False
+    offboard: bool = False
+    in_control: bool = False
+    refusals: int = 0
+    refusal: str = ""
+    link_losses: int = 0
+    link_quality: float = 0.0

@@ -140,5 +140,9 @@ class Module:
         """The lockstep coordinator's step (its simulated-time tick), in µs."""
         raise NotImplementedError
 
+    def status(self) -> dict[str, float | int | str | bool]:
+        """Figures of the module's own for its heartbeat (called from the heartbeat thread)."""
+        return {}
+
     def close(self) -> None:
         """Release resources (the runtime closes the session itself)."""

@@ -422,6 +422,9 @@ class Runtime:
             "trigger_rate_hz": runs / span,
             "sim_time_us": self._now if self.lockstep else 0,
         }
+        module = getattr(self, "module", None)
+        if module is not None:
+            status["extra"] = module.status()
         self._loop_sum = 0.0
         self._loop_max = 0.0
         self._loop_runs = 0

@@ -25,7 +25,7 @@ MODULES: dict[str, str] = {
     "mc_pos_control": "stack.posctl.pos_module:MulticopterPositionControl",
     "flight_mode_manager": "stack.posctl.fmm_module:FlightModeManagerModule",
     "mc_hover_thrust_estimator": "stack.posctl.hte_module:HoverThrustEstimatorModule",
-    "mavlink_pixhawk": "stack.mavlink.module:PixhawkAdapterModule",
+    "pixhawk": "stack.mavlink.module:PixhawkAdapterModule",
     "rerun_bridge": "stack.viz.module:RerunBridgeModule",
     "recorder": "stack.record.module:RecorderModule",
     "scenario": "stack.scenario.module:ScenarioModule",

@@ -8,6 +8,7 @@ set (at arming), which is what a pilot means by "5 m above home" and what return
 
 from __future__ import annotations
 
+import bisect
 import math
 from collections.abc import Generator
 from typing import Any
@@ -113,8 +114,22 @@ def truth_at(series: Series, t: float) -> Any:
     return value_at(series.times, series.values, t)
 
 
+def truth_position_between(series: Series, t: float) -> Vec3 | None:
+    """The true position at ``t``, interpolated between the samples around it (None outside them)."""
+    i = bisect.bisect_right(series.times, t)
+    if i == 0 or i == len(series.times):
+        return None
+    (ta, a), (tb, b) = (series.times[i - 1], series.values[i - 1]), (series.times[i], series.values[i])
+    u = (t - ta) / (tb - ta) if tb > ta else 0.0
+    pa, pb = a.position, b.position
+    return (pa[0] + u * (pb[0] - pa[0]), pa[1] + u * (pb[1] - pa[1]), pa[2] + u * (pb[2] - pa[2]))
+
+
 def estimate_error_rms(ctx: ScriptContext, frames: Frames, t0: float, t1: float) -> float:
-    """RMS distance between the position estimate and the truth (both about home) over [t0, t1]."""
+    """RMS distance between the position estimate and the truth (both about home) over [t0, t1].
+
+    In simulation the truth has a sample at each estimate's sample time; a plant on the wall clock (a
+    simulated Pixhawk) samples its truth at other times, between which it is interpolated."""
     estimates = ctx.series.get("vehicle_local_position")
     if estimates is None:
         raise ScenarioError("no position estimate was received")
@@ -122,6 +137,8 @@ def estimate_error_rms(ctx: ScriptContext, frames: Frames, t0: float, t1: float)
     squares = []
     for t, e in zip(estimates.times, estimates.values, strict=True):
         truth = by_sample.get(e.timestamp_sample)
+        if truth is None:
+            truth = truth_position_between(frames.truth, e.timestamp_sample * 1e-6)
         if truth is None or not (t0 <= t <= t1):
             continue
         est = frames.local_about_home((e.x, e.y, e.z))

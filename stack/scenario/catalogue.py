@@ -42,9 +42,9 @@ class Scenario:
 
 
 def scenarios() -> dict[str, Scenario]:
-    from stack.scenario import attitude_step, failsafes, gps_loss, mission_box, takeoff_land
+    from stack.scenario import attitude_step, failsafes, gps_loss, link_loss, mission_box, takeoff_land
 
-    flights = (attitude_step, takeoff_land, mission_box, gps_loss, failsafes)
+    flights = (attitude_step, takeoff_land, mission_box, gps_loss, failsafes, link_loss)
     return {s.name: s for s in (f.SCENARIO for f in flights)}
 
 

@@ -10,11 +10,21 @@ A profile may start from another (``extends = "sitl_quad"``, looked up beside it
 give only what differs: its tables are merged into the base's key by key, and each ``[[module]]`` it
 lists changes the base's module of the same name (its ``params`` and ``args`` merged likewise) or, if
 the base has none, is started after the base's modules.
+
+A ``[[process]]`` is a supervised program that is not a module (no bus, no heartbeat), such as the
+simulated Pixhawk ``stack pixhawk-sim``: the processes start first, in order, each ready once it has run
+``ready_after_s`` without exiting; they stop last; their death is noticed and handled as a module's
+(``restart``, ``critical``). In a process's ``command`` and in a module's string arguments these
+placeholders are replaced when the stack starts, so both ends of a link can name it: ``{python}`` (this
+Python), ``{run_dir}`` (the run directory), ``{seed}`` (the run's seed), ``{udp_port}`` and
+``{control_port}`` (two free 127.0.0.1 UDP ports, chosen per run). Every module and process also finds
+them in its environment as ``STACK_<NAME>`` (``STACK_CONTROL_PORT``...).
 """
 
 from __future__ import annotations
 
 import ast
+import string
 import sys
 import tomllib
 from dataclasses import dataclass, field
@@ -56,6 +66,8 @@ RESTART_POLICIES = ("no", "on-failure", "always")
 # or Zenoh, for a lockstep run whose modules are not all started by this supervisor on this host.
 LOCKSTEP_TRANSPORTS = ("shm", "zenoh")
 FLAGS = ("lockstep", "realtime", "plot", "record")
+PLACEHOLDERS = ("python", "run_dir", "seed", "udp_port", "control_port")
+"""What ``{name}`` in a process command or a module's string argument stands for (see the module docstring)."""
 
 
 class ProfileError(ValueError):
@@ -76,6 +88,26 @@ class ModuleEntry:
 
 
 @dataclass
+class ProcessEntry:
+    """A supervised program that is not a module (``[[process]]``)."""
+
+    name: str
+    command: list[str]
+    condition: str
+    restart: str
+    max_restarts: int
+    critical: bool
+    ready_after_s: float
+
+
+def expand_placeholders(text: str, values: dict[str, str]) -> str:
+    """``text`` with each ``{name}`` of PLACEHOLDERS replaced (other braces, e.g. JSON, left alone)."""
+    for name, value in values.items():
+        text = text.replace("{" + name + "}", value)
+    return text
+
+
+@dataclass
 class Profile:
     path: Path
     vehicle: str
@@ -88,6 +120,7 @@ class Profile:
     stall_timeout_s: float = 10.0
     lockstep_transport: str = "shm"
     modules: list[ModuleEntry] = field(default_factory=list)
+    processes: list[ProcessEntry] = field(default_factory=list)
     scenario_limits: dict[str, dict[str, float | bool]] = field(default_factory=dict)
 
     @property
@@ -120,7 +153,7 @@ def merge_documents(base: dict, child: dict) -> dict:
     """``child`` over ``base``: tables merged key by key, ``[[module]]`` entries matched by name."""
     merged = dict(base)
     for key, value in child.items():
-        if key == "module" and isinstance(value, list) and isinstance(base.get(key), list):
+        if key in ("module", "process") and isinstance(value, list) and isinstance(base.get(key), list):
             merged[key] = _merge_modules(base[key], value)
         elif isinstance(value, dict) and isinstance(base.get(key), dict):
             merged[key] = merge_documents(base[key], value)
@@ -192,7 +225,7 @@ class _Loader:
             known = ", ".join(available_profiles())
             raise ProfileError(f"{self.path}: no such profile (available: {known})")
         doc = self._document(self.path, ())
-        self._only(doc, "", {"stack", "bus", "params", "module", "scenario"})
+        self._only(doc, "", {"stack", "bus", "params", "module", "process", "scenario"})
         stack = self._table(doc, "stack")
         self._only(
             stack,
@@ -243,6 +276,23 @@ class _Loader:
         for name in given_shared:
             if name not in declared:
                 raise self.fail(f"params.{name}", "no module of this profile has this parameter")
+        processes = doc.get("process", [])
+        if not isinstance(processes, list):
+            raise self.fail("process", "expected [[process]] entries")
+        for i, entry in enumerate(processes):
+            process = self._process(i, entry, shared, variables)
+            if process.name in names:
+                raise self.fail(f"process[{i}].name", f"'{process.name}' is used twice")
+            names.add(process.name)
+            if process.condition and not self._condition(
+                f"process[{i}].condition", process.condition, variables, shared
+            ):
+                continue
+            profile.processes.append(process)
+        for module in profile.modules:
+            for aname, value in module.args.items():
+                if isinstance(value, str):
+                    self._check_placeholders(f"module ({module.name}).args.{aname}", value, allow_json=True)
         profile.scenario_limits = self._scenario_limits(self._table(doc, "scenario"))
         return profile
 
@@ -355,6 +405,60 @@ class _Loader:
             max_restarts=max_restarts,
             critical=self._get(entry, where, "critical", bool, False),
         )
+
+    def _process(self, i: int, entry: object, shared: dict[str, object], variables: dict[str, object]) -> ProcessEntry:
+        where = f"process[{i}]"
+        if not isinstance(entry, dict):
+            raise self.fail(where, "expected a table")
+        self._only(
+            entry, where, {"name", "command", "condition", "restart", "max_restarts", "critical", "ready_after_s"}
+        )
+        name = self._get(entry, where, "name", str, None)
+        if name is None:
+            raise self.fail(f"{where}.name", "missing (a process needs a name)")
+        try:
+            keys.check_name("process", name)
+        except ValueError as e:
+            raise self.fail(f"{where}.name", str(e)) from None
+        where = f"process[{i}] ({name})"
+        command = self._get(entry, where, "command", list, None)
+        if not command or not all(isinstance(part, str) and part for part in command):
+            raise self.fail(f"{where}.command", "expected a non-empty list of non-empty strings (program, arguments)")
+        for part in command:
+            self._check_placeholders(f"{where}.command", part)
+        restart = self._get(entry, where, "restart", str, "no")
+        if restart not in RESTART_POLICIES:
+            raise self.fail(f"{where}.restart", f"'{restart}' is not one of {', '.join(RESTART_POLICIES)}")
+        max_restarts = self._get(entry, where, "max_restarts", int, 5)
+        if max_restarts < 0:
+            raise self.fail(f"{where}.max_restarts", "must be >= 0")
+        ready_after_s = float(self._get(entry, where, "ready_after_s", float, 0.5))
+        if not 0.0 <= ready_after_s <= 60.0:
+            raise self.fail(f"{where}.ready_after_s", "must be between 0 and 60 s")
+        condition = self._get(entry, where, "condition", str, "")
+        if condition:
+            self._condition(f"{where}.condition", condition, variables, shared)
+        return ProcessEntry(
+            name=name,
+            command=list(command),
+            condition=condition,
+            restart=restart,
+            max_restarts=max_restarts,
+            critical=self._get(entry, where, "critical", bool, False),
+            ready_after_s=ready_after_s,
+        )
+
+    def _check_placeholders(self, key: str, text: str, allow_json: bool = False) -> None:
+        """Every ``{name}`` must be one of PLACEHOLDERS (a module argument may also hold JSON)."""
+        try:
+            fields = [f for _, f, _, _ in string.Formatter().parse(text) if f is not None]
+        except ValueError:
+            if allow_json:
+                return
+            raise self.fail(key, f"unbalanced braces in {text!r}") from None
+        for f in fields:
+            if f not in PLACEHOLDERS and not (allow_json and not f.isidentifier()):
+                raise self.fail(key, f"unknown placeholder {{{f}}} (known: {', '.join(PLACEHOLDERS)})")
 
     def _check_param(self, key: str, declared: dict, name: str, value: object) -> ParamValue:
         try:

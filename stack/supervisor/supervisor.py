@@ -5,7 +5,9 @@ bus rendezvous (a Zenoh peer listening on 127.0.0.1), publishes the roster locks
 answers ``stack status``, restarts crashed modules with backoff where the profile says so, and
 stops everything in reverse order (in lockstep, the simulator first, freezing time) on Ctrl-C,
 SIGTERM or ``--duration``, escalating to SIGKILL. No module outlives it: each asks the kernel for
-SIGTERM when its parent dies.
+SIGTERM when its parent dies. A profile's ``[[process]]`` programs (not modules: the simulated Pixhawk)
+start before the modules, are watched and restarted alike, stop after them, and die with it too
+(:mod:`stack.supervisor.child`).
 """
 
 from __future__ import annotations
@@ -15,6 +17,7 @@ import logging
 import os
 import secrets
 import signal
+import socket
 import subprocess
 import sys
 import threading
@@ -33,7 +36,7 @@ from stack.fastpath.host import FastPathHost
 from stack.msg.internal import ModuleHeartbeat
 from stack.runtime.spec import ModuleSpec
 from stack.supervisor import state as run_state
-from stack.supervisor.profile import ModuleEntry, Profile
+from stack.supervisor.profile import ModuleEntry, ProcessEntry, Profile, expand_placeholders
 
 log = logging.getLogger("stack.supervisor")
 
@@ -73,6 +76,25 @@ class ModuleProcess:
         return self.proc.pid if self.proc is not None else 0
 
 
+@dataclass
+class ProgramProcess:
+    """A running ``[[process]]`` (see :class:`ModuleProcess`)."""
+
+    entry: ProcessEntry
+    log_path: Path
+    proc: subprocess.Popen | None = None
+    state: str = "stopped"
+    restarts: int = 0
+    failures: int = 0
+    exit_code: int | None = None
+    restart_at: float | None = None
+    reader: threading.Thread | None = None
+
+    @property
+    def pid(self) -> int:
+        return self.proc.pid if self.proc is not None else 0
+
+
 class Supervisor:
     def __init__(self, profile: Profile, options: UpOptions, run_dir: Path) -> None:
         self.profile = profile
@@ -85,6 +107,14 @@ class Supervisor:
         self.modules = [
             ModuleProcess(e, run_dir / f"{e.name}.spec.json", run_dir / f"{e.name}.log") for e in profile.modules
         ]
+        self.programs = [ProgramProcess(e, run_dir / f"{e.name}.log") for e in profile.processes]
+        self.placeholders = {
+            "python": sys.executable,
+            "run_dir": str(run_dir),
+            "seed": str(profile.seed),
+            "udp_port": str(free_port(kind=socket.SOCK_DGRAM)),
+            "control_port": str(free_port(kind=socket.SOCK_DGRAM)),
+        }
         self.roster_complete = False
         self.failed = False
         # The lockstep run's id, and its same-host shared-memory fast path (stack.fastpath) unless the
@@ -166,7 +196,7 @@ class Supervisor:
                 self.fast.close()
             session.close()
             run_state.remove_state(self.vehicle, os.getpid())
-        code = 1 if self.failed or any(m.failures for m in self.modules) else 0
+        code = 1 if self.failed or any(r.failures for r in (*self.modules, *self.programs)) else 0
         self._say("stopped" + (" with failures" if code else ""))
         return code
 
@@ -192,6 +222,12 @@ class Supervisor:
     # -- starting ----------------------------------------------------------------------------------
 
     def _start_all(self) -> bool:
+        for p in self.programs:
+            if self._stop.is_set():
+                return False
+            self._spawn_program(p)
+            if not self._wait_program_ready(p):
+                return False
         for m in self.modules:
             if self._stop.is_set():
                 return False
@@ -218,6 +254,7 @@ class Supervisor:
     def _spec(self, m: ModuleProcess) -> ModuleSpec:
         e = m.entry
         args = {**e.args, **self.options.extra_args.get(e.name, {})}
+        args = {k: expand_placeholders(v, self.placeholders) if isinstance(v, str) else v for k, v in args.items()}
         return ModuleSpec(
             name=e.name,
             module=e.module,
@@ -236,9 +273,17 @@ class Supervisor:
             fastpath_fd=self.fast.region.fd if self.fast is not None else -1,
         )
 
+    def _environment(self) -> dict[str, str]:
+        """A child's environment: the profile placeholders as STACK_RUN_DIR, STACK_UDP_PORT..."""
+        return {
+            **os.environ,
+            "PYTHONUNBUFFERED": "1",
+            **{f"STACK_{k.upper()}": v for k, v in self.placeholders.items()},
+        }
+
     def _spawn(self, m: ModuleProcess) -> None:
         m.spec_path.write_text(self._spec(m).to_json())
-        env = {**os.environ, "PYTHONUNBUFFERED": "1", "STACK_RUN_DIR": str(self.run_dir)}
+        env = self._environment()
         # fork+exec via posix_spawn/vfork (no Python code runs in the child before exec); own process
         # group so a terminal Ctrl-C reaches the supervisor only and it can stop modules in order.
         m.proc = subprocess.Popen(
@@ -257,6 +302,60 @@ class Supervisor:
         log_file = m.log_path.open("a")
         m.reader = threading.Thread(target=self._pump, args=(m.entry.name, m.proc.stdout, log_file), daemon=True)
         m.reader.start()
+
+    def _spawn_program(self, p: ProgramProcess) -> None:
+        command = [expand_placeholders(part, self.placeholders) for part in p.entry.command]
+        env = self._environment()
+        p.proc = subprocess.Popen(
+            [sys.executable, "-m", "stack.supervisor.child", str(os.getpid()), *command],
+            stdin=subprocess.DEVNULL,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.STDOUT,
+            env=env,
+            process_group=0,
+        )
+        p.state = "starting"
+        p.exit_code = None
+        p.restart_at = None
+        self._say(f"starting process {p.entry.name} (pid {p.proc.pid}): {' '.join(command)}")
+        log_file = p.log_path.open("a")
+        p.reader = threading.Thread(target=self._pump, args=(p.entry.name, p.proc.stdout, log_file), daemon=True)
+        p.reader.start()
+
+    def _wait_program_ready(self, p: ProgramProcess) -> bool:
+        """Ready once it has run ``ready_after_s`` without exiting (it has no bus to say so)."""
+        assert p.proc is not None
+        try:
+            p.proc.wait(timeout=p.entry.ready_after_s)
+        except subprocess.TimeoutExpired:
+            p.state = "running"
+            self._say(f"process {p.entry.name} running")
+            return True
+        p.exit_code = p.proc.returncode
+        p.state = "failed"
+        p.failures += 1
+        self._say(f"process {p.entry.name} exited with code {p.exit_code} while starting (see {p.log_path})")
+        return False
+
+    def _watch_programs(self, now: float) -> None:
+        for p in self.programs:
+            if p.state == "running" and p.proc is not None and p.proc.poll() is not None:
+                p.exit_code = p.proc.returncode
+                failed = p.exit_code != 0
+                p.failures += failed
+                self._say(
+                    f"process {p.entry.name} {'failed with exit code ' + str(p.exit_code) if failed else 'exited'}"
+                )
+                policy = p.entry.restart
+                if (policy == "always" or (policy == "on-failure" and failed)) and p.restarts < p.entry.max_restarts:
+                    p.state = "restarting"
+                    p.restart_at = now + min(0.5 * 2**p.restarts, BACKOFF_MAX_S)
+                else:
+                    p.state = "failed" if failed else "exited"
+            elif p.state == "restarting" and p.restart_at is not None and now >= p.restart_at:
+                p.restarts += 1
+                self._spawn_program(p)
+                p.state = "running"
 
     def _wait_ready(self, m: ModuleProcess) -> bool:
         deadline = time.monotonic() + START_TIMEOUT_S
@@ -320,9 +419,14 @@ class Supervisor:
                             self.fast.restart_over(m.entry.name)
                     else:
                         self._plan_restart_or_give_up(m)
+            self._watch_programs(now)
             for m in self.modules:
                 if m.entry.critical and m.state in ("failed", "exited"):
                     self._say(f"critical module {m.entry.name} {m.state}: stopping the stack")
+                    return
+            for p in self.programs:
+                if p.entry.critical and p.state in ("failed", "exited"):
+                    self._say(f"critical process {p.entry.name} {p.state}: stopping the stack")
                     return
             if all(m.state in ("exited", "failed") for m in self.modules):
                 self._say("all modules have exited")
@@ -375,9 +479,29 @@ class Supervisor:
                 m.failures += 1
                 self._say(f"{m.entry.name} stopped with exit code {m.exit_code}")
             m.state = "exited"
-        for m in self.modules:
-            if m.reader is not None:
-                m.reader.join(timeout=2.0)
+        for p in reversed(self.programs):
+            self._stop_program(p)
+        for r in (*self.modules, *self.programs):
+            if r.reader is not None:
+                r.reader.join(timeout=2.0)
+
+    def _stop_program(self, p: ProgramProcess) -> None:
+        proc = p.proc
+        if proc is None or proc.poll() is not None:
+            return
+        p.state = "stopping"
+        try:
+            proc.send_signal(signal.SIGTERM)
+            proc.wait(timeout=STOP_GRACE_S)
+        except subprocess.TimeoutExpired:
+            self._say(f"process {p.entry.name} did not stop within {STOP_GRACE_S:.0f} s: killing it")
+            proc.kill()
+            proc.wait()
+        p.exit_code = proc.returncode
+        if p.exit_code not in (0, -signal.SIGTERM, -signal.SIGKILL):
+            p.failures += 1
+            self._say(f"process {p.entry.name} stopped with exit code {p.exit_code}")
+        p.state = "exited"
 
     def _stop_order(self) -> list[ModuleProcess]:
         """Reverse start order; in lockstep the clock's driver goes first, so simulated time stops at once
@@ -420,6 +544,17 @@ class Supervisor:
                 row["module"] = m.entry.name
                 row["state"] = m.state if m.state != "running" else hb.state
             rows.append(row)
+        for p in self.programs:
+            rows.append(
+                {
+                    "module": p.entry.name,
+                    "type": "process",
+                    "state": p.state,
+                    "pid": p.pid,
+                    "restarts": p.restarts,
+                    "exit_code": p.exit_code,
+                }
+            )
         return {
             "vehicle": self.vehicle,
             "profile": self.profile.name,
@@ -446,4 +581,3 @@ class Supervisor:
             print(f"[stack] {text}", flush=True)
         with (self.run_dir / "supervisor.log").open("a") as f:
             f.write(f"{time.strftime('%H:%M:%S')} {text}\n")
-
