@@ -3,7 +3,8 @@ transactions, and the hand-off of arming and Offboard between the stack's comman
 
 **Streams.** :func:`stream_plan` asks for HIGHRES_IMU at the attitude-loop rate (250 Hz) or the highest
 rate the link carries: on a serial link the inbound streams keep within half of the UART's bytes per
-second (10 bits a byte), the rest left to PX4's other streams and to bursts.
+second (10 bits a byte), the rest left to PX4's other streams and to bursts; when they do not fit, every
+stream slows in proportion, the IMU no lower than 50 Hz (at 921600 baud all fit).
 
 **Commands** (MAVLink command protocol, https://mavlink.io/en/services/command.html): a COMMAND_LONG is
 resent with ``confirmation`` + 1 until its COMMAND_ACK arrives (IN_PROGRESS extends the wait), at most
@@ -90,12 +91,17 @@ def stream_plan(baud: int | None, autopilot_estimate: bool, imu_rate_hz: float =
         Stream(mavlink2.MAVLink_attitude_message, 0.0),
         Stream(mavlink2.MAVLink_odometry_message, 0.0),
     ]
-    imu = mavlink2.MAVLink_highres_imu_message
-    rate = imu_rate_hz
-    if baud is not None:
-        budget = INBOUND_SHARE * baud / UART_BITS_PER_BYTE - sum(s.bytes_per_s for s in others)
-        rate = min(imu_rate_hz, max(IMU_RATE_MIN_HZ, budget / frame_bytes(imu)))
-    return [Stream(imu, rate), *others]
+    imu = Stream(mavlink2.MAVLink_highres_imu_message, imu_rate_hz)
+    if baud is None:
+        return [imu, *others]
+    budget = INBOUND_SHARE * link_budget_bytes_per_s(baud)
+    others_bytes = sum(s.bytes_per_s for s in others)
+    scale = min(1.0, budget / (imu.bytes_per_s + others_bytes))
+    if scale == 1.0:
+        return [imu, *others]
+    imu = Stream(imu.msg_class, max(IMU_RATE_MIN_HZ, imu.hz * scale))
+    others_scale = max(0.0, budget - imu.bytes_per_s) / others_bytes
+    return [imu, *(Stream(s.msg_class, s.hz * others_scale) for s in others)]
 
 
 def link_budget_bytes_per_s(baud: int) -> float:
