@@ -83,13 +83,6 @@ class UartPacer:
         self.counters.bytes_out += n
         return out
 
-    def next_byte_s(self, now_s: float) -> float | None:
-        """When the next queued byte will have left, or None with nothing queued."""
-        if not self._queue:
-            return None
-        self._advance(now_s)
-        return now_s + max(0.0, 1.0 - self._credit) / self.bytes_per_s
-
     def _advance(self, now_s: float) -> None:
         last = self._last_s
         self._last_s = now_s

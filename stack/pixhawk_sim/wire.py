@@ -27,6 +27,10 @@ from stack.pixhawk_sim.faults import FaultInjector
 from stack.pixhawk_sim.uart import DEFAULT_BAUD, RX_BUFFER_BYTES, UartPacer
 
 LOOPBACK = "127.0.0.1"
+SERVICE_PERIOD_S = 0.001
+"""How often a paced pty moves bytes: ~92 bytes a time at 921600 baud."""
+READER_BACKLOG_BYTES = 65536
+"""Bytes that left the UART but the companion has not read yet (a Linux serial driver's buffering)."""
 
 
 class PhysicalLink(Protocol):
@@ -80,9 +84,11 @@ class UdpLink:
 
 class PtyUart:
     """A pseudo-terminal pair: this side holds the master, the companion opens the slave (``path``, and the
-    symlink ``link_path`` when given). Both directions run at the UART's byte rate. The slave stays open here
-    too, so the companion may close and reopen it; bytes sent while nobody reads are lost (``unread_drops``), as
-    on a UART with nothing connected."""
+    symlink ``link_path`` when given). Both directions run at the UART's byte rate, moved every
+    :data:`SERVICE_PERIOD_S` at most (a UART's DMA moves bytes in blocks too). The slave stays open here too, so
+    the companion may close and reopen it. A pty holds only ~4 KB for its reader, where a serial port's driver
+    buffers far more, so the bytes it cannot take yet wait here, up to :data:`READER_BACKLOG_BYTES`; beyond that
+    (nobody reading) they are lost and counted (``unread_drops``), as on a UART with nothing connected."""
 
     def __init__(self, baud: int = DEFAULT_BAUD, link_path: Path | None = None) -> None:
         self.master, self.slave = os.openpty()
@@ -93,6 +99,7 @@ class PtyUart:
         self.tx = UartPacer(baud)
         self.rx = UartPacer(baud, RX_BUFFER_BYTES)
         self.unread_drops = 0
+        self._backlog = bytearray()
         self.link_path = link_path
         if link_path is not None:
             with contextlib.suppress(FileNotFoundError):
@@ -118,20 +125,23 @@ class PtyUart:
         return self.tx.offer(data, now_s)
 
     def pump(self, now_s: float) -> None:
-        data = self.tx.take(now_s)
-        while data:
+        backlog = self._backlog
+        backlog += self.tx.take(now_s)
+        while backlog:
             try:
-                written = os.write(self.master, data)
+                written = os.write(self.master, backlog)
             except BlockingIOError:
-                written = 0
-            if written <= 0:
-                self.unread_drops += len(data)
-                return
-            data = data[written:]
+                break
+            del backlog[:written]
+        excess = len(backlog) - READER_BACKLOG_BYTES
+        if excess > 0:
+            del backlog[:excess]
+            self.unread_drops += excess
 
     def next_event_s(self, now_s: float) -> float | None:
-        times = [t for t in (self.tx.next_byte_s(now_s), self.rx.next_byte_s(now_s)) if t is not None]
-        return min(times) if times else None
+        if not (self.tx.queued or self.rx.queued):
+            return None  # a backlog waiting for the reader is retried at the next step
+        return now_s + SERVICE_PERIOD_S
 
     def describe(self) -> dict[str, object]:
         return {
@@ -140,6 +150,7 @@ class PtyUart:
             "baud": self.baud,
             "tx": {**vars(self.tx.counters), "queued": self.tx.queued},
             "rx": {**vars(self.rx.counters), "queued": self.rx.queued},
+            "unread_backlog": len(self._backlog),
             "unread_drops": self.unread_drops,
         }
 

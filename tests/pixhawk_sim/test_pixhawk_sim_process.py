@@ -270,7 +270,7 @@ def test_udp_companion_flies_offboard_and_the_pixhawk_holds_when_the_stream_stop
         hb = c.heartbeat_where(mode_is(Px4Mode.AUTO_LOITER), timeout=10.0)
         assert armed(hb) and hb.system_status == mavlink.MAV_STATE_CRITICAL
         assert any("offboard signal lost" in m.text for m in c.texts())
-        c.pump(5.0)
+        c.pump(7.0)
         state = c.latest("SIM_STATE")
         assert height_m(c, origin) > 1.0 and abs(state.vd) < 0.5 and tilt_deg(state) < 5.0
 
