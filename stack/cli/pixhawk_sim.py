@@ -8,6 +8,7 @@ from pathlib import Path
 import typer
 
 from stack.cli.common import fail
+from stack.mavlink.endpoint import DEFAULT_BAUD
 
 
 def _param_overrides(items: list[str]) -> dict[str, str]:
@@ -30,10 +31,10 @@ def pixhawk_sim(
     pty_link: Path | None = typer.Option(
         None,
         "--pty-link",
-        help="Serve a 921600-baud UART on a pseudo-terminal and symlink this path to it "
-        "(the stack opens serial:PATH:921600)",
+        help="Serve a UART (--baud) on a pseudo-terminal and symlink this path to it "
+        "(the stack opens serial:PATH:BAUD)",
     ),
-    baud: int = typer.Option(921600, "--baud", help="UART baud rate of the pty link (10 bits per byte)"),
+    baud: int = typer.Option(DEFAULT_BAUD, "--baud", help="UART baud rate of the pty link (10 bits per byte)"),
     vehicle: str = typer.Option("sih_quad", "--vehicle", help="Vehicle model (stack/sim/vehicles) or a path"),
     system_id: int = typer.Option(1, "--sysid", min=1, max=255, help="MAVLink system id (PX4 MAV_SYS_ID)"),
     component_id: int = typer.Option(1, "--compid", min=1, max=255, help="MAVLink component id (autopilot: 1)"),

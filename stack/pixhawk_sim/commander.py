@@ -36,8 +36,6 @@ from stack.mavlink.px4_modes import Px4Mode, name
 from stack.pixhawk_sim.modes import ARMING_PREVENTED_MODES, FLOWN_MODES, MANUAL_CONTROL_MODES, SELECTABLE_MODES
 from stack.pixhawk_sim.params import OffboardLossAction
 
-FORCE_ARM_DISARM = 21196
-"""MAV_CMD_COMPONENT_ARM_DISARM param2 that skips the checks (MAVLink common.xml)."""
 INITIAL_MODE = Px4Mode.POSCTL
 """PX4's initial user intention (``UserModeIntention``); without RC it cannot run, so arming needs a mode change."""
 

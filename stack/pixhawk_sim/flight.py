@@ -9,7 +9,8 @@ motor output stage (``ControlAllocator`` and ``MotorOutput``, as ``control_alloc
 * Hold (AUTO.LOITER) and Land (AUTO.LAND): the stack's ``FlightModeManager`` (PX4's navigator and flight
   tasks: Hold brakes to its stopping point and holds it, Land holds the landing point and descends at
   MPC_Z_V_AUTO_DN slowing to MPC_LAND_SPEED between MPC_LAND_ALT1 and MPC_LAND_ALT2 above home) into
-  ``PositionControl``, at 50 Hz as PX4's ``mc_pos_control`` runs on the local position, then ``AttitudeControl``;
+  ``PositionControl`` at the local position's rate (50 Hz, as the stack's position estimator and PX4's EKF2
+  run), then ``AttitudeControl``;
 * on the ground in Hold or Land: motors at idle (PX4's takeoff state machine never leaves the ground unless
   asked to climb); disarmed or terminated: motors stopped.
 
@@ -27,6 +28,7 @@ from stack.attctl.rate_control import RateControl, YawTorqueLowPass
 from stack.commander.home import HomePosition
 from stack.estimator.acceleration import VelocityDerivative
 from stack.estimator.angular_velocity import AngularVelocityFilter
+from stack.estimator.position_module import PERIOD_US as POSITION_PERIOD_US
 from stack.mathlib import quaternion as quat
 from stack.mathlib.quaternion import Quat
 from stack.mathlib.vector import Vec3
@@ -40,8 +42,6 @@ from stack.posctl.flight_mode_manager import FlightModeManager, NavigatorInputs
 from stack.posctl.pos_module import control_params
 from stack.posctl.position_control import PositionControl, failsafe_setpoint
 
-POSITION_DECIMATION = 5
-"""Position control every 5th IMU sample: 50 Hz at 250 Hz, PX4's local position rate."""
 NAN3: Vec3 = (math.nan, math.nan, math.nan)
 ZERO3: Vec3 = (0.0, 0.0, 0.0)
 
@@ -77,9 +77,9 @@ _NAN_Q: Quat = (math.nan, math.nan, math.nan, math.nan)
 class FlightControl:
     """PX4's rate, attitude and position loops with the allocator, for one vehicle (see the module docstring)."""
 
-    def __init__(self, params: Mapping[str, object], imu_rate_hz: float) -> None:
+    def __init__(self, params: Mapping[str, object], imu_period_us: int) -> None:
         self.rates = AngularVelocityFilter(
-            float(params["IMU_GYRO_CUTOFF"]), float(params["IMU_DGYRO_CUTOFF"]), sample_rate_hz=imu_rate_hz
+            float(params["IMU_GYRO_CUTOFF"]), float(params["IMU_DGYRO_CUTOFF"]), sample_rate_hz=1e6 / imu_period_us
         )
         self.rate_control = RateControl(params)
         self.yaw_filter = YawTorqueLowPass(float(params["MC_YAW_TQ_CUTOFF"]))
@@ -89,7 +89,8 @@ class FlightControl:
         self.velocity_derivative = VelocityDerivative(float(params["MPC_VELD_LP"]))
         self.allocator = ControlAllocator.from_params(params)
         self.output = MotorOutput(self.allocator.num_motors, params)
-        self._dt = 1.0 / imu_rate_hz
+        self._dt = imu_period_us * 1e-6
+        self._position_every = POSITION_PERIOD_US // imu_period_us
         self._land_speed = float(params["MPC_LAND_SPEED"])
         self._mode: Px4Mode | None = None
         self._position_tick = 0
@@ -169,8 +170,8 @@ class FlightControl:
         self._position_tick -= 1
         if self._position_tick > 0:
             return self._position_sp
-        self._position_tick = POSITION_DECIMATION
-        dt = self._dt * POSITION_DECIMATION
+        self._position_tick = self._position_every
+        dt = POSITION_PERIOD_US * 1e-6
         command = self.navigator.update(self._navigator_inputs(state, mode, armed=True), dt)
         velocity_dot = self.velocity_derivative.update(state.time_us, state.velocity)
         control = self.position_control

@@ -27,14 +27,15 @@ from pymavlink.dialects.v20 import common as mavlink
 
 from stack.mavlink import px4_modes
 from stack.mavlink.px4_modes import Px4Mode
-from stack.pixhawk_sim.commander import FORCE_ARM_DISARM, Verdict
+from stack.msg.system import VehicleCommand
+from stack.pixhawk_sim.commander import Verdict
 from stack.pixhawk_sim.modes import base_mode_flags
 from stack.pixhawk_sim.streams import StreamScheduler
 from stack.pixhawk_sim.telemetry import Message, Telemetry
 from stack.pixhawk_sim.vehicle import SimulatedPixhawk
 
-STATUSTEXT_CHUNK = 50
-"""STATUSTEXT.text length (MAVLink common.xml)."""
+STATUSTEXT_CHUNK = mavlink.MAVLink_statustext_message.array_lengths[1]
+"""STATUSTEXT.text length: 50 characters."""
 MAV_TYPES = {4: mavlink.MAV_TYPE_QUADROTOR, 6: mavlink.MAV_TYPE_HEXAROTOR, 8: mavlink.MAV_TYPE_OCTOROTOR}
 """MAV_TYPE by rotor count (PX4's MAV_TYPE of the multicopter airframes)."""
 
@@ -151,7 +152,7 @@ class Px4Protocol:
         action = round(p[0]) if math.isfinite(p[0]) else -1
         if action not in (0, 1):
             return Verdict(mavlink.MAV_RESULT_DENIED, f"unsupported ARM_DISARM param1 {p[0]}")
-        force = math.isfinite(p[1]) and round(p[1]) == FORCE_ARM_DISARM
+        force = math.isfinite(p[1]) and round(p[1]) == VehicleCommand.ARM_FORCE_MAGIC
         return self.vehicle.arm_disarm(action == 1, force)
 
     def _set_mode(self, p: tuple[float, ...]) -> Verdict:

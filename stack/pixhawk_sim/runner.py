@@ -22,6 +22,7 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from stack.mavlink.endpoint import DEFAULT_BAUD
 from stack.mavlink.link import MavlinkLink
 from stack.pixhawk_sim.control import ControlChannel
 from stack.pixhawk_sim.faults import FaultInjector, FaultSettings
@@ -33,7 +34,6 @@ from stack.sim.vehicle import VehicleModel
 
 MAX_CATCH_UP_STEPS = 25
 """Up to 100 ms late the missed steps are run back to back; later than that the missed time is skipped."""
-LINK_TIMEOUT_S = 1.5
 
 
 @dataclass
@@ -42,7 +42,7 @@ class RunOptions:
     params: dict[str, object]
     udp: str | None = None
     pty_link: Path | None = None
-    baud: int = 921600
+    baud: int = DEFAULT_BAUD
     system_id: int = 1
     component_id: int = 1
     seed: int = 0
@@ -147,7 +147,6 @@ class PixhawkSim:
             system_id=options.system_id,
             component_id=options.component_id,
             heartbeat=self.protocol.heartbeat,
-            link_timeout_s=LINK_TIMEOUT_S,
             clock_us=self.boot_time_us,
         )
         self.control = (

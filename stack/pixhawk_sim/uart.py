@@ -13,7 +13,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-DEFAULT_BAUD = 921600
+from stack.mavlink.endpoint import DEFAULT_BAUD
+
 BITS_PER_BYTE = 10
 """8N1: a start bit, 8 data bits, a stop bit."""
 TX_BUFFER_BYTES = 4096

@@ -17,21 +17,16 @@ from pymavlink.dialects.v20 import common as mavlink
 from stack.commander.battery import BatteryModel, BatteryState
 from stack.commander.home import HomePosition
 from stack.commander.land_detector import LandDetectorInputs, LandDetectorState, MulticopterLandDetector
+from stack.commander.module import LAND_DETECTOR_PERIOD_US
 from stack.mathlib import quaternion as quat
 from stack.mavlink.px4_modes import Px4Mode
 from stack.pixhawk_sim.commander import Condition, Px4Commander, Verdict
 from stack.pixhawk_sim.flight import ControlOutput, FlightControl, VehicleState
 from stack.pixhawk_sim.offboard import OffboardSetpoint, decode_attitude_target
+from stack.sim.module import BATTERY_PERIOD_US
 from stack.sim.sensors import BaroSample, GpsSample, ImuSample, MagSample
 from stack.sim.simulator import GroundTruth, Simulator
 from stack.sim.vehicle import VehicleModel
-
-IMU_RATE_HZ = 250.0
-"""The physics, sensor and rate-loop rate (PX4 SITL IMU_INTEG_RATE, the stack simulator's step)."""
-LAND_DETECTOR_DECIMATION = 5
-"""Land detector and commander every 5th IMU sample: PX4's 50 Hz land detector."""
-BATTERY_DECIMATION = 25
-"""Battery every 25th IMU sample: 10 Hz, as the stack's simulator publishes it."""
 
 
 class Sample(NamedTuple):
@@ -50,11 +45,13 @@ class SimulatedPixhawk:
         self.sim = Simulator(
             model,
             seed=seed,
-            imu_rate_hz=IMU_RATE_HZ,
             home=(float(params["SIH_LOC_LAT0"]), float(params["SIH_LOC_LON0"]), float(params["SIH_LOC_H0"])),
         )
+        period_us = self.sim.imu_period_us
+        self._land_detector_every = LAND_DETECTOR_PERIOD_US // period_us
+        self._battery_every = BATTERY_PERIOD_US // period_us
         self.commander = Px4Commander(params)
-        self.control = FlightControl(params, IMU_RATE_HZ)
+        self.control = FlightControl(params, period_us)
         self.land_detector = MulticopterLandDetector(params)
         self.battery = BatteryModel(params)
         self.battery_state: BatteryState = self.battery.update(0.0, False)
@@ -96,7 +93,7 @@ class SimulatedPixhawk:
         self.truth = truth = self.sim.truth()
         now = self.time_us
         commander = self.commander
-        if self.steps % LAND_DETECTOR_DECIMATION == 0:
+        if self.steps % self._land_detector_every == 0:
             self._detect_landing(now, truth)
             commander.update(now, self.condition())
         land = self.land_detector.state
@@ -113,8 +110,8 @@ class SimulatedPixhawk:
             setpoint=self.setpoint,
         )
         self._motors = out.motors
-        if self.steps % BATTERY_DECIMATION == 0:
-            self.battery_state = self.battery.update(BATTERY_DECIMATION / IMU_RATE_HZ, commander.armed)
+        if self.steps % self._battery_every == 0:
+            self.battery_state = self.battery.update(BATTERY_PERIOD_US * 1e-6, commander.armed)
         self.steps += 1
 
     def _detect_landing(self, now: int, truth: GroundTruth) -> None:

@@ -21,10 +21,10 @@ import tty
 from pathlib import Path
 from typing import Protocol
 
-from stack.mavlink.endpoint import parse_endpoint
+from stack.mavlink.endpoint import DEFAULT_BAUD, parse_endpoint
 from stack.mavlink.transport import READ_CHUNK, UdpInTransport, UdpOutTransport
 from stack.pixhawk_sim.faults import FaultInjector
-from stack.pixhawk_sim.uart import DEFAULT_BAUD, RX_BUFFER_BYTES, UartPacer
+from stack.pixhawk_sim.uart import RX_BUFFER_BYTES, UartPacer
 
 LOOPBACK = "127.0.0.1"
 SERVICE_PERIOD_S = 0.001
