@@ -42,7 +42,7 @@ def pixhawk_sim(
     params_file: Path | None = typer.Option(
         None,
         "--params",
-        help="TOML file whose [params] table sets parameters (a launch profile qualifies; the "
+        help="TOML file whose params table sets parameters (a launch profile qualifies; the "
         "names the Pixhawk does not use are listed and ignored)",
     ),
     seed: int = typer.Option(0, "--seed", help="Seed of the sensor noise and of the link faults"),

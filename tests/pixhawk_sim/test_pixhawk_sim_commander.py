@@ -9,7 +9,7 @@ from pymavlink.dialects.v20 import common as mavlink
 
 from stack.mavlink.px4_modes import Px4Mode
 from stack.pixhawk_sim.commander import Condition, Px4Commander
-from stack.pixhawk_sim.params import OffboardLossAction, parameter_values
+from stack.pixhawk_sim.params import OffboardLossAction, parameter_values, read_params_file
 from stack.runtime.params import ParamError
 from stack.sim.vehicle import load_vehicle
 
@@ -188,3 +188,16 @@ def test_armed_in_a_mode_it_cannot_fly_it_holds() -> None:
     assert c.arm_disarm(True, True, 0, ON_GROUND).result == ACCEPTED  # forced, in Position mode
     c.update(0, ON_GROUND)
     assert c.mode is Px4Mode.AUTO_LOITER and c.failsafe
+
+
+def test_parameters_come_from_the_airframe_then_a_params_file_then_the_command_line(tmp_path) -> None:
+    vehicle = load_vehicle("sih_quad")
+    assert parameter_values(vehicle)["MPC_THR_HOVER"] == vehicle.airframe["MPC_THR_HOVER"]
+    path = tmp_path / "profile.toml"
+    path.write_text('[params]\nMC_ROLLRATE_K = 1.5\nATT_MAG_DECL = 3.2\n\n[[module]]\nmodule = "x"\n')
+    used, ignored = read_params_file(path)
+    assert used == {"MC_ROLLRATE_K": 1.5} and ignored == ["ATT_MAG_DECL"]
+    values = parameter_values(vehicle, {**used, "COM_OF_LOSS_T": "0.5"})
+    assert values["MC_ROLLRATE_K"] == 1.5 and values["COM_OF_LOSS_T"] == 0.5
+    with pytest.raises(ParamError, match="unknown parameter"):
+        parameter_values(vehicle, {"ATT_MAG_DECL": 3.2})
