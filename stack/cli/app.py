@@ -26,7 +26,7 @@ from stack.cli.common import (
 )
 from stack.cli.observers import add_observers
 from stack.supervisor import state as run_state
-from stack.supervisor.profile import DEFAULT_PROFILE, ProfileError, load_profile
+from stack.supervisor.profile import DEFAULT_PROFILE, Profile, ProfileError, load_profile
 from stack.supervisor.supervisor import Supervisor, UpOptions
 
 app = typer.Typer(
@@ -57,6 +57,12 @@ def up(
     save: str | None = typer.Option(None, "--save", help="Write the live plots to this .rrd file"),
     record: Path | None = typer.Option(None, "--record", help="Record every topic to this MCAP file"),
     transport: str | None = TransportOption,
+    device: str | None = typer.Option(
+        None,
+        "--device",
+        help="MAVLink endpoint of the Pixhawk (profiles with the pixhawk module), e.g. "
+        "serial:/dev/ttyACM0:921600 or udp:0.0.0.0:14540",
+    ),
 ) -> None:
     """Start a stack from a launch profile and supervise it until Ctrl-C, SIGTERM or --duration."""
     try:
@@ -64,15 +70,32 @@ def up(
     except ProfileError as e:
         fail(str(e), code=2)
     choose_transport(prof, transport)
+    extra_args = _device_args(prof, device) if device is not None else {}
     add_observers(prof, plot=plot_, web=web, save=save, record=record)
     running = run_state.addressed_stacks(prof.vehicle)
     if running:
         fail(f"a stack for vehicle '{prof.vehicle}' is already running (pid {running[0]['pid']}); `stack down` first")
     run_dir = run_state.new_run_dir(prof.name, prof.vehicle)
-    supervisor = Supervisor(prof, UpOptions(duration=duration, log_level=log_level, echo_logs=not quiet), run_dir)
+    options = UpOptions(duration=duration, log_level=log_level, echo_logs=not quiet, extra_args=extra_args)
+    supervisor = Supervisor(prof, options, run_dir)
     if record is not None:
         typer.echo(f"[stack] recording to {record.resolve()}")
     raise typer.Exit(supervisor.run())
+
+
+def _device_args(prof: Profile, device: str) -> dict[str, dict[str, object]]:
+    """``--device``: the ``device`` argument of the profile's pixhawk module(s), checked before anything starts."""
+    from stack.mavlink.endpoint import parse_endpoint
+    from stack.mavlink.module import PixhawkAdapterModule
+
+    try:
+        parse_endpoint(device)
+    except ValueError as e:
+        fail(f"--device: {e}", code=2)
+    names = [m.name for m in prof.modules if issubclass(m.cls, PixhawkAdapterModule)]
+    if not names:
+        fail(f"--device: profile {prof.name} has no pixhawk module (try: stack up pixhawk --device ...)", code=2)
+    return {name: {"device": device} for name in names}
 
 
 @app.command()
@@ -145,6 +168,10 @@ def status(
     print_table(
         ("MODULE", "STATE", "PID", "CPU%", "MEM", "RESTARTS", "RATE", "RUNS", "IN", "OUT", "ERR", "LOOP us"), rows
     )
+    for m in report["modules"]:
+        if m.get("extra"):  # a module's own figures (e.g. pixhawk: its MAVLink link and time sync)
+            figures = (f"{k} {v:.4g}" if isinstance(v, float) else f"{k} {v}" for k, v in m["extra"].items())
+            typer.echo(f"{m['module']}: " + ", ".join(figures))
     sim_times = [m.get("sim_time_us", 0) for m in report["modules"]]
     if report["lockstep"] and any(sim_times):
         typer.echo(f"simulated time {max(sim_times) / 1e6:.3f} s at {time.strftime('%H:%M:%S')}")

@@ -231,3 +231,11 @@ critical = true
     assert code == 0, stack.output
     assert "Traceback" not in stack.output
     assert not wait_no_processes(tmp_path)
+
+
+def test_stack_up_device_option_is_checked_before_anything_starts(tmp_path: Path) -> None:
+    bad = run_cli(tmp_path, "up", "pixhawk", "--device", "nonsense")
+    assert bad.returncode == 2 and "--device: endpoint 'nonsense'" in bad.stderr
+    elsewhere = run_cli(tmp_path, "up", "sitl_quad", "--device", "udp:127.0.0.1:14540")
+    assert elsewhere.returncode == 2 and "has no pixhawk module" in elsewhere.stderr
+    assert not (tmp_path / "runs").exists()
