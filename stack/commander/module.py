@@ -4,7 +4,9 @@ Like PX4's ``src/modules/commander/Commander.cpp`` it runs at 100 Hz (COMMANDER_
 answers every ``vehicle_command`` with a ``vehicle_command_ack`` and publishes ``actuator_armed``,
 ``vehicle_status`` and ``vehicle_control_mode`` (the flags the controllers obey) on change and at 2 Hz,
 plus ``home_position``. In Offboard the control flags follow the offboard controller's
-``offboard_control_mode``, which must keep arriving (COM_OF_LOSS_T) or the switch is refused.
+``offboard_control_mode``, which must keep arriving (COM_OF_LOSS_T) or the switch is refused. With an external
+autopilot as the plant (COM_EXT_AP, the ``pixhawk`` module) it reads ``external_autopilot_status`` and
+publishes the acknowledgements it held back until that autopilot armed or refused.
 
 PX4's land detector runs in the same process on every second tick, at its 50 Hz
 (LAND_DETECTOR_UPDATE_INTERVAL in ``src/modules/land_detector/LandDetector.h``), and publishes

@@ -130,3 +130,15 @@ def test_a_two_second_link_cut_in_a_hold(tmp_path: Path):
     assert metrics["link_loss_reported_after_s"] < 2.0
     assert metrics["pixhawk_failsafe_mode"] in ("AUTO.LOITER", "AUTO.LAND")
     assert "the stack reports the link lost" in result["output"]
+
+
+def test_on_the_pixhawks_own_estimate_with_attitude_setpoints(tmp_path: Path):
+    # The profile options: no estimator and no mc_att_control in the stack; EKF2's estimate (here the
+    # simulated Pixhawk's) flies, and the Pixhawk gets attitude + thrust.
+    profile = write_profile(
+        tmp_path / "own_estimate.toml", 'extends = "pixhawk_sim"\n[params]\nPXH_EST_SRC = 1\nPXH_SP_TYPE = 1\n'
+    )
+    result = fly(tmp_path, "takeoff_land", profile, 2)
+    assert_meets(result, "takeoff_land")
+    modules = result["output"]
+    assert "starting attitude_estimator_q" not in modules and "starting mc_att_control" not in modules
