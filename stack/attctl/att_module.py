@@ -23,19 +23,10 @@ from stack.mathlib import quaternion as quat
 from stack.msg.estimation import VehicleAttitude
 from stack.msg.setpoints import VehicleAttitudeSetpoint, VehicleRatesSetpoint
 from stack.msg.system import VehicleControlMode
+from stack.params import catalogue
+from stack.params.param import Param
 from stack.runtime.module import Module, Trigger
-from stack.runtime.params import Param
 
-SHAPING_PARAM = Param(
-    "MC_INPUT_SHAPING",
-    0,
-    0,
-    1,
-    "",
-    "Attitude setpoint front end: 0 PX4 (step), 1 ArduPilot input shaping",
-    choices=(0, 1),
-)
-_OWN = (SHAPING_PARAM,)
 _NO_MODE = VehicleControlMode()
 
 
@@ -52,7 +43,13 @@ class MulticopterAttitudeControl(Module):
     DESCRIPTION = "Attitude controller (PX4 mc_att_control): attitude setpoint → body-rate setpoint"
     TRIGGER = Trigger("vehicle_attitude")
     DT_RANGE = (0.0002, 0.02)
-    PARAMS = _unique(attitude_control.PARAMS, input_shaping.PARAMS, stabilized.PARAMS, rate_control.ACRO_PARAMS, _OWN)
+    PARAMS = _unique(
+        attitude_control.PARAMS,
+        input_shaping.PARAMS,
+        stabilized.PARAMS,
+        rate_control.ACRO_PARAMS,
+        catalogue.params("MC_INPUT_SHAPING"),
+    )
 
     def __init__(self, rt) -> None:
         super().__init__(rt)

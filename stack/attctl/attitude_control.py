@@ -17,16 +17,12 @@ from collections.abc import Mapping
 from stack.mathlib import quaternion as quat
 from stack.mathlib.quaternion import Quat
 from stack.mathlib.vector import Vec3
-from stack.runtime.params import Param
+from stack.params import catalogue
+from stack.params.param import Param
 
-PARAMS: tuple[Param, ...] = (
-    Param("MC_ROLL_P", 4.0, 0.0, 12.0, "1/s", "Roll P gain: rate setpoint per radian of roll error"),
-    Param("MC_PITCH_P", 4.0, 0.0, 12.0, "1/s", "Pitch P gain"),
-    Param("MC_YAW_P", 2.8, 0.0, 5.0, "1/s", "Yaw P gain"),
-    Param("MC_YAW_WEIGHT", 0.4, 0.0, 1.0, "", "Fraction of the yaw error kept in the reduced-attitude law"),
-    Param("MC_ROLLRATE_MAX", 220.0, 0.0, 1800.0, "deg/s", "Roll rate setpoint limit"),
-    Param("MC_PITCHRATE_MAX", 220.0, 0.0, 1800.0, "deg/s", "Pitch rate setpoint limit"),
-    Param("MC_YAWRATE_MAX", 200.0, 0.0, 1800.0, "deg/s", "Yaw rate setpoint limit"),
+PARAMS: tuple[Param, ...] = catalogue.params(
+    "MC_ROLL_P", "MC_PITCH_P", "MC_YAW_P", "MC_YAW_WEIGHT", "MC_ROLLRATE_MAX", "MC_PITCHRATE_MAX",
+    "MC_YAWRATE_MAX",
 )
 DEFAULTS: dict[str, object] = {p.name: p.default for p in PARAMS}
 

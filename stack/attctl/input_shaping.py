@@ -24,21 +24,12 @@ from stack.mathlib import quaternion as quat
 from stack.mathlib.quaternion import Quat
 from stack.mathlib.scalar import wrap_pi
 from stack.mathlib.vector import Vec3
-from stack.runtime.params import Param
+from stack.params import catalogue
+from stack.params.param import Param
 
-PARAMS: tuple[Param, ...] = (
-    Param("ATC_INPUT_TC", 0.15, 0.0, 1.0, "s", "Attitude input time constant (0.5 very soft … 0.05 very crisp)"),
-    Param("ATC_ACCEL_R_MAX", 110000.0, 0.0, 180000.0, "cdeg/s/s", "Roll acceleration limit (0 = off)"),
-    Param("ATC_ACCEL_P_MAX", 110000.0, 0.0, 180000.0, "cdeg/s/s", "Pitch acceleration limit (0 = off)"),
-    Param("ATC_ACCEL_Y_MAX", 27000.0, 0.0, 72000.0, "cdeg/s/s", "Yaw acceleration limit (0 = off)"),
-    Param("ATC_RATE_FF_ENAB", 1, 0, 1, "", "1: shape inputs and feed the target rate forward; 0: jump to desired",
-          choices=(0, 1)),
-    Param("ATC_SLEW_YAW", 6000.0, 500.0, 18000.0, "cdeg/s", "Yaw slew limit for slewed yaw-angle inputs"),
-    Param("ATC_RATE_R_MAX", 0.0, 0.0, 1080.0, "deg/s", "Roll target-rate limit (0 = off)"),
-    Param("ATC_RATE_P_MAX", 0.0, 0.0, 1080.0, "deg/s", "Pitch target-rate limit (0 = off)"),
-    Param("ATC_RATE_Y_MAX", 0.0, 0.0, 1080.0, "deg/s", "Yaw target-rate limit (0 = off)"),
-    Param("ACRO_RP_RATE_TC", 0.0, 0.0, 1.0, "s", "Body-rate input time constant, roll and pitch (0 = off)"),
-    Param("ACRO_Y_RATE_TC", 0.0, 0.0, 1.0, "s", "Body-rate input time constant, yaw (0 = off)"),
+PARAMS: tuple[Param, ...] = catalogue.params(
+    "ATC_INPUT_TC", "ATC_ACCEL_R_MAX", "ATC_ACCEL_P_MAX", "ATC_ACCEL_Y_MAX", "ATC_RATE_FF_ENAB", "ATC_SLEW_YAW",
+    "ATC_RATE_R_MAX", "ATC_RATE_P_MAX", "ATC_RATE_Y_MAX", "ACRO_RP_RATE_TC", "ACRO_Y_RATE_TC",
 )
 DEFAULTS: dict[str, object] = {p.name: p.default for p in PARAMS}
 

@@ -14,37 +14,18 @@ from collections.abc import Mapping
 from stack.mathlib.filters import AlphaFilter
 from stack.mathlib.scalar import superexpo
 from stack.mathlib.vector import Vec3
-from stack.runtime.params import Param
+from stack.params import catalogue
+from stack.params.param import Param
 
-PARAMS: tuple[Param, ...] = (
-    Param("MC_ROLLRATE_P", 0.15, 0.01, 0.5, "", "Roll rate P gain (torque per rad/s of error)"),
-    Param("MC_ROLLRATE_I", 0.2, 0.0, None, "", "Roll rate I gain"),
-    Param("MC_ROLLRATE_D", 0.003, 0.0, 0.01, "", "Roll rate D gain (on measured angular acceleration)"),
-    Param("MC_ROLLRATE_FF", 0.0, 0.0, None, "", "Roll rate feed-forward gain"),
-    Param("MC_ROLLRATE_K", 1.0, 0.01, 5.0, "", "Roll rate controller gain multiplying P, I and D"),
-    Param("MC_RR_INT_LIM", 0.3, 0.0, None, "", "Roll rate integrator limit"),
-    Param("MC_PITCHRATE_P", 0.15, 0.01, 0.6, "", "Pitch rate P gain"),
-    Param("MC_PITCHRATE_I", 0.2, 0.0, None, "", "Pitch rate I gain"),
-    Param("MC_PITCHRATE_D", 0.003, 0.0, None, "", "Pitch rate D gain"),
-    Param("MC_PITCHRATE_FF", 0.0, 0.0, None, "", "Pitch rate feed-forward gain"),
-    Param("MC_PITCHRATE_K", 1.0, 0.01, 5.0, "", "Pitch rate controller gain multiplying P, I and D"),
-    Param("MC_PR_INT_LIM", 0.3, 0.0, None, "", "Pitch rate integrator limit"),
-    Param("MC_YAWRATE_P", 0.2, 0.0, 0.6, "", "Yaw rate P gain"),
-    Param("MC_YAWRATE_I", 0.1, 0.0, None, "", "Yaw rate I gain"),
-    Param("MC_YAWRATE_D", 0.0, 0.0, None, "", "Yaw rate D gain"),
-    Param("MC_YAWRATE_FF", 0.0, 0.0, None, "", "Yaw rate feed-forward gain"),
-    Param("MC_YAWRATE_K", 1.0, 0.01, 5.0, "", "Yaw rate controller gain multiplying P, I and D"),
-    Param("MC_YR_INT_LIM", 0.3, 0.0, None, "", "Yaw rate integrator limit"),
-    Param("MC_YAW_TQ_CUTOFF", 2.0, 0.0, 10.0, "Hz", "Yaw torque low-pass cutoff (0 = off)"),
+PARAMS: tuple[Param, ...] = catalogue.params(
+    "MC_ROLLRATE_P", "MC_ROLLRATE_I", "MC_ROLLRATE_D", "MC_ROLLRATE_FF", "MC_ROLLRATE_K", "MC_RR_INT_LIM",
+    "MC_PITCHRATE_P", "MC_PITCHRATE_I", "MC_PITCHRATE_D", "MC_PITCHRATE_FF", "MC_PITCHRATE_K", "MC_PR_INT_LIM",
+    "MC_YAWRATE_P", "MC_YAWRATE_I", "MC_YAWRATE_D", "MC_YAWRATE_FF", "MC_YAWRATE_K", "MC_YR_INT_LIM",
+    "MC_YAW_TQ_CUTOFF",
 )
-ACRO_PARAMS: tuple[Param, ...] = (
-    Param("MC_ACRO_R_MAX", 100.0, 0.0, 1800.0, "deg/s", "Acro roll rate at full stick"),
-    Param("MC_ACRO_P_MAX", 100.0, 0.0, 1800.0, "deg/s", "Acro pitch rate at full stick"),
-    Param("MC_ACRO_Y_MAX", 100.0, 0.0, 1800.0, "deg/s", "Acro yaw rate at full stick"),
-    Param("MC_ACRO_EXPO", 0.0, 0.0, 1.0, "", "Acro roll/pitch expo (0 linear … 1 cubic)"),
-    Param("MC_ACRO_EXPO_Y", 0.0, 0.0, 1.0, "", "Acro yaw expo"),
-    Param("MC_ACRO_SUPEXPO", 0.0, 0.0, 0.95, "", "Acro roll/pitch super-expo (0 = off)"),
-    Param("MC_ACRO_SUPEXPOY", 0.0, 0.0, 0.95, "", "Acro yaw super-expo (0 = off)"),
+ACRO_PARAMS: tuple[Param, ...] = catalogue.params(
+    "MC_ACRO_R_MAX", "MC_ACRO_P_MAX", "MC_ACRO_Y_MAX", "MC_ACRO_EXPO", "MC_ACRO_EXPO_Y", "MC_ACRO_SUPEXPO",
+    "MC_ACRO_SUPEXPOY",
 )
 DEFAULTS: dict[str, object] = {p.name: p.default for p in PARAMS + ACRO_PARAMS}
 

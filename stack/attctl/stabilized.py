@@ -23,20 +23,12 @@ from stack.mathlib.filters import AlphaFilter, SlewRate
 from stack.mathlib.quaternion import Quat
 from stack.mathlib.scalar import interpolate, wrap_pi
 from stack.mathlib.vector import Vec3
-from stack.runtime.params import Param
+from stack.params import catalogue
+from stack.params.param import Param
 
-PARAMS: tuple[Param, ...] = (
-    Param("MPC_MAN_TILT_MAX", 35.0, 0.0, 90.0, "deg", "Maximum tilt at full roll/pitch stick"),
-    Param("MC_MAN_TILT_TAU", 0.0, 0.0, 2.0, "s", "Roll/pitch stick filter time constant (0 = off)"),
-    Param("MPC_MAN_Y_MAX", 150.0, 0.0, 400.0, "deg/s", "Yaw rate at full yaw stick"),
-    Param("MPC_MANTHR_MIN", 0.08, 0.0, 1.0, "", "Thrust at minimum throttle stick while flying"),
-    Param("MPC_THR_HOVER", 0.5, 0.1, 0.8, "", "Hover thrust, used while no hover-thrust estimate is set"),
-    Param("MPC_THR_MAX", 1.0, 0.0, 1.0, "", "Thrust at maximum throttle stick"),
-    Param("MPC_THR_CURVE", 0, 0, 1, "", "0: centred stick = hover thrust; 1: linear min…max", choices=(0, 1)),
-    Param("COM_SPOOLUP_TIME", 1.0, 0.0, 30.0, "s", "Time after arming before the thrust limit starts ramping up"),
-    Param("MC_AIRMODE", 0, 0, 2, "", "Airmode (2 = roll/pitch/yaw: no yaw reset on the arming gesture)",
-          choices=(0, 1, 2)),
-    Param("MC_RATT_TH", 0.8, 0.01, 1.0, "", "Rattitude: roll/pitch stick deflection beyond which sticks command rates"),
+PARAMS: tuple[Param, ...] = catalogue.params(
+    "MPC_MAN_TILT_MAX", "MC_MAN_TILT_TAU", "MPC_MAN_Y_MAX", "MPC_MANTHR_MIN", "MPC_THR_HOVER", "MPC_THR_MAX",
+    "MPC_THR_CURVE", "COM_SPOOLUP_TIME", "MC_AIRMODE", "MC_RATT_TH",
 )
 DEFAULTS: dict[str, object] = {p.name: p.default for p in PARAMS}
 

@@ -62,10 +62,10 @@ def pixhawk_sim(
     """A simulated PX4 Pixhawk: the stack's simulator with PX4's rate controller and allocator, paced to the wall
     clock behind a MAVLink endpoint that behaves as PX4 firmware does (streams, commands, Offboard, failsafes).
     It talks MAVLink only; it never joins the stack's bus."""
+    from stack.params.param import ParamError
     from stack.pixhawk_sim.faults import FaultSettings
     from stack.pixhawk_sim.params import parameter_values, read_params_file
     from stack.pixhawk_sim.runner import RunOptions, run
-    from stack.runtime.params import ParamError
     from stack.sim.vehicle import load_vehicle
 
     if link is not None and pty_link is not None:

@@ -25,19 +25,12 @@ from collections.abc import Iterable, Mapping
 from enum import IntEnum
 from typing import NamedTuple
 
-from stack.runtime.params import Param
+from stack.params import catalogue
+from stack.params.param import Param
 
-PARAMS: tuple[Param, ...] = (
-    Param("SIM_BAT_DRAIN", 60.0, 0.0, None, "s", "Timed drain: full to empty while armed (0 = drain from current)"),
-    Param("SIM_BAT_MIN_PCT", 50.0, 0.0, 100.0, "%", "The simulated charge never falls below this"),
-    Param("BAT1_N_CELLS", 4, 1, 16, "", "Number of cells in series"),
-    Param("BAT1_CAPACITY", 5000.0, 1.0, 100000.0, "mAh", "Pack capacity"),
-    Param("BAT1_V_EMPTY", 3.6, 2.5, 4.5, "V", "Cell voltage when empty (open circuit)"),
-    Param("BAT1_V_CHARGED", 4.05, 3.0, 5.0, "V", "Cell voltage when full (open circuit)"),
-    Param("BAT1_R_INTERNAL", 0.005, 0.0, 0.2, "Ohm", "Internal resistance per cell"),
-    Param("BAT_LOW_THR", 0.15, 0.12, 0.5, "", "Remaining charge below which the warning is LOW"),
-    Param("BAT_CRIT_THR", 0.07, 0.05, 0.5, "", "Remaining charge below which the warning is CRITICAL"),
-    Param("BAT_EMERGEN_THR", 0.05, 0.03, 0.5, "", "Remaining charge below which the warning is EMERGENCY"),
+PARAMS: tuple[Param, ...] = catalogue.params(
+    "SIM_BAT_DRAIN", "SIM_BAT_MIN_PCT", "BAT1_N_CELLS", "BAT1_CAPACITY", "BAT1_V_EMPTY", "BAT1_V_CHARGED",
+    "BAT1_R_INTERNAL", "BAT_LOW_THR", "BAT_CRIT_THR", "BAT_EMERGEN_THR",
 )
 DEFAULTS: dict[str, object] = {p.name: p.default for p in PARAMS}
 

@@ -36,31 +36,13 @@ from stack.commander.geofence import GeofenceAction
 from stack.commander.health import can_run, missing_cause
 from stack.commander.modes import AUTO_NAV_STATES, Requirement
 from stack.msg.system import VehicleStatus
-from stack.runtime.params import Param
+from stack.params import catalogue
+from stack.params.param import Param
 
 NS = VehicleStatus
 
-PARAMS: tuple[Param, ...] = (
-    Param(
-        "NAV_DLL_ACT",
-        0,
-        0,
-        6,
-        "",
-        "Link-loss action: 0 off, 1 hold, 2 return, 3 land, 5 terminate, 6 disarm",
-        choices=(0, 1, 2, 3, 5, 6),
-    ),
-    Param("COM_DLL_EXCEPT", 0, 0, 31, "", "No link-loss failsafe in: bit 0 Mission, bit 1 the other auto modes"),
-    Param(
-        "COM_LOW_BAT_ACT",
-        0,
-        0,
-        3,
-        "",
-        "Battery: 0 warn, 1 return, 2 land, 3 return at critical then land at emergency",
-        choices=(0, 1, 2, 3),
-    ),
-    Param("COM_FAIL_ACT_T", 5.0, 0.0, 25.0, "s", "Hold this long before a failsafe action (0 = act at once)"),
+PARAMS: tuple[Param, ...] = catalogue.params(
+    "NAV_DLL_ACT", "COM_DLL_EXCEPT", "COM_LOW_BAT_ACT", "COM_FAIL_ACT_T",
 )
 DEFAULTS: dict[str, object] = {p.name: p.default for p in PARAMS}
 

@@ -11,7 +11,8 @@ import math
 from collections.abc import Mapping
 from enum import IntEnum
 
-from stack.runtime.params import Param
+from stack.params import catalogue
+from stack.params.param import Param
 
 
 class GeofenceAction(IntEnum):
@@ -25,18 +26,8 @@ class GeofenceAction(IntEnum):
     LAND = 5
 
 
-PARAMS: tuple[Param, ...] = (
-    Param(
-        "GF_ACTION",
-        2,
-        0,
-        5,
-        "",
-        "Geofence breach action: 0 none, 1 warning, 2 hold, 3 return, 4 terminate, 5 land",
-        choices=tuple(int(a) for a in GeofenceAction),
-    ),
-    Param("GF_MAX_HOR_DIST", 0.0, 0.0, 10000.0, "m", "Maximum horizontal distance from home (0 = no limit)"),
-    Param("GF_MAX_VER_DIST", 0.0, 0.0, 10000.0, "m", "Maximum height above home (0 = no limit)"),
+PARAMS: tuple[Param, ...] = catalogue.params(
+    "GF_ACTION", "GF_MAX_HOR_DIST", "GF_MAX_VER_DIST",
 )
 DEFAULTS: dict[str, object] = {p.name: p.default for p in PARAMS}
 

@@ -30,21 +30,13 @@ from typing import NamedTuple
 
 from stack.commander.hysteresis import Hysteresis
 from stack.mathlib.vector import ZERO3, Vec3
+from stack.params import catalogue
+from stack.params.param import Param
 from stack.posctl.takeoff import TakeoffState
-from stack.runtime.params import Param
 
-PARAMS: tuple[Param, ...] = (
-    Param("LNDMC_TRIG_TIME", 1.0, 0.1, 10.0, "s", "Total time to go through ground contact, maybe landed, landed"),
-    Param("LNDMC_Z_VEL_MAX", 0.25, 0.0, None, "m/s", "Vertical speed below which the vehicle counts as still"),
-    Param("LNDMC_XY_VEL_MAX", 1.5, 0.0, None, "m/s", "Horizontal speed allowed in the landed state"),
-    Param("LNDMC_ROT_MAX", 20.0, 0.0, None, "deg/s", "Roll/pitch rate allowed in the landed state"),
-    Param("LNDMC_ALT_GND", 2.0, -1.0, None, "m", "Height below which ground effect is assumed (negative: none)"),
-    Param("MPC_THR_MIN", 0.12, 0.05, 1.0, "", "Minimum collective thrust in climb-rate-controlled modes"),
-    Param("MPC_THR_HOVER", 0.5, 0.1, 0.8, "", "Hover thrust (used until a hover-thrust estimate arrives)"),
-    Param("MPC_MANTHR_MIN", 0.08, 0.0, 1.0, "", "Minimum thrust in manual-thrust modes"),
-    Param("MPC_USE_HTE", True, doc="Use the hover-thrust estimate instead of MPC_THR_HOVER"),
-    Param("MPC_LAND_SPEED", 0.7, 0.6, None, "m/s", "Landing descent speed"),
-    Param("MPC_LAND_CRWL", 0.3, 0.1, None, "m/s", "Landing crawl speed"),
+PARAMS: tuple[Param, ...] = catalogue.params(
+    "LNDMC_TRIG_TIME", "LNDMC_Z_VEL_MAX", "LNDMC_XY_VEL_MAX", "LNDMC_ROT_MAX", "LNDMC_ALT_GND", "MPC_THR_MIN",
+    "MPC_THR_HOVER", "MPC_MANTHR_MIN", "MPC_USE_HTE", "MPC_LAND_SPEED", "MPC_LAND_CRWL",
 )
 DEFAULTS: dict[str, object] = {p.name: p.default for p in PARAMS}
 

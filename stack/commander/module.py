@@ -40,18 +40,16 @@ from stack.msg.system import (
     VehicleLandDetected,
     VehicleStatus,
 )
+from stack.params import catalogue
 from stack.posctl.takeoff import TakeoffState
 from stack.runtime.module import Module, Timer
-from stack.runtime.params import Param
 
 NS = VehicleStatus
 RATE_HZ = 100.0
 REPUBLISH_US = 500_000
 LAND_DETECTOR_PERIOD_US = 20_000
 LAND_DETECTED_REPUBLISH_US = 1_000_000
-OFFBOARD_PARAMS = (
-    Param("COM_OF_LOSS_T", 1.0, 0.0, 60.0, "s", "Offboard signal counts as lost after this long without one"),
-)
+OFFBOARD_PARAMS = catalogue.params("COM_OF_LOSS_T")
 MAV_MODE_FLAG_CUSTOM_MODE_ENABLED = 1
 
 

@@ -23,24 +23,12 @@ from typing import NamedTuple
 
 from stack.commander.home import HomePosition
 from stack.mathlib.vector import Vec3
-from stack.runtime.params import Param
+from stack.params import catalogue
+from stack.params.param import Param
 
-PARAMS: tuple[Param, ...] = (
-    Param("RTL_RETURN_ALT", 30.0, 0.0, None, "m", "Return altitude above home (multicopter default)"),
-    Param("RTL_DESCEND_ALT", 10.0, 0.0, None, "m", "Altitude above home to descend to before landing"),
-    Param("RTL_LAND_DELAY", 0.0, -1.0, None, "s", "Wait at RTL_DESCEND_ALT before landing (−1: do not land)"),
-    Param("RTL_MIN_DIST", 10.0, 0.5, None, "m", "Within this distance of home the return altitude follows the cone"),
-    Param(
-        "RTL_CONE_ANG",
-        45,
-        0,
-        90,
-        "deg",
-        "Half-angle of the return-altitude cone (0: no cone)",
-        choices=(0, 25, 45, 65, 80, 90),
-    ),
-    Param("NAV_ACC_RAD", 2.0, 0.05, 200.0, "m", "Horizontal acceptance radius (multicopter default)"),
-    Param("NAV_MC_ALT_RAD", 0.8, 0.05, 200.0, "m", "Vertical acceptance radius"),
+PARAMS: tuple[Param, ...] = catalogue.params(
+    "RTL_RETURN_ALT", "RTL_DESCEND_ALT", "RTL_LAND_DELAY", "RTL_MIN_DIST", "RTL_CONE_ANG", "NAV_ACC_RAD",
+    "NAV_MC_ALT_RAD",
 )
 DEFAULTS: dict[str, object] = {p.name: p.default for p in PARAMS}
 

@@ -58,7 +58,6 @@ from typing import NamedTuple
 
 from stack.commander.failsafe import ACTION_NAMES, Failsafe, FailsafeAction, FailsafeConditions
 from stack.commander.failsafe import PARAMS as FAILSAFE_PARAMS
-from stack.commander.failure_injection import FAILURE_INJECTION_PARAM
 from stack.commander.geofence import PARAMS as GEOFENCE_PARAMS
 from stack.commander.geofence import CylinderGeofence
 from stack.commander.health import (
@@ -85,7 +84,8 @@ from stack.commander.modes import (
 from stack.mathlib.geo import MapProjection
 from stack.msg.estimation import VehicleLocalPosition
 from stack.msg.system import ActuatorArmed, VehicleCommand, VehicleCommandAck, VehicleControlMode, VehicleStatus
-from stack.runtime.params import Param
+from stack.params import catalogue
+from stack.params.param import Param
 
 NS = VehicleStatus
 CMD = VehicleCommand
@@ -110,28 +110,10 @@ EXTERNAL_LINK_GRACE_US = 1_500_000
 """After the external autopilot's link comes back, its sensors have this long to make the estimates valid."""
 _POSITION_AND_ALTITUDE = int(Requirement.LOCAL_POSITION | Requirement.LOCAL_ALT)
 
-OWN_PARAMS: tuple[Param, ...] = (
-    Param("COM_DISARM_LAND", 2.0, -1.0, 20.0, "s", "Disarm this long after landing (≤ 0: never)"),
-    Param("COM_DISARM_PRFLT", 10.0, -1.0, 20.0, "s", "Disarm this long after arming without taking off (≤ 0: never)"),
-    Param("COM_DL_LOSS_T", 10, 5, 300, "s", "Command link counts as lost after this long without a message"),
-    Param("COM_TAKEOFF_ACT", 0, 0, 1, "", "After takeoff: 0 Hold, 1 Mission (if one is loaded)", choices=(0, 1)),
-    Param("COM_POS_FS_EPH", 5.0, 0.0, 1000.0, "m", "Horizontal position error above which the position is invalid"),
-    Param("COM_ARM_WO_GPS", 1, 0, 1, "", "1: allow arming without GPS in modes that need no position", choices=(0, 1)),
-    Param("SYS_HAS_BARO", 1, 0, 1, "", "A barometer is fitted and required to arm", choices=(0, 1)),
-    Param("SYS_HAS_MAG", 1, 0, 1, "", "A magnetometer is fitted and required to arm", choices=(0, 1)),
-    Param("SYS_HAS_GPS", 1, 0, 1, "", "A GNSS receiver is fitted", choices=(0, 1)),
-    FAILURE_INJECTION_PARAM,
-    Param("MIS_TAKEOFF_ALT", 2.5, 0.0, None, "m", "Takeoff altitude above home when a takeoff gives none"),
-    Param("NAV_MC_ALT_RAD", 0.8, 0.05, 200.0, "m", "Vertical acceptance radius (takeoff altitude reached)"),
-    Param(
-        "COM_EXT_AP",
-        0,
-        0,
-        1,
-        "",
-        "1: the plant is an external autopilot (module pixhawk), which must be connected, armable and armed too",
-        choices=(0, 1),
-    ),
+OWN_PARAMS: tuple[Param, ...] = catalogue.params(
+    "COM_DISARM_LAND", "COM_DISARM_PRFLT", "COM_DL_LOSS_T", "COM_TAKEOFF_ACT", "COM_POS_FS_EPH", "COM_ARM_WO_GPS",
+    "SYS_HAS_BARO", "SYS_HAS_MAG", "SYS_HAS_GPS", "SYS_FAILURE_EN", "MIS_TAKEOFF_ALT", "NAV_MC_ALT_RAD",
+    "COM_EXT_AP",
 )
 PARAMS: tuple[Param, ...] = OWN_PARAMS + FAILSAFE_PARAMS + GEOFENCE_PARAMS
 DEFAULTS: dict[str, object] = {p.name: p.default for p in PARAMS}

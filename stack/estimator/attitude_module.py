@@ -16,24 +16,19 @@ from stack.estimator.angular_velocity import AngularVelocityFilter
 from stack.estimator.attitude_q import AttitudeEstimatorQ
 from stack.msg.estimation import EstimatorStatus, VehicleAngularVelocity, VehicleAttitude, VehicleImuStatus
 from stack.msg.sensors import SensorAccel, SensorGyro
+from stack.params import catalogue
+from stack.params.param import Param
 from stack.runtime.module import Module, Trigger
-from stack.runtime.params import Param
 
-ATTITUDE_PARAMS = (
-    Param("ATT_W_ACC", 0.2, 0.0, 1.0, "1/s", "Accelerometer (tilt) correction weight"),
-    Param("ATT_W_MAG", 0.1, 0.0, 1.0, "1/s", "Magnetometer (heading) correction weight"),
-    Param("ATT_W_GYRO_BIAS", 0.1, 0.0, 1.0, "1/s", "Gyro bias learning weight"),
-    Param("ATT_BIAS_MAX", 0.05, 0.0, 2.0, "rad/s", "Gyro bias limit"),
-    Param("ATT_MAG_DECL", 0.0, -180.0, 180.0, "deg", "Magnetic declination, east positive"),
-    Param("ATT_ACC_COMP", 0, 0, 1, "", "Compensate the accelerometer with the velocity-derived acceleration"),
+ATTITUDE_PARAMS = catalogue.params(
+    "ATT_W_ACC", "ATT_W_MAG", "ATT_W_GYRO_BIAS", "ATT_BIAS_MAX", "ATT_MAG_DECL", "ATT_ACC_COMP",
 )
-COMPENSATION_PARAMS = (
-    Param("ATT_ACC_COMP_LP", 1.0, 0.0, 10.0, "Hz", "Low-pass cutoff of the velocity-derived acceleration (0 = off)"),
+COMPENSATION_PARAMS = catalogue.params(
+    "ATT_ACC_COMP_LP",
 )
 STATUS_INTERVAL_US = 100_000
-GYRO_PARAMS = (
-    Param("IMU_GYRO_CUTOFF", 40.0, 0.0, 1000.0, "Hz", "Body-rate low-pass cutoff (0 = off)"),
-    Param("IMU_DGYRO_CUTOFF", 20.0, 0.0, 1000.0, "Hz", "Angular-acceleration low-pass cutoff (0 = off)"),
+GYRO_PARAMS = catalogue.params(
+    "IMU_GYRO_CUTOFF", "IMU_DGYRO_CUTOFF",
 )
 
 

@@ -50,7 +50,8 @@ The origin (ref lat/lon) is set at the 10th consecutive GPS fix passing LPE's in
 checks (3-D fix, ≥ 6 satellites, eph ≤ LPE_EPH_MAX, epv ≤ LPE_EPV_MAX): the horizontal position is
 reset to zero there and the velocity to the GPS velocity; z does not jump.
 
-Parameters, in :data:`PARAMS` with (default, min, max). LPE names carry PX4's LPE defaults.
+Parameters, in :data:`PARAMS` (defined in :mod:`stack.params.lpe` and :mod:`stack.params.ekf2`). LPE names
+carry PX4's LPE defaults.
 Additions, with the reason:
 
 - ``EKF2_HGT_REF`` 0 (barometer): the height reference, see above. PX4 also offers 2 (range
@@ -88,40 +89,20 @@ from stack.mathlib.geo import MapProjection
 from stack.mathlib.quaternion import Quat
 from stack.mathlib.scalar import CONSTANTS_ONE_G, constrain
 from stack.mathlib.vector import Vec3
+from stack.params import catalogue
+from stack.params.ekf2 import HGT_REF_BARO, HGT_REF_GPS
+from stack.params.param import Param
 
 N_X = 10
 X_X, X_Y, X_Z, X_VX, X_VY, X_VZ, X_BX, X_BY, X_BZ, X_HGT_OFS = range(N_X)
 
-HGT_REF_BARO = 0
-HGT_REF_GPS = 1
-
-PARAMS: dict[str, tuple[float, float, float]] = {
-    # name: (default, min, max)
-    "EKF2_HGT_REF": (HGT_REF_BARO, HGT_REF_BARO, HGT_REF_GPS),  # height reference: 0 baro, 1 GPS (added)
-    "LPE_GPS_XY": (1.0, 0.01, 5.0),  # m, minimum GPS xy std dev (reported eph used when larger)
-    "LPE_GPS_Z": (3.0, 0.01, 200.0),  # m, minimum GPS z std dev (reported epv used when larger)
-    "LPE_GPS_VXY": (0.25, 0.01, 2.0),  # m/s, GPS xy velocity std dev
-    "LPE_GPS_VZ": (0.25, 0.01, 2.0),  # m/s, GPS z velocity std dev
-    "LPE_GPS_DELAY": (0.29, 0.0, 0.4),  # s, GPS delay behind its timestamp_sample
-    "LPE_BAR_Z": (3.0, 0.01, 100.0),  # m, baro altitude std dev
-    "LPE_ACC_XY": (0.012, 1e-5, 2.0),  # m/s²/√Hz, accelerometer xy noise density
-    "LPE_ACC_Z": (0.02, 1e-5, 2.0),  # m/s²/√Hz, accelerometer z noise density
-    "LPE_PN_P": (0.1, 0.0, 1.0),  # m/s/√Hz, position propagation noise density
-    "LPE_PN_V": (0.1, 0.0, 1.0),  # m/s²/√Hz, velocity propagation noise density
-    "LPE_PN_B": (1e-3, 0.0, 1.0),  # m/s³/√Hz, accel bias random walk
-    "LPE_PN_BARO": (0.01, 0.0, 1.0),  # m/s/√Hz, baro offset random walk, GPS reference (added)
-    "LPE_PN_GPS_Z": (0.13, 0.0, 1.0),  # m/s/√Hz, GPS altitude offset random walk, baro reference (added)
-    "LPE_EPH_MAX": (3.0, 1.0, 5.0),  # m, max GPS eph to set the origin
-    "LPE_EPV_MAX": (5.0, 1.0, 5.0),  # m, max GPS epv to set the origin
-    "LPE_XY_PUB": (2.0, 0.3, 100.0),  # m, eph limit for xy_valid (added)
-    "LPE_VXY_PUB": (0.3, 0.01, 1.0),  # m/s, per-axis velocity std dev limit for v_xy_valid
-    "LPE_Z_PUB": (1.0, 0.3, 5.0),  # m, z std dev limit for z_valid / v_z_valid
-    "EKF2_GPS_P_GATE": (5.0, 1.0, 10.0),  # σ, GPS position innovation gate
-    "EKF2_GPS_V_GATE": (5.0, 1.0, 10.0),  # σ, GPS velocity innovation gate
-    "EKF2_BARO_GATE": (5.0, 1.0, 10.0),  # σ, baro innovation gate
-    "EKF2_ABL_LIM": (0.4, 0.0, 0.8),  # m/s², accel bias limit
-    "EKF2_ABIAS_INIT": (0.2, 0.0, 0.5),  # m/s², initial accel bias std dev
-}
+PARAMS: tuple[Param, ...] = catalogue.params(
+    "EKF2_HGT_REF", "LPE_GPS_XY", "LPE_GPS_Z", "LPE_GPS_VXY", "LPE_GPS_VZ", "LPE_GPS_DELAY", "LPE_BAR_Z",
+    "LPE_ACC_XY", "LPE_ACC_Z", "LPE_PN_P", "LPE_PN_V", "LPE_PN_B", "LPE_PN_BARO", "LPE_PN_GPS_Z", "LPE_EPH_MAX",
+    "LPE_EPV_MAX", "LPE_XY_PUB", "LPE_VXY_PUB", "LPE_Z_PUB", "EKF2_GPS_P_GATE", "EKF2_GPS_V_GATE", "EKF2_BARO_GATE",
+    "EKF2_ABL_LIM", "EKF2_ABIAS_INIT",
+)
+_DEFINITIONS = {p.name: p for p in PARAMS}
 
 GPS_DELAY_MAX_US = 500_000  # LPE: history length; older measurements are dropped
 GPS_TIMEOUT_US = 1_000_000  # LPE: no horizontal GPS fusion for this long = dead reckoning
@@ -274,7 +255,7 @@ class LocalPositionKF:
     )
 
     def __init__(self, **params: float) -> None:
-        self.params = {name: spec[0] for name, spec in PARAMS.items()}
+        self.params: dict[str, float] = {p.name: p.default for p in PARAMS}
         self._map: MapProjection | None = None
         self._hgt_ref = HGT_REF_BARO
         self._baro_initialised = False
@@ -285,10 +266,10 @@ class LocalPositionKF:
         """Set parameters by PX4 name (see :data:`PARAMS`); values are clamped to their range.
         ``EKF2_HGT_REF`` is rounded to its enum value and applies from the next :meth:`reset`."""
         for name, value in params.items():
-            if name not in PARAMS:
+            p = _DEFINITIONS.get(name)
+            if p is None:
                 raise KeyError(f"unknown parameter {name}")
-            _, lo, hi = PARAMS[name]
-            value = constrain(float(value), lo, hi)
+            value = constrain(float(value), float(p.min), float(p.max))
             self.params[name] = float(round(value)) if name == "EKF2_HGT_REF" else value
         self._abl_lim = self.params["EKF2_ABL_LIM"]
         self._update_process_noise()

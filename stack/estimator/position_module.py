@@ -15,20 +15,14 @@ from __future__ import annotations
 
 import math
 
-from stack.estimator.position_kf import PARAMS as KF_PARAMS
+from stack.estimator import position_kf
 from stack.estimator.position_kf import LocalPositionEstimate, LocalPositionKF
 from stack.mathlib.atmosphere import isa_altitude_m
 from stack.mathlib.quaternion import yaw
 from stack.msg.estimation import VehicleGlobalPosition, VehicleLocalPosition
 from stack.runtime.module import Module, Timer
-from stack.runtime.params import Param
 
 PERIOD_US = 20_000
-_UNITS = {"LPE_GPS_DELAY": "s", "EKF2_ABL_LIM": "m/s^2", "EKF2_ABIAS_INIT": "m/s^2"}
-PARAMS = tuple(
-    Param(name, default, lo, hi, _UNITS.get(name, ""), "See stack/estimator/position_kf.py")
-    for name, (default, lo, hi) in KF_PARAMS.items()
-)
 
 
 def local_position_message(est: LocalPositionEstimate, heading: float, now_us: int) -> VehicleLocalPosition:
@@ -100,7 +94,7 @@ class LocalPositionEstimatorModule(Module):
     DESCRIPTION = "Position and velocity Kalman filter fusing IMU, GPS and barometer (PX4 LPE)"
     TRIGGER = Timer(1e6 / PERIOD_US)
     DT_RANGE = (0.002, 0.05)
-    PARAMS = PARAMS
+    PARAMS = position_kf.PARAMS
 
     def __init__(self, rt) -> None:
         super().__init__(rt)
@@ -113,7 +107,7 @@ class LocalPositionEstimatorModule(Module):
         self.kf = LocalPositionKF(**self._kf_params())
 
     def _kf_params(self) -> dict[str, float]:
-        return {name: float(self.params[name]) for name in KF_PARAMS}
+        return {p.name: float(self.params[p.name]) for p in position_kf.PARAMS}
 
     def on_params_changed(self, changed: set[str]) -> None:
         self.kf.set_params(**self._kf_params())

@@ -34,8 +34,8 @@ from stack.msg.estimation import EstimatorStatus
 from stack.msg.registry import message_type
 from stack.msg.setpoints import VehicleThrustSetpoint
 from stack.msg.system import ExternalAutopilotStatus, VehicleCommand, VehicleCommandAck
+from stack.params import catalogue
 from stack.runtime.module import Arg, Module, Timer
-from stack.runtime.params import Param
 
 if TYPE_CHECKING:
     from stack.bus.node import Node
@@ -106,28 +106,7 @@ class PixhawkAdapterModule(Module):
     DESCRIPTION = "A PX4 Pixhawk over MAVLink as the plant: its sensors in, the stack's setpoints out in Offboard"
     TRIGGER = Timer(RUN_HZ)
     DT_RANGE = (0.001, 0.1)
-    PARAMS = (
-        Param(
-            "PXH_EST_SRC",
-            0,
-            0,
-            1,
-            "",
-            "Whose estimate flies: 0 the stack's estimators, 1 the Pixhawk's (a profile then starts no estimator; "
-            "applies at start)",
-            choices=(0, 1),
-        ),
-        Param(
-            "PXH_SP_TYPE",
-            0,
-            0,
-            1,
-            "",
-            "What the Pixhawk is sent: 0 body rates + thrust (vehicle_rates_setpoint), 1 attitude + thrust "
-            "(vehicle_attitude_setpoint; a profile then starts no mc_att_control; applies at start)",
-            choices=(0, 1),
-        ),
-    )
+    PARAMS = catalogue.params("PXH_EST_SRC", "PXH_SP_TYPE")
     ARGS = (
         Arg("device", "udp:127.0.0.1:14540", "MAVLink endpoint: serial:/dev/ttyACM0:921600, udp:HOST:PORT, tcp:..."),
         Arg("system_id", 1, "MAVLink system id of the vehicle (PX4 MAV_SYS_ID); the adapter is its component 191"),

@@ -13,13 +13,11 @@ import math
 from collections.abc import Mapping
 
 from stack.mission.items import MAV_CMD_NAV_LAND, MAV_CMD_NAV_TAKEOFF, Mission
-from stack.runtime.params import Param
+from stack.params import catalogue
+from stack.params.param import Param
 
-PARAMS: tuple[Param, ...] = (
-    Param("MIS_DIST_1WP", 900.0, 0.0, 10000.0, "m", "Largest distance of the first waypoint from home (0: no limit)"),
-    Param("MIS_DIST_WPS", 900.0, 0.0, 10000.0, "m", "Largest distance between waypoints (0: no limit)"),
-)
-DEFAULTS: dict[str, object] = {p.name: p.default for p in PARAMS} | {"GF_MAX_HOR_DIST": 0.0, "GF_MAX_VER_DIST": 0.0}
+PARAMS: tuple[Param, ...] = catalogue.params("MIS_DIST_1WP", "MIS_DIST_WPS", "GF_MAX_HOR_DIST", "GF_MAX_VER_DIST")
+DEFAULTS: dict[str, object] = {p.name: p.default for p in PARAMS}
 
 
 def mission_problem(mission: Mission, params: Mapping[str, object]) -> str:

@@ -34,13 +34,11 @@ from stack.mission.items import (
     Mission,
     MissionItem,
 )
-from stack.runtime.params import Param
+from stack.params import catalogue
+from stack.params.param import Param
 
-PARAMS: tuple[Param, ...] = (
-    Param("NAV_ACC_RAD", 2.0, 0.05, 200.0, "m", "Horizontal acceptance radius (multicopter default)"),
-    Param("NAV_MC_ALT_RAD", 0.8, 0.05, 200.0, "m", "Vertical acceptance radius"),
-    Param("MIS_YAW_ERR", 12.0, 0.0, 90.0, "deg", "Yaw error within which a waypoint heading counts as reached"),
-    Param("MIS_YAW_TMT", -1.0, -1.0, 20.0, "s", "Give up waiting for the heading after this long (−1: wait)"),
+PARAMS: tuple[Param, ...] = catalogue.params(
+    "NAV_ACC_RAD", "NAV_MC_ALT_RAD", "MIS_YAW_ERR", "MIS_YAW_TMT",
 )
 DEFAULTS: dict[str, object] = {p.name: p.default for p in PARAMS}
 

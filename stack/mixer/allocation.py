@@ -22,10 +22,11 @@ import numpy as np
 
 from stack.mathlib.vector import Vec3
 from stack.mixer.effectiveness import effectiveness_from_params
-from stack.runtime.params import Param
+from stack.params import catalogue
+from stack.params.param import Param
 
-PARAMS: tuple[Param, ...] = (
-    Param("MC_AIRMODE", 0, 0, 2, "", "0: off; 1: thrust may rise for roll/pitch; 2: also for yaw", choices=(0, 1, 2)),
+PARAMS: tuple[Param, ...] = catalogue.params(
+    "MC_AIRMODE",
 )
 DEFAULTS: dict[str, object] = {p.name: p.default for p in PARAMS}
 

@@ -16,29 +16,11 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from stack.runtime.params import Param
+from stack.params import ca
+from stack.params.ca import MAX_ROTORS
+from stack.params.param import Param
 
-MAX_ROTORS = 12
-"""PX4 ``NUM_ROTORS_MAX``: CA_ROTOR0_* … CA_ROTOR11_*."""
-
-
-def _rotor_params(i: int) -> tuple[Param, ...]:
-    return (
-        Param(f"CA_ROTOR{i}_PX", 0.0, -100.0, 100.0, "m", f"Rotor {i} position x (forward)"),
-        Param(f"CA_ROTOR{i}_PY", 0.0, -100.0, 100.0, "m", f"Rotor {i} position y (right)"),
-        Param(f"CA_ROTOR{i}_PZ", 0.0, -100.0, 100.0, "m", f"Rotor {i} position z (down)"),
-        Param(f"CA_ROTOR{i}_AX", 0.0, -100.0, 100.0, "", f"Rotor {i} thrust axis x"),
-        Param(f"CA_ROTOR{i}_AY", 0.0, -100.0, 100.0, "", f"Rotor {i} thrust axis y"),
-        Param(f"CA_ROTOR{i}_AZ", -1.0, -100.0, 100.0, "", f"Rotor {i} thrust axis z (−1 = thrust up)"),
-        Param(f"CA_ROTOR{i}_CT", 6.5, 0.0, 100.0, "N", f"Rotor {i} thrust at full command"),
-        Param(f"CA_ROTOR{i}_KM", 0.05, -1.0, 1.0, "m", f"Rotor {i} moment ratio (+ counter-clockwise)"),
-    )
-
-
-PARAMS: tuple[Param, ...] = (
-    Param("CA_ROTOR_COUNT", 0, 0, MAX_ROTORS, "", "Number of rotors"),
-    *(p for i in range(MAX_ROTORS) for p in _rotor_params(i)),
-)
+PARAMS: tuple[Param, ...] = ca.ROTOR_PARAMS
 DEFAULTS: dict[str, object] = {p.name: p.default for p in PARAMS}
 
 

@@ -20,16 +20,12 @@ from collections.abc import Mapping, Sequence
 from typing import NamedTuple
 
 from stack.mixer.allocation import FLT_EPSILON
-from stack.mixer.effectiveness import MAX_ROTORS
-from stack.runtime.params import Param
+from stack.params import ca, catalogue
+from stack.params.param import Param
 
 PARAMS: tuple[Param, ...] = (
-    Param("THR_MDL_FAC", 0.0, 0.0, 1.0, "", "Thrust model: rel_thrust = f·u² + (1−f)·u (0 linear, 1 quadratic)"),
-    Param("PWM_MAIN_DIS", 900, 800, 2200, "us", "PWM while disarmed or for a stopped motor"),
-    Param("PWM_MAIN_MIN", 1075, 800, 1400, "us", "PWM for a zero command while armed (motor idle)"),
-    Param("PWM_MAIN_MAX", 2000, 1600, 2200, "us", "PWM for a full command"),
-    *(Param(f"CA_R{i}_SLEW", 0.0, 0.0, 10.0, "s", f"Motor {i}: minimum time to cross the full range (0 = off)")
-      for i in range(MAX_ROTORS)),
+    *catalogue.params("THR_MDL_FAC", "PWM_MAIN_DIS", "PWM_MAIN_MIN", "PWM_MAIN_MAX"),
+    *ca.SLEW_PARAMS,
 )
 DEFAULTS: dict[str, object] = {p.name: p.default for p in PARAMS}
 

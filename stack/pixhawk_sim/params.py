@@ -20,8 +20,8 @@ from stack.commander import state_machine as commander
 from stack.commander.module import OFFBOARD_PARAMS
 from stack.estimator.attitude_module import GYRO_PARAMS
 from stack.mixer import allocation, effectiveness, output
+from stack.params.param import Param, ParamError, ParamValue
 from stack.posctl import flight_mode_manager, pos_module
-from stack.runtime.params import Param, ParamError, ParamValue
 from stack.sim.module import SimulatorModule
 from stack.sim.vehicle import VehicleModel
 
@@ -42,6 +42,16 @@ class OffboardLossAction(IntEnum):
 SIMULATED_OFFBOARD_LOSS_ACTIONS = tuple(a for a in OffboardLossAction if a is not OffboardLossAction.RETURN)
 """Return mode is not simulated, so COM_OBL_RC_ACT 3 is refused."""
 
+_OFFBOARD_LOSS_MEANINGS = {
+    OffboardLossAction.POSITION: "Position mode",
+    OffboardLossAction.ALTITUDE: "Altitude mode",
+    OffboardLossAction.STABILIZED: "Stabilized",
+    OffboardLossAction.LAND: "Land mode",
+    OffboardLossAction.HOLD: "Hold mode",
+    OffboardLossAction.TERMINATE: "Terminate",
+    OffboardLossAction.DISARM: "Disarm",
+}
+
 OWN_PARAMS: tuple[Param, ...] = (
     Param(
         "COM_OBL_RC_ACT",
@@ -49,9 +59,9 @@ OWN_PARAMS: tuple[Param, ...] = (
         0,
         7,
         "",
-        "Offboard loss action: 0 Position, 1 Altitude, 2 Stabilized (each falls back to Hold without RC), "
-        "4 Land, 5 Hold, 6 Terminate, 7 Disarm",
-        choices=tuple(int(a) for a in SIMULATED_OFFBOARD_LOSS_ACTIONS),
+        "Offboard loss failsafe action (Position, Altitude and Stabilized fall back to Hold without RC; "
+        "3 Return mode is not simulated)",
+        values={int(a): _OFFBOARD_LOSS_MEANINGS[a] for a in SIMULATED_OFFBOARD_LOSS_ACTIONS},
     ),
     Param("FD_FAIL_R", 60, 0, 180, "deg", "Roll beyond which the failure detector reports an attitude failure"),
     Param("FD_FAIL_P", 60, 0, 180, "deg", "Pitch beyond which the failure detector reports an attitude failure"),

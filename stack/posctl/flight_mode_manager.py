@@ -40,10 +40,11 @@ from stack.mission.tracker import MissionTracker
 from stack.msg.navigation import NavigationRequest
 from stack.msg.setpoints import ManualControlSetpoint
 from stack.msg.system import VehicleStatus
+from stack.params import catalogue
+from stack.params.param import Param
 from stack.posctl.flight_task import NAN, TrajectoryCommand, VehicleState, YawSlew, stopping_point
 from stack.posctl.manual_tasks import ManualAltitudeTask, ManualPositionTask
 from stack.posctl.position_smoothing import PositionSmoothing, PositionSmoothingParams
-from stack.runtime.params import Param
 
 NS = VehicleStatus
 YAW_TOWARD_WAYPOINT, YAW_TOWARD_HOME, YAW_AWAY_FROM_HOME, YAW_ALONG_TRAJECTORY, YAW_HOLD = range(5)
@@ -56,42 +57,12 @@ _AUTO_NAV_STATES = (
 )
 _YAW_ALONG_MIN_SPEED = 0.5
 
-OWN_PARAMS: tuple[Param, ...] = (
-    Param("MPC_XY_CRUISE", 5.0, 3.0, 20.0, "m/s", "Horizontal cruise speed in auto modes"),
-    Param("MPC_XY_VEL_MAX", 12.0, 0.0, 20.0, "m/s", "Horizontal speed limit"),
-    Param("MPC_Z_V_AUTO_UP", 3.0, 0.5, 8.0, "m/s", "Climb speed in auto modes"),
-    Param("MPC_Z_V_AUTO_DN", 1.5, 0.5, 4.0, "m/s", "Descent speed in auto modes"),
-    Param("MPC_ACC_HOR", 3.0, 2.0, 15.0, "m/s^2", "Horizontal acceleration in auto modes"),
-    Param("MPC_ACC_UP_MAX", 4.0, 2.0, 15.0, "m/s^2", "Upward acceleration in auto modes"),
-    Param("MPC_ACC_DOWN_MAX", 3.0, 2.0, 15.0, "m/s^2", "Downward acceleration in auto modes"),
-    Param("MPC_JERK_AUTO", 4.0, 1.0, 80.0, "m/s^3", "Jerk limit in auto modes"),
-    Param("MPC_XY_ERR_MAX", 2.0, 0.1, 10.0, "m", "Horizontal lag at which the trajectory waits for the vehicle"),
-    Param("MPC_XY_TRAJ_P", 0.5, 0.1, 1.0, "", "Share of MPC_ACC_HOR used to turn at waypoints"),
-    Param("MPC_TKO_SPEED", 1.5, 1.0, 5.0, "m/s", "Takeoff climb rate"),
-    Param("MIS_TAKEOFF_ALT", 2.5, 0.0, None, "m", "Takeoff altitude above home when a takeoff gives none"),
-    Param("MPC_LAND_SPEED", 0.7, 0.6, 5.0, "m/s", "Landing descent rate near the ground"),
-    Param("MPC_LAND_ALT1", 10.0, 0.0, 122.0, "m", "Height above home below which the descent slows"),
-    Param("MPC_LAND_ALT2", 5.0, 0.0, 122.0, "m", "Height above home below which the descent is MPC_LAND_SPEED"),
-    Param(
-        "MPC_YAW_MODE",
-        0,
-        0,
-        4,
-        "",
-        "Heading in auto: 0 to waypoint, 1 to home, 2 from home, 3 along, 4 hold",
-        choices=(0, 1, 2, 3, 4),
-    ),
-    Param("MPC_YAWRAUTO_MAX", 45.0, 5.0, 360.0, "deg/s", "Heading rate limit in auto modes"),
-    Param("MPC_VEL_MANUAL", 10.0, 3.0, 20.0, "m/s", "Horizontal speed at full stick in Position mode"),
-    Param("MPC_MAN_Y_MAX", 150.0, 0.0, 400.0, "deg/s", "Yaw rate at full stick"),
-    Param("MPC_MAN_TILT_MAX", 35.0, 1.0, 90.0, "deg", "Tilt at full stick in Altitude mode"),
-    Param("MPC_HOLD_DZ", 0.1, 0.0, 1.0, "", "Stick dead zone that engages position or altitude hold"),
-    Param("MPC_HOLD_MAX_XY", 0.8, 0.0, 3.0, "m/s", "Horizontal speed below which the position locks"),
-    Param("MPC_HOLD_MAX_Z", 0.6, 0.0, 3.0, "m/s", "Vertical speed below which the altitude locks"),
-    Param("MPC_Z_VEL_MAX_UP", 3.0, 0.5, 8.0, "m/s", "Climb rate at full stick"),
-    Param("MPC_Z_VEL_MAX_DN", 1.5, 0.5, 4.0, "m/s", "Descent rate at full stick"),
-    Param("GF_MAX_HOR_DIST", 0.0, 0.0, 10000.0, "m", "Maximum horizontal distance from home (0 = no limit)"),
-    Param("GF_MAX_VER_DIST", 0.0, 0.0, 10000.0, "m", "Maximum height above home (0 = no limit)"),
+OWN_PARAMS: tuple[Param, ...] = catalogue.params(
+    "MPC_XY_CRUISE", "MPC_XY_VEL_MAX", "MPC_Z_V_AUTO_UP", "MPC_Z_V_AUTO_DN", "MPC_ACC_HOR", "MPC_ACC_UP_MAX",
+    "MPC_ACC_DOWN_MAX", "MPC_JERK_AUTO", "MPC_XY_ERR_MAX", "MPC_XY_TRAJ_P", "MPC_TKO_SPEED", "MIS_TAKEOFF_ALT",
+    "MPC_LAND_SPEED", "MPC_LAND_ALT1", "MPC_LAND_ALT2", "MPC_YAW_MODE", "MPC_YAWRAUTO_MAX", "MPC_VEL_MANUAL",
+    "MPC_MAN_Y_MAX", "MPC_MAN_TILT_MAX", "MPC_HOLD_DZ", "MPC_HOLD_MAX_XY", "MPC_HOLD_MAX_Z", "MPC_Z_VEL_MAX_UP",
+    "MPC_Z_VEL_MAX_DN", "GF_MAX_HOR_DIST", "GF_MAX_VER_DIST",
 )
 PARAMS: tuple[Param, ...] = tuple(
     {p.name: p for p in (*OWN_PARAMS, *tracker.PARAMS, *rtl.PARAMS, *feasibility.PARAMS)}.values()

@@ -9,18 +9,13 @@ altitude whatever its mass.
 from __future__ import annotations
 
 from stack.msg.setpoints import HoverThrustEstimate
+from stack.params import catalogue
 from stack.posctl.hover_thrust_estimator import HoverThrustEstimator, HoverThrustEstimatorParams
 from stack.runtime.module import Module, Trigger
-from stack.runtime.params import Param
 
-PARAMS = (
-    Param("MPC_THR_HOVER", 0.5, 0.1, 0.8, "", "Hover thrust: where the estimate starts, the centre of its range"),
-    Param("HTE_HT_NOISE", 0.0036, 0.0001, 1.0, "1/s", "Hover thrust process noise"),
-    Param("HTE_ACC_GATE", 3.0, 1.0, 10.0, "SD", "Acceleration innovation gate"),
-    Param("HTE_HT_ERR_INIT", 0.1, 0.0, 1.0, "", "Initial hover thrust uncertainty (1 sigma)"),
-    Param("HTE_VXY_THR", 10.0, 1.0, 20.0, "m/s", "Horizontal speed above which measurements are de-weighted"),
-    Param("HTE_VZ_THR", 2.0, 1.0, 10.0, "m/s", "Vertical speed above which measurements are de-weighted"),
-    Param("HTE_THR_RANGE", 0.2, 0.01, 0.4, "", "Largest deviation of the estimate from MPC_THR_HOVER"),
+PARAMS = catalogue.params(
+    "MPC_THR_HOVER", "HTE_HT_NOISE", "HTE_ACC_GATE", "HTE_HT_ERR_INIT", "HTE_VXY_THR", "HTE_VZ_THR",
+    "HTE_THR_RANGE",
 )
 
 

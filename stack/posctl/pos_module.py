@@ -17,10 +17,10 @@ import math
 from stack.estimator.acceleration import VelocityDerivative
 from stack.msg.estimation import VehicleLocalPosition
 from stack.msg.setpoints import TakeoffStatus, VehicleAttitudeSetpoint, VehicleLocalPositionSetpoint
+from stack.params import catalogue
 from stack.posctl.position_control import PositionControl, PositionControlParams, failsafe_setpoint
 from stack.posctl.takeoff import Takeoff, TakeoffParams, TakeoffState, wants_takeoff
 from stack.runtime.module import Module, Trigger
-from stack.runtime.params import Param
 
 NAN = math.nan
 SETPOINT_WAIT_US = 200_000
@@ -29,31 +29,12 @@ SETPOINT_TIMEOUT_US = 500_000
 """A trajectory setpoint older than this no longer counts (its producer stopped)."""
 TAKEOFF_STATUS_REPUBLISH_US = 1_000_000
 
-PARAMS = (
-    Param("MPC_XY_P", 0.95, 0.0, 2.0, "1/s", "Horizontal position gain"),
-    Param("MPC_Z_P", 1.0, 0.1, 1.5, "1/s", "Vertical position gain"),
-    Param("MPC_XY_VEL_P_ACC", 1.8, 1.2, 5.0, "1/s", "Horizontal velocity P gain"),
-    Param("MPC_XY_VEL_I_ACC", 0.4, 0.0, 60.0, "1/s^2", "Horizontal velocity I gain"),
-    Param("MPC_XY_VEL_D_ACC", 0.2, 0.1, 2.0, "", "Horizontal velocity D gain"),
-    Param("MPC_Z_VEL_P_ACC", 4.0, 2.0, 15.0, "1/s", "Vertical velocity P gain"),
-    Param("MPC_Z_VEL_I_ACC", 2.0, 0.2, 3.0, "1/s^2", "Vertical velocity I gain"),
-    Param("MPC_Z_VEL_D_ACC", 0.0, 0.0, 2.0, "", "Vertical velocity D gain"),
-    Param("MPC_XY_VEL_MAX", 12.0, 0.0, 20.0, "m/s", "Horizontal speed limit"),
-    Param("MPC_Z_VEL_MAX_UP", 3.0, 0.5, 8.0, "m/s", "Climb rate limit"),
-    Param("MPC_Z_VEL_MAX_DN", 1.5, 0.5, 4.0, "m/s", "Descent rate limit"),
-    Param("MPC_TILTMAX_AIR", 45.0, 20.0, 89.0, "deg", "Tilt limit in flight"),
-    Param("MPC_TILTMAX_LND", 12.0, 10.0, 89.0, "deg", "Tilt limit on the ground and during takeoff"),
-    Param("MPC_THR_MIN", 0.12, 0.05, 0.5, "", "Minimum collective thrust in flight"),
-    Param("MPC_THR_MAX", 1.0, 0.0, 1.0, "", "Maximum collective thrust"),
-    Param("MPC_THR_HOVER", 0.5, 0.1, 0.8, "", "Hover thrust (until the estimate is valid)"),
-    Param("MPC_THR_XY_MARG", 0.3, 0.0, 0.5, "", "Horizontal thrust margin kept at vertical saturation"),
-    Param("MPC_ACC_DECOUPLE", 1, 0, 1, "", "Tilt from the horizontal acceleration only", choices=(0, 1)),
-    Param("MPC_USE_HTE", 1, 0, 1, "", "Use the hover thrust estimate", choices=(0, 1)),
-    Param("MPC_VELD_LP", 5.0, 0.0, 10.0, "Hz", "Low-pass cutoff of the velocity derivative (D term)"),
-    Param("MPC_TKO_SPEED", 1.5, 1.0, 5.0, "m/s", "Takeoff climb rate"),
-    Param("MPC_TKO_RAMP_T", 3.0, 0.0, 5.0, "s", "Takeoff ramp time"),
-    Param("MPC_LAND_SPEED", 0.7, 0.6, 5.0, "m/s", "Landing descent rate (also the blind failsafe descent)"),
-    Param("COM_SPOOLUP_TIME", 1.0, 0.0, 30.0, "s", "Motor spool-up time after arming before takeoff"),
+PARAMS = catalogue.params(
+    "MPC_XY_P", "MPC_Z_P", "MPC_XY_VEL_P_ACC", "MPC_XY_VEL_I_ACC", "MPC_XY_VEL_D_ACC", "MPC_Z_VEL_P_ACC",
+    "MPC_Z_VEL_I_ACC", "MPC_Z_VEL_D_ACC", "MPC_XY_VEL_MAX", "MPC_Z_VEL_MAX_UP", "MPC_Z_VEL_MAX_DN",
+    "MPC_TILTMAX_AIR", "MPC_TILTMAX_LND", "MPC_THR_MIN", "MPC_THR_MAX", "MPC_THR_HOVER", "MPC_THR_XY_MARG",
+    "MPC_ACC_DECOUPLE", "MPC_USE_HTE", "MPC_VELD_LP", "MPC_TKO_SPEED", "MPC_TKO_RAMP_T", "MPC_LAND_SPEED",
+    "COM_SPOOLUP_TIME",
 )
 
 

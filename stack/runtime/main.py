@@ -17,8 +17,8 @@ import time
 from pathlib import Path
 from types import FrameType
 
+from stack.params.param import ParamError
 from stack.runtime.lockstep import LockstepError
-from stack.runtime.params import ParamError
 from stack.runtime.runner import Runtime, Shutdown
 from stack.runtime.spec import ModuleSpec
 

@@ -7,7 +7,7 @@ it takes; the runtime does the rest (session, lockstep, parameters service, hear
         NAME = "mc_rate_control"
         TRIGGER = Trigger("vehicle_angular_velocity")
         DT_RANGE = (0.000125, 0.02)
-        PARAMS = (Param("MC_ROLLRATE_P", 0.15, 0.01, 0.5), ...)
+        PARAMS = catalogue.params("MC_ROLLRATE_P", ...)   # definitions from stack.params.catalogue
 
         def __init__(self, ctx):
             super().__init__(ctx)
@@ -29,7 +29,7 @@ import logging
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, ClassVar
 
-from stack.runtime.params import Param, ParamError, ParamValue
+from stack.params.param import Param, ParamError, ParamValue, convert
 
 if TYPE_CHECKING:
     from stack.runtime.runner import Runtime
@@ -64,10 +64,11 @@ class Arg:
     choices: tuple[ParamValue, ...] = ()
 
     def check(self, value: object) -> ParamValue:
-        try:
-            return Param(self.name, self.default, choices=self.choices).check(value)
-        except ParamError as e:
-            raise ParamError(str(e).replace(self.name, f"argument {self.name}", 1)) from None
+        where = f"argument {self.name}"
+        v = convert(where, type(self.default), value)
+        if self.choices and v not in self.choices:
+            raise ParamError(f"{where}: {v!r} is not one of {', '.join(repr(c) for c in self.choices)}")
+        return v
 
 
 class Module:

@@ -20,12 +20,12 @@ from stack.fastpath.inputs import FastInput
 from stack.fastpath.layout import SUB_QUEUE, SUB_TRIGGER, Region
 from stack.msg.registry import fingerprint
 from stack.msg.system import ParameterUpdate
+from stack.params.store import ParamStore
 from stack.runtime import startup
 from stack.runtime.fastrun import FastDriver
 from stack.runtime.inputs import InputBuffer, sample_time
 from stack.runtime.lockstep import TIMER, LockstepCoordinator, LockstepMember
 from stack.runtime.module import Module, Timer, Trigger
-from stack.runtime.params import ParamStore
 from stack.runtime.services import Heartbeat, ParamService
 from stack.runtime.spec import ModuleSpec, load_module_class, resolve_args
 

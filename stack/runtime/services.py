@@ -15,16 +15,19 @@ import zenoh
 
 from stack.bus import keys
 from stack.msg.internal import ModuleHeartbeat
-from stack.runtime.params import ParamError, ParamStore
+from stack.params.param import ParamError
+from stack.params.store import ParamStore
 
 log = logging.getLogger("stack.runtime")
 
 
 class ParamService:
-    """Answers ``stack param`` queries for one module (list, get, set), on Zenoh's callback thread.
+    """Answers parameter queries for one module (:mod:`stack.params.client`), on Zenoh's callback thread.
 
-    Query payload: JSON ``{"op": "list"|"get"|"set", "name": ..., "value": ...}``; the reply is JSON,
-    with an ``error`` member when a request is refused (nothing changes then).
+    Query payload: JSON ``{"op": "list"|"get"|"check"|"set", "name": ..., "value": ...}``; the reply is JSON,
+    with an ``error`` member when a request is refused (nothing changes then). ``check`` validates a value
+    as ``set`` would and changes nothing, so a client can set a parameter in every module that has it or
+    in none.
     """
 
     def __init__(self, session: zenoh.Session, vehicle: str, module: str, store: ParamStore) -> None:
@@ -52,6 +55,9 @@ class ParamService:
             if op == "get":
                 self.store.definition(name)
                 return {"module": self.module, "name": name, "value": values[name]}
+            if op == "check":
+                value = self.store.definition(name).check(request.get("value"))
+                return {"module": self.module, "name": name, "value": value}
             if op == "set":
                 old, new = self.store.set(name, request.get("value"))
                 return {"module": self.module, "name": name, "old": old, "new": new}

@@ -8,7 +8,7 @@ from dataclasses import asdict, dataclass, field
 from typing import TYPE_CHECKING
 
 from stack.bus.config import BusConfig
-from stack.runtime.params import ParamError, ParamValue
+from stack.params.param import ParamError, ParamValue
 
 if TYPE_CHECKING:
     from stack.runtime.module import Arg, Module

@@ -12,15 +12,14 @@ import math
 
 from stack.commander import battery
 from stack.commander.battery import BatteryModel
-from stack.commander.failure_injection import FAILURE_INJECTION_PARAM
 from stack.mathlib.vector import Vec3
 from stack.msg.sensors import SensorAccel, SensorBaro, SensorGps, SensorGyro, SensorMag
 from stack.msg.simulation import SimGroundtruth
 from stack.msg.system import BatteryStatus, VehicleCommand
+from stack.params import catalogue
 from stack.runtime.module import Arg, Module
-from stack.runtime.params import Param
 from stack.sim.sensors import BaroSample, GpsSample, ImuSample, MagSample
-from stack.sim.simulator import SIH_HOME, Simulator
+from stack.sim.simulator import Simulator
 from stack.sim.wind import WindParams
 
 # Device ids as PX4's simulated drivers report them (SIH's IMU id; the others distinct).
@@ -45,15 +44,10 @@ class SimulatorModule(Module):
         Arg("gps_delay_s", 0.0, "GPS measurement delay"),
     )
     PARAMS = (
-        Param("SIH_LOC_LAT0", SIH_HOME[0], -90.0, 90.0, "deg", "Home latitude (applies at start)"),
-        Param("SIH_LOC_LON0", SIH_HOME[1], -180.0, 180.0, "deg", "Home longitude (applies at start)"),
-        Param("SIH_LOC_H0", SIH_HOME[2], -420.0, 8848.0, "m", "Home altitude AMSL (applies at start)"),
-        Param("SIM_GPS_USED", 10, 0, 50, "", "Satellites in view; fewer than 4 means no fix (GPS loss injection)"),
-        Param("SIM_WIND_SPD", 0.0, 0.0, 40.0, "m/s", "Mean wind speed (ArduPilot SIM_WIND_SPD)"),
-        Param("SIM_WIND_DIR", 0.0, 0.0, 360.0, "deg", "Direction the wind blows from (ArduPilot SIM_WIND_DIR)"),
-        Param("SIM_WIND_GUST", 0.0, 0.0, 20.0, "m/s", "Horizontal gust standard deviation"),
-        Param("SIM_WIND_GUST_T", 2.0, 0.1, 60.0, "s", "Gust correlation time"),
-        FAILURE_INJECTION_PARAM,
+        *catalogue.params(
+            "SIH_LOC_LAT0", "SIH_LOC_LON0", "SIH_LOC_H0", "SIM_GPS_USED", "SIM_WIND_SPD", "SIM_WIND_DIR",
+            "SIM_WIND_GUST", "SIM_WIND_GUST_T", "SYS_FAILURE_EN",
+        ),
         *battery.PARAMS,
     )
 

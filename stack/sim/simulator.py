@@ -25,6 +25,7 @@ from typing import NamedTuple
 from stack.mathlib.geo import MapProjection
 from stack.mathlib.quaternion import IDENTITY, Quat, rotate_inv
 from stack.mathlib.vector import ZERO3, Vec3
+from stack.params import catalogue
 from stack.sim.physics import SIH_MAX_BODY_RATE, MulticopterPhysics
 from stack.sim.sensors import (
     BarometerModel,
@@ -43,7 +44,12 @@ from stack.sim.sensors import (
 from stack.sim.vehicle import VehicleModel, load_vehicle
 from stack.sim.wind import WindModel, WindParams
 
-SIH_HOME = (47.397742, 8.545594, 489.4)  # SIH_LOC_LAT0 (deg), SIH_LOC_LON0 (deg), SIH_LOC_H0 (m AMSL)
+SIH_HOME: tuple[float, float, float] = (
+    float(catalogue.get("SIH_LOC_LAT0").default),
+    float(catalogue.get("SIH_LOC_LON0").default),
+    float(catalogue.get("SIH_LOC_H0").default),
+)
+"""The default home: SIH_LOC_LAT0 (deg), SIH_LOC_LON0 (deg), SIH_LOC_H0 (m AMSL)."""
 
 SensorSample = ImuSample | MagSample | BaroSample | GpsSample
 

@@ -32,8 +32,8 @@ from pathlib import Path
 
 from stack.bus import keys
 from stack.bus.config import BusConfig
+from stack.params.param import ParamError, ParamValue
 from stack.runtime.module import Module
-from stack.runtime.params import ParamError, ParamValue
 from stack.runtime.spec import load_module_class, resolve_args
 
 DEFAULT_PROFILE = "sitl_quad"

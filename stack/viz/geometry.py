@@ -10,7 +10,7 @@ import math
 from collections.abc import Mapping, Sequence
 
 from stack.mathlib.vector import Vec3
-from stack.runtime.params import ParamValue
+from stack.params.param import ParamValue
 
 # PX4's quadrotor X numbering (motor 1 front-right, 2 rear-left, 3 front-left, 4 rear-right), with
 # the SIH quad's 0.2 m hub offsets.

@@ -2,7 +2,8 @@
 
 import pytest
 
-from stack.runtime.params import Param, ParamError, ParamStore
+from stack.params.param import Param, ParamError
+from stack.params.store import ParamStore
 from stack.supervisor.profile import ProfileError, load_profile
 from tests.support.harness import run_cli, write_profile
 

@@ -8,9 +8,9 @@ import pytest
 from pymavlink.dialects.v20 import common as mavlink
 
 from stack.mavlink.px4_modes import Px4Mode
+from stack.params.param import ParamError
 from stack.pixhawk_sim.commander import Condition, Px4Commander
 from stack.pixhawk_sim.params import OffboardLossAction, parameter_values, read_params_file
-from stack.runtime.params import ParamError
 from stack.sim.vehicle import load_vehicle
 
 ACCEPTED = mavlink.MAV_RESULT_ACCEPTED

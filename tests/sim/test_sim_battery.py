@@ -14,7 +14,7 @@ import pytest
 
 from stack.commander.battery import BatteryModel, BatteryState, BatteryWarning
 from stack.msg.system import ActuatorArmed, VehicleCommand
-from stack.runtime.params import ParamStore
+from stack.params.store import ParamStore
 from stack.runtime.spec import ModuleSpec, resolve_args
 from stack.sim.module import SimulatorModule
 from stack.sim.sensors import BaroSample, GpsParams, GpsSample, ImuSample, MagSample

@@ -16,8 +16,8 @@ from stack.msg.estimation import VehicleAngularVelocity
 from stack.msg.sensors import SensorGyro
 from stack.msg.setpoints import VehicleRatesSetpoint, VehicleTorqueSetpoint
 from stack.msg.system import VehicleCommand, VehicleCommandAck
+from stack.params.param import Param
 from stack.runtime.module import Arg, Module, Timer, Trigger
-from stack.runtime.params import Param
 
 
 class TickSource(Module):

@@ -8,7 +8,7 @@ import zenoh
 
 from stack.bus.config import BusConfig
 from stack.mixer import effectiveness
-from stack.runtime.params import ParamStore
+from stack.params.store import ParamStore
 from stack.runtime.services import ParamService
 from stack.viz.module import query_rotors
 
