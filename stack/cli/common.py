@@ -18,6 +18,7 @@ import zenoh
 from stack.bus import keys
 from stack.bus.config import BusConfig
 from stack.bus.node import Node
+from stack.bus.query import query_json
 from stack.supervisor import state as run_state
 from stack.supervisor.profile import LOCKSTEP_TRANSPORTS, Profile
 
@@ -95,21 +96,6 @@ def wait_until_sent(node: Node, topics: Iterable[tuple[str, int]], timeout: floa
         if not answers or not answers[0]["fast_path"] or wanted <= set(answers[0]["topics"]):
             return
         time.sleep(0.01)
-
-
-def query_json(session: zenoh.Session, key: str, payload: dict | None = None, timeout: float = 2.0) -> list[dict]:
-    replies = session.get(
-        key,
-        payload=json.dumps(payload) if payload is not None else None,
-        consolidation=zenoh.ConsolidationMode.NONE,
-        target=zenoh.QueryTarget.ALL,
-        timeout=timeout,
-    )
-    out = []
-    for reply in replies:
-        if reply.ok is not None:
-            out.append(json.loads(reply.ok.payload.to_string()))
-    return out
 
 
 def to_jsonable(obj: object) -> object:

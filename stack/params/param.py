@@ -145,8 +145,8 @@ class Param:
         return cls(
             name=str(d["name"]),
             default=kind(d["default"]),
-            min=None if d.get("min") is None else float(d["min"]),
-            max=None if d.get("max") is None else float(d["max"]),
+            min=d.get("min"),
+            max=d.get("max"),
             unit=str(d.get("unit", "")),
             doc=str(d.get("doc", "")),
             values={int(v): str(m) for v, m in d.get("values") or ()},
