@@ -25,9 +25,9 @@ def _n(value: object) -> str:
 
 
 def _value(p: Param, value: object) -> str:
-    """``2 (Return mode)`` for an enum or a bitmask, else the number."""
+    """``2 (Return mode)`` for an enum or a bitmask, else the value as it is held."""
     meaning = p.meaning(value)
-    return f"{_n(value)} ({meaning})" if meaning else _n(value)
+    return f"{value} ({meaning})" if meaning else str(value)
 
 
 def _values(sp: client.StackParam) -> str:
@@ -200,7 +200,7 @@ def save(
         name = node.vehicle
     for p in params:
         if not p.consistent:
-            typer.echo(f"warning: {p.name} differs between modules ({_values(p)}); saving {_n(p.value)}", err=True)
+            typer.echo(f"warning: {p.name} differs between modules ({_values(p)}); saving {p.value}", err=True)
     text = qgc_file.format_file(((p.name, p.value, p.param.mav_type) for p in params), name, system_id)
     try:
         file.write_text(text)

@@ -79,8 +79,8 @@ def test_topic_info_gives_the_schema(stack):
 
 def test_parameters_change_while_running_and_the_module_sees_it(stack):
     listing = json.loads(stack.cli("param", "list", "--json").stdout)
-    assert {(p["name"], p["module"]) for p in listing} == {("TEST_GAIN", "tick_source"), ("TEST_OFFSET", "doubler")}
-    assert stack.cli("param", "get", "TEST_OFFSET").stdout.strip() == "TEST_OFFSET = 0.0  (doubler)"
+    assert {(p["name"], *p["owners"]) for p in listing} == {("TEST_GAIN", "tick_source"), ("TEST_OFFSET", "doubler")}
+    assert stack.cli("param", "get", "TEST_OFFSET").stdout.splitlines()[0] == "TEST_OFFSET = 0.0  (doubler)"
     refused = stack.cli("param", "set", "TEST_OFFSET", "1000")
     assert refused.returncode == 1 and "above the maximum 100" in refused.stderr
     assert stack.cli("param", "set", "TEST_OFFSET", "not-a-number").returncode == 1
@@ -96,7 +96,7 @@ def test_parameters_change_while_running_and_the_module_sees_it(stack):
         ).stdout.splitlines()
     ]
     assert all(x > 45 for x in xs)
-    assert json.loads(stack.cli("param", "get", "TEST_OFFSET", "--json").stdout)[0]["value"] == 50.0
+    assert json.loads(stack.cli("param", "get", "TEST_OFFSET", "--json").stdout)["value"] == 50.0
 
 
 def test_an_unreachable_endpoint_is_one_line_not_a_traceback(tmp_path):
