@@ -41,9 +41,7 @@ from stack.params.param import Param
 
 NS = VehicleStatus
 
-PARAMS: tuple[Param, ...] = catalogue.params(
-    "NAV_DLL_ACT", "COM_DLL_EXCEPT", "COM_LOW_BAT_ACT", "COM_FAIL_ACT_T",
-)
+PARAMS: tuple[Param, ...] = catalogue.params("NAV_DLL_ACT", "COM_DLL_EXCEPT", "COM_LOW_BAT_ACT", "COM_FAIL_ACT_T")
 DEFAULTS: dict[str, object] = {p.name: p.default for p in PARAMS}
 
 DLL_EXCEPT_MISSION = 1

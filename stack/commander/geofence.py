@@ -26,9 +26,7 @@ class GeofenceAction(IntEnum):
     LAND = 5
 
 
-PARAMS: tuple[Param, ...] = catalogue.params(
-    "GF_ACTION", "GF_MAX_HOR_DIST", "GF_MAX_VER_DIST",
-)
+PARAMS: tuple[Param, ...] = catalogue.params("GF_ACTION", "GF_MAX_HOR_DIST", "GF_MAX_VER_DIST")
 DEFAULTS: dict[str, object] = {p.name: p.default for p in PARAMS}
 
 

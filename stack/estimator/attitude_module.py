@@ -23,13 +23,9 @@ from stack.runtime.module import Module, Trigger
 ATTITUDE_PARAMS = catalogue.params(
     "ATT_W_ACC", "ATT_W_MAG", "ATT_W_GYRO_BIAS", "ATT_BIAS_MAX", "ATT_MAG_DECL", "ATT_ACC_COMP",
 )
-COMPENSATION_PARAMS = catalogue.params(
-    "ATT_ACC_COMP_LP",
-)
+COMPENSATION_PARAMS = catalogue.params("ATT_ACC_COMP_LP")
 STATUS_INTERVAL_US = 100_000
-GYRO_PARAMS = catalogue.params(
-    "IMU_GYRO_CUTOFF", "IMU_DGYRO_CUTOFF",
-)
+GYRO_PARAMS = catalogue.params("IMU_GYRO_CUTOFF", "IMU_DGYRO_CUTOFF")
 
 
 class ImuSummary:

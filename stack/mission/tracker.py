@@ -37,9 +37,7 @@ from stack.mission.items import (
 from stack.params import catalogue
 from stack.params.param import Param
 
-PARAMS: tuple[Param, ...] = catalogue.params(
-    "NAV_ACC_RAD", "NAV_MC_ALT_RAD", "MIS_YAW_ERR", "MIS_YAW_TMT",
-)
+PARAMS: tuple[Param, ...] = catalogue.params("NAV_ACC_RAD", "NAV_MC_ALT_RAD", "MIS_YAW_ERR", "MIS_YAW_TMT")
 DEFAULTS: dict[str, object] = {p.name: p.default for p in PARAMS}
 
 

@@ -25,9 +25,7 @@ from stack.mixer.effectiveness import effectiveness_from_params
 from stack.params import catalogue
 from stack.params.param import Param
 
-PARAMS: tuple[Param, ...] = catalogue.params(
-    "MC_AIRMODE",
-)
+PARAMS: tuple[Param, ...] = catalogue.params("MC_AIRMODE")
 DEFAULTS: dict[str, object] = {p.name: p.default for p in PARAMS}
 
 FLT_EPSILON = float(np.finfo(np.float32).eps)

@@ -1,4 +1,5 @@
-"""The simulated Pixhawk's parameters: PX4's names, each defined once in the stack and imported here.
+"""The simulated Pixhawk's parameters: PX4's names, with the stack's definition (``stack.params.catalogue``)
+wherever the stack has the parameter.
 
 The controllers, the allocator, the land detector and the battery bring their own parameter tables; the
 commander's timeouts come from ``stack.commander``. Defined here are only the PX4 parameters nothing else
