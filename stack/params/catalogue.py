@@ -6,7 +6,8 @@ A module takes the definitions of the parameters it reads from here, by name::
 
 so every module that reads a parameter holds the same definition, and a value one accepts all accept.
 ``tests/params/test_catalogue.py`` proves that every module's parameters are these objects and that every
-parameter here is read by some module.
+parameter here is read by some module: there is none that only ground stations use (one would have to be
+documented as such, and exempted there by name).
 """
 
 from __future__ import annotations
