@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import math
 
-from stack.mathlib.scalar import CONSTANTS_ONE_G, wrap_pi
+from stack.mathlib.scalar import CONSTANTS_ONE_G, FLT_EPSILON, wrap_pi
 from stack.mathlib.vector import Vec3
 
 Vec2 = tuple[float, float]
@@ -223,7 +223,7 @@ class L1Guidance:
 
         c_to_p = (position[0] - center[0], position[1] - center[1])
         distance = math.hypot(c_to_p[0], c_to_p[1])
-        c_to_p_unit = (c_to_p[0] / distance, c_to_p[1] / distance) if distance > 1.1920929e-07 else c_to_p
+        c_to_p_unit = (c_to_p[0] / distance, c_to_p[1] / distance) if distance > FLT_EPSILON else c_to_p
         self.target_bearing = math.atan2(-c_to_p_unit[1], -c_to_p_unit[0])
 
         xtrack_vel_center = _cross(c_to_p_unit, ground_velocity)
