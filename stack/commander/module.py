@@ -25,7 +25,7 @@ from stack.commander import land_detector
 from stack.commander.health import CommanderInputs
 from stack.commander.home import HomePosition as Home
 from stack.commander.land_detector import LandDetectorInputs, MulticopterLandDetector
-from stack.commander.modes import nav_state_from_custom_mode
+from stack.commander.modes import MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, nav_state_from_custom_mode
 from stack.commander.state_machine import PARAMS as COMMANDER_PARAMS
 from stack.commander.state_machine import Commander
 from stack.commander.state_machine import NavigationRequest as Navigation
@@ -52,7 +52,6 @@ LAND_DETECTED_REPUBLISH_US = 1_000_000
 OFFBOARD_PARAMS = (
     Param("COM_OF_LOSS_T", 1.0, 0.0, 60.0, "s", "Offboard signal counts as lost after this long without one"),
 )
-MAV_MODE_FLAG_CUSTOM_MODE_ENABLED = 1
 
 
 def offboard_control_flags(ocm: OffboardControlMode) -> dict[str, bool]:
