@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from enum import IntEnum
+
 from stack.msg.base import NAN, Message
 
 
@@ -220,6 +222,7 @@ class BatteryStatus(Message):
     WARNING_LOW = 1
     WARNING_CRITICAL = 2
     WARNING_EMERGENCY = 3
+    WARNING_FAILED = 4
 
     connected: bool = False
     voltage_v: float = 0.0
@@ -233,6 +236,16 @@ class BatteryStatus(Message):
     cell_count: int = 0
     capacity: float = 0.0
     warning: int = WARNING_NONE
+
+
+class BatteryWarning(IntEnum):
+    """``battery_status.warning``, ordered by severity."""
+
+    NONE = BatteryStatus.WARNING_NONE
+    LOW = BatteryStatus.WARNING_LOW
+    CRITICAL = BatteryStatus.WARNING_CRITICAL
+    EMERGENCY = BatteryStatus.WARNING_EMERGENCY
+    FAILED = BatteryStatus.WARNING_FAILED
 
 
 class HomePosition(Message):

@@ -10,8 +10,6 @@ from __future__ import annotations
 
 import math
 
-from stack.commander import battery
-from stack.commander.battery import BatteryModel
 from stack.commander.failure_injection import FAILURE_INJECTION_PARAM
 from stack.mathlib.vector import Vec3
 from stack.msg.sensors import SensorAccel, SensorBaro, SensorGps, SensorGyro, SensorMag
@@ -19,6 +17,8 @@ from stack.msg.simulation import SimGroundtruth
 from stack.msg.system import BatteryStatus, VehicleCommand
 from stack.runtime.module import Arg, Module
 from stack.runtime.params import Param
+from stack.sim import battery
+from stack.sim.battery import BatteryModel
 from stack.sim.sensors import BaroSample, GpsSample, ImuSample, MagSample
 from stack.sim.simulator import SIH_HOME, Simulator
 from stack.sim.wind import WindParams
