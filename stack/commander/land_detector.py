@@ -30,7 +30,7 @@ from typing import NamedTuple
 
 from stack.commander.hysteresis import Hysteresis
 from stack.mathlib.vector import ZERO3, Vec3
-from stack.posctl.takeoff import TakeoffState
+from stack.msg.setpoints import TakeoffState
 from stack.runtime.params import Param
 
 PARAMS: tuple[Param, ...] = (

@@ -29,7 +29,7 @@ from stack.commander.state_machine import PARAMS as COMMANDER_PARAMS
 from stack.commander.state_machine import Commander
 from stack.commander.state_machine import NavigationRequest as Navigation
 from stack.msg.navigation import NavigationRequest
-from stack.msg.setpoints import TakeoffStatus
+from stack.msg.setpoints import TakeoffState, TakeoffStatus
 from stack.msg.system import (
     HomePosition,
     VehicleCommand,
@@ -38,7 +38,6 @@ from stack.msg.system import (
     VehicleLandDetected,
     VehicleStatus,
 )
-from stack.posctl.takeoff import TakeoffState
 from stack.runtime.module import Module, Timer
 from stack.runtime.params import Param
 
@@ -277,6 +276,5 @@ class CommanderModule(Module):
             inp.hover_thrust, inp.hover_thrust_timestamp_us = hover.hover_thrust, hover.timestamp
         takeoff = latest("takeoff_status")
         if takeoff is not None and takeoff.takeoff_state >= TakeoffStatus.TAKEOFF_STATE_DISARMED:
-            # takeoff_status uses PX4's numbering, one above the position controller's TakeoffState.
-            inp.takeoff_state = TakeoffState(takeoff.takeoff_state - 1)
+            inp.takeoff_state = TakeoffState(takeoff.takeoff_state)
         return inp

@@ -4,7 +4,7 @@ import math
 import pytest
 
 from stack.commander.land_detector import LandDetectorInputs, MulticopterLandDetector
-from stack.posctl.takeoff import TakeoffState
+from stack.msg.setpoints import TakeoffState
 
 DT_US = 10_000
 STAGE_US = 333_333  # LNDMC_TRIG_TIME / 3
