@@ -1,6 +1,6 @@
 """mc_att_control: the attitude loop, run on every attitude estimate.
 
-It obeys ``vehicle_control_mode`` as seed 000's module does:
+It obeys ``vehicle_control_mode`` as PX4's mc_att_control did while it had rattitude:
 
 - attitude control enabled: rates from the attitude error (PX4's tilt-prioritised law), the
   setpoint coming from ``vehicle_attitude_setpoint`` or, in Stabilized, from the sticks; optionally
@@ -92,7 +92,7 @@ class MulticopterAttitudeControl(Module):
             and sticks is not None
             and rattitude_uses_rate_control(sticks.roll, sticks.pitch, float(self.params["MC_RATT_TH"]))
         ):
-            attitude_enabled = False  # seed 000: large stick deflections fly rates
+            attitude_enabled = False  # rattitude: large stick deflections fly rates
         if attitude_enabled:
             self._attitude(q, mode, sticks, dt)
         elif mode.flag_control_manual_enabled and mode.flag_control_rates_enabled and sticks is not None:

@@ -1,6 +1,6 @@
 """Multicopter body-rate PID: rate setpoint → normalised torque.
 
-Follows PX4 ``src/lib/rate_control/rate_control.cpp`` (RateControl, seed 003) together with the parts
+Follows PX4 ``src/lib/rate_control/rate_control.cpp`` (RateControl) together with the parts
 of ``mc_rate_control/MulticopterRateControl.cpp`` that are pure computation: K-form gains, NaN rate
 setpoints holding the current rate, NaN torques published as 0, the yaw-torque low-pass
 (MC_YAW_TQ_CUTOFF) and the acro stick mapping.

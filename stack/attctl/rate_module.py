@@ -1,8 +1,9 @@
 """mc_rate_control: the body-rate loop, run on every filtered angular velocity sample.
 
-Seed 003's RateControl: PID with feed-forward, the integrator held back on an axis the allocator
-reports saturated and while landed, and D on the measured angular acceleration. Its torque and
-thrust setpoints go to the allocator (thrust first, so the allocator, triggered by the torque,
+PX4's RateControl (``src/lib/rate_control/rate_control.cpp``): PID with feed-forward, the integrator held
+back on an axis the allocator reports saturated (``control_allocator_status``, read as
+``MulticopterRateControl.cpp`` reads it) and while landed, and D on the measured angular acceleration. Its
+torque and thrust setpoints go to the allocator (thrust first, so the allocator, triggered by the torque,
 always sees the thrust of the same step).
 """
 

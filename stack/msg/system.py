@@ -25,7 +25,7 @@ class VehicleControlMode(Message):
     flag_control_allocation_enabled: bool = False
     flag_control_termination_enabled: bool = False
     source_id: int = 0
-    # Seed 000's rattitude mode (removed from PX4 in 2021, kept here): sticks beyond MC_RATT_TH command rates.
+    # PX4's rattitude mode (removed from PX4 in 2021, kept here): sticks beyond MC_RATT_TH command rates.
     flag_control_rattitude_enabled: bool = False
 
 

@@ -1,7 +1,8 @@
 """Nonlinear L1 lateral guidance (PX4 ECL ``ECL_L1_Pos_Controller``) on local NED coordinates.
 
-Follows ``src/lib/l1/ECL_L1_Pos_Controller.cpp`` (Park, Deyst, How 2004, with PX4's extensions) as
-explained in seed article 004, but on 2-D local (north, east) metres instead of lat/lon. The
+Follows ``src/lib/l1/ECL_L1_Pos_Controller.cpp`` (Park, Deyst, How, "A New Nonlinear Guidance Logic for
+Trajectory Tracking", AIAA GNC 2004, with PX4's extensions), but on 2-D local (north, east) metres instead
+of lat/lon. The
 guidance picks a reference point at distance L1 = (damping·period/π)·groundspeed ahead on the
 path and commands the lateral acceleration a = K_L1·v²/L1·sin η (K_L1 = 4·damping²) where η is the
 angle between the ground velocity and the line to that point; positive a turns right. For a

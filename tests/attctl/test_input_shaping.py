@@ -101,8 +101,8 @@ def test_euler_accel_limit():
     # Banked 90°: a yaw (Euler) acceleration is body pitch, so it is held to the pitch limit.
     banked = euler_accel_limit((math.pi / 2, 0.0, 0.0), a)
     assert banked[2] == pytest.approx(min(10.0 / 0.1, 10.0 / 1.0, 2.0 / 0.1))
-    # Pitched 60° with wings level: yaw is shared with body yaw through cos θ (current ArduPilot; the 2023
-    # version in seed 002 had no cos θ and would give 2.0 here).
+    # Pitched 60° with wings level: yaw is shared with body yaw through cos θ (current ArduPilot; its 2023
+    # AC_AttitudeControl::euler_accel_limit had no cos θ and would give 2.0 here).
     assert euler_accel_limit((0.0, math.radians(60.0), 0.0), a)[2] == pytest.approx(2.0 / 0.5)
     assert euler_accel_limit((0.3, 0.2, 0.0), (10.0, 0.0, 2.0)) == (10.0, 0.0, 2.0)
 

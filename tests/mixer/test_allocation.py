@@ -11,7 +11,7 @@ from stack.mixer.effectiveness import effectiveness_from_params, rotor_effective
 
 # SIH quad X in PX4 motor order: (x, y, KM); KM > 0 is counter-clockwise.
 QUAD_X = [(1.0, 1.0, 0.05), (-1.0, -1.0, 0.05), (1.0, -1.0, -0.05), (-1.0, 1.0, -0.05)]
-# px4.md §3.6: m_r, m_p, m_y per motor.
+# m_r, m_p, m_y per motor: PX4's normalised pseudo-inverse (ControlAllocationPseudoInverse.cpp) of this geometry.
 QUAD_X_TABLE = [(-0.7071, 0.7071, 1.0), (0.7071, -0.7071, 1.0), (0.7071, 0.7071, -1.0), (-0.7071, -0.7071, -1.0)]
 HOVER = (0.0, 0.0, -0.5)
 NO_SAT = (False, False, False)
