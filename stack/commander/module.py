@@ -156,7 +156,7 @@ class CommanderModule(Module):
         control = out.vehicle_control_mode
         changed = out.changed
         if self.commander.nav_state == NS.NAVIGATION_STATE_OFFBOARD:
-            flags = offboard.offboard_control(
+            flags = offboard.control_flags_now(
                 self.latest("offboard_control_mode"), now, float(self.params["COM_OF_LOSS_T"])
             )
             if flags != self._offboard_flags:

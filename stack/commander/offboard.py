@@ -24,9 +24,9 @@ def signal_present(ocm: OffboardControlMode | None, now_us: int, loss_timeout_s:
 
 def control_flags(ocm: OffboardControlMode) -> dict[str, bool]:
     """PX4's ``vehicle_control_mode`` flags in Offboard, from what the offboard controller streams: a position,
-    velocity or acceleration setpoint runs the position controller (only the loops above the one given), those
-    and an attitude setpoint the attitude loop; anything but torque/thrust or actuator setpoints the rate loop;
-    direct actuator setpoints bypass the allocator."""
+    velocity or acceleration setpoint runs the position controller from that level down, those and an attitude
+    setpoint the attitude loop; anything but torque/thrust or actuator setpoints the rate loop; direct actuator
+    setpoints bypass the allocator."""
     flags = {"flag_control_offboard_enabled": True, "flag_control_allocation_enabled": True}
     if ocm.position or ocm.velocity or ocm.acceleration:
         flags |= {
@@ -46,7 +46,7 @@ def control_flags(ocm: OffboardControlMode) -> dict[str, bool]:
     return flags
 
 
-def offboard_control(ocm: OffboardControlMode | None, now_us: int, loss_timeout_s: float) -> dict[str, bool] | None:
+def control_flags_now(ocm: OffboardControlMode | None, now_us: int, loss_timeout_s: float) -> dict[str, bool] | None:
     """The control flags of Offboard now, or None while the offboard signal is missing."""
     return control_flags(ocm) if ocm is not None and signal_present(ocm, now_us, loss_timeout_s) else None
 

@@ -35,12 +35,12 @@ def test_a_fresh_signal_is_present_up_to_com_of_loss_t_and_not_after():
 
 def test_no_signal_at_all_is_no_signal():
     assert not offboard.signal_present(None, NOW, LOSS_S)
-    assert offboard.offboard_control(None, NOW, LOSS_S) is None
+    assert offboard.control_flags_now(None, NOW, LOSS_S) is None
 
 
 def test_a_stale_signal_gives_no_control_flags():
-    assert offboard.offboard_control(ocm(2_000_000, velocity=True), NOW, LOSS_S) is None
-    assert offboard.offboard_control(ocm(500_000, velocity=True), NOW, LOSS_S) is not None
+    assert offboard.control_flags_now(ocm(2_000_000, velocity=True), NOW, LOSS_S) is None
+    assert offboard.control_flags_now(ocm(500_000, velocity=True), NOW, LOSS_S) is not None
 
 
 def enabled(flags: dict[str, bool]) -> set[str]:
@@ -66,7 +66,7 @@ POSITION_CHAIN = {"offboard", "mc_position", "acceleration", "attitude", "rates"
     ],
 )
 def test_each_setpoint_type_runs_the_loops_below_it(setpoint, loops):
-    assert enabled(offboard.offboard_control(ocm(**{setpoint: True}), NOW, LOSS_S)) == loops
+    assert enabled(offboard.control_flags_now(ocm(**{setpoint: True}), NOW, LOSS_S)) == loops
 
 
 def test_the_highest_setpoint_type_given_decides():
