@@ -3,9 +3,10 @@
 Run with ``python benchmarks/bench_sim_physics.py``. For each vehicle it prints the bare rigid-body
 step rate (``MulticopterPhysics.step`` at 1 kHz) and the rate with sensors (``Simulator.advance``:
 4 physics steps, wind, IMU every call, magnetometer, barometer and GPS at their rates), plus the
-cost of ``Simulator.truth()``; each figure is the best of ``--repeat`` runs. Reference points
-(shared/reference): RotorPy ≈ 500 steps/s, gym-pybullet-drones ≈ 4,000, a numpy RK4 quad ≈ 7,700;
-target ≥ 50,000 with sensors.
+cost of ``Simulator.truth()``; each figure is the best of ``--repeat`` runs. Reference points: RotorPy 3.0.0
+(``Multirotor.step``, RK45 at 100 Hz, measured on the 2-core reference machine) ≈ 500 steps/s;
+gym-pybullet-drones ≈ 4,000 (its README on the ``paper`` branch: 240 Hz physics at 15.5–16.8× real time);
+a plain numpy RK4 quad (17 states, measured on the same machine) ≈ 7,700; target ≥ 50,000 with sensors.
 """
 
 from __future__ import annotations

@@ -1,6 +1,6 @@
 """mc_att_control: the attitude loop, run on every attitude estimate.
 
-It obeys ``vehicle_control_mode`` as seed 000's module does:
+It obeys ``vehicle_control_mode`` as PX4's mc_att_control did while it had rattitude:
 
 - attitude control enabled: rates from the attitude error (PX4's tilt-prioritised law), the
   setpoint coming from ``vehicle_attitude_setpoint`` or, in Stabilized, from the sticks; optionally
@@ -12,11 +12,9 @@ It obeys ``vehicle_control_mode`` as seed 000's module does:
 
 from __future__ import annotations
 
-import math
-
 from stack.attctl import attitude_control, input_shaping, rate_control, stabilized
 from stack.attctl.attitude_control import AttitudeControl
-from stack.attctl.input_shaping import AttitudeInputShaper, combine_with_feedforward
+from stack.attctl.input_shaping import AttitudeSetpointShaping
 from stack.attctl.rate_control import AcroStickMapping
 from stack.attctl.stabilized import StabilizedAttitudeSetpoint, rattitude_uses_rate_control
 from stack.mathlib import quaternion as quat
@@ -64,29 +62,25 @@ class MulticopterAttitudeControl(Module):
         self.advertise("vehicle_attitude_setpoint")
         values = self.params.values()
         self.control = AttitudeControl(values)
-        self.shaper = AttitudeInputShaper(values)
+        self.shaping = AttitudeSetpointShaping(values, bool(values["MC_INPUT_SHAPING"]))
         self.sticks = StabilizedAttitudeSetpoint(values)
         self.acro = AcroStickMapping(values)
-        self.shaping = bool(values["MC_INPUT_SHAPING"])
-        self._shaper_engaged = False
         self._reset_counter = 0
         self._was_stabilized = False
 
     def on_params_changed(self, changed: set[str]) -> None:
         values = self.params.values()
         self.control.set_params(values)
-        self.shaper.set_params(values)
+        self.shaping.set_params(values, bool(values["MC_INPUT_SHAPING"]))
         self.sticks.set_params(values)
         self.acro.set_params(values)
-        self.shaping = bool(values["MC_INPUT_SHAPING"])
-        self._shaper_engaged = False
 
     def run(self, att: VehicleAttitude, dt: float) -> None:
         q = att.q
         if att.quat_reset_counter != self._reset_counter:
             self._reset_counter = att.quat_reset_counter
             self.control.adapt_to_reset(att.delta_q_reset)
-            self.shaper.adapt_to_reset(att.delta_q_reset)
+            self.shaping.adapt_to_reset(att.delta_q_reset)
         mode = self.latest("vehicle_control_mode") or _NO_MODE
         sticks = self.latest("manual_control_setpoint")
         attitude_enabled = mode.flag_control_attitude_enabled
@@ -95,11 +89,11 @@ class MulticopterAttitudeControl(Module):
             and sticks is not None
             and rattitude_uses_rate_control(sticks.roll, sticks.pitch, float(self.params["MC_RATT_TH"]))
         ):
-            attitude_enabled = False  # seed 000: large stick deflections fly rates
+            attitude_enabled = False  # rattitude: large stick deflections fly rates
         if attitude_enabled:
             self._attitude(q, mode, sticks, dt)
         elif mode.flag_control_manual_enabled and mode.flag_control_rates_enabled and sticks is not None:
-            self._shaper_engaged = False
+            self.shaping.release()
             rates = self.acro.rates(sticks.roll, sticks.pitch, sticks.yaw)
             thrust = AcroStickMapping.thrust_body(sticks.throttle)
             self.publish(
@@ -107,7 +101,7 @@ class MulticopterAttitudeControl(Module):
                 VehicleRatesSetpoint(roll=rates[0], pitch=rates[1], yaw=rates[2], thrust_body=thrust),
             )
         else:
-            self._shaper_engaged = False
+            self.shaping.release()
 
     def _attitude(self, q: tuple[float, float, float, float], mode: VehicleControlMode, sticks, dt: float) -> None:
         stabilized_mode = (
@@ -134,16 +128,7 @@ class MulticopterAttitudeControl(Module):
         self._was_stabilized = stabilized_mode
         if setpoint is None or not quat.is_finite(setpoint.q_d):
             return
-        if self.shaping:
-            if not self._shaper_engaged:
-                self.shaper.reset(q)
-                self._shaper_engaged = True
-            shaped = self.shaper.input_quaternion(setpoint.q_d, q, dt)
-            self.control.set_attitude_setpoint(shaped.q_target, math.nan)
-            rates = combine_with_feedforward(self.control.update(q), shaped, self._body_rates())
-        else:
-            self.control.set_attitude_setpoint(setpoint.q_d, setpoint.yaw_sp_move_rate)
-            rates = self.control.update(q)
+        rates = self.shaping.rates(self.control, setpoint.q_d, setpoint.yaw_sp_move_rate, q, self._body_rates(), dt)
         self.publish(
             "vehicle_rates_setpoint",
             VehicleRatesSetpoint(roll=rates[0], pitch=rates[1], yaw=rates[2], thrust_body=setpoint.thrust_body),

@@ -5,8 +5,8 @@ law of Brescianini, Hehn and D'Andrea, "Nonlinear Quadrocopter Attitude Control"
 thrust axis is corrected along the shortest path first and the yaw remainder is scaled down by
 MC_YAW_WEIGHT, with the yaw gain divided by the same weight so small yaw errors keep gain MC_YAW_P.
 
-``attitude_error_dcm`` is the older PX4 rotation-matrix formulation of the same idea (mc_att_control
-before 2016, seed 000), kept for comparison.
+``attitude_error_dcm`` is the older PX4 rotation-matrix formulation of the same idea (``control_attitude`` in
+``mc_att_control_main.cpp`` before 2016), kept for comparison.
 """
 
 from __future__ import annotations
@@ -113,7 +113,7 @@ class AttitudeControl:
 
 
 def attitude_error_dcm(q: Quat, q_sp: Quat) -> Vec3:
-    """Attitude error vector [rad, body frame] of PX4's original rotation-matrix controller (seed 000).
+    """Attitude error vector [rad, body frame] of PX4's original rotation-matrix controller.
 
     The thrust axis error is an axis·angle (angle, not 2·sin(α/2)); the yaw error, measured after the
     tilt-only rotation R_rp, is weighted by yaw_w = R_sp(2,2)² (no yaw control with a horizontal thrust

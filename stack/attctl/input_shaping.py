@@ -9,7 +9,8 @@ caller asks for), *target* (a rate- and acceleration-limited trajectory toward d
 computes a new target angular velocity, and returns the target attitude plus the target angular
 velocity rotated into the current body frame as feed-forward. In our stack the target quaternion goes
 to ``AttitudeControl`` (target vs measured) and ``combine_with_feedforward`` adds the feed-forward to its
-rate setpoint.
+rate setpoint. ``AttitudeSetpointShaping`` decides whether the shaper is used at all (MC_INPUT_SHAPING)
+and when it engages.
 
 Angles are in rad and rates in rad/s; the ArduPilot parameters keep their own units (cdeg, deg).
 """
@@ -20,6 +21,7 @@ import math
 from collections.abc import Mapping
 from typing import NamedTuple
 
+from stack.attctl.attitude_control import AttitudeControl
 from stack.mathlib import quaternion as quat
 from stack.mathlib.quaternion import Quat
 from stack.mathlib.scalar import wrap_pi
@@ -333,3 +335,50 @@ class AttitudeInputShaper:
         else:
             s = 1.0
         return ShapedAttitude(q_t, (ff[0] * s, ff[1] * s, ff[2]), s, err)
+
+
+class AttitudeSetpointShaping:
+    """The attitude setpoint's way into ``AttitudeControl``, with or without the shaper (MC_INPUT_SHAPING).
+
+    Without it the setpoint and its yaw feed-forward go to the controller as PX4 does. With it the shaper's
+    target goes instead and its rates are fed forward; the shaper engages, from the measured attitude at rest,
+    on the first attitude-controlled step after it was released. Call ``release()`` on every step that does not
+    control the attitude; a parameter change releases it too.
+    """
+
+    __slots__ = ("_engaged", "enabled", "shaper")
+
+    def __init__(self, params: Mapping[str, object] | None = None, enabled: bool = False) -> None:
+        self.shaper = AttitudeInputShaper(params)
+        self.enabled = enabled
+        self._engaged = False
+
+    def set_params(self, params: Mapping[str, object], enabled: bool) -> None:
+        """The shaper's ATC_* parameters and MC_INPUT_SHAPING."""
+        self.shaper.set_params(params)
+        self.enabled = enabled
+        self._engaged = False
+
+    @property
+    def engaged(self) -> bool:
+        return self._engaged
+
+    def release(self) -> None:
+        self._engaged = False
+
+    def adapt_to_reset(self, delta_q: Quat) -> None:
+        """Shift the shaper's target by an estimator reset (``q_new = delta_q ⊗ q_old``)."""
+        self.shaper.adapt_to_reset(delta_q)
+
+    def rates(self, control: AttitudeControl, q_d: Quat, yaw_sp_move_rate: float, q: Quat, gyro: Vec3,
+              dt: float) -> Vec3:
+        """Body-rate setpoint [rad/s] toward ``q_d`` for the measured attitude ``q`` and body rates ``gyro``."""
+        if not self.enabled:
+            control.set_attitude_setpoint(q_d, yaw_sp_move_rate)
+            return control.update(q)
+        if not self._engaged:
+            self.shaper.reset(q)
+            self._engaged = True
+        shaped = self.shaper.input_quaternion(q_d, q, dt)
+        control.set_attitude_setpoint(shaped.q_target, math.nan)
+        return combine_with_feedforward(control.update(q), shaped, gyro)

@@ -1,6 +1,6 @@
 """Multicopter body-rate PID: rate setpoint → normalised torque.
 
-Follows PX4 ``src/lib/rate_control/rate_control.cpp`` (RateControl, seed 003) together with the parts
+Follows PX4 ``src/lib/rate_control/rate_control.cpp`` (RateControl) together with the parts
 of ``mc_rate_control/MulticopterRateControl.cpp`` that are pure computation: K-form gains, NaN rate
 setpoints holding the current rate, NaN torques published as 0, the yaw-torque low-pass
 (MC_YAW_TQ_CUTOFF) and the acro stick mapping.
@@ -12,7 +12,7 @@ import math
 from collections.abc import Mapping
 
 from stack.mathlib.filters import AlphaFilter
-from stack.mathlib.scalar import superexpo
+from stack.mathlib.scalar import FLT_EPSILON, superexpo
 from stack.mathlib.vector import Vec3
 from stack.params import catalogue
 from stack.params.param import Param
@@ -37,6 +37,19 @@ def integrator_factor(rate_error: float) -> float:
     """PX4's i_factor: 1 − (e / 400°/s)², floored at 0; ≈1 up to 100°/s, 0.75 at 200°/s."""
     f = rate_error / I_FACTOR_RATE
     return max(0.0, 1.0 - f * f)
+
+
+def saturation_from_allocator(
+    torque_achieved: bool, unallocated_torque: Vec3
+) -> tuple[tuple[bool, bool, bool], tuple[bool, bool, bool]]:
+    """``control_allocator_status`` → the (positive, negative) per-axis flags of ``RateControl.set_saturation_status``,
+    as ``MulticopterRateControl::Run`` derives them: when the torque was not achieved, an axis whose unallocated
+    torque exceeds FLT_EPSILON could not go further that way."""
+    if torque_achieved:
+        return (False, False, False), (False, False, False)
+    ur, up, uy = unallocated_torque
+    positive = (ur > FLT_EPSILON, up > FLT_EPSILON, uy > FLT_EPSILON)
+    return positive, (ur < -FLT_EPSILON, up < -FLT_EPSILON, uy < -FLT_EPSILON)
 
 
 class RateControl:

@@ -1,20 +1,19 @@
 """mc_rate_control: the body-rate loop, run on every filtered angular velocity sample.
 
-Seed 003's RateControl: PID with feed-forward, the integrator held back on an axis the allocator
-reports saturated and while landed, and D on the measured angular acceleration. Its torque and
-thrust setpoints go to the allocator (thrust first, so the allocator, triggered by the torque,
+PX4's RateControl (``src/lib/rate_control/rate_control.cpp``): PID with feed-forward, the integrator held
+back on an axis the allocator reports saturated (``control_allocator_status``, read as
+``MulticopterRateControl.cpp`` reads it) and while landed, and D on the measured angular acceleration. Its
+torque and thrust setpoints go to the allocator (thrust first, so the allocator, triggered by the torque,
 always sees the thrust of the same step).
 """
 
 from __future__ import annotations
 
 from stack.attctl import rate_control
-from stack.attctl.rate_control import RateControl, YawTorqueLowPass
+from stack.attctl.rate_control import RateControl, YawTorqueLowPass, saturation_from_allocator
 from stack.msg.estimation import VehicleAngularVelocity
 from stack.msg.setpoints import RateCtrlStatus, VehicleThrustSetpoint, VehicleTorqueSetpoint
 from stack.runtime.module import Module, Trigger
-
-FLT_EPSILON = 1.1920929e-07
 
 
 class MulticopterRateControl(Module):
@@ -49,13 +48,9 @@ class MulticopterRateControl(Module):
             return
         status = self.update("control_allocator_status")
         if status is not None:
-            positive = [False, False, False]
-            negative = [False, False, False]
-            if not status.torque_setpoint_achieved:
-                for i, unallocated in enumerate(status.unallocated_torque):
-                    positive[i] = unallocated > FLT_EPSILON
-                    negative[i] = unallocated < -FLT_EPSILON
-            self.control.set_saturation_status(tuple(positive), tuple(negative))
+            self.control.set_saturation_status(
+                *saturation_from_allocator(status.torque_setpoint_achieved, status.unallocated_torque)
+            )
         if not mode.flag_armed:
             self.control.reset_integral()
             self.yaw_filter.reset()

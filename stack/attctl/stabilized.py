@@ -4,9 +4,10 @@ roll / pitch / yaw-rate / thrust command.
 * ``StabilizedAttitudeSetpoint`` follows ``MulticopterAttitudeControl::generate_attitude_setpoint`` and
   ``throttle_curve`` in PX4's ``mc_att_control_main.cpp`` (yaw setpoint integrated from the stick as in
   v1.13), with the manual throttle slews of its ``Run()``.
-* ``rattitude_uses_rate_control`` is the rattitude switch of the older mc_att_control (seed 000).
+* ``rattitude_uses_rate_control`` is the rattitude switch of the older mc_att_control (MC_RATT_TH in
+  ``mc_att_control_main.cpp``, removed from PX4 in 2021).
 * ``rotors_attitude_setpoint`` converts the RotorS ``roll_pitch_yawrate_thrust_controller`` command
-  (seed 001) to our NED / FRD conventions.
+  (``rotors_control/src/library/roll_pitch_yawrate_thrust_controller.cpp``) to our NED / FRD conventions.
 
 Sticks follow manual_control_setpoint: each in [−1, 1], pitch +1 = stick forward = nose down,
 yaw + = clockwise, throttle −1 = minimum.
@@ -156,7 +157,7 @@ def rattitude_uses_rate_control(roll: float, pitch: float, threshold: float = 0.
 
 def rotors_attitude_setpoint(q: Quat, roll: float, pitch: float, yaw_rate: float, thrust: float,
                              max_thrust: float) -> AttitudeSetpoint:
-    """Attitude setpoint from a RotorS ``RollPitchYawrateThrust`` command (seed 001).
+    """Attitude setpoint from a RotorS ``RollPitchYawrateThrust`` command.
 
     RotorS works in ENU with a FLU body and builds R_des = Rz(ψ_current)·Rx(φ)·Ry(θ). Conjugating with
     the ENU→NED and FLU→FRD axis changes gives R_des = Rz(ψ_NED)·Rx(φ)·Ry(−θ): roll keeps its sign

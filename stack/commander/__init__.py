@@ -1,2 +1,2 @@
-"""The commander's logic: arming, flight modes, commands, failsafes, land detection, and the simulated
-battery (pure classes; the module glue lives in ``module.py`` and ``land_module.py``)."""
+"""The commander's logic: arming, flight modes, commands, failsafes, Offboard checks and land detection (pure
+classes; the module glue lives in ``module.py``)."""

@@ -31,11 +31,10 @@ from enum import IntEnum
 from functools import cache
 from typing import NamedTuple
 
-from stack.commander.battery import BatteryWarning
 from stack.commander.geofence import GeofenceAction
 from stack.commander.health import can_run, missing_cause
 from stack.commander.modes import AUTO_NAV_STATES, Requirement
-from stack.msg.system import VehicleStatus
+from stack.msg.system import BatteryWarning, VehicleStatus
 from stack.params import catalogue
 from stack.params.param import Param
 

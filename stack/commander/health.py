@@ -27,12 +27,11 @@ import math
 from dataclasses import dataclass
 from functools import cache
 
-from stack.commander.battery import BatteryWarning
 from stack.commander.modes import MODES, REQUIREMENT_CAUSE, REQUIREMENT_TEXT, RUN_REQUIREMENTS, Requirement
 from stack.mathlib.quaternion import IDENTITY, Quat
 from stack.msg.estimation import VehicleLocalPosition
 from stack.msg.sensors import SensorGps
-from stack.msg.system import ExternalAutopilotStatus
+from stack.msg.system import BatteryWarning, ExternalAutopilotStatus
 
 ESTIMATE_TIMEOUT_US = 1_000_000
 SENSOR_TIMEOUT_US = 1_000_000

@@ -30,9 +30,9 @@ from typing import NamedTuple
 
 from stack.commander.hysteresis import Hysteresis
 from stack.mathlib.vector import ZERO3, Vec3
+from stack.msg.setpoints import TakeoffState
 from stack.params import catalogue
 from stack.params.param import Param
-from stack.posctl.takeoff import TakeoffState
 
 PARAMS: tuple[Param, ...] = catalogue.params(
     "LNDMC_TRIG_TIME", "LNDMC_Z_VEL_MAX", "LNDMC_XY_VEL_MAX", "LNDMC_ROT_MAX", "LNDMC_ALT_GND", "MPC_THR_MIN",

@@ -6,7 +6,7 @@ One table, :data:`MODES`, keyed by PX4's ``vehicle_status.nav_state`` numbers, h
   data the mode cannot run without, and whether it forbids arming (Return, Land, Descend, Termination);
 * ``control_flags`` — the ``vehicle_control_mode`` flags PX4 ``ModeUtil/control_mode.cpp`` sets for it
   (rotary wing: Manual is stabilised like Stabilized). ``flag_control_allocation_enabled`` is set in every
-  mode but Termination, as PX4's own modes leave the allocator on. Rattitude is seed 000's mode (removed
+  mode but Termination, as PX4's own modes leave the allocator on. Rattitude is the older PX4's mode (removed
   from PX4 in 2021): manual, attitude and rates plus ``flag_control_rattitude_enabled``;
 * ``custom_mode`` — the PX4 custom main/sub mode (``px4_custom_mode.h``, from :mod:`stack.mavlink.px4_modes`)
   QGroundControl and MAVLink send in ``MAV_CMD_DO_SET_MODE`` param2/param3 (with param1 =

@@ -21,19 +21,17 @@ import math
 
 import msgspec
 
-from stack.commander import land_detector
+from stack.commander import land_detector, offboard
 from stack.commander.health import CommanderInputs
 from stack.commander.home import HomePosition as Home
 from stack.commander.land_detector import LandDetectorInputs, MulticopterLandDetector
-from stack.commander.modes import nav_state_from_custom_mode
 from stack.commander.state_machine import PARAMS as COMMANDER_PARAMS
 from stack.commander.state_machine import Commander
 from stack.commander.state_machine import NavigationRequest as Navigation
 from stack.msg.navigation import NavigationRequest
-from stack.msg.setpoints import TakeoffStatus
+from stack.msg.setpoints import TakeoffState, TakeoffStatus
 from stack.msg.system import (
     HomePosition,
-    OffboardControlMode,
     VehicleCommand,
     VehicleCommandAck,
     VehicleControlMode,
@@ -41,7 +39,6 @@ from stack.msg.system import (
     VehicleStatus,
 )
 from stack.params import catalogue
-from stack.posctl.takeoff import TakeoffState
 from stack.runtime.module import Module, Timer
 
 NS = VehicleStatus
@@ -50,28 +47,6 @@ REPUBLISH_US = 500_000
 LAND_DETECTOR_PERIOD_US = 20_000
 LAND_DETECTED_REPUBLISH_US = 1_000_000
 OFFBOARD_PARAMS = catalogue.params("COM_OF_LOSS_T")
-MAV_MODE_FLAG_CUSTOM_MODE_ENABLED = 1
-
-
-def offboard_control_flags(ocm: OffboardControlMode) -> dict[str, bool]:
-    """PX4's control flags for Offboard, from what the offboard controller streams."""
-    flags = {"flag_control_offboard_enabled": True, "flag_control_allocation_enabled": True}
-    if ocm.position or ocm.velocity or ocm.acceleration:
-        flags |= {
-            "flag_multicopter_position_control_enabled": True,
-            "flag_control_position_enabled": ocm.position,
-            "flag_control_velocity_enabled": ocm.position or ocm.velocity,
-            "flag_control_altitude_enabled": ocm.position,
-            "flag_control_climb_rate_enabled": ocm.position or ocm.velocity,
-            "flag_control_acceleration_enabled": True,
-        }
-    if ocm.position or ocm.velocity or ocm.acceleration or ocm.attitude:
-        flags["flag_control_attitude_enabled"] = True
-    if not ocm.thrust_and_torque and not ocm.direct_actuator:
-        flags["flag_control_rates_enabled"] = True
-    if ocm.direct_actuator:
-        flags["flag_control_allocation_enabled"] = False
-    return flags
 
 
 def navigation_request(nav: Navigation) -> NavigationRequest:
@@ -179,7 +154,9 @@ class CommanderModule(Module):
         control = out.vehicle_control_mode
         changed = out.changed
         if self.commander.nav_state == NS.NAVIGATION_STATE_OFFBOARD:
-            flags = self._offboard(now)
+            flags = offboard.control_flags_now(
+                self.latest("offboard_control_mode"), now, float(self.params["COM_OF_LOSS_T"])
+            )
             if flags != self._offboard_flags:
                 changed = True
                 self._offboard_flags = flags
@@ -221,15 +198,8 @@ class CommanderModule(Module):
             self.publish("vehicle_land_detected", VehicleLandDetected(timestamp=now, **state._asdict()))
 
     def _handle(self, cmd: VehicleCommand, now: int) -> None:
-        if self._wants_offboard(cmd) and self._offboard(now) is None:
-            ack = VehicleCommandAck(
-                command=cmd.command,
-                result=VehicleCommandAck.VEHICLE_CMD_RESULT_TEMPORARILY_REJECTED,
-                target_system=cmd.source_system,
-                target_component=cmd.source_component,
-                reason="Switching to Offboard denied: no offboard signal (offboard_control_mode)",
-            )
-        else:
+        ack = offboard.refusal(cmd, self.latest("offboard_control_mode"), now, float(self.params["COM_OF_LOSS_T"]))
+        if ack is None:
             ack = self.commander.handle_command(cmd, now)
         if ack is not None:
             self._acknowledge(ack)
@@ -238,24 +208,6 @@ class CommanderModule(Module):
         if ack.result != VehicleCommandAck.VEHICLE_CMD_RESULT_ACCEPTED:
             self.log.warning("command %d refused: %s", ack.command, ack.reason)
         self.publish("vehicle_command_ack", ack)
-
-    @staticmethod
-    def _wants_offboard(cmd: VehicleCommand) -> bool:
-        if cmd.command == VehicleCommand.VEHICLE_CMD_SET_NAV_STATE:
-            return cmd.param1 == NS.NAVIGATION_STATE_OFFBOARD
-        if cmd.command != VehicleCommand.VEHICLE_CMD_DO_SET_MODE or math.isnan(cmd.param1):
-            return False
-        if int(cmd.param1) & MAV_MODE_FLAG_CUSTOM_MODE_ENABLED and not math.isnan(cmd.param2):
-            sub = 0 if math.isnan(cmd.param3) else int(cmd.param3)
-            return nav_state_from_custom_mode(int(cmd.param2), sub) == NS.NAVIGATION_STATE_OFFBOARD
-        return False
-
-    def _offboard(self, now: int) -> dict[str, bool] | None:
-        """The Offboard control flags, or None if the offboard signal is missing."""
-        ocm = self.latest("offboard_control_mode")
-        if ocm is None or now - ocm.timestamp > float(self.params["COM_OF_LOSS_T"]) * 1e6:
-            return None
-        return offboard_control_flags(ocm)
 
     def _inputs(self, now: int) -> CommanderInputs:
         latest = self.latest
@@ -322,6 +274,5 @@ class CommanderModule(Module):
             inp.hover_thrust, inp.hover_thrust_timestamp_us = hover.hover_thrust, hover.timestamp
         takeoff = latest("takeoff_status")
         if takeoff is not None and takeoff.takeoff_state >= TakeoffStatus.TAKEOFF_STATE_DISARMED:
-            # takeoff_status uses PX4's numbering, one above the position controller's TakeoffState.
-            inp.takeoff_state = TakeoffState(takeoff.takeoff_state - 1)
+            inp.takeoff_state = TakeoffState(takeoff.takeoff_state)
         return inp

@@ -5,6 +5,8 @@ from __future__ import annotations
 import math
 
 CONSTANTS_ONE_G = 9.80665
+FLT_EPSILON = 2.0**-23
+"""C's ``FLT_EPSILON`` (single-precision machine epsilon), the threshold PX4 uses for its degenerate checks."""
 
 
 def constrain(x: float, lo: float, hi: float) -> float:

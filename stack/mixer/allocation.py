@@ -4,8 +4,7 @@ Follows PX4 ``control_allocator``: the pseudo-inverse with multirotor RPY normal
 (``ControlAllocationPseudoInverse.cpp``), sequential desaturation with MC_AIRMODE
 (``ControlAllocationSequentialDesaturation.cpp``), the weak-row zeroing of the effectiveness matrix and
 the status of ``ControlAllocator.cpp`` (allocated/unallocated control, achieved flags, actuator
-saturation), plus the per-axis saturation flags that ``MulticopterRateControl`` derives from it for
-``RateControl.set_saturation_status``.
+saturation).
 
 After normalisation the torque setpoint is in "motor command units": CT and the arm length cancel, so
 for a quad X u_i = m_r·τx + m_p·τy + m_y·τz − T_z with |m_r| = |m_p| = 0.7071 and |m_y| = 1.
@@ -20,6 +19,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from stack.mathlib.scalar import FLT_EPSILON
 from stack.mathlib.vector import Vec3
 from stack.mixer.effectiveness import effectiveness_from_params
 from stack.params import catalogue
@@ -28,7 +28,6 @@ from stack.params.param import Param
 PARAMS: tuple[Param, ...] = catalogue.params("MC_AIRMODE")
 DEFAULTS: dict[str, object] = {p.name: p.default for p in PARAMS}
 
-FLT_EPSILON = float(np.finfo(np.float32).eps)
 WEAK_ROW_THRESHOLD = 0.05
 """An effectiveness row whose entries are all at most this is zeroed (the axis is not controlled)."""
 MIX_ZERO_THRESHOLD = 1e-3
@@ -60,9 +59,6 @@ class AllocationResult(NamedTuple):
     thrust_achieved: bool
     actuator_saturation: tuple[int, ...]
     """Per motor: 0 ok, +2 at maximum, −2 at minimum."""
-    saturation_positive: tuple[bool, bool, bool]
-    """Roll, pitch, yaw could not reach a more positive torque (for ``RateControl.set_saturation_status``)."""
-    saturation_negative: tuple[bool, bool, bool]
 
 
 def normalized_allocation(effectiveness: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -214,11 +210,6 @@ class ControlAllocator:
             else SATURATION_OK
             for m in motors
         )
-        if torque_achieved:
-            sat_pos = sat_neg = (False, False, False)
-        else:
-            sat_pos = (un[0] > FLT_EPSILON, un[1] > FLT_EPSILON, un[2] > FLT_EPSILON)
-            sat_neg = (un[0] < -FLT_EPSILON, un[1] < -FLT_EPSILON, un[2] < -FLT_EPSILON)
         return AllocationResult(
             motors,
             (allocated[0], allocated[1], allocated[2]),
@@ -228,6 +219,4 @@ class ControlAllocator:
             torque_achieved,
             thrust_achieved,
             saturation,
-            sat_pos,
-            sat_neg,
         )

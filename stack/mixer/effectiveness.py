@@ -16,6 +16,7 @@ from collections.abc import Mapping
 
 import numpy as np
 
+from stack.mathlib.scalar import FLT_EPSILON
 from stack.params import ca
 from stack.params.ca import MAX_ROTORS
 from stack.params.param import Param
@@ -37,7 +38,7 @@ def rotor_effectiveness(positions: np.ndarray, axes: np.ndarray, ct: np.ndarray,
     b = np.zeros((6, n))
     for i in range(n):
         norm = np.linalg.norm(axes[i])
-        if norm <= np.finfo(np.float32).eps or abs(ct[i]) <= np.finfo(np.float32).eps:
+        if norm <= FLT_EPSILON or abs(ct[i]) <= FLT_EPSILON:
             continue
         axis = axes[i] / norm
         b[0:3, i] = ct[i] * np.cross(positions[i], axis) - ct[i] * km[i] * axis

@@ -19,7 +19,7 @@ import math
 from collections.abc import Mapping, Sequence
 from typing import NamedTuple
 
-from stack.mixer.allocation import FLT_EPSILON
+from stack.mathlib.scalar import FLT_EPSILON
 from stack.params import ca, catalogue
 from stack.params.param import Param
 

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from enum import IntEnum
+
 from stack.msg.base import F3, F4, NAN, NAN3, Q_IDENTITY, ZERO3, Message
 
 
@@ -121,3 +123,13 @@ class TakeoffStatus(Message):
 
     takeoff_state: int = TAKEOFF_STATE_UNINITIALIZED
     tilt_limit: float = NAN
+
+
+class TakeoffState(IntEnum):
+    """The position controller's takeoff state (PX4 ``Takeoff.hpp``), numbered as ``takeoff_status`` numbers it."""
+
+    DISARMED = TakeoffStatus.TAKEOFF_STATE_DISARMED
+    SPOOLUP = TakeoffStatus.TAKEOFF_STATE_SPOOLUP
+    READY_FOR_TAKEOFF = TakeoffStatus.TAKEOFF_STATE_READY_FOR_TAKEOFF
+    RAMPUP = TakeoffStatus.TAKEOFF_STATE_RAMPUP
+    FLIGHT = TakeoffStatus.TAKEOFF_STATE_FLIGHT

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from enum import IntEnum
+
 from stack.msg.base import NAN, Message
 
 
@@ -23,7 +25,7 @@ class VehicleControlMode(Message):
     flag_control_allocation_enabled: bool = False
     flag_control_termination_enabled: bool = False
     source_id: int = 0
-    # Seed 000's rattitude mode (removed from PX4 in 2021, kept here): sticks beyond MC_RATT_TH command rates.
+    # PX4's rattitude mode (removed from PX4 in 2021, kept here): sticks beyond MC_RATT_TH command rates.
     flag_control_rattitude_enabled: bool = False
 
 
@@ -220,6 +222,7 @@ class BatteryStatus(Message):
     WARNING_LOW = 1
     WARNING_CRITICAL = 2
     WARNING_EMERGENCY = 3
+    WARNING_FAILED = 4
 
     connected: bool = False
     voltage_v: float = 0.0
@@ -233,6 +236,16 @@ class BatteryStatus(Message):
     cell_count: int = 0
     capacity: float = 0.0
     warning: int = WARNING_NONE
+
+
+class BatteryWarning(IntEnum):
+    """``battery_status.warning``, ordered by severity."""
+
+    NONE = BatteryStatus.WARNING_NONE
+    LOW = BatteryStatus.WARNING_LOW
+    CRITICAL = BatteryStatus.WARNING_CRITICAL
+    EMERGENCY = BatteryStatus.WARNING_EMERGENCY
+    FAILED = BatteryStatus.WARNING_FAILED
 
 
 class HomePosition(Message):

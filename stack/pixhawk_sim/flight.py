@@ -24,7 +24,7 @@ from collections.abc import Mapping
 from typing import NamedTuple
 
 from stack.attctl.attitude_control import AttitudeControl
-from stack.attctl.rate_control import RateControl, YawTorqueLowPass
+from stack.attctl.rate_control import RateControl, YawTorqueLowPass, saturation_from_allocator
 from stack.commander.home import HomePosition
 from stack.estimator.acceleration import VelocityDerivative
 from stack.estimator.angular_velocity import AngularVelocityFilter
@@ -144,7 +144,8 @@ class FlightControl:
         torque = self.rate_control.update(rates, rates_sp, rates_derivative, self._dt, landed or maybe_landed)
         torque = (torque[0], torque[1], self.yaw_filter.update(torque[2], self._dt))
         result = self.allocator.allocate(torque, thrust)
-        self.rate_control.set_saturation_status(result.saturation_positive, result.saturation_negative)
+        saturation = saturation_from_allocator(result.torque_achieved, result.unallocated_torque)
+        self.rate_control.set_saturation_status(*saturation)
         out = self.output.update(result.motors, flying, self._dt)
         self.last = ControlOutput(out.sim, out.pwm, rates_sp, q_sp, thrust, velocity_sp_z)
         return self.last

@@ -16,13 +16,14 @@ from enum import IntEnum
 from pathlib import Path
 
 from stack.attctl import attitude_control, rate_control
-from stack.commander import battery, land_detector
+from stack.commander import land_detector
 from stack.commander import state_machine as commander
 from stack.commander.module import OFFBOARD_PARAMS
 from stack.estimator.attitude_module import GYRO_PARAMS
 from stack.mixer import allocation, effectiveness, output
 from stack.params.param import Param, ParamError, ParamValue
 from stack.posctl import flight_mode_manager, pos_module
+from stack.sim import battery
 from stack.sim.module import SimulatorModule
 from stack.sim.vehicle import VehicleModel
 

@@ -14,7 +14,6 @@ from typing import NamedTuple
 
 from pymavlink.dialects.v20 import common as mavlink
 
-from stack.commander.battery import BatteryModel, BatteryState
 from stack.commander.home import HomePosition
 from stack.commander.land_detector import LandDetectorInputs, LandDetectorState, MulticopterLandDetector
 from stack.commander.module import LAND_DETECTOR_PERIOD_US
@@ -23,6 +22,7 @@ from stack.mavlink.px4_modes import Px4Mode
 from stack.pixhawk_sim.commander import Condition, Px4Commander, Verdict
 from stack.pixhawk_sim.flight import ControlOutput, FlightControl, VehicleState
 from stack.pixhawk_sim.offboard import OffboardSetpoint, decode_attitude_target
+from stack.sim.battery import BatteryModel, BatteryState
 from stack.sim.module import BATTERY_PERIOD_US
 from stack.sim.sensors import BaroSample, GpsSample, ImuSample, MagSample
 from stack.sim.simulator import GroundTruth, Simulator

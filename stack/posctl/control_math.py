@@ -13,12 +13,10 @@ import math
 
 from stack.mathlib import quaternion
 from stack.mathlib.quaternion import Quat
+from stack.mathlib.scalar import FLT_EPSILON
 from stack.mathlib.vector import Vec3
 
 Vec2 = tuple[float, float]
-
-FLT_EPSILON = 1.1920929e-07
-"""Single-precision epsilon, the threshold PX4 uses for its degenerate-vector checks."""
 
 _MIN_LENGTH = 0.001
 

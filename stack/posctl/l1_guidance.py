@@ -1,7 +1,8 @@
 """Nonlinear L1 lateral guidance (PX4 ECL ``ECL_L1_Pos_Controller``) on local NED coordinates.
 
-Follows ``src/lib/l1/ECL_L1_Pos_Controller.cpp`` (Park, Deyst, How 2004, with PX4's extensions) as
-explained in seed article 004, but on 2-D local (north, east) metres instead of lat/lon. The
+Follows ``src/lib/l1/ECL_L1_Pos_Controller.cpp`` (Park, Deyst, How, "A New Nonlinear Guidance Logic for
+Trajectory Tracking", AIAA GNC 2004, with PX4's extensions), but on 2-D local (north, east) metres instead
+of lat/lon. The
 guidance picks a reference point at distance L1 = (damping·period/π)·groundspeed ahead on the
 path and commands the lateral acceleration a = K_L1·v²/L1·sin η (K_L1 = 4·damping²) where η is the
 angle between the ground velocity and the line to that point; positive a turns right. For a
@@ -16,7 +17,7 @@ from __future__ import annotations
 
 import math
 
-from stack.mathlib.scalar import CONSTANTS_ONE_G, wrap_pi
+from stack.mathlib.scalar import CONSTANTS_ONE_G, FLT_EPSILON, wrap_pi
 from stack.mathlib.vector import Vec3
 
 Vec2 = tuple[float, float]
@@ -223,7 +224,7 @@ class L1Guidance:
 
         c_to_p = (position[0] - center[0], position[1] - center[1])
         distance = math.hypot(c_to_p[0], c_to_p[1])
-        c_to_p_unit = (c_to_p[0] / distance, c_to_p[1] / distance) if distance > 1.1920929e-07 else c_to_p
+        c_to_p_unit = (c_to_p[0] / distance, c_to_p[1] / distance) if distance > FLT_EPSILON else c_to_p
         self.target_bearing = math.atan2(-c_to_p_unit[1], -c_to_p_unit[0])
 
         xtrack_vel_center = _cross(c_to_p_unit, ground_velocity)

@@ -16,10 +16,10 @@ import math
 
 from stack.estimator.acceleration import VelocityDerivative
 from stack.msg.estimation import VehicleLocalPosition
-from stack.msg.setpoints import TakeoffStatus, VehicleAttitudeSetpoint, VehicleLocalPositionSetpoint
+from stack.msg.setpoints import TakeoffState, TakeoffStatus, VehicleAttitudeSetpoint, VehicleLocalPositionSetpoint
 from stack.params import catalogue
 from stack.posctl.position_control import PositionControl, PositionControlParams, failsafe_setpoint
-from stack.posctl.takeoff import Takeoff, TakeoffParams, TakeoffState, wants_takeoff
+from stack.posctl.takeoff import Takeoff, TakeoffParams, wants_takeoff
 from stack.runtime.module import Module, Trigger
 
 NAN = math.nan
@@ -233,9 +233,8 @@ class MulticopterPositionControl(Module):
         )
 
     def _publish_takeoff_status(self, now: int) -> None:
-        status = (int(self.takeoff.state) + 1, round(self.takeoff.tilt_limit, 4))
+        status = (int(self.takeoff.state), round(self.takeoff.tilt_limit, 4))
         if status != self._takeoff_published or now - self._takeoff_published_us >= TAKEOFF_STATUS_REPUBLISH_US:
             self._takeoff_published = status
             self._takeoff_published_us = now
-            # takeoff_status uses PX4's numbering, one above TakeoffState (0 is "uninitialised").
             self.publish("takeoff_status", TakeoffStatus(takeoff_state=status[0], tilt_limit=self.takeoff.tilt_limit))

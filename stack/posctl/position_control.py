@@ -16,10 +16,9 @@ from dataclasses import dataclass
 from typing import NamedTuple
 
 from stack.mathlib.quaternion import Quat
-from stack.mathlib.scalar import CONSTANTS_ONE_G
+from stack.mathlib.scalar import CONSTANTS_ONE_G, FLT_EPSILON
 from stack.mathlib.vector import NAN3, Vec3
 from stack.posctl.control_math import (
-    FLT_EPSILON,
     add_if_not_nan,
     constrain_xy,
     limit_tilt,

@@ -24,13 +24,13 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from stack.mathlib.scalar import FLT_EPSILON
 from stack.mathlib.vector import Vec3
 from stack.posctl.l1_guidance import line_crossing_point
 from stack.posctl.velocity_smoothing import TrajectoryPoint, VelocitySmoothing3D
 
 Waypoints = tuple[Vec3, Vec3, Vec3]
 
-_EPS = 1.1920929e-07
 _MIN_CROSSING_DISTANCE = 5.0
 _TURNING_MIN_SPEED = 0.2
 _TURNING_COS_ALIGN = 0.98
@@ -60,14 +60,14 @@ def max_speed_in_turn(alpha: float, accel: float, radius: float) -> float:
 
 def _unit2(x: float, y: float) -> tuple[float, float]:
     n = math.hypot(x, y)
-    return (x / n, y / n) if n > _EPS else (0.0, 0.0)
+    return (x / n, y / n) if n > FLT_EPSILON else (0.0, 0.0)
 
 
 def _angle_at_corner(ux: float, uy: float, wx: float, wy: float) -> float:
     """Angle between the unit 2-D vectors u and w, kept below π so tan(α/2) stays finite."""
     d = ux * wx + uy * wy
     alpha = math.acos(min(max(d, -1.0), 1.0))
-    return min(alpha, math.pi - _EPS)
+    return min(alpha, math.pi - FLT_EPSILON)
 
 
 @dataclass(slots=True)
@@ -198,7 +198,7 @@ class PositionSmoothing:
         ey = y_axis.pos - position[1]
         err_max = self._params.mpc_xy_err_max
         # Stretch only when the vehicle is behind the trajectory, never when it is ahead.
-        if err_max <= _EPS or ex * x_axis.vel + ey * y_axis.vel < 0.0:
+        if err_max <= FLT_EPSILON or ex * x_axis.vel + ey * y_axis.vel < 0.0:
             return 1.0
         return 1.0 - min(math.hypot(ex, ey) / err_max, 1.0)
 
@@ -232,7 +232,7 @@ class PositionSmoothing:
 
         dx, dy, dz = aim[0] - pos[0], aim[1] - pos[1], aim[2] - pos[2]
         n = math.sqrt(dx * dx + dy * dy + dz * dz)
-        if n <= _EPS:
+        if n <= FLT_EPSILON:
             return (0.0, 0.0, 0.0)
         # Along the direction to the aim point, as fast as both the xy and the z limit allow;
         # components below the clamp tolerance are left alone (PX4 clampToXYNorm/clampToZNorm).

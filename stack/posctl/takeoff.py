@@ -13,25 +13,17 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from enum import IntEnum
 from typing import NamedTuple
 
 from stack.mathlib.scalar import CONSTANTS_ONE_G
 from stack.mathlib.vector import NAN3, Vec3
+from stack.msg.setpoints import TakeoffState
 
 IDLE_ACCELERATION: Vec3 = (0.0, 0.0, 100.0)
 """Acceleration setpoint that drives the collective thrust to zero (far more than gravity, down)."""
 
 TILT_LIMIT_SLEW_RATE = 0.2
 """Slew rate of the tilt limit [rad/s] (MulticopterPositionControl)."""
-
-
-class TakeoffState(IntEnum):
-    DISARMED = 0
-    SPOOLUP = 1
-    READY_FOR_TAKEOFF = 2
-    RAMPUP = 3
-    FLIGHT = 4
 
 
 @dataclass(slots=True)

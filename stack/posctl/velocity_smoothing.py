@@ -15,9 +15,9 @@ from __future__ import annotations
 import math
 from typing import NamedTuple
 
+from stack.mathlib.scalar import FLT_EPSILON
 from stack.mathlib.vector import Vec3
 
-_EPS = 1.1920929e-07
 _COLLINEAR_TOL = 1e-6
 
 
@@ -129,7 +129,7 @@ class VelocitySmoothing:
         """Plan the minimum-time profile from the current state to ``vel_target``."""
         self._start_plan(vel_target)
         jerk = self._plan_jerk = self._direction * self.max_jerk
-        if abs(jerk) > _EPS:
+        if abs(jerk) > FLT_EPSILON:
             dv = self._vel_sp - self.vel
             self.t1 = self._t1_free(self.accel, dv, jerk)
             self.t3 = max(self.accel / jerk + self.t1, 0.0)
@@ -145,7 +145,7 @@ class VelocitySmoothing:
         plan is kept (PX4 keeps the broken plan, which can overshoot the velocity limit).
         """
         jerk = self._direction * self.max_jerk
-        if abs(jerk) <= _EPS:
+        if abs(jerk) <= FLT_EPSILON:
             return
         a0 = self.accel
         dv = self._vel_sp - self.vel
@@ -180,7 +180,7 @@ class VelocitySmoothing:
         # bringing the current acceleration to zero as fast as possible.
         a = self.accel
         vel_zero_acc = self.vel
-        if abs(a) > _EPS:
+        if abs(a) > FLT_EPSILON:
             j_zero = -_sign(a) * self.max_jerk
             t_zero = -a / j_zero
             vel_zero_acc = self.vel + a * t_zero + 0.5 * j_zero * t_zero * t_zero
@@ -235,7 +235,7 @@ class VelocitySmoothing:
     @staticmethod
     def _t2_free(t1: float, t3: float, a0: float, dv: float, jerk: float) -> float:
         den = a0 + jerk * t1
-        if abs(den) <= _EPS:
+        if abs(den) <= FLT_EPSILON:
             return 0.0
         t2 = (-0.5 * t1 * t1 * jerk - t1 * t3 * jerk - t1 * a0 + 0.5 * t3 * t3 * jerk - t3 * a0 + dv) / den
         return max(t2, 0.0)
@@ -290,7 +290,7 @@ def synchronize_durations(axes: tuple[VelocitySmoothing, ...]) -> None:
         if total > longest:
             longest = total
             longest_index = i
-    if longest > _EPS:
+    if longest > FLT_EPSILON:
         for i, axis in enumerate(axes):
             if i != longest_index and axis.total_time < longest:
                 axis.update_durations_given_total_time(longest)
@@ -374,7 +374,7 @@ class VelocitySmoothing3D:
         max_jerk = max_accel = max_vel = math.inf
         for axis, ui in zip(self.axes, u, strict=True):
             k = abs(ui)
-            if k > _EPS:
+            if k > FLT_EPSILON:
                 max_jerk = min(max_jerk, axis.max_jerk / k)
                 max_accel = min(max_accel, axis.max_accel / k)
                 max_vel = min(max_vel, axis.max_vel / k)

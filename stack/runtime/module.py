@@ -77,7 +77,8 @@ class Module:
     TRIGGER: ClassVar[Trigger | Timer | None] = None
     PARAMS: ClassVar[tuple[Param, ...]] = ()
     ARGS: ClassVar[tuple[Arg, ...]] = ()
-    # PX4 clamps each module's dt (px4.md §0); (min, max) in seconds.
+    # PX4 clamps each module's dt, e.g. to 0.125–20 ms in MulticopterRateControl::Run and 0.2–20 ms in
+    # MulticopterAttitudeControl::Run; (min, max) in seconds.
     DT_RANGE: ClassVar[tuple[float, float]] = (0.0002, 0.02)
     # The lockstep coordinator (the simulator) drives time instead of following it.
     LOCKSTEP_COORDINATOR: ClassVar[bool] = False

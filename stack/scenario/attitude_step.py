@@ -12,8 +12,10 @@ import math
 from collections.abc import Generator
 from typing import Any
 
+from stack.commander.modes import MAV_MODE_FLAG_CUSTOM_MODE_ENABLED
 from stack.mathlib import quaternion as quat
 from stack.mathlib.scalar import constrain
+from stack.mavlink.px4_modes import MainMode
 from stack.msg.setpoints import VehicleAttitudeSetpoint
 from stack.msg.system import OffboardControlMode, TelemetryStatus, VehicleCommand
 from stack.scenario.catalogue import Check, Scenario
@@ -23,8 +25,6 @@ from stack.scenario.script import ScenarioError, ScriptContext, Wait
 STEP_DEG = 10.0
 HOLD_S = 1.5
 CLIMB_TO_M = 3.0
-PX4_CUSTOM_MAIN_MODE_OFFBOARD = 6
-MAV_MODE_FLAG_CUSTOM_MODE_ENABLED = 1
 
 
 class AttitudeStep:
@@ -69,7 +69,7 @@ class AttitudeStep:
         yield from ctx.command(
             VehicleCommand.VEHICLE_CMD_DO_SET_MODE,
             param1=MAV_MODE_FLAG_CUSTOM_MODE_ENABLED,
-            param2=PX4_CUSTOM_MAIN_MODE_OFFBOARD,
+            param2=MainMode.OFFBOARD,
         )
         yield from ctx.command(VehicleCommand.VEHICLE_CMD_COMPONENT_ARM_DISARM, param1=1.0)
         ctx.log("armed: climbing")

@@ -23,7 +23,8 @@ import math
 from collections.abc import Generator
 from typing import Any
 
-from stack.commander.modes import mode_name
+from stack.commander.modes import MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, mode_name
+from stack.mavlink.px4_modes import MainMode
 from stack.msg.setpoints import TrajectorySetpoint
 from stack.msg.system import OffboardControlMode, TelemetryStatus
 from stack.scenario import autonomy
@@ -36,7 +37,6 @@ ALTITUDE_M = 10.0
 AWAY_M = 10.0
 FENCE_M = 25.0
 BREACH_SPEED = 3.0
-PX4_CUSTOM_MAIN_MODE_OFFBOARD = 6
 PARAMS: dict[str, object] = {
     "COM_DL_LOSS_T": 5,
     "GF_MAX_HOR_DIST": FENCE_M,
@@ -109,7 +109,11 @@ def script(ctx: ScriptContext) -> Generator[Wait, None, None]:
     ctx.log("offboard: flying north out of the geofence")
     gcs.offboard_velocity = (BREACH_SPEED, 0.0, 0.0)
     yield ctx.wait(1.0)
-    yield from ctx.command(CMD.VEHICLE_CMD_DO_SET_MODE, param1=1.0, param2=float(PX4_CUSTOM_MAIN_MODE_OFFBOARD))
+    yield from ctx.command(
+        CMD.VEHICLE_CMD_DO_SET_MODE,
+        param1=float(MAV_MODE_FLAG_CUSTOM_MODE_ENABLED),
+        param2=float(MainMode.OFFBOARD),
+    )
     yield ctx.until(lambda: failsafe_mode(ctx) is not None, 30.0, "the geofence failsafe")
     ctx.state["geofence_action"] = failsafe_mode(ctx)
     ctx.log(f"geofence failsafe: {ctx.state['geofence_action']}")

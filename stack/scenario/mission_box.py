@@ -13,6 +13,7 @@ import math
 from collections.abc import Generator
 from typing import Any
 
+from stack.launch_files import find_launch_file
 from stack.mission.items import MAV_CMD_NAV_WAYPOINT, GeoPoint, Mission
 from stack.mission.loader import load_mission
 from stack.mission.transfer import mission_id_for, mission_message
@@ -20,7 +21,6 @@ from stack.scenario import autonomy
 from stack.scenario.catalogue import Check, Scenario
 from stack.scenario.metrics import value_at
 from stack.scenario.script import ScenarioError, ScriptContext, Wait
-from stack.supervisor.profile import find_launch_file
 
 MISSION_FILE = "missions/box.plan"
 Vec2 = tuple[float, float]

@@ -10,14 +10,14 @@ from __future__ import annotations
 
 import math
 
-from stack.commander import battery
-from stack.commander.battery import BatteryModel
 from stack.mathlib.vector import Vec3
 from stack.msg.sensors import SensorAccel, SensorBaro, SensorGps, SensorGyro, SensorMag
 from stack.msg.simulation import SimGroundtruth
 from stack.msg.system import BatteryStatus, VehicleCommand
 from stack.params import catalogue
 from stack.runtime.module import Arg, Module
+from stack.sim import battery
+from stack.sim.battery import BatteryModel
 from stack.sim.sensors import BaroSample, GpsSample, ImuSample, MagSample
 from stack.sim.simulator import Simulator
 from stack.sim.wind import WindParams

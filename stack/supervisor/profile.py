@@ -25,40 +25,18 @@ from __future__ import annotations
 
 import ast
 import string
-import sys
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from stack.bus import keys
 from stack.bus.config import BusConfig
+from stack.launch_files import launch_dirs
 from stack.params.param import ParamError, ParamValue
 from stack.runtime.module import Module
 from stack.runtime.spec import load_module_class, resolve_args
 
 DEFAULT_PROFILE = "sitl_quad"
-
-
-def launch_dirs() -> list[Path]:
-    """Where profiles are looked up by name: ./launch, the source checkout's launch/, the installed copy."""
-    candidates = [
-        Path.cwd() / "launch",
-        Path(__file__).resolve().parents[2] / "launch",
-        Path(sys.prefix) / "share" / "stack" / "launch",
-    ]
-    seen: list[Path] = []
-    for d in candidates:
-        if d.is_dir() and d not in seen:
-            seen.append(d)
-    return seen
-
-
-def find_launch_file(relative: str) -> Path:
-    """A file shipped under launch/ (e.g. ``missions/box.plan``), from the first launch directory holding it."""
-    for d in launch_dirs():
-        if (d / relative).is_file():
-            return d / relative
-    raise FileNotFoundError(f"launch/{relative} not found in {', '.join(str(d) for d in launch_dirs())}")
 
 
 RESTART_POLICIES = ("no", "on-failure", "always")

@@ -1,8 +1,8 @@
 """Where the plots go: a native Rerun viewer, the web viewer, an .rrd file.
 
 Network exposure is opt-in: the viewer and web servers are the ``rerun`` executable started with
-``--bind 127.0.0.1`` (the SDK's in-process ``serve_grpc`` binds 0.0.0.0 and cannot be told
-otherwise, middleware.md §4.1), so nothing listens beyond loopback unless ``bind`` says so.
+``--bind 127.0.0.1`` (the SDK's in-process ``serve_grpc`` binds 0.0.0.0 and takes a port but no address:
+``rerun_bindings`` ``python_bridge::serve_grpc``), so nothing listens beyond loopback unless ``bind`` says so.
 
 Rerun's usage analytics: the ``rerun`` executable reports "viewer opened"-style events unless
 analytics are disabled. The processes started here get ``CI=1`` in their environment, which Rerun

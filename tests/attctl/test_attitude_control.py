@@ -1,4 +1,4 @@
-"""AttitudeControl (PX4 quaternion law) and the older rotation-matrix error of seed 000."""
+"""AttitudeControl (PX4 quaternion law) and the older PX4 rotation-matrix attitude error."""
 
 import math
 import random

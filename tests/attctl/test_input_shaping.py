@@ -6,8 +6,10 @@ import random
 
 import pytest
 
+from stack.attctl.attitude_control import AttitudeControl
 from stack.attctl.input_shaping import (
     AttitudeInputShaper,
+    AttitudeSetpointShaping,
     ShapedAttitude,
     ang_vel_limit,
     ang_vel_to_euler_rate,
@@ -99,8 +101,8 @@ def test_euler_accel_limit():
     # Banked 90°: a yaw (Euler) acceleration is body pitch, so it is held to the pitch limit.
     banked = euler_accel_limit((math.pi / 2, 0.0, 0.0), a)
     assert banked[2] == pytest.approx(min(10.0 / 0.1, 10.0 / 1.0, 2.0 / 0.1))
-    # Pitched 60° with wings level: yaw is shared with body yaw through cos θ (current ArduPilot; the 2023
-    # version in seed 002 had no cos θ and would give 2.0 here).
+    # Pitched 60° with wings level: yaw is shared with body yaw through cos θ (current ArduPilot; its 2023
+    # AC_AttitudeControl::euler_accel_limit had no cos θ and would give 2.0 here).
     assert euler_accel_limit((0.0, math.radians(60.0), 0.0), a)[2] == pytest.approx(2.0 / 0.5)
     assert euler_accel_limit((0.3, 0.2, 0.0), (10.0, 0.0, 2.0)) == (10.0, 0.0, 2.0)
 
@@ -241,3 +243,45 @@ def test_heading_reset_moves_the_target_with_the_estimate():
     delta = quat.from_axis_angle((0.0, 0.0, 1.0), 0.5)
     shaper.adapt_to_reset(delta)
     assert shaper.q_target == pytest.approx(quat.mul(delta, q), abs=1e-12)
+
+
+def test_without_shaping_the_setpoint_goes_to_the_controller_as_px4_gives_it():
+    q, q_d = quat.from_euler(0.1, 0.0, 0.0), quat.from_euler(0.3, -0.1, 0.5)
+    shaping = AttitudeSetpointShaping(enabled=False)
+    rates = shaping.rates(AttitudeControl(), q_d, 0.2, q, (9.0, 9.0, 9.0), DT)
+    plain = AttitudeControl()
+    plain.set_attitude_setpoint(q_d, 0.2)
+    assert rates == plain.update(q)
+    assert not shaping.engaged
+
+
+def test_shaping_engages_from_the_measured_attitude_at_rest_until_released():
+    q_d = quat.from_euler(0.5, 0.0, 0.0)
+    shaping = AttitudeSetpointShaping(enabled=True)
+    control = AttitudeControl()
+    start = quat.from_euler(0.0, 0.2, 0.0)
+    shaping.rates(control, q_d, math.nan, start, (0.0, 0.0, 0.0), DT)
+    assert shaping.engaged
+    # One step from the measured attitude at rest: the target has barely moved toward q_d.
+    assert quat.angle_between(shaping.shaper.q_target, start) < 0.01
+    for _ in range(40):
+        shaping.rates(control, q_d, math.nan, start, (0.0, 0.0, 0.0), DT)
+    assert quat.angle_between(shaping.shaper.q_target, start) > 0.05
+    # Engaged, the target goes on from where it was; released, it starts again from the measured attitude.
+    elsewhere = quat.from_euler(0.0, -0.3, 1.0)
+    shaping.rates(control, q_d, math.nan, elsewhere, (0.0, 0.0, 0.0), DT)
+    assert quat.angle_between(shaping.shaper.q_target, elsewhere) > 0.3
+    shaping.release()
+    assert not shaping.engaged
+    shaping.rates(control, q_d, math.nan, elsewhere, (0.0, 0.0, 0.0), DT)
+    assert quat.angle_between(shaping.shaper.q_target, elsewhere) < 0.01
+
+
+def test_a_parameter_change_releases_the_shaper_and_can_turn_it_off():
+    shaping = AttitudeSetpointShaping(enabled=True)
+    shaping.rates(AttitudeControl(), quat.IDENTITY, math.nan, quat.IDENTITY, (0.0, 0.0, 0.0), DT)
+    shaping.set_params({"ATC_INPUT_TC": 0.2}, enabled=True)
+    assert not shaping.engaged
+    shaping.set_params({}, enabled=False)
+    shaping.rates(AttitudeControl(), quat.IDENTITY, math.nan, quat.IDENTITY, (0.0, 0.0, 0.0), DT)
+    assert not shaping.engaged and not shaping.enabled

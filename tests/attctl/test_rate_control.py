@@ -4,7 +4,14 @@ import math
 
 import pytest
 
-from stack.attctl.rate_control import AcroStickMapping, RateControl, YawTorqueLowPass, integrator_factor
+from stack.attctl.rate_control import (
+    AcroStickMapping,
+    RateControl,
+    YawTorqueLowPass,
+    integrator_factor,
+    saturation_from_allocator,
+)
+from stack.mathlib.scalar import FLT_EPSILON
 
 DT = 0.004
 ZERO = (0.0, 0.0, 0.0)
@@ -72,6 +79,15 @@ def test_saturated_axis_stops_winding_up_that_way_but_still_unwinds():
     assert rc.integral[1] == 0.0
     rc.update(ZERO, (0.0, 1.0, 0.0), ZERO, DT, False)
     assert rc.integral[1] > 0.0
+
+
+def test_saturation_flags_from_the_allocator_status():
+    # An achieved torque never saturates, whatever is left over.
+    assert saturation_from_allocator(True, (0.5, -0.5, 0.5)) == (NO_SAT, NO_SAT)
+    # Otherwise the sign of each axis's unallocated torque, beyond FLT_EPSILON.
+    tiny = 0.5 * FLT_EPSILON
+    assert saturation_from_allocator(False, (0.2, -0.3, tiny)) == ((True, False, False), (False, True, False))
+    assert saturation_from_allocator(False, (-tiny, 0.0, -0.1)) == (NO_SAT, (False, False, True))
 
 
 def test_no_integration_when_landed():

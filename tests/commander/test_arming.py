@@ -3,9 +3,8 @@ import math
 import pytest
 
 from stack.commander import commands as C
-from stack.commander.battery import BatteryWarning
 from stack.commander.state_machine import ArmDisarmReason, Commander
-from stack.msg.system import VehicleCommand
+from stack.msg.system import BatteryWarning, VehicleCommand
 from stack.msg.system import VehicleCommandAck as ACK
 from stack.msg.system import VehicleStatus as NS
 from tests.commander.helpers import healthy, local_position, make_clock

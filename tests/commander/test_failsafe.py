@@ -1,10 +1,10 @@
 import pytest
 
 from stack.commander import commands as C
-from stack.commander.battery import BatteryWarning
 from stack.commander.failsafe import FailsafeAction, mode_fallback, runnable_action
 from stack.commander.modes import Requirement
 from stack.commander.state_machine import ArmDisarmReason
+from stack.msg.system import BatteryWarning
 from stack.msg.system import VehicleCommandAck as ACK
 from stack.msg.system import VehicleStatus as NS
 from tests.commander.helpers import local_position, make_clock

@@ -4,7 +4,7 @@ import math
 import pytest
 
 from stack.commander.land_detector import LandDetectorInputs, MulticopterLandDetector
-from stack.posctl.takeoff import TakeoffState
+from stack.msg.setpoints import TakeoffState
 
 DT_US = 10_000
 STAGE_US = 333_333  # LNDMC_TRIG_TIME / 3
@@ -150,3 +150,26 @@ def test_ground_effect_during_takeoff_ramp():
     assert not state.in_ground_effect
     state, _ = flight.run(0.05, dist_bottom_valid=True, dist_bottom=1.5)
     assert state.in_ground_effect
+
+
+def test_a_parameter_change_in_flight_does_not_land_the_vehicle():
+    flight = Flight()
+    state, _ = flight.run(1.0, vz=0.0)
+    assert not (state.landed or state.maybe_landed or state.ground_contact)
+    flight.detector.set_params({"LNDMC_TRIG_TIME": 0.3, "MPC_THR_MIN": 0.1, "LNDMC_Z_VEL_MAX": 0.3})
+    state, first = flight.run(1.0)
+    assert not ({"landed", "maybe_landed", "ground_contact"} & first.keys())
+
+
+def test_a_parameter_change_on_the_ground_keeps_it_landed_and_times_the_next_landing():
+    flight = _descending()
+    state, _ = flight.run(1.5, vz=0.0, throttle=0.1)
+    assert state.landed
+    flight.detector.set_params({"LNDMC_TRIG_TIME": 3.0})
+    state, _ = flight.run(0.05)
+    assert state.landed
+    state, _ = flight.run(0.5, vz=0.0, throttle=0.5, velocity_setpoint_z=-1.5)
+    assert not state.landed
+    flight.run(1.0, vz=0.7, throttle=0.45, velocity_setpoint_z=0.7)
+    state, first = flight.run(4.0, vz=0.0, throttle=0.1)
+    assert state.landed and first["landed"] == pytest.approx(3 * 1_000_000, abs=4 * DT_US)

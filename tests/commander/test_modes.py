@@ -17,7 +17,7 @@ FLAG_FIELDS = [f for f in VehicleControlMode.__struct_fields__ if f.startswith("
 STAB = {"manual", "attitude", "rates", "allocation"}
 AUTO = {"auto", "position", "velocity", "altitude", "climb_rate", "attitude", "rates", "allocation", "mc_position"}
 
-# PX4 ModeUtil/control_mode.cpp for a rotary-wing vehicle, plus seed 000's rattitude.
+# PX4 ModeUtil/control_mode.cpp for a rotary-wing vehicle, plus the older PX4's rattitude.
 EXPECTED_FLAGS = {
     NS.NAVIGATION_STATE_MANUAL: STAB,
     NS.NAVIGATION_STATE_STAB: STAB,

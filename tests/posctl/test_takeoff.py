@@ -5,8 +5,9 @@ import pytest
 
 from stack.mathlib.scalar import CONSTANTS_ONE_G as G
 from stack.mathlib.vector import NAN3
+from stack.msg.setpoints import TakeoffState
 from stack.posctl.position_control import PositionControl
-from stack.posctl.takeoff import IDLE_ACCELERATION, Takeoff, TakeoffParams, TakeoffState
+from stack.posctl.takeoff import IDLE_ACCELERATION, Takeoff, TakeoffParams
 
 DT = 0.01
 DT_US = 10_000

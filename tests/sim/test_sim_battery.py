@@ -1,6 +1,6 @@
 """Simulated battery (timed drain SIM_BAT_DRAIN, floor SIM_BAT_MIN_PCT) and GPS switched off and on.
 
-Covers the battery model beyond tests/commander/test_battery.py, the simulator core's GPS switch, and the
+Covers the battery model beyond tests/sim/test_battery.py, the simulator core's GPS switch, and the
 simulator module's glue (failure injection, SIM_GPS_USED, battery_status) through a stand-in runtime.
 """
 
@@ -12,10 +12,10 @@ from typing import Any
 
 import pytest
 
-from stack.commander.battery import BatteryModel, BatteryState, BatteryWarning
-from stack.msg.system import ActuatorArmed, VehicleCommand
+from stack.msg.system import ActuatorArmed, BatteryWarning, VehicleCommand
 from stack.params.store import ParamStore
 from stack.runtime.spec import ModuleSpec, resolve_args
+from stack.sim.battery import BatteryModel, BatteryState
 from stack.sim.module import SimulatorModule
 from stack.sim.sensors import BaroSample, GpsParams, GpsSample, ImuSample, MagSample
 from stack.sim.simulator import Simulator

@@ -152,7 +152,8 @@ def angular_acceleration_for(model: VehicleModel, commands: tuple[float, ...]) -
 
 
 def test_px4_quad_x_mixer_rows_give_positive_accelerations() -> None:
-    """The px4.md §3.6 allocation rows (PX4 motor order) produce positive roll, pitch and yaw accelerations."""
+    """PX4's quad X allocation rows (ControlAllocationPseudoInverse.cpp, PX4 motor order) produce positive roll,
+    pitch and yaw accelerations."""
     model = load_vehicle("sih_quad")
     hover = model.hover_command
     # Expected from SIH's moment formulas: 0.2 m · 5 N · 4 · 0.05·0.7071 / 0.025 kg·m², and 0.1 N·m · 4 · 0.05 / 0.03.

@@ -22,9 +22,9 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterable, Mapping
-from enum import IntEnum
 from typing import NamedTuple
 
+from stack.msg.system import BatteryWarning
 from stack.params import catalogue
 from stack.params.param import Param
 
@@ -38,16 +38,6 @@ AVERAGE_CURRENT_TAU = 2.0
 """Time constant [s] of the average current used for the time-remaining estimate."""
 AIR_DENSITY = 1.225
 """Sea-level air density [kg/m³]."""
-
-
-class BatteryWarning(IntEnum):
-    """``battery_status.warning`` values (PX4 ``WARNING_*``)."""
-
-    NONE = 0
-    LOW = 1
-    CRITICAL = 2
-    EMERGENCY = 3
-    FAILED = 4
 
 
 class BatteryState(NamedTuple):

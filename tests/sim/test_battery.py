@@ -2,7 +2,8 @@ import math
 
 import pytest
 
-from stack.commander.battery import BatteryModel, BatteryWarning, motor_current
+from stack.msg.system import BatteryWarning
+from stack.sim.battery import BatteryModel, motor_current
 
 
 def _run(battery, seconds, armed=True, current=math.nan, dt=0.1):
