@@ -6,7 +6,9 @@ answers every ``vehicle_command`` with a ``vehicle_command_ack`` and publishes `
 plus ``home_position``. In Offboard the control flags follow the offboard controller's
 ``offboard_control_mode``, which must keep arriving (COM_OF_LOSS_T) or the switch is refused. With an external
 autopilot as the plant (COM_EXT_AP, the ``pixhawk`` module) it reads ``external_autopilot_status`` and
-publishes the acknowledgements it held back until that autopilot armed or refused.
+publishes the acknowledgements it held back until that autopilot armed or refused. Its events (arming, mode
+changes, failsafes) and the reasons of the commands it refuses go out on ``mavlink_log`` for the operator, as
+PX4's commander does with ``mavlink_log_*``: ground-station links send them as STATUSTEXT.
 
 PX4's land detector runs in the same process on every second tick, at its 50 Hz
 (LAND_DETECTOR_UPDATE_INTERVAL in ``src/modules/land_detector/LandDetector.h``), and publishes
@@ -33,6 +35,7 @@ from stack.msg.navigation import NavigationRequest
 from stack.msg.setpoints import TakeoffStatus
 from stack.msg.system import (
     HomePosition,
+    MavlinkLog,
     OffboardControlMode,
     VehicleCommand,
     VehicleCommandAck,
@@ -53,6 +56,18 @@ OFFBOARD_PARAMS = (
     Param("COM_OF_LOSS_T", 1.0, 0.0, 60.0, "s", "Offboard signal counts as lost after this long without one"),
 )
 MAV_MODE_FLAG_CUSTOM_MODE_ENABLED = 1
+WARNING_EVENTS = ("Failsafe warning", "Connection to ground station lost", "Link to the Pixhawk lost")
+CRITICAL_EVENTS = ("Failsafe activated",)
+
+
+def event_severity(text: str, refused: bool) -> int:
+    """The MAV_SEVERITY of a commander event: a refusal's reason (PX4 sends "Arming denied..." as critical) and a
+    failsafe taking over are critical, warnings and link losses warnings, the rest (arming, modes) information."""
+    if refused or text.startswith(CRITICAL_EVENTS):
+        return MavlinkLog.SEVERITY_CRITICAL
+    if text.startswith(WARNING_EVENTS):
+        return MavlinkLog.SEVERITY_WARNING
+    return MavlinkLog.SEVERITY_INFO
 
 
 def offboard_control_flags(ocm: OffboardControlMode) -> dict[str, bool]:
@@ -145,6 +160,7 @@ class CommanderModule(Module):
         self.advertise("home_position")
         self.advertise("vehicle_land_detected")
         self.advertise("navigation_request")
+        self.advertise("mavlink_log")
         self.commander = Commander(self.params.values())
         self.land_detector = MulticopterLandDetector(self.params.values())
         self._land_due = 0
@@ -156,6 +172,7 @@ class CommanderModule(Module):
         self._navigation: Navigation | None = None
         self._last_gcs = 0
         self._offboard_flags: dict[str, bool] | None = None
+        self._refusals: list[str] = []
 
     def on_params_changed(self, changed: set[str]) -> None:
         self.commander.set_params(self.params.values())
@@ -174,10 +191,9 @@ class CommanderModule(Module):
             for cmd in commands:
                 self._handle(cmd, now)
         out = self.commander.update(now, inputs)
-        for event in out.events:
-            self.log.info("%s", event)
         for ack in out.acks:
             self._acknowledge(ack)
+        self._tell_operator(out.events, now)
         control = out.vehicle_control_mode
         changed = out.changed
         if self.commander.nav_state == NS.NAVIGATION_STATE_OFFBOARD:
@@ -239,7 +255,18 @@ class CommanderModule(Module):
     def _acknowledge(self, ack: VehicleCommandAck) -> None:
         if ack.result != VehicleCommandAck.VEHICLE_CMD_RESULT_ACCEPTED:
             self.log.warning("command %d refused: %s", ack.command, ack.reason)
+            if ack.reason:
+                self._refusals.append(ack.reason)
         self.publish("vehicle_command_ack", ack)
+
+    def _tell_operator(self, events: tuple[str, ...], now: int) -> None:
+        """Each event, and each refusal's reason (most are events too), once on ``mavlink_log``."""
+        refusals, self._refusals = self._refusals, []
+        for event in events:
+            self.log.info("%s", event)
+        for text in (*events, *(r for r in dict.fromkeys(refusals) if r not in events)):
+            severity = event_severity(text, text in refusals)
+            self.publish("mavlink_log", MavlinkLog(timestamp=now, text=text, severity=severity))
 
     @staticmethod
     def _wants_offboard(cmd: VehicleCommand) -> bool:

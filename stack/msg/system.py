@@ -203,6 +203,23 @@ class OffboardControlMode(Message):
     direct_actuator: bool = False
 
 
+class MavlinkLog(Message):
+    """A message for the operator (PX4 ``MavlinkLog``): the ground-station links send it as STATUSTEXT.
+    ``severity`` is MAVLink's MAV_SEVERITY (PX4: the kernel log levels, the same numbers)."""
+
+    SEVERITY_EMERGENCY = 0
+    SEVERITY_ALERT = 1
+    SEVERITY_CRITICAL = 2
+    SEVERITY_ERROR = 3
+    SEVERITY_WARNING = 4
+    SEVERITY_NOTICE = 5
+    SEVERITY_INFO = 6
+    SEVERITY_DEBUG = 7
+
+    text: str = ""
+    severity: int = SEVERITY_INFO
+
+
 class TelemetryStatus(Message):
     """A command link's heartbeat (the subset of PX4 ``TelemetryStatus`` the commander uses)."""
 
