@@ -90,6 +90,10 @@ class FastInput(InputBuffer):
             self.readers.append(reader)
         self._inside = inside
 
+    def from_inside(self, publisher_id: int) -> bool:
+        """Whether a Zenoh sample comes from one of the run's own publishers (a duplicate of a ring record)."""
+        return publisher_id in self._inside
+
     # -- reading -----------------------------------------------------------------------------------
 
     def refresh(self, now: int, trigger_slot: int = -1, trigger_seq: int = 0) -> None:
