@@ -111,6 +111,7 @@ class MissionTransfer:
             return
         self._upload = None
         if msg.count == 0:
+            self.items = []
             self._actions.append(Clear())
             self._ack(source, mavlink2.MAV_MISSION_ACCEPTED)
             return
@@ -164,6 +165,7 @@ class MissionTransfer:
             self._ack(source, mavlink2.MAV_MISSION_UNSUPPORTED, msg.mission_type)
             return
         self._upload = None
+        self.items = []
         self._actions.append(Clear())
         self._ack(source, mavlink2.MAV_MISSION_ACCEPTED, msg.mission_type)
 

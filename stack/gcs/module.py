@@ -237,7 +237,7 @@ class MavlinkModule(Module):
             else max(1.0, self.endpoint.baud / 10 / 2 / PARAM_VALUE_BYTES)
         )
         self._mission_msg: MissionMsg | None = None
-        self._download_key: tuple[int, bool] | None = None
+        self._download_key: tuple[int | None, bool, int | None] | None = None
         self._verdict_id: int | None = None
         self._active = False
         self._last_service_us = wall_clock_us()
@@ -359,6 +359,7 @@ class MavlinkModule(Module):
 
     def _on_mission(self, msg: MissionMsg) -> None:
         self._mission_msg = msg
+        self._refresh_download()
 
     def _on_mission_result(self, result: MissionResult) -> None:
         if self._verdict_id is not None and result.mission_id == self._verdict_id and self.transfer.judging:
@@ -367,10 +368,7 @@ class MavlinkModule(Module):
             if not result.valid:
                 self._say(M.MAV_SEVERITY_CRITICAL, f"Mission rejected: {result.reason}")
         self._on_progress(result)
-        key = (result.mission_id, result.valid)
-        if key != self._download_key:
-            self._download_key = key
-            self._update_download(result)
+        self._refresh_download()
 
     def _on_progress(self, result: MissionResult | None) -> None:
         nav_state = self.view.status.nav_state if self.view.status is not None else -1
@@ -378,14 +376,23 @@ class MavlinkModule(Module):
             if self._active:
                 self._send(msg)
 
-    def _update_download(self, result: MissionResult) -> None:
-        msg = self._mission_msg
-        if not result.valid or msg is None or msg.mission_id != result.mission_id:
+    def _refresh_download(self) -> None:
+        """The mission a download gets: the last ``mission`` message, once the navigator has accepted it."""
+        result, msg = self.progress.result, self._mission_msg
+        key = (
+            result.mission_id if result is not None else None,
+            result is not None and result.valid,
+            msg.mission_id if msg is not None else None,
+        )
+        if key == self._download_key:
+            return
+        self._download_key = key
+        if result is None or not result.valid or msg is None or msg.mission_id != result.mission_id:
             self.transfer.items = []
             return
-        mission = mission_from_message(msg)
+        home = mission_from_message(msg).home
         self.transfer.items = [
-            mission_items.mission_item_int(entry, seq, mission.home, (0, 0), current=seq == result.seq_current)
+            mission_items.mission_item_int(entry, seq, home, (0, 0), current=seq == result.seq_current)
             for seq, entry in enumerate(msg.items)
         ]
 

@@ -170,10 +170,13 @@ def test_items_out_of_order_a_second_uploader_and_a_refused_verdict():
 
 def test_count_zero_and_clear_all_clear_the_mission():
     transfer = MissionTransfer(OWN)
+    transfer.items = [mission_item_int(e, i, HOME, (0, 0)) for i, e in enumerate(_entries())]
+    transfer.on_message(M.MAVLink_mission_clear_all_message(1, 1, 0), GCS, 0)
+    assert transfer.items == []  # a download right after the clear finds nothing
     transfer.on_message(M.MAVLink_mission_count_message(1, 1, 0, 0), GCS, 0)
     transfer.on_message(M.MAVLink_mission_clear_all_message(1, 1, M.MAV_MISSION_TYPE_ALL), GCS, 0)
     out, actions = transfer.take()
-    assert actions == [Clear(), Clear()] and [m.type for m in out] == [M.MAV_MISSION_ACCEPTED] * 2
+    assert actions == [Clear()] * 3 and [m.type for m in out] == [M.MAV_MISSION_ACCEPTED] * 3
 
 
 def test_a_download_answers_each_request_from_the_vehicles_mission():
