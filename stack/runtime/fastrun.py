@@ -198,7 +198,7 @@ class FastDriver:
         arrived = trigger.sub.arrived
         while arrived:
             item = arrived.popleft()
-            if not trigger.from_inside(item[1]):
+            if not trigger.from_inside(item):
                 self.rt._ignore_outside_trigger(trigger.sub.suffix)
 
     def _run_passive(self, period_us: int) -> None:
