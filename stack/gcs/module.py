@@ -276,7 +276,7 @@ class MavlinkModule(Module):
     # -- the link thread ------------------------------------------------------------------------------
 
     def _wake(self) -> None:
-        with contextlib.suppress(BlockingIOError):
+        with contextlib.suppress(OSError):  # full (a wake is pending) or, at shutdown, closed
             os.write(self._wake_w, b"\0")
 
     def _link_loop(self) -> None:
