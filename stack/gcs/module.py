@@ -348,8 +348,7 @@ class MavlinkModule(Module):
             self._send(answer)
 
     def _on_log(self, log: Any) -> None:
-        if self._active:
-            self._say(log.severity, log.text)
+        self._say(log.severity, log.text)  # also to a silent peer: what happened while it was away
 
     def _on_parameter_update(self, msg: Any) -> None:
         if self._active and self.parameters.loaded:

@@ -8,11 +8,13 @@ session: it reads the stack through the CLI.
 
 from __future__ import annotations
 
+import json
 import math
 import socket
 import struct
+import threading
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -319,6 +321,40 @@ def test_missions_upload_download_refusal_and_clear(vehicle: Vehicle) -> None:
     assert gcs.wait("MISSION_COUNT", after=mark).count == 0
 
 
+def test_a_parameter_set_from_a_terminal_is_broadcast(vehicle: Vehicle) -> None:
+    gcs = vehicle.gcs
+    mark = gcs.mark()
+    assert vehicle.stack.cli("param", "set", "MPC_XY_CRUISE", "7.5").returncode == 0
+    value = gcs.wait("PARAM_VALUE", lambda m: m.param_id == "MPC_XY_CRUISE", 15.0, mark)
+    assert value.param_value == 7.5 and value.param_type == M.MAV_PARAM_TYPE_REAL32
+    assert vehicle.stack.cli("param", "set", "MPC_XY_CRUISE", "5.0").returncode == 0
+
+
+def _stream(gcs: Peer, send: Callable[[], None], hz: float) -> tuple[threading.Event, threading.Thread]:
+    stop = threading.Event()
+
+    def run() -> None:
+        while not stop.wait(1.0 / hz):
+            send()
+
+    thread = threading.Thread(target=run, daemon=True)
+    thread.start()
+    return stop, thread
+
+
+def test_sticks_reach_manual_control_setpoint(vehicle: Vehicle) -> None:
+    stop, thread = _stream(vehicle.gcs, lambda: vehicle.gcs.mav.manual_control_send(1, 250, -500, 750, 100, 0), 20.0)
+    try:
+        out = vehicle.stack.cli("topic", "echo", "manual_control_setpoint", "-n", "1", "--json")
+    finally:
+        stop.set()
+        thread.join()
+    assert out.returncode == 0, out.stderr
+    sticks = json.loads(out.stdout.splitlines()[0])
+    assert (sticks["pitch"], sticks["roll"], sticks["throttle"], sticks["yaw"]) == (0.25, -0.5, 0.5, 0.1)
+    assert sticks["valid"]
+
+
 def test_qgroundcontrols_takeoff_from_the_ground_then_link_loss_returns(vehicle: Vehicle) -> None:
     gcs = vehicle.gcs
     prearm_ok(gcs)
@@ -332,11 +368,32 @@ def test_qgroundcontrols_takeoff_from_the_ground_then_link_loss_returns(vehicle:
     gcs.wait("GLOBAL_POSITION_INT", lambda m: m.relative_alt > 2500, 30.0, mark)
     wait_mode(gcs, Px4Mode.AUTO_LOITER)
 
+    here = gcs.wait("LOCAL_POSITION_NED", after=gcs.mark())
+    target = (here.x + 4.0, here.y, here.z)  # offboard: 4 m north, streamed at 10 Hz, PX4's proof of life
+    position_only = 0b110111111000
+    stop, thread = _stream(
+        gcs, lambda: gcs.mav.set_position_target_local_ned_send(0, 1, 1, 1, position_only, *target, *[0.0] * 8), 10.0
+    )
+    try:
+        time.sleep(0.5)
+        assert gcs.command(M.MAV_CMD_DO_SET_MODE, M.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, 6, 0).result == 0
+        wait_mode(gcs, Px4Mode.OFFBOARD)
+        mark = gcs.mark()
+        gcs.wait("LOCAL_POSITION_NED", lambda m: abs(m.x - target[0]) < 0.5, 30.0, mark)
+        assert gcs.command(M.MAV_CMD_DO_SET_MODE, M.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, 4, 3).result == 0
+        wait_mode(gcs, Px4Mode.AUTO_LOITER)
+    finally:
+        stop.set()
+        thread.join()
+
+    mark = gcs.mark()
     gcs.heartbeats = False  # the ground station goes silent: NAV_DLL_ACT = 2 (Return) after COM_DL_LOSS_T
     try:
         wait_mode(gcs, Px4Mode.AUTO_RTL, timeout=30.0)
     finally:
         gcs.heartbeats = True
+    assert wait_text(gcs, "Connection to ground station lost", mark)
+    assert "gcs_connection_loss" in wait_text(gcs, "Failsafe activated", mark)
     mark = gcs.mark()
     gcs.wait("HEARTBEAT", lambda m: not m.base_mode & M.MAV_MODE_FLAG_SAFETY_ARMED, 60.0, mark)
     assert vehicle.extra("mavlink_gcs")["handler_errors"] == 0
