@@ -10,6 +10,8 @@ from __future__ import annotations
 
 import json
 import math
+import os
+import select
 import socket
 import struct
 import threading
@@ -24,6 +26,7 @@ from pymavlink.dialects.v20 import common as M
 from stack.gcs.params import decode
 from stack.mavlink import px4_modes
 from stack.mavlink.convert import StatustextAssembler
+from stack.mavlink.framing import FrameParser
 from stack.mavlink.px4_modes import Px4Mode
 from tests.gcs.peer import Link, Peer, links_profile, udp_port
 from tests.support.harness import RunningStack, wait_no_processes
@@ -38,6 +41,8 @@ class Vehicle:
     gcs: Peer
     links: dict[str, Link]
     busy: socket.socket
+    radio: int
+    """The master side of the pseudo-terminal a serial link (a telemetry radio) is on."""
 
     def extra(self, module: str) -> dict:
         return next(m for m in self.stack.status()["modules"] if m["module"] == module)["extra"]
@@ -59,16 +64,23 @@ def vehicle(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Vehicle]:
     }
     busy = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)  # someone else has that link's port
     busy.bind(("127.0.0.1", links["mavlink_busy"].local))
-    stack = RunningStack(home, links_profile(home / "gs.toml", list(links.values())), "--quiet")
+    radio, terminal = os.openpty()
+    serial = f'device = "serial:{os.ttyname(terminal)}:57600", remote = ""'
+    radio_link = f'[[module]]\nname = "mavlink_radio"\nmodule = "mavlink"\nargs = {{ {serial} }}\n'
+    os.close(terminal)
+    profile = links_profile(home / "gs.toml", list(links.values()))
+    profile.write_text(profile.read_text() + radio_link)
+    stack = RunningStack(home, profile, "--quiet")
     gcs = Peer(links["mavlink_gcs"].remote)
     try:
         stack.wait_up(120)
         gcs.connect(60)
-        yield Vehicle(stack, gcs, links, busy)
+        yield Vehicle(stack, gcs, links, busy, radio)
     finally:
         gcs.close()
         busy.close()
         code = stack.stop()
+        os.close(radio)
     assert code == 0, stack.output
     assert "Traceback" not in stack.output
     assert not wait_no_processes(home)
@@ -273,6 +285,27 @@ def test_a_link_whose_port_is_taken_retries_until_it_is_free(vehicle: Vehicle) -
     assert vehicle.extra("mavlink_busy")["link_error"] == ""
 
 
+def test_a_telemetry_radio_on_a_serial_device(vehicle: Vehicle) -> None:
+    mav = M.MAVLink(None, 255, 190)
+    parser = FrameParser(M.MAVLink(None, 255, 190))
+    received: list[M.MAVLink_message] = []
+
+    def read(until: Callable[[], bool], timeout: float) -> None:
+        deadline = time.monotonic() + timeout
+        while not until() and time.monotonic() < deadline:
+            if select.select([vehicle.radio], [], [], 0.1)[0]:
+                received.extend(parser.feed(os.read(vehicle.radio, 4096)))
+
+    read(lambda: any(m.get_type() == "HEARTBEAT" for m in received), 10.0)
+    assert any(m.get_type() == "HEARTBEAT" and m.autopilot == M.MAV_AUTOPILOT_PX4 for m in received)
+    os.write(vehicle.radio, M.MAVLink_heartbeat_message(6, 8, 0, 0, 0, 3).pack(mav))
+    os.write(vehicle.radio, M.MAVLink_command_long_message(1, 1, 512, 0, 148, 0, 0, 0, 0, 0, 0).pack(mav))
+    read(lambda: any(m.get_type() == "AUTOPILOT_VERSION" for m in received), 10.0)
+    ack = next(m for m in received if m.get_type() == "COMMAND_ACK")
+    assert (ack.command, ack.result) == (512, M.MAV_RESULT_ACCEPTED)
+    read(lambda: any(m.get_type() == "SYS_STATUS" for m in received), 10.0)  # streams flow on the radio too
+
+
 def test_missions_upload_download_refusal_and_clear(vehicle: Vehicle) -> None:
     gcs = vehicle.gcs
     home = gcs.wait("HOME_POSITION", timeout=10.0)
@@ -386,6 +419,8 @@ def test_qgroundcontrols_takeoff_from_the_ground_then_link_loss_returns(vehicle:
         stop.set()
         thread.join()
 
+    time.sleep(4.0)  # tens of simulated seconds, beyond COM_DL_LOSS_T: a ground station heard at 1 Hz is not lost
+    assert px4_modes.decode(gcs.mode()) is Px4Mode.AUTO_LOITER
     mark = gcs.mark()
     gcs.heartbeats = False  # the ground station goes silent: NAV_DLL_ACT = 2 (Return) after COM_DL_LOSS_T
     try:
