@@ -145,38 +145,53 @@ def command_ack(
 
 
 class PendingCommands:
-    """Commands forwarded to the commander and not answered yet, by (command, sender). A repeat of a pending
-    command (MAVSDK resends after 0.5 s without an answer) is not forwarded again: the answer to the first
-    answers it. After ``timeout_us`` without an answer the command is answered FAILED."""
+    """Commands forwarded to the commander and not answered yet, by (command, sender), oldest first. A repeat of a
+    pending command with the same parameters (MAVSDK resends after 0.5 s without an answer) is not forwarded
+    again: the answer to the first answers it; the same command with other parameters (arm, then disarm) is. After
+    ``timeout_us`` without an answer a command is answered FAILED."""
 
     def __init__(self, timeout_us: int) -> None:
         self.timeout_us = timeout_us
-        self._pending: dict[tuple[int, int, int], int] = {}
+        self._pending: dict[tuple[int, int, int], list[tuple[int, tuple[float, ...]]]] = {}
 
     def __len__(self) -> int:
-        return len(self._pending)
+        return sum(len(waiting) for waiting in self._pending.values())
 
     def add(self, cmd: VehicleCommand, now_us: int) -> bool:
         """Note a command about to be forwarded; False if the same one is already waiting for its answer."""
-        key = (cmd.command, cmd.source_system, cmd.source_component)
-        if key in self._pending:
+        params = (cmd.param1, cmd.param2, cmd.param3, cmd.param4, cmd.param5, cmd.param6, cmd.param7)
+        waiting = self._pending.setdefault((cmd.command, cmd.source_system, cmd.source_component), [])
+        if any(_same(params, other) for _, other in waiting):
             return False
-        self._pending[key] = now_us
+        waiting.append((now_us, params))
         return True
 
     def answer(self, ack: VehicleCommandAck) -> mavlink2.MAVLink_command_ack_message | None:
         """The COMMAND_ACK for a commander's acknowledgement of a command forwarded from this link, else None."""
         key = (ack.command, ack.target_system, ack.target_component)
-        if self._pending.pop(key, None) is None:
+        waiting = self._pending.get(key)
+        if not waiting:
             return None
+        waiting.pop(0)
+        if not waiting:
+            del self._pending[key]
         return command_ack(ack.command, ack.result, (ack.target_system, ack.target_component), ack.result_param2)
 
     def expired(self, now_us: int) -> list[mavlink2.MAVLink_command_ack_message]:
         """FAILED for the commands that have waited too long."""
-        late = [key for key, since in self._pending.items() if now_us - since > self.timeout_us]
-        for key in late:
-            del self._pending[key]
+        late = []
+        for key, waiting in list(self._pending.items()):
+            while waiting and now_us - waiting[0][0] > self.timeout_us:
+                waiting.pop(0)
+                late.append(key)
+            if not waiting:
+                del self._pending[key]
         return [
             command_ack(command, VehicleCommandAck.VEHICLE_CMD_RESULT_FAILED, (sys, comp))
             for command, sys, comp in late
         ]
+
+
+def _same(a: tuple[float, ...], b: tuple[float, ...]) -> bool:
+    """Parameters equal, NaN equal to NaN ("not given" both times)."""
+    return all(x == y or (math.isnan(x) and math.isnan(y)) for x, y in zip(a, b, strict=True))

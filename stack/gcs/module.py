@@ -751,6 +751,7 @@ class MavlinkModule(Module):
                 "unknown_messages": c.unknown_messages,
                 "open_failures": c.open_failures,
                 "link_error": self.link.error or "",
+                "bus_in": sum(s.sub.received for s in (*self._subs.values(), *self._telemetry)),
                 "peers": sum(1 for p in self.presence.peers.values() if now - p.last_us < 5_000_000),
                 "gcs": self.presence.gcs(now),
                 "active": self._active,

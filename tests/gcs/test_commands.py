@@ -106,3 +106,15 @@ def test_an_unanswered_command_fails_after_the_timeout():
     (ack,) = pending.expired(3_000_001)
     assert (ack.command, ack.result, ack.target_system) == (M.MAV_CMD_NAV_LAND, M.MAV_RESULT_FAILED, 245)
     assert len(pending) == 0
+
+
+def test_the_same_command_with_other_parameters_is_forwarded_and_answered_in_turn():
+    pending = PendingCommands(timeout_us=3_000_000)
+    arm = from_command_long(_long(M.MAV_CMD_COMPONENT_ARM_DISARM, 1.0), GCS, OWN, SUPPORTED)
+    disarm = from_command_long(_long(M.MAV_CMD_COMPONENT_ARM_DISARM, 0.0), GCS, OWN, SUPPORTED)
+    assert pending.add(arm, 0) and pending.add(disarm, 1000) and not pending.add(disarm, 2000)
+    assert len(pending) == 2
+    for result in (0, 1):
+        ack = pending.answer(ACK(command=400, result=result, target_system=245, target_component=190))
+        assert ack is not None and ack.result == result
+    assert pending.answer(ACK(command=400, result=0, target_system=245, target_component=190)) is None
