@@ -54,6 +54,9 @@ def fly(
     if seed is not None:
         prof.seed = seed
     prof.port = 0  # the flight's own router, on a free port
+    # A flight is a stack of its own beside others: the links to the world outside (ground-station ports)
+    # belong to `stack up`, and a scripted flight needs none.
+    prof.modules = [m for m in prof.modules if not m.cls.OUTSIDE_LOCKSTEP]
     name = run_state.flight_name(prof.vehicle, os.getpid())
     run_dir = run_state.new_run_dir(scenario, name)
     result_path = run_dir / "scenario_result.json"

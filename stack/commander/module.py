@@ -6,7 +6,9 @@ answers every ``vehicle_command`` with a ``vehicle_command_ack`` and publishes `
 plus ``home_position``. In Offboard the control flags follow the offboard controller's
 ``offboard_control_mode``, which must keep arriving (COM_OF_LOSS_T) or the switch is refused. With an external
 autopilot as the plant (COM_EXT_AP, the ``pixhawk`` module) it reads ``external_autopilot_status`` and
-publishes the acknowledgements it held back until that autopilot armed or refused.
+publishes the acknowledgements it held back until that autopilot armed or refused. Its events (arming, mode
+changes, failsafes) and the reasons of the commands it refuses go out on ``mavlink_log`` for the operator, as
+PX4's commander does with ``mavlink_log_*``: ground-station links send them as STATUSTEXT.
 
 PX4's land detector runs in the same process on every second tick, at its 50 Hz
 (LAND_DETECTOR_UPDATE_INTERVAL in ``src/modules/land_detector/LandDetector.h``), and publishes
@@ -22,6 +24,7 @@ import math
 import msgspec
 
 from stack.commander import land_detector, offboard
+from stack.commander.events import event_severity
 from stack.commander.health import CommanderInputs
 from stack.commander.home import HomePosition as Home
 from stack.commander.land_detector import LandDetectorInputs, MulticopterLandDetector
@@ -32,6 +35,7 @@ from stack.msg.navigation import NavigationRequest
 from stack.msg.setpoints import TakeoffState, TakeoffStatus
 from stack.msg.system import (
     HomePosition,
+    MavlinkLog,
     VehicleCommand,
     VehicleCommandAck,
     VehicleControlMode,
@@ -118,6 +122,7 @@ class CommanderModule(Module):
         self.advertise("home_position")
         self.advertise("vehicle_land_detected")
         self.advertise("navigation_request")
+        self.advertise("mavlink_log")
         self.commander = Commander(self.params.values())
         self.land_detector = MulticopterLandDetector(self.params.values())
         self._land_due = 0
@@ -129,6 +134,7 @@ class CommanderModule(Module):
         self._navigation: Navigation | None = None
         self._last_gcs = 0
         self._offboard_flags: dict[str, bool] | None = None
+        self._refusals: list[str] = []
 
     def on_params_changed(self, changed: set[str]) -> None:
         self.commander.set_params(self.params.values())
@@ -147,10 +153,9 @@ class CommanderModule(Module):
             for cmd in commands:
                 self._handle(cmd, now)
         out = self.commander.update(now, inputs)
-        for event in out.events:
-            self.log.info("%s", event)
         for ack in out.acks:
             self._acknowledge(ack)
+        self._tell_operator(out.events, now)
         control = out.vehicle_control_mode
         changed = out.changed
         if self.commander.nav_state == NS.NAVIGATION_STATE_OFFBOARD:
@@ -207,7 +212,18 @@ class CommanderModule(Module):
     def _acknowledge(self, ack: VehicleCommandAck) -> None:
         if ack.result != VehicleCommandAck.VEHICLE_CMD_RESULT_ACCEPTED:
             self.log.warning("command %d refused: %s", ack.command, ack.reason)
+            if ack.reason:
+                self._refusals.append(ack.reason)
         self.publish("vehicle_command_ack", ack)
+
+    def _tell_operator(self, events: tuple[str, ...], now: int) -> None:
+        """Each event, and each refusal's reason (most are events too), once on ``mavlink_log``."""
+        refusals, self._refusals = self._refusals, []
+        for event in events:
+            self.log.info("%s", event)
+        for text in (*events, *(r for r in dict.fromkeys(refusals) if r not in events)):
+            severity = event_severity(text, text in refusals)
+            self.publish("mavlink_log", MavlinkLog(timestamp=now, text=text, severity=severity))
 
     def _inputs(self, now: int) -> CommanderInputs:
         latest = self.latest

@@ -55,10 +55,10 @@ def requests_offboard(cmd: VehicleCommand) -> bool:
     """Whether the command asks for Offboard: SET_NAV_STATE to it, or DO_SET_MODE with PX4's Offboard custom mode."""
     if cmd.command == VehicleCommand.VEHICLE_CMD_SET_NAV_STATE:
         return cmd.param1 == VehicleStatus.NAVIGATION_STATE_OFFBOARD
-    if cmd.command != VehicleCommand.VEHICLE_CMD_DO_SET_MODE or math.isnan(cmd.param1):
+    if cmd.command != VehicleCommand.VEHICLE_CMD_DO_SET_MODE or not math.isfinite(cmd.param1):
         return False
-    if int(cmd.param1) & MAV_MODE_FLAG_CUSTOM_MODE_ENABLED and not math.isnan(cmd.param2):
-        sub = 0 if math.isnan(cmd.param3) else int(cmd.param3)
+    if int(cmd.param1) & MAV_MODE_FLAG_CUSTOM_MODE_ENABLED and math.isfinite(cmd.param2):
+        sub = int(cmd.param3) if math.isfinite(cmd.param3) else 0
         return nav_state_from_custom_mode(int(cmd.param2), sub) == VehicleStatus.NAVIGATION_STATE_OFFBOARD
     return False
 

@@ -30,6 +30,9 @@ Commands (MAVLink ids; PX4 encodings):
   Hold. Our extension DO_REPOSITION_LOCAL (100192, PX4-internal id range): the same with param5/6/7 the
   local north, east, down [m]. Refused when not flying or outside the geofence.
 * MISSION_START (300): param1 first item (−1: current); needs a valid mission; arms when disarmed.
+* DO_SET_MISSION_CURRENT (224): param1 the item to fly next (−1: keep; with param2 = 1, "reset", the first
+  item); needs a valid mission; in Mission mode the vehicle goes there at once, otherwise when the mission next
+  starts or resumes.
 * INJECT_FAILURE (420): param1 the MAVLink FAILURE_UNIT, param2 the FAILURE_TYPE; accepted when
   SYS_FAILURE_EN is 1 (the simulator acts on it, as PX4's simulated sensors do), denied otherwise.
 
@@ -251,6 +254,7 @@ class Commander:
             CMD.VEHICLE_CMD_DO_REPOSITION: self._cmd_reposition_global,
             VEHICLE_CMD_DO_REPOSITION_LOCAL: self._cmd_reposition_local,
             CMD.VEHICLE_CMD_MISSION_START: self._cmd_mission_start,
+            CMD.VEHICLE_CMD_DO_SET_MISSION_CURRENT: self._cmd_set_mission_current,
             CMD.VEHICLE_CMD_INJECT_FAILURE: self._cmd_inject_failure,
         }
         self.set_params(params or {})
@@ -289,6 +293,11 @@ class Commander:
     @property
     def failsafe_cause(self) -> str:
         return self._failsafe_cause
+
+    @property
+    def supported_commands(self) -> frozenset[int]:
+        """The ``vehicle_command`` ids this commander carries out (any other is answered UNSUPPORTED)."""
+        return frozenset(self._handlers)
 
     def can_run(self, nav_state: int) -> bool:
         """Whether the mode's requirements are met now."""
@@ -766,6 +775,22 @@ class Commander:
             self._mission_start_index = round(first)
             self._mission_start_counter += 1
         return verdict
+
+    def _cmd_set_mission_current(self, cmd: VehicleCommand, now_us: int) -> _Verdict:
+        count = self._inputs.mission_count
+        if count <= 0:
+            return _denied("Set current mission item denied: no valid mission")
+        seq, reset = cmd.param1, math.isfinite(cmd.param2) and round(cmd.param2) == 1
+        if math.isnan(seq) or seq == -1:
+            if not reset:
+                return _ACCEPTED
+            seq = 0.0
+        if not math.isfinite(seq) or seq != round(seq) or not 0 <= seq < count:
+            return _denied(f"Set current mission item: param1 must be −1…{count - 1}, got {seq:g}", 1)
+        self._mission_start_index = round(seq)
+        self._mission_start_counter += 1
+        self._events.append(f"Mission: item {round(seq)} is next")
+        return _ACCEPTED
 
     def _cmd_inject_failure(self, cmd: VehicleCommand, now_us: int) -> _Verdict:
         if not self._p["SYS_FAILURE_EN"]:

@@ -13,7 +13,7 @@ import logging
 
 import msgspec
 
-from stack.bus.topics import TopicSubscriber
+from stack.bus.topics import Received, TopicSubscriber
 from stack.fastpath.layout import Region, topic_hash
 from stack.fastpath.ring import RingReader
 from stack.runtime.inputs import InputBuffer
@@ -90,6 +90,13 @@ class FastInput(InputBuffer):
             self.readers.append(reader)
         self._inside = inside
 
+    def from_inside(self, item: Received) -> bool:
+        """Whether a Zenoh sample is one of the run's own records, put on Zenoh for an outside subscriber (a
+        ground-station link, ``stack topic echo``): it carries the run's lockstep time (only the run's members
+        stamp it, and samples of other runs are dropped on arrival) or comes from a publisher known to be in it.
+        The time tells even before this process has learnt who is in the run."""
+        return item[0] >= 0 or item[1] in self._inside
+
     # -- reading -----------------------------------------------------------------------------------
 
     def refresh(self, now: int, trigger_slot: int = -1, trigger_seq: int = 0) -> None:
@@ -162,10 +169,9 @@ class FastInput(InputBuffer):
 
     def _take_outside(self, now: int) -> None:
         arrived = self.sub.arrived
-        inside = self._inside
         while arrived:
             item = arrived.popleft()
-            if item[1] not in inside:
+            if not self.from_inside(item):
                 self._accept((now, item[1], item[2]), item[3])
 
 

@@ -52,6 +52,7 @@ class LinkCounters(msgspec.Struct):
     seq_gaps: int = 0  # packets lost, by sequence number
     link_losses: int = 0
     reconnects: int = 0
+    open_failures: int = 0  # attempts to open the endpoint that failed (device missing, port in use...)
     quality: float = 0.0  # received / (received + lost) over the last few seconds; 0 while disconnected
 
 
@@ -67,7 +68,8 @@ class _LinkWriter:
 
 class MavlinkLink:
     """One endpoint, one peer. Call ``poll()`` often (it also sends what is due); ``fileno()`` may change when the
-    transport is reopened. A udpin endpoint answers whoever sent last, and cannot send before someone has."""
+    transport is reopened. A udpin endpoint answers whoever sent last, and cannot send before someone has.
+    ``opener`` opens the endpoint's transport (and is retried every REOPEN_PERIOD_US while it raises OSError)."""
 
     def __init__(
         self,
@@ -79,6 +81,7 @@ class MavlinkLink:
         link_timeout_s: float = 1.5,
         timesync: bool = False,
         clock_us: Callable[[], int] = monotonic_us,
+        opener: Callable[[Endpoint], Transport] = open_transport,
     ) -> None:
         self.endpoint = endpoint if isinstance(endpoint, Endpoint) else parse_endpoint(endpoint)
         self.system_id = system_id
@@ -87,6 +90,7 @@ class MavlinkLink:
         self.link_timeout_us = int(link_timeout_s * 1e6)
         self.send_timesync = timesync
         self.clock_us = clock_us
+        self.opener = opener
         self.mav = mavlink2.MAVLink(_LinkWriter(self), srcSystem=system_id, srcComponent=component_id)
         self.parser = FrameParser(self.mav)
         self.timesync = TimeSync()
@@ -152,9 +156,10 @@ class MavlinkLink:
 
     def _open(self) -> None:
         try:
-            self.transport = open_transport(self.endpoint)
+            self.transport = self.opener(self.endpoint)
         except OSError as e:
             self.error = f"cannot open {self.endpoint}: {e}"
+            self.counters.open_failures += 1
             self._next_open_us = self.clock_us() + REOPEN_PERIOD_US
             return
         if self._opened_before:

@@ -96,12 +96,16 @@ def encode(mode: Px4Mode) -> int:
     return (mode.main_mode << 16) | (mode.sub_mode << 24)
 
 
+def main_sub(custom_mode: int) -> tuple[int, int]:
+    """The (main mode, sub mode) numbers of a HEARTBEAT or SET_MODE ``custom_mode``, whatever they are."""
+    return (custom_mode >> 16) & 0xFF, (custom_mode >> 24) & 0xFF
+
+
 def decode(custom_mode: int) -> Px4Mode | None:
     """The mode a HEARTBEAT ``custom_mode`` carries, or None for a value PX4 does not define.
 
     The reserved low 16 bits are ignored, and so is the sub mode of a main mode that has none."""
-    main = (custom_mode >> 16) & 0xFF
-    sub = (custom_mode >> 24) & 0xFF
+    main, sub = main_sub(custom_mode)
     if main not in _SUB_MODE_MAIN_MODES:
         sub = 0
     return _BY_PAIR.get((main, sub))
@@ -117,7 +121,8 @@ def describe(custom_mode: int) -> str:
     mode = decode(custom_mode)
     if mode is not None:
         return name(mode)
-    return f"main {(custom_mode >> 16) & 0xFF} sub {(custom_mode >> 24) & 0xFF}"
+    main, sub = main_sub(custom_mode)
+    return f"main {main} sub {sub}"
 
 
 NAV_STATE_MODE: dict[int, Px4Mode] = {

@@ -142,6 +142,46 @@ class UdpInTransport:
         self.sock.close()
 
 
+class UdpPeerTransport:
+    """Binds HOST:PORT and sends to whoever sent the last datagram, or to ``remote`` until someone has (PX4's
+    ``mavlink start -u PORT -o REMOTE_PORT``: a vehicle that a ground station listening on the remote port hears
+    at once). No SO_REUSEADDR: a second process must not share the port, each would get half the datagrams."""
+
+    def __init__(self, host: str, port: int, remote: tuple[str, int] | None = None) -> None:
+        self.sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+        try:
+            self.sock.bind((host, port))
+        except OSError:
+            self.sock.close()
+            raise
+        self.sock.setblocking(False)
+        self.peer_address: tuple[str, int] | None = remote
+
+    def fileno(self) -> int | None:
+        return self.sock.fileno()
+
+    def read(self) -> bytes:
+        chunks = []
+        while True:
+            try:
+                data, self.peer_address = self.sock.recvfrom(READ_CHUNK)
+            except (BlockingIOError, ConnectionRefusedError):
+                return b"".join(chunks)
+            chunks.append(data)
+
+    def write(self, data: bytes) -> bool:
+        if self.peer_address is None:
+            return False
+        try:
+            self.sock.sendto(data, self.peer_address)
+        except OSError:
+            return False
+        return True
+
+    def close(self) -> None:
+        self.sock.close()
+
+
 class UdpOutTransport:
     """Sends to HOST:PORT; connecting the socket binds it to the local address that reaches HOST, and only
     HOST:PORT's datagrams are received."""

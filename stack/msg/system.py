@@ -107,6 +107,7 @@ class VehicleCommand(Message):
     VEHICLE_CMD_DO_SET_MODE = 176
     VEHICLE_CMD_DO_FLIGHTTERMINATION = 185
     VEHICLE_CMD_DO_REPOSITION = 192
+    VEHICLE_CMD_DO_SET_MISSION_CURRENT = 224
     VEHICLE_CMD_MISSION_START = 300
     VEHICLE_CMD_COMPONENT_ARM_DISARM = 400
     VEHICLE_CMD_INJECT_FAILURE = 420
@@ -202,6 +203,23 @@ class OffboardControlMode(Message):
     body_rate: bool = False
     thrust_and_torque: bool = False
     direct_actuator: bool = False
+
+
+class MavlinkLog(Message):
+    """A message for the operator (PX4 ``MavlinkLog``): the ground-station links send it as STATUSTEXT.
+    ``severity`` is MAVLink's MAV_SEVERITY (PX4: the kernel log levels, the same numbers)."""
+
+    SEVERITY_EMERGENCY = 0
+    SEVERITY_ALERT = 1
+    SEVERITY_CRITICAL = 2
+    SEVERITY_ERROR = 3
+    SEVERITY_WARNING = 4
+    SEVERITY_NOTICE = 5
+    SEVERITY_INFO = 6
+    SEVERITY_DEBUG = 7
+
+    text: str = ""
+    severity: int = SEVERITY_INFO
 
 
 class TelemetryStatus(Message):

@@ -371,7 +371,9 @@ class FlightModeManager:
         first = -1
         if request is not None and request.mission_start_counter != self._mission_start_counter:
             self._mission_start_counter = request.mission_start_counter
-            first = request.mission_start_index
+            # An item set for a mission that was replaced since (a longer one) does not apply to this one.
+            if request.mission_start_index < self.tracker.progress.seq_total:
+                first = request.mission_start_index
         home = inp.home.position if inp.home is not None else (0.0, 0.0, 0.0)
         self.tracker.start(inp.state.now_us, inp.state.position, first, home)
         self._mission_returning = False

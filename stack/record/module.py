@@ -89,8 +89,10 @@ class SampleRecorder:
         self.clock = clock
         self.sim_now_us = 0
         self.without_header = 0
-        # Publishers whose messages come from the fast path: their Zenoh copies are skipped.
+        # Publishers whose messages come from the fast path: their Zenoh copies are skipped. On the fast path every
+        # sample with lockstep time is such a copy, also before the run's publishers are known.
         self.fast_publishers: frozenset[int] = frozenset()
+        self.fast_path = False
         self._routes: dict[str, _Route | None] = {}
         self._suffix_routes: dict[str, _Route | None] = {}
 
@@ -130,7 +132,7 @@ class SampleRecorder:
             self.without_header += 1
             return
         fp, publisher, _seq, index, pub_time, flags, _run = HEADER.unpack(header)
-        if flags & FLAG_PROBE or publisher in self.fast_publishers:
+        if flags & FLAG_PROBE or publisher in self.fast_publishers or (self.fast_path and flags & FLAG_LOCKSTEP_TIME):
             return  # a publisher announcing itself at start-up, or a copy of a fast-path record
         if self.lockstep:
             if flags & FLAG_LOCKSTEP_TIME and pub_time > self.sim_now_us:
@@ -325,6 +327,7 @@ class RecorderModule(Module):
         if rt.fast is not None:
             rt.read_all_topics()
             self.fast = AllTopicsReader(rt.fast)
+            self.sink.fast_path = True
         self.pump.start()
         self._next_status = time.monotonic() + STATUS_PERIOD_S
         what = "all topics" if selection.everything else f"topics {self.args['topics']}"

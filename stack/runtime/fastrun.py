@@ -193,10 +193,13 @@ class FastDriver:
             touched.clear()
 
     def _drop_outside_triggers(self, trigger: FastInput) -> None:
+        """Triggers from outside the run are refused; the run's own records put on Zenoh for an outside subscriber
+        (a ground-station link, ``stack topic echo``) arrive here too and are mere duplicates."""
         arrived = trigger.sub.arrived
         while arrived:
-            arrived.popleft()
-            self.rt._ignore_outside_trigger(trigger.sub.suffix)
+            item = arrived.popleft()
+            if not trigger.from_inside(item):
+                self.rt._ignore_outside_trigger(trigger.sub.suffix)
 
     def _run_passive(self, period_us: int) -> None:
         """A passive module runs on its wall-clock timer, or sooner when the coordinator wakes a lossless

@@ -120,7 +120,7 @@ class InProcessStack:
         self.runtimes: dict[str, InProcessRuntime] = {}
         self._triggers: deque[tuple[InProcessRuntime, Received]] = deque()
         for entry in profile.modules:
-            if entry.cls.PASSIVE:
+            if entry.cls.PASSIVE or entry.cls.OUTSIDE_LOCKSTEP:
                 continue
             rt = InProcessRuntime(module_spec(profile, entry), self.bus, entry.critical)
             if rt.trigger_sub is not None:

@@ -88,6 +88,11 @@ class Module:
     # A passive module that must not lose messages (the recorder): on the same-host fast path,
     # lockstep time waits for it whenever it falls far behind.
     LOSSLESS: ClassVar[bool] = False
+    # A module outside the lockstep even in a lockstep run, like a program that is not part of the stack (a
+    # ground-station link): it runs on the wall clock, reads and publishes over Zenoh only (never on the
+    # same-host fast path), and stamps what it publishes with the simulated time it has seen. It links the
+    # stack to the world outside (fixed ports), so the scripted flights of `stack fly` do not start it.
+    OUTSIDE_LOCKSTEP: ClassVar[bool] = False
 
     def __init__(self, rt: Runtime) -> None:
         self.rt = rt

@@ -50,7 +50,7 @@ class Runtime:
         self.module_cls = load_module_class(spec.module)
         self.params = ParamStore(self.module_cls.PARAMS, spec.params)
         self.args = resolve_args(self.module_cls.ARGS, spec.args)
-        self.lockstep = spec.lockstep and not self.module_cls.PASSIVE
+        self.lockstep = spec.lockstep and not self.module_cls.PASSIVE and not self.module_cls.OUTSIDE_LOCKSTEP
         self.inputs: dict[tuple[str, int], InputBuffer] = {}
         self.outputs: dict[tuple[str, int], TopicPublisher] = {}
         self.state = "starting"
@@ -117,7 +117,9 @@ class Runtime:
                 node.header_flags = FLAG_LOCKSTEP_TIME
             services: list[Any] = []
             lockstep_part: LockstepMember | LockstepCoordinator | None = None
-            region = Region(spec.fastpath_fd) if spec.lockstep and spec.fastpath_fd >= 0 else None
+            shm = spec.lockstep and spec.fastpath_fd >= 0
+            outside = self.module_cls.OUTSIDE_LOCKSTEP
+            region = Region(spec.fastpath_fd) if shm and not outside else None
             if self.module_cls.PASSIVE:
                 # An observer yields to the control loops (a lossless one that falls far behind makes
                 # lockstep time wait, see stack.fastpath.lockstep), yet still gets its share of a machine
@@ -141,7 +143,9 @@ class Runtime:
                     return
                 lockstep_part = self._make_lockstep()
                 node.declare_token(keys.alive_token(node.vehicle, self.name, os.getpid()))
-                if self.spec.lockstep:
+                # Over Zenoh the simulator starts once every module of the roster has synced; on the fast path
+                # it waits for the participants only, which an outside module is not.
+                if self.spec.lockstep and not (outside and shm):
                     self.state = "syncing"
                     member = lockstep_part if isinstance(lockstep_part, LockstepMember) else None
                     coordinator = lockstep_part if isinstance(lockstep_part, LockstepCoordinator) else None

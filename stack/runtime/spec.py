@@ -26,6 +26,7 @@ MODULES: dict[str, str] = {
     "flight_mode_manager": "stack.posctl.fmm_module:FlightModeManagerModule",
     "mc_hover_thrust_estimator": "stack.posctl.hte_module:HoverThrustEstimatorModule",
     "pixhawk": "stack.mavlink.module:PixhawkAdapterModule",
+    "mavlink": "stack.gcs.module:MavlinkModule",
     "rerun_bridge": "stack.viz.module:RerunBridgeModule",
     "recorder": "stack.record.module:RecorderModule",
     "scenario": "stack.scenario.module:ScenarioModule",

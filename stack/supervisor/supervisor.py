@@ -140,6 +140,11 @@ class Supervisor:
             lease_ms=bus.lease_ms,
         )
 
+    @staticmethod
+    def _on_fast_path(m: ModuleProcess) -> bool:
+        """Whether the module takes part in the same-host fast path (a module outside the lockstep does not)."""
+        return not m.entry.cls.OUTSIDE_LOCKSTEP
+
     def _open_router(self) -> zenoh.Session:
         """The rendezvous router; a port taken since it was picked (another stack starting at the same
         moment) is picked again, unless the profile fixed it."""
@@ -167,7 +172,7 @@ class Supervisor:
         session = self._open_router()
         entities = []
         if self.profile.lockstep and self.profile.lockstep_transport == "shm":
-            self.fast = FastPathHost([m.entry.name for m in self.modules], self.run_id)
+            self.fast = FastPathHost([m.entry.name for m in self.modules if self._on_fast_path(m)], self.run_id)
             self.fast.watch_graph(session, self.vehicle)
         try:
             entities = [
@@ -415,7 +420,7 @@ class Supervisor:
                     self._say(f"restarting {m.entry.name} (restart {m.restarts})")
                     self._spawn(m)
                     if self._wait_ready(m):
-                        if self.fast is not None:
+                        if self.fast is not None and self._on_fast_path(m):
                             self.fast.restart_over(m.entry.name)
                     else:
                         self._plan_restart_or_give_up(m)
@@ -444,14 +449,14 @@ class Supervisor:
             self._plan_restart_or_give_up(m)
         else:
             m.state = "exited" if m.exit_code == 0 else "failed"
-        if self.fast is not None:
+        if self.fast is not None and self._on_fast_path(m):
             self.fast.exit_handled(m.entry.name, m.state == "restarting")
 
     def _plan_restart_or_give_up(self, m: ModuleProcess) -> None:
         if m.restarts >= m.entry.max_restarts:
             self._say(f"{m.entry.name}: giving up after {m.restarts} restarts")
             m.state = "failed"
-            if self.fast is not None:
+            if self.fast is not None and self._on_fast_path(m):
                 self.fast.restart_over(m.entry.name)
             return
         delay = min(0.5 * 2**m.restarts, BACKOFF_MAX_S)

@@ -86,6 +86,11 @@ def test_the_highest_setpoint_type_given_decides():
         (set_mode(MainMode.OFFBOARD, base=0.0), False),  # without CUSTOM_MODE_ENABLED param2 means nothing
         (set_mode(math.nan), False),
         (set_mode(MainMode.OFFBOARD, base=math.nan), False),
+        # Infinite parameters are no request, and never an exception (it would lose the cycle's other commands).
+        (set_mode(MainMode.OFFBOARD, base=math.inf), False),
+        (set_mode(math.inf), False),
+        (set_mode(-math.inf), False),
+        (set_mode(MainMode.OFFBOARD, math.inf), True),
         (CMD(command=CMD.VEHICLE_CMD_COMPONENT_ARM_DISARM, param1=1.0), False),
     ],
 )

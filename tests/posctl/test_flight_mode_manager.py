@@ -674,3 +674,14 @@ def test_position_and_altitude_modes_fly_the_sticks():
     command = flight.step()
     assert command is not None
     assert math.isnan(command.position[0]) and command.position[2] == -5.0
+
+
+def test_a_start_item_set_for_a_longer_mission_is_ignored_by_a_shorter_one():
+    flight = Flight(position=(0.0, 0.0, -5.0), nav_state=NS.NAVIGATION_STATE_AUTO_LOITER)
+    flight.fmm.load_mission(parse_waypoint_list("10 0 -5\n"), 1)
+    flight.request = NavigationRequest(mission_start_index=3, mission_start_counter=1)  # set for an older mission
+    flight.run(1.0)
+    flight.nav_state = NS.NAVIGATION_STATE_AUTO_MISSION
+    reached = _fly_mission(flight, 15.0)
+    assert [seq for seq, _ in reached] == [0]
+    assert flight.fmm.mission_status().finished
