@@ -10,7 +10,7 @@ import zenoh
 
 from stack.gcs.params import ParamNumber
 from stack.params import client
-from stack.params.param import MAV_PARAM_TYPE_INT32
+from stack.params.param import MAV_PARAM_TYPE_INT32, ParamError
 
 
 class BusParamSource:
@@ -27,5 +27,9 @@ class BusParamSource:
         return entries
 
     def set(self, name: str, value: ParamNumber) -> ParamNumber:
-        new = client.set_param(self.session, self.vehicle, name, value, self.timeout_s).new
+        try:
+            new = client.set_param(self.session, self.vehicle, name, value, self.timeout_s).new
+        except ParamError as e:
+            # The ground station shows the reason after the parameter's name already.
+            raise ParamError(str(e).removeprefix(f"{name}: ")) from None
         return int(new) if isinstance(new, bool | int) else float(new)
