@@ -30,6 +30,7 @@ from another run, is counted and ignored, so nothing sent on the bus can stop th
 
 from __future__ import annotations
 
+import collections
 import json
 import logging
 import threading
@@ -50,8 +51,10 @@ from stack.runtime.inputs import InputBuffer
 log = logging.getLogger("stack.lockstep")
 
 TIMER = "@timer"
-# Clocks wait in a FIFO that is drained on every trigger: garbage on the key can delay a clock but
-# never push it out.
+# A timed member's ticks wait in a FIFO it drains on every tick. A triggered member's clocks are decoded as they
+# arrive and only valid ones are queued, the oldest dropped beyond CLOCK_QUEUE: garbage on the key never pushes a
+# clock out, and a member that is not triggered for minutes (the allocator of a disarmed vehicle) never fills a
+# queue that would block the session's receiving thread and, through it, the coordinator's clock.
 CLOCK_QUEUE = 1 << 14
 SLOW_WAIT_S = 2.0
 VERDICT_TIMEOUT_S = 5.0
@@ -163,8 +166,12 @@ class LockstepMember:
         self.barrier = Barrier(inputs)
         self._floor: dict[tuple[int, str], int] | None = None
         key = keys.lockstep_tick_key(node.vehicle, node.name) if timed else keys.lockstep_clock_key(node.vehicle)
-        self._clock_sub = node.session.declare_subscriber(key, zenoh.handlers.FifoChannel(CLOCK_QUEUE))
         self._clocks = ProtocolDecoder(LockstepClock, node.run_id, key)
+        self._arrived: collections.deque[LockstepClock] = collections.deque(maxlen=CLOCK_QUEUE)
+        if timed:
+            self._clock_sub = node.session.declare_subscriber(key, zenoh.handlers.FifoChannel(CLOCK_QUEUE))
+        else:
+            self._clock_sub = node.session.declare_subscriber(key, self._on_clock)
         self._ack_pub = node.session.declare_publisher(
             keys.lockstep_ack_key(node.vehicle), congestion_control=zenoh.CongestionControl.BLOCK, express=True
         )
@@ -177,6 +184,11 @@ class LockstepMember:
 
     def poll_startup(self) -> None:
         """Before the first step: note whether the coordinator's pre-start clocks reach this member."""
+        if not self.timed:
+            if self._arrived:
+                self.heard_coordinator = True
+                self._arrived.clear()
+            return
         sample = self._clock_sub.try_recv()
         while sample is not None:
             if self._clocks.decode(sample) is not None:
@@ -191,9 +203,19 @@ class LockstepMember:
     def rejected(self) -> int:
         return self._clocks.rejected
 
+    def _on_clock(self, sample: zenoh.Sample) -> None:
+        """Zenoh's thread: queue a triggered member's valid clocks."""
+        clk = self._clocks.decode(sample)
+        if clk is not None:
+            self._arrived.append(clk)
+
     def _take(self, sample: zenoh.Sample) -> None:
         clk = self._clocks.decode(sample)
-        if clk is None or clk.step <= self.step:
+        if clk is not None:
+            self._apply(clk)
+
+    def _apply(self, clk: LockstepClock) -> None:
+        if clk.step <= self.step:
             return
         self.members = frozenset(clk.members)
         self.admitted = self.node.publisher_id in self.members
@@ -224,25 +246,18 @@ class LockstepMember:
 
     def advance_to(self, t: int) -> None:
         """Take in the newest clock, waiting until one has reached ``t`` (triggered members)."""
-        sub = self._clock_sub
-        sample = sub.try_recv()
-        while sample is not None:
-            self._take(sample)
-            sample = sub.try_recv()
+        arrived = self._arrived
+        while arrived:
+            self._apply(arrived.popleft())
         while self.now < t:
-            sample = sub.try_recv()
-            if sample is None:
-                sample = self._slow_clock(t)
-            self._take(sample)
+            self._apply(arrived.popleft() if arrived else self._slow_clock(t))
 
-    def _slow_clock(self, t: int) -> zenoh.Sample:
-        """Block for the clock of time ``t``, saying so in the log if it is long in coming."""
+    def _slow_clock(self, t: int) -> LockstepClock:
+        """Wait for the clock of time ``t``, saying so in the log if it is long in coming."""
+        arrived = self._arrived
         started = time.monotonic()
         spins = 0
-        while True:
-            sample = self._clock_sub.try_recv()
-            if sample is not None:
-                return sample
+        while not arrived:
             spins += 1
             if spins < 100:
                 time.sleep(0)
@@ -256,6 +271,7 @@ class LockstepMember:
                     self.now,
                 )
             time.sleep(0.0002)
+        return arrived.popleft()
 
     def ack(self, trigger_publisher: int, trigger_topic: str, touched: Iterable[TopicPublisher]) -> None:
         if not self.admitted:

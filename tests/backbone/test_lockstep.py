@@ -13,6 +13,7 @@ import time
 
 import pytest
 
+from stack.runtime.lockstep import CLOCK_QUEUE
 from tests.support.harness import REPO, RunningStack, chain_profile, stack_env, wait_no_processes
 
 STEPS = 3000
@@ -167,4 +168,23 @@ def test_nothing_sent_on_the_bus_stops_the_lockstep(tmp_path, transport):
         code = stack.stop()
     assert code == 0, stack.output
     assert not re.search(r"stalled|Traceback|crashed", stack.output), stack.output
+    assert not wait_no_processes(home)
+
+
+@pytest.mark.parametrize("transport", TRANSPORTS)
+def test_a_member_that_is_never_triggered_never_holds_up_the_clock(tmp_path, transport):
+    """It reads no clock for more steps than its clock queue holds: the clocks must not pile up until they block
+    the coordinator's (an idle `stack up` on the Zenoh transport froze after 88 s that way, its allocator never
+    triggered)."""
+    home = tmp_path / "home"
+    profile = chain_profile(
+        tmp_path / "chain.toml",
+        tick_args=f"steps = {4 * CLOCK_QUEUE}",
+        extra='[[module]]\nmodule = "tests.support.modules:Untriggered"\n',
+        transport=transport,
+    )
+    stack = RunningStack(home, profile)
+    code = stack.wait(timeout=240)
+    assert code == 0, stack.output
+    assert "critical module tick_source exited" in stack.output
     assert not wait_no_processes(home)

@@ -187,6 +187,16 @@ class Staller(Module):
                 time.sleep(1.0)
 
 
+class Untriggered(Module):
+    """Triggered by a topic nothing in the chain publishes: a lockstep member that never runs."""
+
+    NAME = "untriggered"
+    TRIGGER = Trigger("vehicle_thrust_setpoint")
+
+    def run(self, msg: object, dt: float) -> None:
+        raise AssertionError("nothing publishes vehicle_thrust_setpoint in the test chain")
+
+
 class Probe(Module):
     """Triggered by sensor_gyro: records which input messages each run could see, into a JSON file."""
 
