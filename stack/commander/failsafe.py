@@ -6,6 +6,10 @@ for the failures this stack detects:
 * **command-link loss** (``gcs_connection_lost``): NAV_DLL_ACT (0 disabled, 1 hold, 2 return, 3 land,
   5 terminate, 6 disarm); ignored while disarmed, while landing, and in the modes COM_DLL_EXCEPT exempts
   (bit 0 mission, bit 1 the other auto modes);
+* **manual control loss** (``manual_control_lost``): NAV_RCL_ACT, the same actions; ignored while disarmed,
+  while landing, in the modes COM_RCL_EXCEPT exempts (bit 0 mission, bit 1 hold and takeoff, bit 2
+  offboard), and while the input has been lost since arming (a vehicle armed without sticks flies without
+  them), as ``src/modules/commander/failsafe/failsafe.cpp`` does;
 * **battery**: LOW only warns; CRITICAL and EMERGENCY act per COM_LOW_BAT_ACT (0 warn, 1 return,
   2 land, 3 return at critical then land at emergency), but only when the warning is worse than it was at
   arming;
@@ -40,11 +44,16 @@ from stack.params.param import Param
 
 NS = VehicleStatus
 
-PARAMS: tuple[Param, ...] = catalogue.params("NAV_DLL_ACT", "COM_DLL_EXCEPT", "COM_LOW_BAT_ACT", "COM_FAIL_ACT_T")
+PARAMS: tuple[Param, ...] = catalogue.params(
+    "NAV_DLL_ACT", "COM_DLL_EXCEPT", "NAV_RCL_ACT", "COM_RCL_EXCEPT", "COM_LOW_BAT_ACT", "COM_FAIL_ACT_T"
+)
 DEFAULTS: dict[str, object] = {p.name: p.default for p in PARAMS}
 
 DLL_EXCEPT_MISSION = 1
 DLL_EXCEPT_AUTO_MODES = 2
+RCL_EXCEPT_MISSION = 1
+RCL_EXCEPT_HOLD = 2
+RCL_EXCEPT_OFFBOARD = 4
 
 
 class FailsafeAction(IntEnum):
@@ -131,6 +140,7 @@ class FailsafeConditions:
 
     failing: Requirement = Requirement.NONE
     gcs_connection_lost: bool = False
+    manual_control_lost: bool = False
     battery_warning: int = BatteryWarning.NONE
     geofence_breached: bool = False
 
@@ -147,7 +157,7 @@ class FailsafeResult(NamedTuple):
 
 
 @cache
-def _from_dll_param(value: int) -> _Options:
+def _from_link_loss_param(value: int) -> _Options:
     if value == 1:
         return _Options(FailsafeAction.HOLD, Clear.ON_MODE_CHANGE_OR_DISARM)
     if value == 2:
@@ -239,6 +249,7 @@ class Failsafe:
         "_battery_warning_at_arming",
         "_delay_us",
         "_last_update_us",
+        "_manual_control_lost_at_arming",
         "_p",
         "_selected",
         "_takeover_active",
@@ -252,6 +263,7 @@ class Failsafe:
         self._takeover_active = False
         self._was_armed = False
         self._battery_warning_at_arming = BatteryWarning.NONE
+        self._manual_control_lost_at_arming = False
         self._last_update_us = 0
         self.set_params(params or {})
 
@@ -280,6 +292,9 @@ class Failsafe:
             self._remove_actions(Clear.ON_MODE_CHANGE_OR_DISARM)
         elif armed and not self._was_armed:
             self._battery_warning_at_arming = cond.battery_warning
+            self._manual_control_lost_at_arming = cond.manual_control_lost
+        if not cond.manual_control_lost:
+            self._manual_control_lost_at_arming = False
         self._was_armed = armed
         if intended_updated or self._takeover_active:
             self._remove_actions(Clear.ON_MODE_CHANGE_OR_DISARM)
@@ -288,7 +303,11 @@ class Failsafe:
         landing = intended == NS.NAVIGATION_STATE_AUTO_LAND
         dll_action = int(p["NAV_DLL_ACT"])
         if dll_action != 0 and armed and not landing and not self._dll_exempt(intended):
-            self._check("gcs_connection_loss", cond.gcs_connection_lost, _from_dll_param(dll_action))
+            self._check("gcs_connection_loss", cond.gcs_connection_lost, _from_link_loss_param(dll_action))
+        rcl_action = int(p["NAV_RCL_ACT"])
+        rcl_ignored = self._manual_control_lost_at_arming or self._rcl_exempt(intended)
+        if rcl_action != 0 and armed and not landing and not rcl_ignored:
+            self._check("manual_control_loss", cond.manual_control_lost, _from_link_loss_param(rcl_action))
 
         self._check("geofence_breach", cond.geofence_breached, _from_geofence_param(gf_action))
 
@@ -319,6 +338,16 @@ class Failsafe:
             return bool(mask & DLL_EXCEPT_MISSION)
         if intended in AUTO_NAV_STATES:
             return bool(mask & DLL_EXCEPT_AUTO_MODES)
+        return False
+
+    def _rcl_exempt(self, intended: int) -> bool:
+        mask = int(self._p["COM_RCL_EXCEPT"])
+        if intended == NS.NAVIGATION_STATE_AUTO_MISSION:
+            return bool(mask & RCL_EXCEPT_MISSION)
+        if intended in (NS.NAVIGATION_STATE_AUTO_LOITER, NS.NAVIGATION_STATE_AUTO_TAKEOFF):
+            return bool(mask & RCL_EXCEPT_HOLD)
+        if intended == NS.NAVIGATION_STATE_OFFBOARD:
+            return bool(mask & RCL_EXCEPT_OFFBOARD)
         return False
 
     def _check(self, cause: str, failing: bool, options: _Options) -> None:

@@ -46,7 +46,9 @@ class CommanderInputs:
     Timestamps are the receive/publication times of the last message (0 = never). ``landed`` and
     ``maybe_landed`` come from ``vehicle_land_detected``; ``battery_warning`` from ``battery_status``;
     ``last_gcs_heartbeat_us`` is the time of the last message from a ground station or companion (the
-    command link); ``mission_count`` is the number of items of the loaded, valid mission (0: none) and
+    command link); ``last_manual_control_us`` the time of the last valid manual control input (sticks from a
+    radio, a joystick or a ground station) and ``manual_control_valid`` whether the latest one is valid;
+    ``mission_count`` is the number of items of the loaded, valid mission (0: none) and
     ``mission_finished`` whether its last item has been reached.
     """
 
@@ -64,6 +66,8 @@ class CommanderInputs:
     maybe_landed: bool = True
     battery_warning: int = BatteryWarning.NONE
     last_gcs_heartbeat_us: int = 0
+    last_manual_control_us: int = 0
+    manual_control_valid: bool = False
     mission_count: int = 0
     mission_finished: bool = False
     external_autopilot: ExternalAutopilotStatus | None = None

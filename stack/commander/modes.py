@@ -12,7 +12,8 @@ One table, :data:`MODES`, keyed by PX4's ``vehicle_status.nav_state`` numbers, h
   QGroundControl and MAVLink send in ``MAV_CMD_DO_SET_MODE`` param2/param3 (with param1 =
   MAV_MODE_FLAG_CUSTOM_MODE_ENABLED).
 
-Manual-control (RC) requirements are listed but not enforced: the stack has no RC-loss detection.
+Manual-control (RC) requirements are listed but not enforced when a mode is chosen; the loss of manual control
+input in flight is a failsafe of its own (NAV_RCL_ACT, :mod:`stack.commander.failsafe`).
 """
 
 from __future__ import annotations

@@ -108,6 +108,7 @@ class CommanderModule(Module):
             "sensor_gps",
             "battery_status",
             "telemetry_status",
+            "manual_control_setpoint",
             "offboard_control_mode",
             "vehicle_thrust_setpoint",
             "trajectory_setpoint",
@@ -133,6 +134,7 @@ class CommanderModule(Module):
         self._home_count = 0
         self._navigation: Navigation | None = None
         self._last_gcs = 0
+        self._last_manual_control = 0
         self._offboard_flags: dict[str, bool] | None = None
         self._refusals: list[str] = []
 
@@ -238,6 +240,9 @@ class CommanderModule(Module):
         land = self.land_detector.state
         if telemetry is not None and (telemetry.heartbeat_type_gcs or telemetry.heartbeat_type_onboard_controller):
             self._last_gcs = max(self._last_gcs, telemetry.timestamp)
+        sticks = latest("manual_control_setpoint")
+        if sticks is not None and sticks.valid:
+            self._last_manual_control = max(self._last_manual_control, sticks.timestamp)
         return CommanderInputs(
             attitude_timestamp_us=est.attitude_timestamp if est is not None and est.attitude_valid else 0,
             attitude_q=est.q if est is not None else (1.0, 0.0, 0.0, 0.0),
@@ -253,6 +258,8 @@ class CommanderModule(Module):
             maybe_landed=land.maybe_landed,
             battery_warning=battery.warning if battery is not None else 0,
             last_gcs_heartbeat_us=self._last_gcs,
+            last_manual_control_us=self._last_manual_control,
+            manual_control_valid=sticks is not None and sticks.valid,
             mission_count=mission.seq_total if mission is not None and mission.valid else 0,
             mission_finished=mission is not None and mission.valid and mission.finished,
             external_autopilot=latest("external_autopilot_status"),

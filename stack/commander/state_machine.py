@@ -114,9 +114,9 @@ EXTERNAL_LINK_GRACE_US = 1_500_000
 _POSITION_AND_ALTITUDE = int(Requirement.LOCAL_POSITION | Requirement.LOCAL_ALT)
 
 OWN_PARAMS: tuple[Param, ...] = catalogue.params(
-    "COM_DISARM_LAND", "COM_DISARM_PRFLT", "COM_DL_LOSS_T", "COM_TAKEOFF_ACT", "COM_POS_FS_EPH", "COM_ARM_WO_GPS",
-    "SYS_HAS_BARO", "SYS_HAS_MAG", "SYS_HAS_GPS", "SYS_FAILURE_EN", "MIS_TAKEOFF_ALT", "NAV_MC_ALT_RAD",
-    "COM_EXT_AP",
+    "COM_DISARM_LAND", "COM_DISARM_PRFLT", "COM_DL_LOSS_T", "COM_RC_LOSS_T", "COM_TAKEOFF_ACT", "COM_POS_FS_EPH",
+    "COM_ARM_WO_GPS", "SYS_HAS_BARO", "SYS_HAS_MAG", "SYS_HAS_GPS", "SYS_FAILURE_EN", "MIS_TAKEOFF_ALT",
+    "NAV_MC_ALT_RAD", "COM_EXT_AP",
 )
 PARAMS: tuple[Param, ...] = OWN_PARAMS + FAILSAFE_PARAMS + GEOFENCE_PARAMS
 DEFAULTS: dict[str, object] = {p.name: p.default for p in PARAMS}
@@ -217,6 +217,7 @@ class Commander:
         self._preflight_checked: tuple[int, int, int, int] | None = None
         self._preflight_checked_us = 0
         self._gcs_lost = False
+        self._manual_control_lost = False
         self._gcs_lost_counter = 0
         self._geofence_violation = ""
         self._failsafe_action = FailsafeAction.NONE
@@ -361,6 +362,7 @@ class Commander:
             self._failing &= ~Requirement.HOME
 
         self._update_link(now_us)
+        self._update_manual_control(now_us)
         if self._p["COM_EXT_AP"]:
             self._follow_external_autopilot(now_us)
             armed = self.armed
@@ -387,6 +389,7 @@ class Commander:
         conditions = FailsafeConditions(
             failing=failing,
             gcs_connection_lost=self._gcs_lost,
+            manual_control_lost=self._manual_control_lost,
             battery_warning=inp.battery_warning,
             geofence_breached=bool(self._geofence_violation),
         )
@@ -419,6 +422,19 @@ class Commander:
         elif self._gcs_lost and not lost:
             self._events.append("Data link regained")
         self._gcs_lost = lost
+
+    def _update_manual_control(self, now_us: int) -> None:
+        """Manual control input counts as lost COM_RC_LOSS_T after the last valid one, or at once when the latest
+        says it is invalid, once some has been seen (PX4 ``ManualControl.cpp``, ``rcAndDataLinkCheck.cpp``)."""
+        inp = self._inputs
+        last = inp.last_manual_control_us
+        loss_us = float(self._p["COM_RC_LOSS_T"]) * 1e6
+        lost = last > 0 and (not inp.manual_control_valid or now_us - last > loss_us)
+        if lost and not self._manual_control_lost:
+            self._events.append("Manual control lost")
+        elif self._manual_control_lost and not lost:
+            self._events.append("Manual control regained")
+        self._manual_control_lost = lost
 
     def _external_link_down(self, now_us: int) -> bool:
         """Armed with COM_EXT_AP, and the external autopilot's link is down or has just come back: its sensors,

@@ -605,9 +605,9 @@ class MavlinkModule(Module):
             in_offboard = self.view.status is not None and self.view.status.nav_state == NS.NAVIGATION_STATE_OFFBOARD
             for topic, msg in self.relay.due(now, stamp, in_offboard):
                 self.publish(topic, msg)
-            lost = self.manual.lost(now, stamp)
-            if lost is not None:
-                self.publish("manual_control_setpoint", lost)
+            sticks = self.manual.due(now, stamp)
+            if sticks is not None:
+                self.publish("manual_control_setpoint", sticks)
 
     def _missions(self, now: int) -> None:
         self.transfer.tick(now)

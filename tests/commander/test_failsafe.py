@@ -113,6 +113,80 @@ def test_no_link_loss_before_a_first_heartbeat():
     assert out.vehicle_status.nav_state == NS.NAVIGATION_STATE_AUTO_LOITER
 
 
+def _position_mode_with_sticks(**params):
+    """A vehicle holding 5 m in Position mode, flown with sticks from a ground station's joystick."""
+    clock = make_clock(**params)
+    clock.overrides = {"last_manual_control_us": clock.t, "manual_control_valid": True}
+    clock.step()
+    clock.send(C.set_mode_command("posctl"))
+    clock.send(C.arm_command())
+    clock.fly_to((0.0, 0.0, -5.0))
+    clock.overrides["last_manual_control_us"] = clock.t
+    assert clock.status.nav_state == NS.NAVIGATION_STATE_POSCTL
+    return clock
+
+
+def test_manual_control_loss_returns_after_com_rc_loss_t():
+    clock = _position_mode_with_sticks(COM_FAIL_ACT_T=0.0)
+    out = clock.step(0.45)
+    assert out.vehicle_status.nav_state == NS.NAVIGATION_STATE_POSCTL and not out.vehicle_status.failsafe
+    out = clock.step(0.1)
+    assert out.vehicle_status.nav_state == NS.NAVIGATION_STATE_AUTO_RTL
+    assert (out.failsafe_action, out.failsafe_cause) == ("rtl", "manual_control_loss")
+    assert out.vehicle_status.nav_state_user_intention == NS.NAVIGATION_STATE_POSCTL
+
+
+def test_sticks_marked_invalid_are_a_loss_at_once_and_valid_ones_a_recovery():
+    clock = _position_mode_with_sticks(NAV_RCL_ACT=3, COM_FAIL_ACT_T=0.0)
+    clock.overrides["manual_control_valid"] = False
+    out = clock.step()
+    assert (out.vehicle_status.nav_state, out.failsafe_cause) == (NS.NAVIGATION_STATE_AUTO_LAND, "manual_control_loss")
+    assert "Manual control lost" in out.events
+    clock.overrides.update(manual_control_valid=True, last_manual_control_us=clock.t + clock.period)
+    out = clock.step()
+    assert "Manual control regained" in out.events
+    # Land stays until the pilot switches mode, as PX4's link-loss actions do.
+    assert out.vehicle_status.nav_state == NS.NAVIGATION_STATE_AUTO_LAND
+    clock.send(C.set_mode_command("posctl"))
+    assert clock.step().vehicle_status.nav_state == NS.NAVIGATION_STATE_POSCTL
+
+
+@pytest.mark.parametrize(
+    ("params", "acts"),
+    [({"NAV_RCL_ACT": 0}, False), ({"COM_RCL_EXCEPT": 1}, False), ({"COM_RCL_EXCEPT": 2}, True), ({}, True)],
+)
+def test_manual_control_loss_in_mission_follows_nav_rcl_act_and_com_rcl_except(params, acts):
+    clock = _in_mission(COM_FAIL_ACT_T=0.0, **params)
+    clock.overrides["last_manual_control_us"] = clock.t
+    clock.overrides["manual_control_valid"] = True
+    out = clock.step(1.0)
+    expected = NS.NAVIGATION_STATE_AUTO_RTL if acts else NS.NAVIGATION_STATE_AUTO_MISSION
+    assert out.vehicle_status.nav_state == expected
+
+
+def test_sticks_lost_before_arming_trigger_nothing_until_they_come_back_and_go_again():
+    clock = make_clock(COM_FAIL_ACT_T=0.0)
+    clock.overrides = {"last_manual_control_us": clock.t, "manual_control_valid": False}
+    clock.step()
+    clock.send(C.set_mode_command("hold"))
+    clock.send(C.arm_command())
+    clock.fly_to((0.0, 0.0, -5.0))
+    assert clock.step(2.0).vehicle_status.nav_state == NS.NAVIGATION_STATE_AUTO_LOITER
+    clock.overrides.update(manual_control_valid=True, last_manual_control_us=clock.t + clock.period)
+    clock.step()
+    out = clock.step(1.0)
+    assert (out.vehicle_status.nav_state, out.failsafe_cause) == (NS.NAVIGATION_STATE_AUTO_RTL, "manual_control_loss")
+
+
+def test_no_manual_control_loss_before_any_sticks_nor_while_disarmed():
+    clock = _in_mission(COM_FAIL_ACT_T=0.0)
+    assert clock.step(5.0).vehicle_status.nav_state == NS.NAVIGATION_STATE_AUTO_MISSION
+    clock = make_clock(COM_FAIL_ACT_T=0.0)
+    clock.overrides = {"last_manual_control_us": clock.t, "manual_control_valid": True}
+    out = clock.step(2.0)
+    assert not out.vehicle_status.failsafe and out.vehicle_status.arming_state == NS.ARMING_STATE_DISARMED
+
+
 def test_low_battery_warns_critical_returns_emergency_lands():
     clock = _in_mission(COM_LOW_BAT_ACT=3)
     clock.overrides["battery_warning"] = BatteryWarning.LOW

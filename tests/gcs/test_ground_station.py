@@ -1,6 +1,7 @@
 """A ground station on the ``mavlink`` module of a running lockstep stack, played with pymavlink as QGroundControl
 plays it: its connect sequence, PX4 mode changes, parameters, missions, takeoff from the ground, refusals, bad
-input, signing, a link whose port is taken, and the loss of the link in flight (NAV_DLL_ACT).
+input, signing, a link whose port is taken, the loss of the link in flight (NAV_DLL_ACT) and of the sticks
+(NAV_RCL_ACT).
 
 One stack serves the whole file (tests run in order, the later ones fly). The test process opens no Zenoh
 session: it reads the stack through the CLI.
@@ -432,6 +433,30 @@ def test_qgroundcontrols_takeoff_from_the_ground_then_link_loss_returns(vehicle:
     mark = gcs.mark()
     gcs.wait("HEARTBEAT", lambda m: not m.base_mode & M.MAV_MODE_FLAG_SAFETY_ARMED, 60.0, mark)
     assert vehicle.extra("mavlink_gcs")["handler_errors"] == 0
+
+
+def test_sticks_stopping_in_flight_are_the_manual_control_loss_failsafe(vehicle: Vehicle) -> None:
+    gcs = vehicle.gcs
+    prearm_ok(gcs)
+    home = gcs.wait("HOME_POSITION", timeout=10.0)
+    stop, thread = _stream(gcs, lambda: gcs.mav.manual_control_send(1, 0, 0, 500, 0, 0), 20.0)  # centred sticks
+    try:
+        time.sleep(0.5)
+        ack = gcs.command(M.MAV_CMD_NAV_TAKEOFF, -1, 0, 0, NAN, NAN, NAN, home.altitude / 1000.0 + 3.0)
+        assert ack.result == M.MAV_RESULT_ACCEPTED
+        assert gcs.command(M.MAV_CMD_COMPONENT_ARM_DISARM, 1).result == M.MAV_RESULT_ACCEPTED
+        gcs.wait("GLOBAL_POSITION_INT", lambda m: m.relative_alt > 2500, 30.0, gcs.mark())
+        wait_mode(gcs, Px4Mode.AUTO_LOITER)
+        time.sleep(3.0)  # tens of simulated seconds: sticks from a 20 Hz joystick are never taken as lost
+        assert px4_modes.decode(gcs.mode()) is Px4Mode.AUTO_LOITER
+        mark = gcs.mark()
+    finally:
+        stop.set()
+        thread.join()
+    wait_mode(gcs, Px4Mode.AUTO_RTL, timeout=30.0)  # NAV_RCL_ACT = 2 (Return), PX4's default
+    assert wait_text(gcs, "Manual control lost", mark)
+    assert "manual_control_loss" in wait_text(gcs, "Failsafe activated", mark)
+    gcs.wait("HEARTBEAT", lambda m: not m.base_mode & M.MAV_MODE_FLAG_SAFETY_ARMED, 60.0, gcs.mark())
 
 
 def test_the_fast_path_modules_saw_no_outside_triggers(vehicle: Vehicle) -> None:

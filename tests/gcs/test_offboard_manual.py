@@ -7,6 +7,7 @@ from pymavlink.dialects.v20 import common as M
 
 from stack.gcs import offboard
 from stack.gcs.manual import LOSS_US, ManualInput, Refused, manual_control
+from stack.gcs.offboard import REPUBLISH_US
 from stack.msg.setpoints import TrajectorySetpoint, VehicleAttitudeSetpoint, VehicleRatesSetpoint
 
 NAN = math.nan
@@ -114,10 +115,16 @@ def test_sticks_out_of_range_are_refused(x, z):
         manual_control(M.MAVLink_manual_control_message(1, x, 0, z, 0, 0), 0)
 
 
-def test_lost_sticks_are_published_once_more_as_invalid():
+def test_sticks_are_repeated_while_they_come_and_published_once_more_as_invalid_when_they_stop():
     manual = ManualInput()
-    manual.on_sticks(manual_control(M.MAVLink_manual_control_message(1, 0, 0, 500, 0, 0), 1), 1_000_000)
-    assert manual.lost(1_000_000 + LOSS_US, 5) is None
-    lost = manual.lost(1_000_000 + LOSS_US + 1, 6)
+    t0 = 1_000_000
+    manual.on_sticks(manual_control(M.MAVLink_manual_control_message(1, 0, 0, 500, 0, 0), 1), t0)
+    assert manual.due(t0 + REPUBLISH_US - 1, 2) is None
+    again = manual.due(t0 + REPUBLISH_US, 3)
+    assert again is not None and again.valid and again.timestamp == 3
+    assert manual.due(t0 + REPUBLISH_US + 1, 4) is None
+    assert manual.due(t0 + LOSS_US, 5) is not None
+    lost = manual.due(t0 + LOSS_US + 1, 6)
     assert lost is not None and not lost.valid and lost.throttle == 0.0 and lost.timestamp == 6
-    assert manual.lost(9_000_000, 7) is None
+    assert manual.due(9_000_000, 7) is None
+
