@@ -28,6 +28,10 @@ MAG_GAIN_BOOST_MAX = 10.0
 ACCEL_NORM_MIN_SQ = (0.9 * CONSTANTS_ONE_G) ** 2
 ACCEL_NORM_MAX_SQ = (1.1 * CONSTANTS_ONE_G) ** 2
 DEGENERATE_NORM = 1e-2  # accel [m/s²] or horizontal mag [G] too small to give a direction
+ALIGN_TIME_S = 2.0
+"""Accelerometer and magnetometer samples are averaged this long before the first attitude is set."""
+ALIGN_SPIN_RATE_MAX = 0.1  # rad/s: a vehicle turning faster than this restarts the alignment
+ALIGN_MAG_SAMPLES_MIN = 10
 
 
 class AttitudeEstimatorQ:
@@ -45,9 +49,21 @@ class AttitudeEstimatorQ:
 
     Outputs: ``q`` (body FRD → NED), ``gyro_bias`` (additive, rad/s), ``rates`` (gyro minus bias of
     the last step, rad/s) and ``initialised``.
+
+    Alignment: PX4's attitude_estimator_q takes its first attitude from a single accelerometer and
+    magnetometer sample, which puts one sample's noise into the heading (5° RMS for a 0.02 G mag noise
+    in a 0.22 G horizontal field) for the ~10 s the 0.1/s mag weight needs to remove it. Here, as EKF2
+    does before its tilt and heading alignment (``Ekf::initialiseFilter``, low-pass filtered samples),
+    the samples are averaged first: ALIGN_TIME_S of a still vehicle (spin below ALIGN_SPIN_RATE_MAX,
+    specific force within 0.9–1.1 g), with at least ALIGN_MAG_SAMPLES_MIN magnetometer samples when the
+    magnetometer is used; any motion restarts the average.
     """
 
     __slots__ = (
+        "_align_accel",
+        "_align_mag",
+        "_align_mag_count",
+        "_align_time",
         "_mag",
         "_mag_decl",
         "_w_acc",
@@ -76,6 +92,7 @@ class AttitudeEstimatorQ:
         self.initialised = False
         self._mag: Vec3 | None = None
         self._mag_decl = 0.0
+        self._restart_alignment()
         self.set_params(
             ATT_W_ACC=ATT_W_ACC,
             ATT_W_MAG=ATT_W_MAG,
@@ -130,6 +147,13 @@ class AttitudeEstimatorQ:
         else:
             self.q = quat.IDENTITY
             self.initialised = False
+            self._restart_alignment()
+
+    def _restart_alignment(self) -> None:
+        self._align_accel: Vec3 = vec.ZERO3
+        self._align_mag: Vec3 = vec.ZERO3
+        self._align_mag_count = 0
+        self._align_time = 0.0
 
     def update(
         self,
@@ -155,13 +179,14 @@ class AttitudeEstimatorQ:
         # Norms catch both non-finite components and magnitudes that overflow the arithmetic.
         if not (math.isfinite(spin_rate) and math.isfinite(accel_norm_sq) and math.isfinite(dt)):
             return False
-        if mag is not None and DEGENERATE_NORM < vec.norm(mag) < math.inf:
+        new_mag = mag is not None and DEGENERATE_NORM < vec.norm(mag) < math.inf
+        if new_mag:
             self._mag = mag
         if accel_norm_sq < DEGENERATE_NORM * DEGENERATE_NORM:
             return False
-        if not self.initialised:
-            return self._init_from_vectors(accel)
         dt = constrain(dt, DT_MIN_S, DT_MAX_S)
+        if not self.initialised:
+            return self._align(dt, spin_rate, accel, accel_norm_sq, mag if new_mag else None)
 
         q = self.q
         corr = vec.ZERO3
@@ -206,24 +231,41 @@ class AttitudeEstimatorQ:
         self.rates = rates
         return True
 
-    def _init_from_vectors(self, accel: Vec3) -> bool:
+    def _align(self, dt: float, spin_rate: float, accel: Vec3, accel_norm_sq: float, mag: Vec3 | None) -> bool:
+        """Average a still vehicle's samples; set the first attitude from them once there are enough."""
+        if spin_rate > ALIGN_SPIN_RATE_MAX or not ACCEL_NORM_MIN_SQ < accel_norm_sq < ACCEL_NORM_MAX_SQ:
+            self._restart_alignment()
+            return False
+        self._align_accel = vec.add(self._align_accel, accel)
+        self._align_time += dt
+        if mag is not None:
+            self._align_mag = vec.add(self._align_mag, mag)
+            self._align_mag_count += 1
+        use_mag = self._w_mag > 0.0
+        if self._align_time < ALIGN_TIME_S or (use_mag and self._align_mag_count < ALIGN_MAG_SAMPLES_MIN):
+            return False
+        mean_mag = vec.scale(self._align_mag, 1.0 / self._align_mag_count) if self._align_mag_count else None
+        # The accelerometer sum's direction is its mean's; only the direction is used.
+        aligned = self._init_from_vectors(self._align_accel, mean_mag if use_mag else None)
+        if not aligned:
+            self._restart_alignment()
+        return aligned
+
+    def _init_from_vectors(self, accel: Vec3, mag: Vec3 | None) -> bool:
         """Attitude from gravity and magnetic north: rows of the body→NED matrix are N, E, D in body.
 
-        Without a magnetometer (ATT_W_MAG = 0) the body x axis projected on the horizontal plane is
-        taken as north, i.e. the filter starts at yaw 0.
+        Without a magnetometer (``mag`` None) the body x axis projected on the horizontal plane is taken
+        as north, i.e. the filter starts at yaw 0.
         """
-        use_mag = self._w_mag > 0.0
-        if use_mag and self._mag is None:
-            return False
         down = vec.normalized(vec.neg(accel))
-        ref = self._mag if use_mag and self._mag is not None else (1.0, 0.0, 0.0)
+        ref = mag if mag is not None else (1.0, 0.0, 0.0)
         north = vec.sub(ref, vec.scale(down, vec.dot(ref, down)))
         if vec.norm(north) < DEGENERATE_NORM:
             return False
         north = vec.normalized(north)
         east = vec.cross(down, north)
         q = quat.from_dcm((north, east, down))
-        if use_mag:
+        if mag is not None:
             q = quat.mul(quat.from_axis_angle((0.0, 0.0, 1.0), self._mag_decl), q)
         q = quat.normalized(q)
         if not quat.is_finite(q):
