@@ -240,9 +240,12 @@ class CommanderModule(Module):
         land = self.land_detector.state
         if telemetry is not None and (telemetry.heartbeat_type_gcs or telemetry.heartbeat_type_onboard_controller):
             self._last_gcs = max(self._last_gcs, telemetry.timestamp)
+        fresh_sticks = self.update("manual_control_setpoint")
+        if fresh_sticks is not None and fresh_sticks.valid:
+            # their age from when they came, on this clock: a source outside the lockstep (a ground station)
+            # stamps them with the latest simulated time it saw, which lags
+            self._last_manual_control = now
         sticks = latest("manual_control_setpoint")
-        if sticks is not None and sticks.valid:
-            self._last_manual_control = max(self._last_manual_control, sticks.timestamp)
         return CommanderInputs(
             attitude_timestamp_us=est.attitude_timestamp if est is not None and est.attitude_valid else 0,
             attitude_q=est.q if est is not None else (1.0, 0.0, 0.0, 0.0),

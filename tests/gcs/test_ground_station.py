@@ -114,6 +114,14 @@ def wait_mode(peer: Peer, mode: Px4Mode, timeout: float = 20.0) -> None:
     )
 
 
+def climbed_above(peer: Peer, metres: float, after: int) -> None:
+    """Wait for the vehicle to climb above ``metres`` over home; say what the vehicle said if it does not."""
+    try:
+        peer.wait("GLOBAL_POSITION_INT", lambda m: m.relative_alt > metres * 1000, 30.0, after)
+    except AssertionError as e:
+        raise AssertionError(f"{e}; the vehicle said {texts(peer, after)}") from None
+
+
 def prearm_ok(peer: Peer, timeout: float = 30.0) -> None:
     mark = peer.mark()
     peer.wait("SYS_STATUS", lambda m: m.onboard_control_sensors_health & M.MAV_SYS_STATUS_PREARM_CHECK, timeout, mark)
@@ -376,13 +384,16 @@ def _stream(gcs: Peer, send: Callable[[], None], hz: float) -> tuple[threading.E
     return stop, thread
 
 
-def test_sticks_reach_manual_control_setpoint(vehicle: Vehicle) -> None:
-    stop, thread = _stream(vehicle.gcs, lambda: vehicle.gcs.mav.manual_control_send(1, 250, -500, 750, 100, 0), 20.0)
+def test_sticks_reach_manual_control_setpoint_and_their_loss_is_noticed(vehicle: Vehicle) -> None:
+    gcs = vehicle.gcs
+    stop, thread = _stream(gcs, lambda: gcs.mav.manual_control_send(1, 250, -500, 750, 100, 0), 20.0)
     try:
         out = vehicle.stack.cli("topic", "echo", "manual_control_setpoint", "-n", "1", "--json")
+        mark = gcs.mark()
     finally:
         stop.set()
         thread.join()
+    assert wait_text(gcs, "Manual control lost", mark)  # on the ground, disarmed: noticed, no failsafe
     assert out.returncode == 0, out.stderr
     sticks = json.loads(out.stdout.splitlines()[0])
     assert (sticks["pitch"], sticks["roll"], sticks["throttle"], sticks["yaw"]) == (0.25, -0.5, 0.5, 0.1)
@@ -398,8 +409,7 @@ def test_qgroundcontrols_takeoff_from_the_ground_then_link_loss_returns(vehicle:
     assert ack.result == M.MAV_RESULT_ACCEPTED
     wait_mode(gcs, Px4Mode.AUTO_TAKEOFF)
     assert gcs.command(M.MAV_CMD_COMPONENT_ARM_DISARM, 1).result == M.MAV_RESULT_ACCEPTED  # then QGC arms
-    mark = gcs.mark()
-    gcs.wait("GLOBAL_POSITION_INT", lambda m: m.relative_alt > 2500, 30.0, mark)
+    climbed_above(gcs, 2.5, gcs.mark())
     wait_mode(gcs, Px4Mode.AUTO_LOITER)
 
     here = gcs.wait("LOCAL_POSITION_NED", after=gcs.mark())
@@ -437,6 +447,7 @@ def test_qgroundcontrols_takeoff_from_the_ground_then_link_loss_returns(vehicle:
 
 def test_sticks_stopping_in_flight_are_the_manual_control_loss_failsafe(vehicle: Vehicle) -> None:
     gcs = vehicle.gcs
+    start = gcs.mark()
     prearm_ok(gcs)
     home = gcs.wait("HOME_POSITION", timeout=10.0)
     stop, thread = _stream(gcs, lambda: gcs.mav.manual_control_send(1, 0, 0, 500, 0, 0), 20.0)  # centred sticks
@@ -445,10 +456,10 @@ def test_sticks_stopping_in_flight_are_the_manual_control_loss_failsafe(vehicle:
         ack = gcs.command(M.MAV_CMD_NAV_TAKEOFF, -1, 0, 0, NAN, NAN, NAN, home.altitude / 1000.0 + 3.0)
         assert ack.result == M.MAV_RESULT_ACCEPTED
         assert gcs.command(M.MAV_CMD_COMPONENT_ARM_DISARM, 1).result == M.MAV_RESULT_ACCEPTED
-        gcs.wait("GLOBAL_POSITION_INT", lambda m: m.relative_alt > 2500, 30.0, gcs.mark())
+        climbed_above(gcs, 2.5, start)
         wait_mode(gcs, Px4Mode.AUTO_LOITER)
-        time.sleep(3.0)  # tens of simulated seconds: sticks from a 20 Hz joystick are never taken as lost
-        assert px4_modes.decode(gcs.mode()) is Px4Mode.AUTO_LOITER
+        time.sleep(3.0)  # sticks from a 20 Hz joystick are never taken as lost, however fast the simulation runs
+        assert px4_modes.decode(gcs.mode()) is Px4Mode.AUTO_LOITER, texts(gcs, start)
         mark = gcs.mark()
     finally:
         stop.set()
