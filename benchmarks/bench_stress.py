@@ -6,7 +6,7 @@ Starts ``--burners`` CPU-burning processes (a Python busy loop each, at normal p
 running throughout. Then:
 
 1. flies ``--flights`` ``stack fly SCENARIO --seed N`` (seeds 1..N, ``--jobs`` at a time), each in a fresh
-   interpreter as ``benchmarks/sweep_seeds.py`` does. A flight that left no report (the stack stopped:
+   interpreter as ``benchmarks/sweep.py`` does. A flight that left no report (the stack stopped:
    a stall, a crash) or whose output names a lockstep stall counts as a stall; a flight that finished
    but failed a check is counted apart, since a loaded machine must only make a flight slower.
 2. runs ``stack up`` (disarmed) for ``--idle-minutes`` and follows the lockstep coordinator's heartbeat:
@@ -28,7 +28,7 @@ from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import msgspec
-from sweep_seeds import fly
+from sweep import fly
 
 from stack.bus import keys
 from stack.cli.common import connect
@@ -57,7 +57,7 @@ def flights(args: argparse.Namespace, home: Path) -> tuple[int, int]:
         reports = pool.map(lambda s: fly(args.scenario, args.profile, s, False, home), range(1, args.flights + 1))
         for r in reports:
             seed = r["seed"]
-            stall = r.get("error") or stalled_in(home / f"seed-{seed}.out")
+            stall = r.get("error") or stalled_in(Path(r["log"]))
             if stall:
                 stalls += 1
                 print(f"seed {seed}: STALL: {stall}", flush=True)

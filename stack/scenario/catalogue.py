@@ -39,6 +39,8 @@ class Scenario:
     watch: tuple[str, ...] = ()
     timeout_s: float = 300.0
     params: dict[str, Any] = field(default_factory=dict)
+    profile: str | None = None
+    """The launch profile the scenario needs, when it cannot fly on any (link_loss: a simulated Pixhawk)."""
 
 
 def scenarios() -> dict[str, Scenario]:

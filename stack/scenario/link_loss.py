@@ -141,4 +141,5 @@ SCENARIO = Scenario(
     record=(*autonomy.RECORD, "external_autopilot_status"),
     watch=autonomy.WATCH,
     timeout_s=180.0,
+    profile="pixhawk_sim",
 )
