@@ -217,21 +217,21 @@ def sweep(args: argparse.Namespace, home: Path) -> int:
     todo = cases(args.scenarios, args.profile, CONDITIONS[args.wind])
     print(f"{len(todo)} cases × {len(args.seeds)} seeds, {args.jobs} flights at a time, STACK_HOME {home}", flush=True)
     start = time.monotonic()
-    reports: dict[Case, list[dict[str, Any]]] = {case: [] for case in todo}
+    reports: list[list[dict[str, Any]]] = [[] for _ in todo]
     with ThreadPoolExecutor(max_workers=args.jobs) as pool:
         futures = {
-            pool.submit(fly, case.scenario.name, case.profile, seed, case.wind, home): case
-            for case in todo
+            pool.submit(fly, case.scenario.name, case.profile, seed, case.wind, home): i
+            for i, case in enumerate(todo)
             for seed in args.seeds
         }
         for future in as_completed(futures):
-            case, r = futures[future], future.result()
-            reports[case].append(r)
+            case, r = todo[futures[future]], future.result()
+            reports[futures[future]].append(r)
             detail = r.get("error") or f"{r['wall_time_s']:.0f} s, real-time factor {r['realtime_factor']:.1f}"
             print(f"{case.name} seed {r['seed']}: {'passed' if r['passed'] else 'FAILED'} ({detail})", flush=True)
     summaries = []
-    for case in todo:
-        flown = sorted(reports[case], key=lambda r: r["seed"])
+    for case, flown in zip(todo, reports, strict=True):
+        flown = sorted(flown, key=lambda r: r["seed"])
         summary = summarise(case, flown)
         summaries.append(summary)
         print(f"\n{case.name} on {case.profile}: {'holds' if summary['passed'] else 'FAILS'} on every seed")
