@@ -173,20 +173,28 @@ class ControlAllocator:
         """Per-axis normalisation scale: allocated control = (B · u) ∘ scale."""
         return self._scale
 
-    def allocate(self, torque: Vec3, thrust: Vec3) -> AllocationResult:
-        """Motor commands for a normalised torque (roll, pitch, yaw) and body thrust (x, y, z; z < 0 is up)."""
+    def allocate(self, torque: Vec3, thrust: Vec3, on_ground: bool = False) -> AllocationResult:
+        """Motor commands for a normalised torque (roll, pitch, yaw) and body thrust (x, y, z; z < 0 is up).
+
+        ``on_ground`` (the land detector's ground contact): thrust has priority over attitude, as without
+        airmode, so that torque demands never raise the collective thrust. ArduPilot does the same while
+        landing and landed (``Copter::update_throttle_mix`` → ``set_throttle_mix_min``): a vehicle touching
+        down tilted in wind tips onto its legs, and airmode's added thrust for that rotation lifted it off
+        again, so that it hopped downwind instead of settling.
+        """
         tr, tp, ty = torque
         fx, fy, fz = thrust
         cr, cp, cy = self._col_r, self._col_p, self._col_y
         cfx, cfy, cfz = self._col_fx, self._col_fy, self._col_fz
         u = [cr[i] * tr + cp[i] * tp + cfx[i] * fx + cfy[i] * fy + cfz[i] * fz for i in range(self._n)]
-        if self._airmode == 2:
+        airmode = 0 if on_ground else self._airmode
+        if airmode == 2:
             for i in range(self._n):
                 u[i] += cy[i] * ty
             desaturate(u, cfz)
             desaturate(u, cy)
         else:
-            if self._airmode == 1:
+            if airmode == 1:
                 desaturate(u, cfz)
             else:
                 desaturate(u, cfz, reduce_only=True)

@@ -2,7 +2,8 @@
 
 The allocation is built from the CA_ROTOR* geometry (rebuilt when those parameters change). Motors
 idle when armed and are stopped when disarmed. The saturation of each axis goes back to the rate
-loop in ``control_allocator_status``.
+loop in ``control_allocator_status``. While the land detector reports ground contact, airmode is off
+(see :meth:`ControlAllocator.allocate`).
 """
 
 from __future__ import annotations
@@ -35,6 +36,7 @@ class ControlAllocatorModule(Module):
         super().__init__(rt)
         self.subscribe("vehicle_thrust_setpoint")
         self.subscribe("actuator_armed")
+        self.subscribe("vehicle_land_detected")
         for topic in ("actuator_motors", "actuator_outputs", "actuator_outputs_sim", "control_allocator_status"):
             self.advertise(topic)
         self._build()
@@ -57,7 +59,9 @@ class ControlAllocatorModule(Module):
         thrust = tuple(v if math.isfinite(v) else 0.0 for v in thrust)
         armed_msg = self.latest("actuator_armed")
         armed = armed_msg is not None and armed_msg.armed and not armed_msg.lockdown and not armed_msg.kill
-        result = self.allocator.allocate(torque, thrust)
+        land = self.latest("vehicle_land_detected")
+        on_ground = land is not None and (land.ground_contact or land.maybe_landed or land.landed)
+        result = self.allocator.allocate(torque, thrust, on_ground)
         out = self.outputs.update(result.motors, armed, dt)
         n = self.allocator.num_motors
         t = torque_sp.timestamp_sample

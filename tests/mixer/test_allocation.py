@@ -154,6 +154,15 @@ def test_yaw_airmode_keeps_yaw_at_low_thrust():
     assert without.allocated_torque[2] < 0.4 - 0.1
 
 
+@pytest.mark.parametrize("airmode", [1, 2])
+@pytest.mark.parametrize("torque", [(0.5, 0.0, 0.0), (0.0, 0.0, 0.4)])
+def test_on_the_ground_torque_never_raises_the_thrust(airmode, torque):
+    # A vehicle tipping onto its legs must not be lifted off by airmode's added thrust.
+    r = quad(airmode=airmode).allocate(torque, (0.0, 0.0, -0.1), on_ground=True)
+    assert r.allocated_thrust[2] >= -0.1 - 1e-9
+    assert r == quad(airmode=0).allocate(torque, (0.0, 0.0, -0.1))
+
+
 def test_saturation_codes_at_the_limits():
     a = quad()
     idle = a.allocate((0.0, 0.0, 0.0), (0.0, 0.0, 0.0))
