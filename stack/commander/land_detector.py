@@ -143,6 +143,12 @@ class MulticopterLandDetector:
         self.state = LandDetectorState(False, True, True, True, False, False, False, False, False, False, True, True)
         self.set_params(params or {})
 
+    def resume_in_air(self) -> None:
+        """Start from flying, not from the landed power-on state (a commander restarted in the air)."""
+        for h in (self._ground_contact, self._maybe_landed, self._landed):
+            h.force(False)
+        self.state = self.state._replace(ground_contact=False, maybe_landed=False, landed=False, at_rest=False)
+
     def set_params(self, params: Mapping[str, object]) -> None:
         p = {**DEFAULTS, **params}
         # PX4 rewrites LNDMC_Z_VEL_MAX when it exceeds the slowest landing speed / 1.2.

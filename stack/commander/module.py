@@ -23,7 +23,7 @@ import math
 
 import msgspec
 
-from stack.commander import land_detector, offboard
+from stack.commander import control_chain, land_detector, offboard
 from stack.commander.events import event_severity
 from stack.commander.health import CommanderInputs
 from stack.commander.home import HomePosition as Home
@@ -118,6 +118,9 @@ class CommanderModule(Module):
             "external_autopilot_status",
         ):
             self.subscribe(topic)
+        for topic in control_chain.OUTPUTS:
+            if topic not in ("vehicle_local_position", "trajectory_setpoint"):
+                self.subscribe(topic)
         for topic in ("actuator_armed", "vehicle_status", "vehicle_control_mode", "vehicle_command_ack"):
             self.advertise(topic)
         self.advertise("home_position")
@@ -137,6 +140,28 @@ class CommanderModule(Module):
         self._last_manual_control = 0
         self._offboard_flags: dict[str, bool] | None = None
         self._refusals: list[str] = []
+        self._lockstep = rt.spec.lockstep
+        self._republish_now = False
+        self.watch_modules(self._on_module)
+        kept = self.kept_state()
+        if kept is not None:
+            try:
+                self.commander.resume(kept, self.now_us())
+            except ValueError as e:
+                self.log.warning("restarted, but cannot resume (%s): starting afresh", e)
+            else:
+                if self.commander.armed:
+                    self.land_detector.resume_in_air()
+
+    def _on_module(self, module: str, pid: int, alive: bool) -> None:
+        if alive:
+            self.commander.chain.module_alive(module)
+            self._republish_now = True  # a restarted module learns the vehicle's state at once
+            self._land_published = None
+        elif not self._lockstep:
+            # In lockstep a dead module's silence is measured in simulated time, which stands still while the
+            # supervisor restarts it; in real time its liveliness token says at once that it is gone.
+            self.commander.chain.module_died(module)
 
     def on_params_changed(self, changed: set[str]) -> None:
         self.commander.set_params(self.params.values())
@@ -144,6 +169,9 @@ class CommanderModule(Module):
 
     def run(self, msg: None, dt: float) -> None:
         now = self.now_us()
+        for topic in control_chain.OUTPUTS:
+            if self.update(topic) is not None:
+                self.commander.chain.output_seen(topic, now)
         if now >= self._land_due:
             # On the first tick of each 20 ms interval, so every second tick at 100 Hz.
             self._land_due = now - now % LAND_DETECTOR_PERIOD_US + LAND_DETECTOR_PERIOD_US
@@ -177,8 +205,14 @@ class CommanderModule(Module):
             self._home = out.home
             self._home_count += 1
         # Late subscribers (a CLI, a restarted module) learn the state within REPUBLISH_US.
-        if changed or home_changed or navigation != self._navigation or now - self._last_publish >= REPUBLISH_US:
+        if self.commander.chain.late:
+            self._republish_now = True
+            self._land_published = None
+        republish = self._republish_now or now - self._last_publish >= REPUBLISH_US
+        if changed or home_changed or navigation != self._navigation or republish:
+            self._republish_now = False
             self._last_publish = now
+            self.keep_state(self.commander.kept_state())
             self._navigation = navigation
             # PX4 publishes actuator_armed before vehicle_status; the navigator reads its request with the mode.
             self.publish("actuator_armed", msgspec.structs.replace(out.actuator_armed, timestamp=now))

@@ -59,6 +59,7 @@ from collections.abc import Callable, Mapping
 from enum import IntEnum
 from typing import NamedTuple
 
+from stack.commander.control_chain import ChainFault, ControlChainMonitor, Loss
 from stack.commander.failsafe import ACTION_NAMES, Failsafe, FailsafeAction, FailsafeConditions
 from stack.commander.failsafe import PARAMS as FAILSAFE_PARAMS
 from stack.commander.geofence import PARAMS as GEOFENCE_PARAMS
@@ -218,6 +219,8 @@ class Commander:
         self._preflight_checked_us = 0
         self._gcs_lost = False
         self._manual_control_lost = False
+        self.chain = ControlChainMonitor()
+        self._chain_faults: tuple[ChainFault, ...] = ()
         self._gcs_lost_counter = 0
         self._geofence_violation = ""
         self._failsafe_action = FailsafeAction.NONE
@@ -383,6 +386,7 @@ class Commander:
             self._events.append(f"Takeoff complete, switching to {mode_name(follow)}")
             self._set_intention(follow)
 
+        self._update_control_chain(now_us, armed)
         failing = self._failing
         if self._external_link_down(now_us):
             failing &= ~_ESTIMATES  # without the Pixhawk's sensors the estimates go; its own failsafe flies
@@ -392,6 +396,9 @@ class Commander:
             manual_control_lost=self._manual_control_lost,
             battery_warning=inp.battery_warning,
             geofence_breached=bool(self._geofence_violation),
+            attitude_control_lost=any(f.loss == Loss.ATTITUDE_CONTROL for f in self._chain_faults),
+            position_control_lost=any(f.loss == Loss.POSITION_CONTROL for f in self._chain_faults),
+            landed=inp.landed,
         )
         result = self._failsafe.update(
             now_us, armed, self.user_intended_nav_state, self._intention_updated, conditions, int(p["GF_ACTION"])
@@ -412,6 +419,56 @@ class Commander:
             self._preflight_checked = checked
             self._preflight_checked_us = now_us
             self._preflight_ok = not arming_denial(now_us, intended, self._failing, inp, self._health)
+
+    # ------------------------------------------------------------------ resuming after a restart
+
+    def kept_state(self) -> dict[str, object]:
+        """What a commander restarted after a crash resumes from (see :meth:`resume`)."""
+        return {
+            "armed": self.armed,
+            "armed_time_us": self._armed_time_us,
+            "takeoff_time_us": self._takeoff_time_us,
+            "have_taken_off": self._have_taken_off,
+            "intended_nav_state": self.user_intended_nav_state,
+            "home": list(self._home) if self._home is not None else None,
+            "terminated": self._failsafe.selected_action == FailsafeAction.TERMINATE,
+        }
+
+    def resume(self, kept: Mapping[str, object], now_us: int) -> None:
+        """Take over the vehicle as the crashed commander left it: armed (no checks: it is flying), in the mode the
+        user chose, with the same home. Raises ValueError if ``kept`` is not what :meth:`kept_state` wrote."""
+        intended, home = kept.get("intended_nav_state"), kept.get("home")
+        armed_time, takeoff_time = kept.get("armed_time_us"), kept.get("takeoff_time_us")
+        if not isinstance(intended, int) or intended not in MODES:
+            raise ValueError(f"no known mode in {kept!r}")
+        if not isinstance(armed_time, int) or not isinstance(takeoff_time, int):
+            raise ValueError(f"no arming times in {kept!r}")
+        if home is not None and (not isinstance(home, list) or len(home) != len(HomePosition._fields)):
+            raise ValueError(f"no home position in {kept!r}")
+        if home is not None:
+            self._home = HomePosition(*(float(v) for v in home))
+        self.user_intended_nav_state = self.nav_state = intended
+        self._nav_state_timestamp_us = now_us
+        if kept.get("armed") is True:
+            self.arming_state = NS.ARMING_STATE_ARMED
+            self._armed_time_us, self._takeoff_time_us = armed_time, takeoff_time
+            self._have_taken_off = kept.get("have_taken_off") is True
+        if kept.get("terminated") is True:
+            self._failsafe.latch_termination()
+            self.nav_state = NS.NAVIGATION_STATE_TERMINATION
+        armed = "armed" if self.armed else "disarmed"
+        self._events.append(f"Commander restarted: resuming {armed} in {mode_name(self.nav_state)}")
+
+    def _update_control_chain(self, now_us: int, armed: bool) -> None:
+        if self.nav_state == NS.NAVIGATION_STATE_TERMINATION:
+            return  # terminated: the loops are off, and the modules that were lost stay named
+        faults = tuple(self.chain.update(now_us, armed, control_mode(self.nav_state, armed)))
+        for fault in faults:
+            if fault not in self._chain_faults:
+                self._events.append(fault.describe())
+        if self._chain_faults and not faults and armed:
+            self._events.append("Control chain complete again")
+        self._chain_faults = faults
 
     def _update_link(self, now_us: int) -> None:
         last = self._inputs.last_gcs_heartbeat_us
@@ -841,6 +898,7 @@ class Commander:
             self._gcs_lost_counter,
             self._preflight_ok,
             can_set,
+            self._chain_faults,
         )
         changed = key != self._published_key
         if changed or self._messages is None:
@@ -862,6 +920,7 @@ class Commander:
                 gcs_connection_lost=self._gcs_lost,
                 gcs_connection_lost_counter=self._gcs_lost_counter,
                 pre_flight_checks_pass=self._preflight_ok,
+                control_lost_modules=[f.module for f in self._chain_faults],
             )
             actuator_armed = ActuatorArmed(
                 armed=armed,

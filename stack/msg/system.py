@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from enum import IntEnum
 
+import msgspec
+
 from stack.msg.base import NAN, Message
 
 
@@ -82,6 +84,8 @@ class VehicleStatus(Message):
     power_input_valid: bool = True
     usb_connected: bool = False
     pre_flight_checks_pass: bool = False
+    control_lost_modules: list[str] = msgspec.field(default_factory=list)
+    """The control chain's dead or silent modules (not in PX4, whose loops share one process)."""
 
 
 class ActuatorArmed(Message):

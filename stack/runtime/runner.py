@@ -10,7 +10,10 @@ from __future__ import annotations
 import logging
 import os
 import time
+from collections.abc import Callable
 from typing import Any
+
+import zenoh
 
 from stack.bus import keys
 from stack.bus.node import Node, wall_clock_us
@@ -71,6 +74,7 @@ class Runtime:
         self.reads_all_topics = False
         self.node: Node
         self.module: Module
+        self._module_watchers: list[zenoh.Subscriber] = []
 
     # -- clock -------------------------------------------------------------------------------------
 
@@ -78,6 +82,17 @@ class Runtime:
         return self._now if self.lockstep else wall_clock_us()
 
     # -- declarations used by Module -----------------------------------------------------------------
+
+    def watch_modules(self, on_change: Callable[[str, int, bool], None]) -> None:
+        """Call ``on_change(module, pid, alive)`` for every module process of this vehicle that is running or comes
+        or goes (their liveliness tokens; called from a Zenoh thread). The subscriber lives as long as the session."""
+
+        def changed(sample: zenoh.Sample) -> None:
+            module, pid = str(sample.key_expr).split("/")[-2:]
+            on_change(module, int(pid), sample.kind == zenoh.SampleKind.PUT)
+
+        key = keys.alive_query(self.spec.vehicle)
+        self._module_watchers.append(self.node.session.liveliness().declare_subscriber(key, changed, history=True))
 
     def add_input(self, topic: str, instance: int, queue: bool, capacity: int) -> None:
         if self.fast is not None:

@@ -130,7 +130,11 @@ class SimulatorModule(Module):
 
     def motor_commands(self) -> tuple[float, ...]:
         outputs = self.latest("actuator_outputs_sim")
-        if outputs is None:
+        armed = self.latest("actuator_armed")
+        # As PX4's output drivers do, the motors stop on disarm, lockdown, kill or termination whatever the last
+        # output said: a dead allocator cannot keep them turning.
+        stopped = armed is not None and (not armed.armed or armed.lockdown or armed.kill or armed.termination)
+        if outputs is None or stopped:
             return (0.0,) * self.motor_count
         commands = outputs.output[: self.motor_count]
         return tuple(c if math.isfinite(c) else 0.0 for c in commands)
