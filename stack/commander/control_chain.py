@@ -2,9 +2,10 @@
 
 Every module in the chain publishes an output each control cycle while its loop runs, so that output is its
 heartbeat at the control rate: a module whose output stopped for SILENCE_US while the loop should run is
-*silent*; one whose process is gone (its liveliness token withdrawn, see the commander's glue) is *dead*, known
-at once. PX4 runs these loops in one process and has no such failure; its matching actions are those of the
-estimate and control failures (``src/modules/commander/failsafe/failsafe.cpp``):
+*silent* (measured against the chain's newest output, so that a simulator or bus that pauses the whole chain
+silences no module); one whose process is gone (its liveliness token withdrawn, see the commander's glue) is
+*dead*, known at once. PX4 runs these loops in one process and has no such failure; its matching actions are
+those of the estimate and control failures (``src/modules/commander/failsafe/failsafe.cpp``):
 
 * losing an attitude estimate, attitude, rate control or the allocator is a loss of **attitude control**:
   flight termination in the air, disarm on the ground;
@@ -13,7 +14,7 @@ estimate and control failures (``src/modules/commander/failsafe/failsafe.cpp``):
 
 A module is watched only once its output has been seen since the stack started (a profile without it, e.g. an
 external autopilot's, never flags it), only while armed, and only while the control mode runs its loop; a loop
-that has just been switched on gets SILENCE_US to speak. In Offboard the setpoints (position, attitude or rates)
+that has just been switched on gets the silence limit to speak. In Offboard the setpoints (position, attitude or rates)
 come from outside and their loss is the Offboard failsafe, so only the estimators, rate control and the
 allocator are watched there.
 """
@@ -27,8 +28,11 @@ from enum import IntEnum
 from stack.msg.system import VehicleControlMode
 
 SILENCE_US = 90_000
-"""An output older than this, while its loop should run, names its module silent: with the commander at
-100 Hz, a silent module is noticed within 100 ms."""
+"""In lockstep, an output this much older than the newest output of the chain, while its loop should run, names
+its module silent: with the commander at 100 Hz, a silent module is noticed within 100 ms of simulated time."""
+REALTIME_SILENCE_US = 500_000
+"""The same in real time, where a process of a loaded machine is now and then not scheduled for 0.1 s: a dead
+module is known at once from its liveliness, a hung one after this."""
 
 
 STALE_US = 30_000
@@ -98,8 +102,9 @@ class ChainFault:
 class ControlChainMonitor:
     """Which chain modules are dead or silent now (I/O-free: the glue reports outputs and deaths)."""
 
-    def __init__(self, chain: tuple[ChainLink, ...] = CHAIN) -> None:
+    def __init__(self, chain: tuple[ChainLink, ...] = CHAIN, silence_us: int = SILENCE_US) -> None:
         self._chain = chain
+        self.silence_us = silence_us
         self._seen: dict[str, int] = {}
         """Each output's last arrival on the commander's clock (outputs never seen are absent)."""
         self._watch_since: dict[str, int] = {}
@@ -120,17 +125,18 @@ class ControlChainMonitor:
         """The faults now, attitude-control losses first."""
         faults: list[ChainFault] = []
         self.late = False
+        watched: list[tuple[ChainLink, int]] = []
         for link in self._chain:
-            watched = armed and link.output in self._seen and link.runs(mode)
-            if not watched:
+            if not (armed and link.output in self._seen and link.runs(mode)):
                 self._watch_since.pop(link.output, None)
                 continue
             since = self._watch_since.setdefault(link.output, now_us)
+            watched.append((link, max(self._seen[link.output], since)))
+        newest = max((heard for _, heard in watched), default=now_us)
+        for link, heard in watched:
+            self.late |= now_us - heard > STALE_US
             dead = link.module in self._dead
-            age = now_us - max(self._seen[link.output], since)
-            self.late |= age > STALE_US
-            silent = age > SILENCE_US
-            if dead or silent:
+            if dead or newest - heard > self.silence_us:
                 faults.append(ChainFault(link.module, link.loss, dead))
         faults.sort(key=lambda f: -f.loss)
         return faults

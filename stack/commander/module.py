@@ -142,6 +142,8 @@ class CommanderModule(Module):
         self._refusals: list[str] = []
         self._lockstep = rt.spec.lockstep
         self._republish_now = False
+        if not self._lockstep:
+            self.commander.chain.silence_us = control_chain.REALTIME_SILENCE_US
         self.watch_modules(self._on_module)
         kept = self.kept_state()
         if kept is not None:

@@ -54,6 +54,13 @@ def test_nothing_is_watched_disarmed_never_seen_or_outside_its_loop():
     assert monitor.update(later, True, acro) == []
 
 
+def test_a_pause_of_the_whole_chain_silences_no_module():
+    monitor = ControlChainMonitor()
+    _all_seen(monitor, 0)
+    monitor.update(0, True, HOLD)
+    assert monitor.update(10 * SILENCE_US, True, HOLD) == [] and monitor.late
+
+
 def test_a_loop_switched_on_gets_the_silence_limit_to_speak():
     monitor = ControlChainMonitor()
     _all_seen(monitor, 0)
@@ -82,8 +89,9 @@ def test_offboard_watches_only_the_estimators_rate_control_and_allocation():
     offboard.flag_control_attitude_enabled = offboard.flag_multicopter_position_control_enabled = True
     _all_seen(monitor, 0)
     monitor.update(0, True, offboard)
+    monitor.output_seen("vehicle_attitude", 10 * SILENCE_US)
     modules = {f.module for f in monitor.update(10 * SILENCE_US, True, offboard)}
-    assert modules == {"attitude_estimator_q", "local_position_estimator", "mc_rate_control", "control_allocator"}
+    assert modules == {"local_position_estimator", "mc_rate_control", "control_allocator"}
 
 
 def _hovering() -> Clock:
