@@ -39,6 +39,11 @@ if TYPE_CHECKING:
     from stack.runtime.runner import Runtime
 
 
+KEEP_PERIOD_US = 200_000
+"""How often a module whose state changes every run (an estimator) keeps it for an instance restarted after a
+crash: in lockstep the kept state is at most this old when it resumes (simulated time waits for the restart)."""
+
+
 @dataclass(frozen=True)
 class Trigger:
     """Run once per message published on this topic."""

@@ -151,10 +151,13 @@ class Runtime:
                 services.append(ParamService(node.session, node.vehicle, self.name, self.params))
                 services.append(Heartbeat(node.session, node.vehicle, self.name, self.snapshot))
                 if self.fast is not None:
-                    node.declare_token(keys.alive_token(node.vehicle, self.name, os.getpid()))
-                    self.state = "running"
-                    log.info("%s ready (%s, shared-memory fast path)", self.name, self.describe_trigger())
-                    FastDriver(self).run()
+
+                    def announce() -> None:
+                        node.declare_token(keys.alive_token(node.vehicle, self.name, os.getpid()))
+                        self.state = "running"
+                        log.info("%s ready (%s, shared-memory fast path)", self.name, self.describe_trigger())
+
+                    FastDriver(self, announce).run()
                     return
                 lockstep_part = self._make_lockstep()
                 node.declare_token(keys.alive_token(node.vehicle, self.name, os.getpid()))

@@ -27,7 +27,7 @@ def test_each_control_module_killed_in_a_hover_restarts_and_the_flight_goes_on(
     assert report["passed"] is True and flight.returncode == 0, flight.output
     metrics = report["metrics"]
     assert metrics["modules_killed"] == len(MODULES) and metrics["all_resumed"] is True
-    assert metrics["max_deviation_m"] <= 1.0
+    assert metrics["max_deviation_m"] <= 0.5
     for module in MODULES:
         assert f"{module} failed with exit code -9" in flight.output, module
         assert f"restarting {module} (restart 1)" in flight.output, module
