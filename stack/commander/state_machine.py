@@ -462,6 +462,9 @@ class Commander:
     def _update_control_chain(self, now_us: int, armed: bool) -> None:
         if self.nav_state == NS.NAVIGATION_STATE_TERMINATION:
             return  # terminated: the loops are off, and the modules that were lost stay named
+        if self._p["COM_EXT_AP"]:
+            self._chain_faults = ()  # an external autopilot flies the vehicle; its estimates come over its link
+            return
         faults = tuple(self.chain.update(now_us, armed, control_mode(self.nav_state, armed)))
         for fault in faults:
             if fault not in self._chain_faults:

@@ -200,3 +200,10 @@ def test_a_commander_restarted_after_a_termination_keeps_the_vehicle_terminated(
     clock.commander = restarted
     clock.step(1.0)
     assert clock.status.nav_state == NS.NAVIGATION_STATE_TERMINATION and clock.last.actuator_armed.termination
+
+
+def test_with_an_external_autopilot_the_chain_is_not_the_stacks_to_watch():
+    clock = _hovering()
+    clock.commander.set_params({"COM_EXT_AP": 1})
+    _keep_alive(clock, 0.5, but="attitude_estimator_q")
+    assert clock.status.control_lost_modules == []
