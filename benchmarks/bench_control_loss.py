@@ -19,7 +19,7 @@ from pathlib import Path
 from stack.cli.common import print_table
 from stack.commander.control_chain import CHAIN
 from stack.commander.modes import mode_name
-from tests.support.hover import echo, kill, start_hovering, wait
+from tests.support.hover import echo, kill, start_hovering, truth, wait
 
 ALTITUDE_M = 5.0
 
@@ -27,7 +27,7 @@ ALTITUDE_M = 5.0
 def one(home: Path, module: str) -> list[object]:
     stack = start_hovering(home, ALTITUDE_M)
     try:
-        north, east, killed_at = kill(stack, module)
+        north, east, _, killed_at = kill(stack, module)
         wait(stack, lambda: module in echo(stack, "vehicle_status")["control_lost_modules"], 10.0, "detection")
         status = echo(stack, "vehicle_status")
         noticed_ms = (status["nav_state_timestamp"] - killed_at) / 1000

@@ -18,7 +18,7 @@ import pytest
 
 from stack.msg.system import VehicleStatus as NS
 from tests.support.harness import RunningStack, wait_no_processes
-from tests.support.hover import echo, kill, restarted, start_hovering, wait
+from tests.support.hover import echo, kill, restarted, start_hovering, truth, wait
 
 pytestmark = pytest.mark.flight
 
@@ -39,7 +39,7 @@ def hovering(tmp_path: Path) -> Iterator[RunningStack]:
 
 def test_a_dead_rate_controller_terminates_the_flight_where_it_was(hovering: RunningStack) -> None:
     stack = hovering
-    north, east, _ = kill(stack, "mc_rate_control")
+    north, east, _, _ = kill(stack, "mc_rate_control")
     wait(
         stack,
         lambda: echo(stack, "vehicle_status")["nav_state"] == NS.NAVIGATION_STATE_TERMINATION,
@@ -48,21 +48,21 @@ def test_a_dead_rate_controller_terminates_the_flight_where_it_was(hovering: Run
     )
     assert echo(stack, "vehicle_status")["control_lost_modules"] == ["mc_rate_control"]
     assert echo(stack, "actuator_armed")["termination"]
-    wait(stack, lambda: -echo(stack, "vehicle_local_position")["z"] < 0.5, 20.0, "the fall")
+    wait(stack, lambda: -truth(stack)[2] < 0.5, 20.0, "the fall")
     wait(stack, lambda: restarted(stack, "mc_rate_control"), 30.0, "restart")
     time.sleep(2.0)
-    down = echo(stack, "vehicle_local_position")
-    assert math.hypot(down["x"] - north, down["y"] - east) < 5.0  # fell where it was: no flyaway
-    assert -down["z"] < 0.5
+    down = truth(stack)
+    assert math.hypot(down[0] - north, down[1] - east) < 5.0  # fell where it was: no flyaway
+    assert -down[2] < 0.5
     assert echo(stack, "vehicle_status")["nav_state"] == NS.NAVIGATION_STATE_TERMINATION  # latched
 
 
 def test_a_dead_position_controller_lands_the_vehicle_where_it_was(hovering: RunningStack) -> None:
     stack = hovering
-    north, east, _ = kill(stack, "mc_pos_control")
+    north, east, _, _ = kill(stack, "mc_pos_control")
     wait(stack, lambda: echo(stack, "vehicle_status")["nav_state"] == NS.NAVIGATION_STATE_AUTO_LAND, 10.0, "Land")
     wait(stack, lambda: restarted(stack, "mc_pos_control"), 30.0, "restart")
     wait(stack, lambda: echo(stack, "vehicle_status")["arming_state"] == NS.ARMING_STATE_DISARMED, 60.0, "landing")
-    down = echo(stack, "vehicle_local_position")
-    assert math.hypot(down["x"] - north, down["y"] - east) < 5.0
-    assert -down["z"] < 0.5
+    down = truth(stack)
+    assert math.hypot(down[0] - north, down[1] - east) < 5.0
+    assert -down[2] < 0.5

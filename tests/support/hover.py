@@ -43,13 +43,20 @@ def start_hovering(home: Path, altitude: float) -> RunningStack:
     return stack
 
 
-def kill(stack: RunningStack, module: str) -> tuple[float, float, int]:
-    """SIGKILL a module; returns where the vehicle was (north, east) and when (the stack's clock, µs)."""
-    here = echo(stack, "vehicle_local_position")
+def truth(stack: RunningStack) -> tuple[float, float, float]:
+    """Where the simulated vehicle truly is (NED about the simulator's home point): after a crash the estimate
+    may say anything."""
+    north, east, down = echo(stack, "sim_groundtruth")["position"]
+    return north, east, down
+
+
+def kill(stack: RunningStack, module: str) -> tuple[float, float, float, int]:
+    """SIGKILL a module; returns where the vehicle truly was (north, east, down) and when (the stack's clock, µs)."""
+    here = truth(stack)
     pid = stack.module_pids()[module]
     killed_at = time.clock_gettime_ns(time.CLOCK_MONOTONIC) // 1000
     os.kill(pid, signal.SIGKILL)
-    return here["x"], here["y"], killed_at
+    return *here, killed_at
 
 
 def restarted(stack: RunningStack, module: str) -> bool:
