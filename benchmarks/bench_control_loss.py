@@ -32,16 +32,11 @@ def one(home: Path, module: str) -> list[object]:
         status = echo(stack, "vehicle_status")
         noticed_ms = (status["nav_state_timestamp"] - killed_at) / 1000
         deadline = time.monotonic() + 20.0
-        while time.monotonic() < deadline and -echo(stack, "vehicle_local_position")["z"] > 0.3:
+        while time.monotonic() < deadline and -truth(stack)[2] > 0.3:
             time.sleep(0.5)
-        end = echo(stack, "vehicle_local_position")
-        return [
-            module,
-            round(noticed_ms, 1),
-            mode_name(status["nav_state"]),
-            round(math.hypot(end["x"] - north, end["y"] - east), 2),
-            round(-end["z"], 2),
-        ]
+        end = truth(stack)
+        drift = math.hypot(end[0] - north, end[1] - east)
+        return [module, round(noticed_ms, 1), mode_name(status["nav_state"]), round(drift, 2), round(-end[2], 2)]
     finally:
         stack.stop()
 
