@@ -11,6 +11,7 @@ from pathlib import Path
 import psutil
 import typer
 
+import stack
 from stack.bus import keys
 from stack.cli import cmd, fly, log, mavlink, param, pixhawk_sim, plot, topic
 from stack.cli.common import (
@@ -33,6 +34,7 @@ app = typer.Typer(
     help="stack: a PX4-shaped multicopter autopilot, one process per module, uORB topics over Zenoh.",
     no_args_is_help=True,
     add_completion=False,
+    context_settings={"help_option_names": ["-h", "--help"]},  # inherited by every subcommand
 )
 app.add_typer(topic.app, name="topic")
 app.add_typer(param.app, name="param")
@@ -43,6 +45,21 @@ app.command("fly")(fly.fly)
 app.command("plot")(plot.plot)
 app.command("replay")(log.replay)
 app.command("pixhawk-sim")(pixhawk_sim.pixhawk_sim)
+
+
+def _print_version(value: bool) -> None:
+    if value:
+        typer.echo(f"stack {stack.__version__}")
+        raise typer.Exit()
+
+
+@app.callback()
+def _root(
+    version: bool = typer.Option(
+        False, "--version", callback=_print_version, is_eager=True, help="Print the version and exit"
+    ),
+) -> None:
+    pass
 
 
 @app.command()
