@@ -129,7 +129,7 @@ def list_topics(
 
 
 ECHO_QUEUE = 1000
-"""Messages kept between the subscriber and the printer; behind a slow reader the oldest are dropped."""
+"""Messages kept between the subscriber and the printer by default (a few seconds of a fast topic)."""
 
 
 def _subscribe(node: Node, topic: str, instance: int, capacity: int) -> tuple[zenoh.Subscriber, Inbox[Received]]:
@@ -176,6 +176,9 @@ def echo(
         "indexes reach into nested fields (q.0, items.1.north)",
     ),
     rate: float = typer.Option(0.0, "--rate", "-r", help="At most this many messages a second, the newest (0: all)"),
+    capacity: int = typer.Option(
+        ECHO_QUEUE, "--queue", help="Messages kept waiting for a slow reader (beyond it the oldest are dropped)"
+    ),
     timeout: float = typer.Option(5.0, help="Give up after this many seconds without a message"),
     vehicle: str | None = VehicleOption,
     endpoint: str | None = EndpointOption,
@@ -191,10 +194,12 @@ def echo(
             fail(f"{msg_type.__name__} has no field '{path.split('.')[0]}' (fields: {', '.join(fields)})")
     if not math.isfinite(rate) or rate < 0:
         fail(f"--rate must be a finite number of messages a second ≥ 0, got {rate:g}", code=2)
+    if capacity < 1:
+        fail(f"--queue must be at least 1, got {capacity}", code=2)
     period = 1.0 / rate if rate > 0 else 0.0
     with connect(vehicle, endpoint) as node:
         # With --rate only the newest waiting message matters: the inbox keeps just that one.
-        sub, inbox = _subscribe(node, topic, instance, 1 if period else ECHO_QUEUE)
+        sub, inbox = _subscribe(node, topic, instance, 1 if period else capacity)
         shown = reported = 0
         try:
             next_time = time.monotonic()
