@@ -37,7 +37,7 @@ from stack.mission.transfer import mission_id_for, mission_message
 from stack.msg.base import Message
 from stack.msg.estimation import VehicleLocalPosition
 from stack.msg.navigation import MissionResult
-from stack.msg.system import VehicleCommand, VehicleCommandAck, VehicleStatus
+from stack.msg.system import RESULT_NAMES, VehicleCommand, VehicleCommandAck, VehicleStatus
 
 app = typer.Typer(
     help="Command the vehicle (arm, takeoff, goto, modes, missions...) and print the acknowledgement.",
@@ -50,8 +50,6 @@ CLI_SYSTEM = 255
 """MAVLink system id of a ground station."""
 CLI_COMPONENT = 190
 """MAV_COMP_ID_MISSIONPLANNER: the acknowledgements addressed to this pair are ours."""
-RESULT_PREFIX = "VEHICLE_CMD_RESULT_"
-RESULT_NAMES = {v: k.removeprefix(RESULT_PREFIX) for k, v in vars(ACK).items() if k.startswith(RESULT_PREFIX)}
 HOME_WAIT_S = 1.5
 REACHED_M = 1.0
 POLL_S = 0.01

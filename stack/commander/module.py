@@ -41,6 +41,7 @@ from stack.msg.system import (
     VehicleControlMode,
     VehicleLandDetected,
     VehicleStatus,
+    command_label,
 )
 from stack.params import catalogue
 from stack.runtime.module import Module, Timer
@@ -213,7 +214,7 @@ class CommanderModule(Module):
 
     def _acknowledge(self, ack: VehicleCommandAck) -> None:
         if ack.result != VehicleCommandAck.VEHICLE_CMD_RESULT_ACCEPTED:
-            self.log.warning("command %d refused: %s", ack.command, ack.reason)
+            self.log.warning("command %s refused: %s", command_label(ack.command), ack.reason)
             if ack.reason:
                 self._refusals.append(ack.reason)
         self.publish("vehicle_command_ack", ack)
