@@ -138,6 +138,7 @@ class CommanderModule(Module):
         self._last_manual_control = 0
         self._offboard_flags: dict[str, bool] | None = None
         self._refusals: list[str] = []
+        self._failsafe = {"failsafe_action": "none", "failsafe_cause": ""}
 
     def on_params_changed(self, changed: set[str]) -> None:
         self.commander.set_params(self.params.values())
@@ -156,6 +157,7 @@ class CommanderModule(Module):
             for cmd in commands:
                 self._handle(cmd, now)
         out = self.commander.update(now, inputs)
+        self._failsafe = {"failsafe_action": out.failsafe_action, "failsafe_cause": out.failsafe_cause}
         for ack in out.acks:
             self._acknowledge(ack)
         self._tell_operator(out.events, now)
@@ -188,6 +190,10 @@ class CommanderModule(Module):
             self.publish("vehicle_control_mode", msgspec.structs.replace(control, timestamp=now))
             if self._home is not None:
                 self.publish("home_position", home_position_message(self._home, self._home_count, now))
+
+    def status(self) -> dict[str, float | int | str | bool]:
+        """The failsafe in force and why, for `stack status` (PX4's `commander status`)."""
+        return dict(self._failsafe)
 
     def _detect_landing(self, now: int) -> None:
         state = self.land_detector.update(now, self._land_inputs())
