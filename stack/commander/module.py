@@ -41,6 +41,7 @@ from stack.msg.system import (
     VehicleControlMode,
     VehicleLandDetected,
     VehicleStatus,
+    command_label,
 )
 from stack.params import catalogue
 from stack.runtime.module import Module, Timer
@@ -141,6 +142,7 @@ class CommanderModule(Module):
         self._offboard_flags: dict[str, bool] | None = None
         self._refusals: list[str] = []
         self._lockstep = rt.spec.lockstep
+        self._failsafe = {"failsafe_action": "none", "failsafe_cause": ""}
         self._republish_now = False
         if not self._lockstep:
             self.commander.chain.silence_us = control_chain.REALTIME_SILENCE_US
@@ -185,6 +187,7 @@ class CommanderModule(Module):
             for cmd in commands:
                 self._handle(cmd, now)
         out = self.commander.update(now, inputs)
+        self._failsafe = {"failsafe_action": out.failsafe_action, "failsafe_cause": out.failsafe_cause}
         for ack in out.acks:
             self._acknowledge(ack)
         self._tell_operator(out.events, now)
@@ -224,6 +227,10 @@ class CommanderModule(Module):
             if self._home is not None:
                 self.publish("home_position", home_position_message(self._home, self._home_count, now))
 
+    def status(self) -> dict[str, float | int | str | bool]:
+        """The failsafe in force and why, for `stack status` (PX4's `commander status`)."""
+        return dict(self._failsafe)
+
     def _detect_landing(self, now: int) -> None:
         state = self.land_detector.update(now, self._land_inputs())
         # LandDetector.cpp publishes when one of these changes, or at 1 Hz.
@@ -249,7 +256,7 @@ class CommanderModule(Module):
 
     def _acknowledge(self, ack: VehicleCommandAck) -> None:
         if ack.result != VehicleCommandAck.VEHICLE_CMD_RESULT_ACCEPTED:
-            self.log.warning("command %d refused: %s", ack.command, ack.reason)
+            self.log.warning("command %s refused: %s", command_label(ack.command), ack.reason)
             if ack.reason:
                 self._refusals.append(ack.reason)
         self.publish("vehicle_command_ack", ack)

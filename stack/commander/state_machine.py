@@ -87,7 +87,14 @@ from stack.commander.modes import (
 )
 from stack.mathlib.geo import MapProjection
 from stack.msg.estimation import VehicleLocalPosition
-from stack.msg.system import ActuatorArmed, VehicleCommand, VehicleCommandAck, VehicleControlMode, VehicleStatus
+from stack.msg.system import (
+    ActuatorArmed,
+    VehicleCommand,
+    VehicleCommandAck,
+    VehicleControlMode,
+    VehicleStatus,
+    command_label,
+)
 from stack.params import catalogue
 from stack.params.param import Param
 
@@ -327,7 +334,8 @@ class Commander:
         handler = self._handlers.get(cmd.command)
         awaiting = self._external_arming
         if handler is None:
-            result, reason, param = (ACK.VEHICLE_CMD_RESULT_UNSUPPORTED, f"Unsupported command {cmd.command}", 0)
+            unsupported = f"Unsupported command {command_label(cmd.command)}"
+            result, reason, param = (ACK.VEHICLE_CMD_RESULT_UNSUPPORTED, unsupported, 0)
         else:
             result, reason, param = handler(cmd, now_us)
         if result == ACK.VEHICLE_CMD_RESULT_ACCEPTED:

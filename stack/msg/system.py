@@ -167,6 +167,23 @@ class VehicleCommandAck(Message):
     reason: str = ""
 
 
+def _short_names(cls: type, prefix: str) -> dict[int, str]:
+    """Constant value → name without ``prefix``, from a message class's ``PREFIX_NAME = value`` attributes."""
+    return {v: k.removeprefix(prefix) for k, v in vars(cls).items() if k.startswith(prefix) and isinstance(v, int)}
+
+
+COMMAND_NAMES = _short_names(VehicleCommand, "VEHICLE_CMD_")
+"""Command id → MAVLink's MAV_CMD name without the prefix (``NAV_LAND``), for the commands the stack knows."""
+RESULT_NAMES = _short_names(VehicleCommandAck, "VEHICLE_CMD_RESULT_")
+"""Acknowledgement result → MAVLink's MAV_RESULT name without the prefix (``TEMPORARILY_REJECTED``)."""
+
+
+def command_label(command: int) -> str:
+    """A command for people: ``NAV_LAND (21)``, or the bare number of a command the stack does not know."""
+    name = COMMAND_NAMES.get(command)
+    return f"{name} ({command})" if name else str(command)
+
+
 class ParameterUpdate(Message):
     """Published whenever a parameter value changes (``instance`` counts notifications)."""
 

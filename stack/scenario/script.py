@@ -14,7 +14,7 @@ from collections.abc import Callable, Generator
 from dataclasses import dataclass, field
 from typing import Any
 
-from stack.msg.system import VehicleCommand, VehicleCommandAck
+from stack.msg.system import RESULT_NAMES, VehicleCommand, VehicleCommandAck, command_label
 
 Wait = Callable[[], bool]
 Script = Callable[["ScriptContext"], Generator[Wait, None, None]]
@@ -116,13 +116,13 @@ class ScriptContext:
         """Send a vehicle_command and wait for its acknowledgement; a refusal raises ScenarioError."""
         self._acks.clear()
         self.publish("vehicle_command", VehicleCommand(command=command, from_external=True, **params))
-        yield self.until(
-            lambda: any(a.command == command for a in self._acks), timeout, f"the ack of command {command}"
-        )
+        label = command_label(command)
+        yield self.until(lambda: any(a.command == command for a in self._acks), timeout, f"the ack of command {label}")
         ack = next(a for a in self._acks if a.command == command)
         if ack.result != VehicleCommandAck.VEHICLE_CMD_RESULT_ACCEPTED:
-            raise ScenarioError(f"command {command} refused (result {ack.result}): {ack.reason or 'no reason given'}")
-        self.log(f"command {command} accepted")
+            result = RESULT_NAMES.get(ack.result, str(ack.result))
+            raise ScenarioError(f"command {label} refused ({result}): {ack.reason or 'no reason given'}")
+        self.log(f"command {label} accepted")
         return ack
 
 

@@ -87,6 +87,9 @@ def test_return_needs_an_armed_vehicle(stack):
         line = refused(stack.cli("cmd", name))
         assert line.startswith("rtl: TEMPORARILY_REJECTED: ") and "disarmed" in line
     assert refused(stack.cli("cmd", "land")).startswith("land: TEMPORARILY_REJECTED: ")
+    # The commander logs refusals by the command's MAVLink name.
+    log = (stack.run_dir() / "commander.log").read_text()
+    assert "command NAV_LAND (21) refused: " in log and "command NAV_RETURN_TO_LAUNCH (20) refused: " in log
 
 
 def test_the_commander_denies_out_of_range_parameters(stack):

@@ -5,7 +5,7 @@ import pytest
 from stack.commander import commands as C
 from stack.commander.state_machine import VEHICLE_CMD_DO_REPOSITION_LOCAL, VEHICLE_CMD_SET_NAV_STATE
 from stack.mathlib.geo import MapProjection
-from stack.msg.system import VehicleCommand
+from stack.msg.system import VehicleCommand, command_label
 from stack.msg.system import VehicleCommandAck as ACK
 from stack.msg.system import VehicleStatus as NS
 from tests.commander.helpers import REF, make_clock
@@ -91,7 +91,9 @@ def test_unknown_commands_are_unsupported(command):
     before = _snapshot(clock.step())
     ack = clock.send(CMD(command=command, param1=1.0))
     assert ack.result == ACK.VEHICLE_CMD_RESULT_UNSUPPORTED
-    assert ack.reason == f"Unsupported command {command}"
+    assert ack.reason == f"Unsupported command {command_label(command)}"
+    if command == CMD.VEHICLE_CMD_NAV_WAYPOINT:
+        assert ack.reason == "Unsupported command NAV_WAYPOINT (16)"  # by MAVLink's name where it has one
     assert _snapshot(clock.step()) == before
 
 
