@@ -27,6 +27,7 @@ def summary(latest: dict[str, Any], commander: dict[str, Any] | None) -> dict[st
         out["nav_state"] = status.nav_state
         out["armed"] = status.arming_state == VehicleStatus.ARMING_STATE_ARMED
         out["failsafe"] = status.failsafe
+        out["control_lost_modules"] = list(status.control_lost_modules)
     if commander:
         out["failsafe_action"] = commander.get("failsafe_action", "none")
         out["failsafe_cause"] = commander.get("failsafe_cause", "")
@@ -63,6 +64,8 @@ def lines(s: dict[str, Any]) -> list[str]:
         cause = f" ({s['failsafe_cause']})" if s.get("failsafe_cause") else ""
         failsafe = f"{s.get('failsafe_action', 'yes')}{cause}"
     out = [f"vehicle: {s['mode']}, {'armed' if s['armed'] else 'disarmed'}, failsafe: {failsafe}"]
+    if s.get("control_lost_modules"):
+        out.append(f"control chain: {', '.join(s['control_lost_modules'])} dead or silent")
     if (p := s.get("position")) is not None:
         valid = "valid" if p["xy_valid"] and p["z_valid"] else "NOT valid"
         out.append(

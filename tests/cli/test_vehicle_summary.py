@@ -29,3 +29,14 @@ def test_a_quiet_vehicle_and_no_vehicle():
     s = summary({"vehicle_status": NS()}, {"failsafe_action": "none", "failsafe_cause": ""})
     assert lines(s) == ["vehicle: Manual, disarmed, failsafe: no"]
     assert lines(summary({}, None)) == ["vehicle: no vehicle_status (is a commander running?)"]
+
+
+def test_the_dead_or_silent_control_modules_are_named():
+    status = NS(nav_state=NS.NAVIGATION_STATE_TERMINATION, arming_state=NS.ARMING_STATE_ARMED, failsafe=True)
+    status.control_lost_modules = ["mc_rate_control"]
+    s = summary({"vehicle_status": status}, {"failsafe_action": "terminate", "failsafe_cause": "attitude_control_loss"})
+    assert s["control_lost_modules"] == ["mc_rate_control"]
+    assert lines(s) == [
+        "vehicle: Termination, armed, failsafe: terminate (attitude_control_loss)",
+        "control chain: mc_rate_control dead or silent",
+    ]
