@@ -85,6 +85,15 @@ class LandDetectorInputs:
     takeoff_state: int = TakeoffState.DISARMED
 
 
+_TAKEOFF_STATES = frozenset(int(state) for state in TakeoffState)
+
+
+def takeoff_state(value: int) -> TakeoffState | None:
+    """The takeoff state a ``takeoff_status`` reports, or None for "uninitialized" or a value that names none
+    (dropped: the land detector keeps the state it had)."""
+    return TakeoffState(value) if value in _TAKEOFF_STATES else None
+
+
 class LandDetectorState(NamedTuple):
     """``vehicle_land_detected`` content (PX4 field names)."""
 

@@ -32,7 +32,6 @@ from stack.commander.state_machine import PARAMS as COMMANDER_PARAMS
 from stack.commander.state_machine import Commander
 from stack.commander.state_machine import NavigationRequest as Navigation
 from stack.msg.navigation import NavigationRequest
-from stack.msg.setpoints import TakeoffState, TakeoffStatus
 from stack.msg.system import (
     HomePosition,
     MavlinkLog,
@@ -248,6 +247,9 @@ class CommanderModule(Module):
             self.publish("vehicle_land_detected", VehicleLandDetected(timestamp=now, **state._asdict()))
 
     def _handle(self, cmd: VehicleCommand, now: int) -> None:
+        if not self.commander.addressed_to_me(cmd):
+            self.commander.ignored_commands += 1
+            return
         ack = offboard.refusal(cmd, self.latest("offboard_control_mode"), now, float(self.params["COM_OF_LOSS_T"]))
         if ack is None:
             ack = self.commander.handle_command(cmd, now)
@@ -342,6 +344,7 @@ class CommanderModule(Module):
         if hover is not None and hover.valid:
             inp.hover_thrust, inp.hover_thrust_timestamp_us = hover.hover_thrust, hover.timestamp
         takeoff = latest("takeoff_status")
-        if takeoff is not None and takeoff.takeoff_state >= TakeoffStatus.TAKEOFF_STATE_DISARMED:
-            inp.takeoff_state = TakeoffState(takeoff.takeoff_state)
+        state = land_detector.takeoff_state(takeoff.takeoff_state) if takeoff is not None else None
+        if state is not None:
+            inp.takeoff_state = state
         return inp
