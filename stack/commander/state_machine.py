@@ -225,6 +225,10 @@ def _flag_refusal(what: str, index: int, value: float) -> _Verdict | None:
     return _denied(f"{what}: param{index} must be finite or NaN, got {value:g}", index)
 
 
+def _finite_position(lpos: VehicleLocalPosition) -> bool:
+    return math.isfinite(lpos.x) and math.isfinite(lpos.y) and math.isfinite(lpos.z)
+
+
 class Commander:
     """PX4's commander as a pure state machine (see the module docstring for the rules)."""
 
@@ -406,7 +410,7 @@ class Commander:
         if armed and not inp.landed and not self._have_taken_off:
             self._have_taken_off = True
             self._takeoff_time_us = now_us
-        if self._home is None and position_known and inp.landed and lpos is not None:
+        if self._home is None and position_known and inp.landed and lpos is not None and _finite_position(lpos):
             self._set_home(lpos)
             self._failing &= ~Requirement.HOME
 
