@@ -207,7 +207,7 @@ class Supervisor:
 
     def state_record(self) -> dict[str, object]:
         return {
-            "pid": os.getpid(),
+            **run_state.process_identity(),
             "kind": self.options.kind,
             "vehicle": self.vehicle,
             "profile": str(self.profile.path),
