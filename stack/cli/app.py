@@ -76,7 +76,11 @@ def up(
     if running:
         fail(f"a stack for vehicle '{prof.vehicle}' is already running (pid {running[0]['pid']}); `stack down` first")
     run_dir = run_state.new_run_dir(prof.name, prof.vehicle)
-    options = UpOptions(duration=duration, log_level=log_level, echo_logs=not quiet, extra_args=extra_args)
+    # The web viewer's URL is shown even with --quiet: the bridge's few lines are echoed.
+    shown = ("rerun_bridge",) if web else ()
+    options = UpOptions(
+        duration=duration, log_level=log_level, echo_logs=not quiet, echo_only=shown, extra_args=extra_args
+    )
     supervisor = Supervisor(prof, options, run_dir)
     if record is not None:
         typer.echo(f"[stack] recording to {record.resolve()}")

@@ -199,6 +199,8 @@ class Supervisor:
             else:
                 self.failed = True
         finally:
+            if self._signal is not None and self.roster_complete:
+                self._say(f"{signal.Signals(self._signal).name}: stopping")
             self._stop_all()
             for entity in entities:
                 entity.undeclare()
@@ -237,9 +239,9 @@ class Supervisor:
         }
 
     def _on_signal(self, signum: int, frame: object) -> None:
+        # No printing here: the handler may interrupt this thread inside _say, which holds the print lock.
         if not self._stop.is_set():
             self._signal = signum
-            self._say(f"{signal.Signals(signum).name}: stopping")
         self._stop.set()
 
     # -- starting ----------------------------------------------------------------------------------
