@@ -165,7 +165,7 @@ def status(
                 m.get("runs", 0),
                 m.get("msgs_in", 0),
                 m.get("msgs_out", 0),
-                m.get("decode_errors", 0) + m.get("schema_errors", 0) + m.get("rejected", 0),
+                sum(m.get(k, 0) for k in ("decode_errors", "schema_errors", "foreign", "rejected")),
                 f"{m.get('loop_avg_us', 0.0):.0f}/{m.get('loop_max_us', 0.0):.0f}",
             )
         )
