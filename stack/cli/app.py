@@ -99,7 +99,11 @@ def up(
     if running:
         fail(f"a stack for vehicle '{prof.vehicle}' is already running (pid {running[0]['pid']}); `stack down` first")
     run_dir = run_state.new_run_dir(prof.name, prof.vehicle)
-    options = UpOptions(duration=duration, log_level=log_level, echo_logs=not quiet, extra_args=extra_args)
+    # The web viewer's URL is shown even with --quiet: the bridge's few lines are echoed.
+    shown = ("rerun_bridge",) if web else ()
+    options = UpOptions(
+        duration=duration, log_level=log_level, echo_logs=not quiet, echo_only=shown, extra_args=extra_args
+    )
     supervisor = Supervisor(prof, options, run_dir)
     if record is not None:
         typer.echo(f"[stack] recording to {record.resolve()}")
@@ -191,7 +195,7 @@ def status(
                 m.get("runs", 0),
                 m.get("msgs_in", 0),
                 m.get("msgs_out", 0),
-                m.get("decode_errors", 0) + m.get("schema_errors", 0) + m.get("rejected", 0),
+                sum(m.get(k, 0) for k in ("decode_errors", "schema_errors", "foreign", "rejected")),
                 f"{m.get('loop_avg_us', 0.0):.0f}/{m.get('loop_max_us', 0.0):.0f}",
             )
         )

@@ -72,6 +72,7 @@ class Runtime:
         self.fast: Attachment | None = None
         self.trigger_input: FastInput | None = None
         self.reads_all_topics = False
+        self._lockstep: LockstepMember | LockstepCoordinator | None = None
         self.node: Node
         self.module: Module
         self._module_watchers: list[zenoh.Subscriber] = []
@@ -159,7 +160,7 @@ class Runtime:
 
                     FastDriver(self, announce).run()
                     return
-                lockstep_part = self._make_lockstep()
+                lockstep_part = self._lockstep = self._make_lockstep()
                 node.declare_token(keys.alive_token(node.vehicle, self.name, os.getpid()))
                 # Over Zenoh the simulator starts once every module of the roster has synced; on the fast path
                 # it waits for the participants only, which an outside module is not.
@@ -429,16 +430,18 @@ class Runtime:
         span = max(now - self._last_beat, 1e-3)
         runs = self._loop_runs
         avg = self._loop_sum / runs * 1e6 if runs else 0.0
+        # Every subscriber's drops, inputs or not (a link's telemetry subscriptions, withdrawn ones too).
+        decode, schema, foreign = self.node.drop_counts()
         status = {
             "state": self.state,
             "trigger": self.describe_trigger(),
             "runs": self.runs,
             "msgs_in": sum(buf.received for buf in self.inputs.values()),
             "msgs_out": sum(p.count for p in self.outputs.values()),
-            "decode_errors": sum(buf.decode_errors for buf in self.inputs.values()),
-            "schema_errors": sum(buf.schema_errors for buf in self.inputs.values()),
-            "foreign": sum(buf.foreign for buf in self.inputs.values()),
-            "rejected": self.rejected + self.errors,
+            "decode_errors": decode + sum(buf.ring_decode_errors for buf in self.inputs.values()),
+            "schema_errors": schema,
+            "foreign": foreign,
+            "rejected": self.rejected + self.errors + (self._lockstep.rejected if self._lockstep else 0),
             "loop_avg_us": avg,
             "loop_max_us": self._loop_max * 1e6,
             "trigger_rate_hz": runs / span,
