@@ -3,10 +3,8 @@
 
 import itertools
 import json
-import signal
 import subprocess
 import sys
-import threading
 import time
 
 import pytest
@@ -63,17 +61,13 @@ def test_echo_several_fields(stack):
 
 
 def test_a_slow_reader_loses_the_oldest_messages_and_is_told(stack):
-    echo = background_cli(stack, "topic", "echo", "sensor_gyro", "--queue", "10")
+    echo = background_cli(stack, "topic", "echo", "sensor_gyro", "--queue", "10", "-n", "500")
     try:
         time.sleep(5.0)  # nobody reads: the pipe fills, the printer blocks, the queue overflows
         first = echo.stdout.readline()
-        lines = []
-        reader = threading.Thread(target=lambda: lines.extend(echo.stdout), daemon=True)
-        reader.start()
-        time.sleep(2.0)
+        _, err = echo.communicate(timeout=60)  # then it reads on until the echo has shown its 500 and ends
     finally:
-        echo.send_signal(signal.SIGINT)
-        _, err = echo.communicate(timeout=30)
+        echo.kill()
     assert first.startswith("TOPIC: sensor_gyro instance 0 #1")
     drops = [line for line in err.splitlines() if line.endswith("sensor_gyro messages dropped: output too slow]")]
     assert drops, err
