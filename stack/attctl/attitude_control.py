@@ -66,8 +66,11 @@ class AttitudeControl:
         self._rate_limit = (rate_limit[0], rate_limit[1], rate_limit[2])
 
     def set_attitude_setpoint(self, q_sp: Quat, yawspeed_setpoint: float = math.nan) -> None:
-        """Desired attitude and the yaw feed-forward ``yaw_sp_move_rate`` [rad/s about world z; NaN = none]."""
-        self._q_sp = quat.normalized(q_sp)
+        """Desired attitude and the yaw feed-forward ``yaw_sp_move_rate`` [rad/s about world z; NaN = none].
+        A ``q_sp`` that names no rotation (zero or not finite) is dropped: the previous setpoint stays."""
+        q_sp = quat.normalized(q_sp)
+        if quat.is_finite(q_sp):
+            self._q_sp = q_sp
         self._yawspeed_sp = yawspeed_setpoint
 
     @property
@@ -76,11 +79,17 @@ class AttitudeControl:
 
     def adapt_to_reset(self, delta_q: Quat) -> None:
         """Shift the setpoint by an estimator reset (``q_new = delta_q ⊗ q_old``, e.g. a heading reset)."""
-        self._q_sp = quat.normalized(quat.mul(delta_q, self._q_sp))
+        q_sp = quat.normalized(quat.mul(delta_q, self._q_sp))
+        if quat.is_finite(q_sp):
+            self._q_sp = q_sp
 
     def update(self, q: Quat) -> Vec3:
-        """Body-rate setpoint [rad/s] that moves attitude ``q`` toward the setpoint."""
+        """Body-rate setpoint [rad/s] that moves attitude ``q`` toward the setpoint; NaN (the rate controller's
+        "hold the current rate") when ``q`` names no rotation."""
+        q = quat.normalized(q)
         qw, qx, qy, qz = q
+        if qw != qw:
+            return (math.nan, math.nan, math.nan)
         qd = self._q_sp
         # Reduced setpoint: rotate the current thrust axis onto the desired one, keep the current yaw.
         q_red = quat.from_two_vectors(quat.dcm_z(q), quat.dcm_z(qd))

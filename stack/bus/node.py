@@ -54,6 +54,9 @@ class Node:
         self.touched: set[TopicPublisher] = set()
         self.publishers: list[TopicPublisher] = []
         self.subscribers: list[TopicSubscriber] = []
+        # Every subscriber not yet withdrawn, and what the withdrawn ones dropped (decode, schema, foreign).
+        self.live_subscribers: set[TopicSubscriber] = set()
+        self._retired_drops = (0, 0, 0)
         self._tokens: list[zenoh.LivelinessToken] = []
         self._owns_session = session is None
         self.session = session if session is not None else _open(bus, name)
@@ -94,6 +97,21 @@ class Node:
         if announce:
             self.announce("sub", topic, instance)
         return sub
+
+    def retire(self, sub: TopicSubscriber) -> None:
+        """Keep a withdrawn subscriber's drops in this node's count."""
+        if sub in self.live_subscribers:
+            self.live_subscribers.discard(sub)
+            d, s, f = self._retired_drops
+            self._retired_drops = (d + sub.decode_errors, s + sub.schema_errors, f + sub.foreign)
+
+    def drop_counts(self) -> tuple[int, int, int]:
+        """Messages every subscriber of this node, withdrawn or not, dropped: undecodable, of another schema
+        (or with no stack header), and of another lockstep run."""
+        d, s, f = self._retired_drops
+        for sub in list(self.live_subscribers):
+            d, s, f = d + sub.decode_errors, s + sub.schema_errors, f + sub.foreign
+        return d, s, f
 
     def announce(self, role: str, topic: str, instance: int) -> None:
         """Say in the topic graph that this node publishes or subscribes to a topic (a tool reading a topic

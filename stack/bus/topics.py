@@ -19,6 +19,7 @@ from __future__ import annotations
 import collections
 import logging
 import struct
+import threading
 from typing import TYPE_CHECKING, Any
 
 import msgspec
@@ -40,6 +41,9 @@ FLAG_PROBE = 2
 
 
 log = logging.getLogger("stack.bus")
+
+# How long a blocking receive waits between looks at its queue (a signal handler runs in between).
+RECV_WAKE_S = 0.5
 
 # Diagnostics that nothing in the control path consumes: in real time these may be dropped under
 # load rather than stall their publisher. Everything else (commands and state) blocks.
@@ -133,13 +137,17 @@ class TopicPublisher:
 class TopicSubscriber:
     """A subscription drained by the owner's loop: ``recv`` blocks (GIL released), ``poll`` never does.
 
-    With ``callback``, Zenoh's thread decodes each sample as it arrives and queues the valid ones in
-    ``arrived`` (at most ``capacity``, the oldest dropped): a loop that polls many inputs which almost
-    never receive anything (a fast-path module's outside messages) then only looks at an empty deque.
+    With ``callback`` or ``keep_last``, Zenoh's thread decodes each sample as it arrives and queues the valid
+    ones in ``arrived`` (at most ``capacity``, the oldest dropped): a loop that polls many inputs which almost
+    never receive anything (a fast-path module's outside messages) then only looks at an empty deque, and a
+    keep-last subscription counts every malformed sample, where a ring of Zenoh's would push some out unread.
+    Counters of a withdrawn subscriber stay in its node's (:meth:`stack.bus.node.Node.drop_counts`).
     """
 
     __slots__ = (
+        "_arrival",
         "_decoder",
+        "_node",
         "_run_id",
         "_sub",
         "_warned",
@@ -182,17 +190,20 @@ class TopicSubscriber:
         self._run_id = node.run_id
         self._warned = False
         self.arrived: collections.deque[Received] | None = None
-        if callback:
+        self._arrival = threading.Event()
+        self._node = node
+        node.live_subscribers.add(self)
+        if callback or keep_last:
             self.arrived = collections.deque(maxlen=capacity)
             self._sub = node.session.declare_subscriber(self.key, self._on_sample)
         else:
-            handler = zenoh.handlers.RingChannel(capacity) if keep_last else zenoh.handlers.FifoChannel(capacity)
-            self._sub = node.session.declare_subscriber(self.key, handler)
+            self._sub = node.session.declare_subscriber(self.key, zenoh.handlers.FifoChannel(capacity))
 
     def _on_sample(self, sample: zenoh.Sample) -> None:
         item = self._decode(sample)
         if item is not None and self.arrived is not None:
             self.arrived.append(item)
+            self._arrival.set()
 
     def _decode(self, sample: zenoh.Sample) -> Received | None:
         attachment = sample.attachment
@@ -247,6 +258,14 @@ class TopicSubscriber:
 
     def recv(self) -> Received:
         """Block until the next valid message (Ctrl-C and signal handlers still run)."""
+        arrived = self.arrived
+        if arrived is not None:
+            while True:
+                if arrived:
+                    return arrived.popleft()
+                self._arrival.clear()
+                if not arrived:
+                    self._arrival.wait(RECV_WAKE_S)
         sub = self._sub
         while True:
             item = self._decode(sub.recv())
@@ -255,3 +274,4 @@ class TopicSubscriber:
 
     def undeclare(self) -> None:
         self._sub.undeclare()
+        self._node.retire(self)

@@ -11,8 +11,10 @@ from pathlib import Path
 import psutil
 import typer
 
+import stack
 from stack.bus import keys
-from stack.cli import cmd, fly, log, mavlink, param, pixhawk_sim, plot, topic
+from stack.bus.node import Node
+from stack.cli import cmd, fly, log, mavlink, param, pixhawk_sim, plot, topic, vehicle_summary
 from stack.cli.common import (
     EndpointOption,
     JsonOption,
@@ -23,16 +25,22 @@ from stack.cli.common import (
     fail,
     print_table,
     query_json,
+    to_jsonable,
+    wait_until_sent,
 )
 from stack.cli.observers import add_observers
 from stack.supervisor import state as run_state
 from stack.supervisor.profile import DEFAULT_PROFILE, Profile, ProfileError, load_profile
 from stack.supervisor.supervisor import Supervisor, UpOptions
 
+SUMMARY_WAIT_S = 2.0
+"""Wall-clock seconds `stack status` waits for the vehicle's messages (vehicle_status comes at 2 Hz at least)."""
+
 app = typer.Typer(
     help="stack: a PX4-shaped multicopter autopilot, one process per module, uORB topics over Zenoh.",
     no_args_is_help=True,
     add_completion=False,
+    context_settings={"help_option_names": ["-h", "--help"]},  # inherited by every subcommand
 )
 app.add_typer(topic.app, name="topic")
 app.add_typer(param.app, name="param")
@@ -43,6 +51,21 @@ app.command("fly")(fly.fly)
 app.command("plot")(plot.plot)
 app.command("replay")(log.replay)
 app.command("pixhawk-sim")(pixhawk_sim.pixhawk_sim)
+
+
+def _print_version(value: bool) -> None:
+    if value:
+        typer.echo(f"stack {stack.__version__}")
+        raise typer.Exit()
+
+
+@app.callback()
+def _root(
+    version: bool = typer.Option(
+        False, "--version", callback=_print_version, is_eager=True, help="Print the version and exit"
+    ),
+) -> None:
+    pass
 
 
 @app.command()
@@ -76,7 +99,11 @@ def up(
     if running:
         fail(f"a stack for vehicle '{prof.vehicle}' is already running (pid {running[0]['pid']}); `stack down` first")
     run_dir = run_state.new_run_dir(prof.name, prof.vehicle)
-    options = UpOptions(duration=duration, log_level=log_level, echo_logs=not quiet, extra_args=extra_args)
+    # The web viewer's URL is shown even with --quiet: the bridge's few lines are echoed.
+    shown = ("rerun_bridge",) if web else ()
+    options = UpOptions(
+        duration=duration, log_level=log_level, echo_logs=not quiet, echo_only=shown, extra_args=extra_args
+    )
     supervisor = Supervisor(prof, options, run_dir)
     if record is not None:
         typer.echo(f"[stack] recording to {record.resolve()}")
@@ -136,17 +163,24 @@ def status(
     endpoint: str | None = EndpointOption,
     as_json: bool = JsonOption,
 ) -> None:
-    """Each module's state, pid, CPU, memory, restarts, trigger rate and counters."""
+    """The vehicle (mode, armed, failsafe, position, battery, as PX4's `commander status`), then each
+    module's state, pid, CPU, memory, restarts, trigger rate and counters."""
     with connect(vehicle, endpoint) as node:
         answers = query_json(node.session, keys.supervisor_key(node.vehicle, "status"))
-    if not answers:
-        fail("the supervisor did not answer")
-    report = answers[0]
+        if not answers:
+            fail("the supervisor did not answer")
+        report = answers[0]
+        commander = next((m["extra"] for m in report["modules"] if "failsafe_action" in m.get("extra", {})), None)
+        if commander is not None:
+            report["vehicle_summary"] = vehicle_summary.summary(_latest(node, vehicle_summary.TOPICS), commander)
     if as_json:
-        typer.echo(json.dumps(report))
+        typer.echo(json.dumps(to_jsonable(report)))
         return
     mode = "lockstep" if report["lockstep"] else "real time"
     typer.echo(f"vehicle '{report['vehicle']}', profile {report['profile']} ({mode})")
+    if "vehicle_summary" in report:
+        for line in vehicle_summary.lines(report["vehicle_summary"]):
+            typer.echo(line)
     rows = []
     for m in report["modules"]:
         rows.append(
@@ -161,7 +195,7 @@ def status(
                 m.get("runs", 0),
                 m.get("msgs_in", 0),
                 m.get("msgs_out", 0),
-                m.get("decode_errors", 0) + m.get("schema_errors", 0) + m.get("rejected", 0),
+                sum(m.get(k, 0) for k in ("decode_errors", "schema_errors", "foreign", "rejected")),
                 f"{m.get('loop_avg_us', 0.0):.0f}/{m.get('loop_max_us', 0.0):.0f}",
             )
         )
@@ -175,6 +209,20 @@ def status(
     sim_times = [m.get("sim_time_us", 0) for m in report["modules"]]
     if report["lockstep"] and any(sim_times):
         typer.echo(f"simulated time {max(sim_times) / 1e6:.3f} s at {time.strftime('%H:%M:%S')}")
+
+
+def _latest(node: Node, topics: tuple[str, ...]) -> dict[str, object]:
+    """The next message of each topic, waiting at most SUMMARY_WAIT_S for them (those that came)."""
+    subs = {topic: node.subscriber(topic, keep_last=True) for topic in topics}
+    wait_until_sent(node, [(topic, 0) for topic in topics])
+    latest: dict[str, object] = {}
+    deadline = time.monotonic() + SUMMARY_WAIT_S
+    while len(latest) < len(topics) and time.monotonic() < deadline:
+        for name, sub in subs.items():
+            while (item := sub.poll()) is not None:
+                latest[name] = item[3]
+        time.sleep(0.01)
+    return latest
 
 
 def main() -> None:

@@ -4,40 +4,52 @@ Each command is one ``vehicle_command`` from system 255 (a ground station) and c
 (MAV_COMP_ID_MISSIONPLANNER); the acknowledgement addressed back to that pair is the answer, so several
 tools can command one vehicle at once. A refused command prints ``<RESULT>: <reason>`` and exits with
 1; input that cannot be sent (a non-finite number, an unknown mode, a broken mission file) exits with 2
-and sends nothing. ``--wait`` then follows the action on the vehicle's topics until it completes.
+and sends nothing. ``--wait`` then follows the action on the vehicle's topics until it completes
+(:mod:`stack.cli.follow`), and exits with 1 when it did not.
 """
 
 from __future__ import annotations
 
 import math
 import time
-from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
 import msgspec
 import typer
 
+from stack.bus import keys
 from stack.bus.node import Node
+from stack.bus.query import query_json
 from stack.bus.topics import TopicPublisher
 from stack.cli.common import EndpointOption, VehicleOption, connect, fail, wait_until_sent
-from stack.commander import commands
-from stack.commander.modes import MODES, mode_name, nav_state_from_name
-from stack.mathlib.geo import MapProjection
-from stack.mission.items import (
-    GLOBAL_AMSL_FRAMES,
-    MAV_CMD_NAV_LAND,
-    MAV_CMD_NAV_RETURN_TO_LAUNCH,
-    GeoPoint,
-    Mission,
-    MissionError,
+from stack.cli.follow import (
+    GOTO_MODES,
+    LAND_MODES,
+    MISSION_MODES,
+    RETURN_MODES,
+    TAKEOFF_MODES,
+    Action,
+    Goto,
+    Land,
+    MissionRun,
+    Return,
+    Takeoff,
+    Vehicle,
+    budget_s,
 )
+from stack.cli.follow import PARAMS as FOLLOW_PARAMS
+from stack.commander import commands
+from stack.commander.modes import MODES, nav_state_from_name
+from stack.mathlib.geo import MapProjection
+from stack.mission.items import GLOBAL_AMSL_FRAMES, GeoPoint, Mission, MissionError
 from stack.mission.loader import load_mission
 from stack.mission.transfer import mission_id_for, mission_message
 from stack.msg.base import Message
 from stack.msg.estimation import VehicleLocalPosition
 from stack.msg.navigation import MissionResult
-from stack.msg.system import VehicleCommand, VehicleCommandAck, VehicleStatus
+from stack.msg.system import RESULT_NAMES, VehicleCommand, VehicleCommandAck, VehicleStatus
+from stack.params import catalogue, client
 
 app = typer.Typer(
     help="Command the vehicle (arm, takeoff, goto, modes, missions...) and print the acknowledgement.",
@@ -50,19 +62,27 @@ CLI_SYSTEM = 255
 """MAVLink system id of a ground station."""
 CLI_COMPONENT = 190
 """MAV_COMP_ID_MISSIONPLANNER: the acknowledgements addressed to this pair are ours."""
-RESULT_PREFIX = "VEHICLE_CMD_RESULT_"
-RESULT_NAMES = {v: k.removeprefix(RESULT_PREFIX) for k, v in vars(ACK).items() if k.startswith(RESULT_PREFIX)}
 HOME_WAIT_S = 1.5
-REACHED_M = 1.0
 POLL_S = 0.01
+PROGRESS_S = 1.0
+"""Wall-clock seconds between progress lines."""
+SILENT_S = 15.0
+"""Wall-clock seconds without a message from the vehicle after which --wait gives up (the stack stopped)."""
 NO_COMMANDER = "no commander is running (nothing subscribes to vehicle_command)"
 NO_NAVIGATOR = "no answer from the navigator (is flight_mode_manager running?)"
-WATCHED = ("vehicle_status", "vehicle_local_position")
+WATCHED = ("vehicle_status", "vehicle_local_position", "home_position", "mavlink_log")
 
-TimeoutOption = typer.Option(
-    5.0, "--timeout", "-t", help="Seconds to wait for the answer (and, with --wait, for the action)"
+TimeoutOption = typer.Option(5.0, "--timeout", "-t", help="Seconds to wait for the acknowledgement")
+WaitOption = typer.Option(
+    False, "--wait", "-w", help="Follow the action until it completes, printing progress; exit 1 if it fails"
 )
-WaitOption = typer.Option(False, "--wait", "-w", help="Wait until the action completes, printing progress")
+WaitTimeoutOption = typer.Option(
+    None,
+    "--wait-timeout",
+    help="With --wait: seconds the action may take, simulated in lockstep (default: sized to the action "
+    "from its distances and the vehicle's speed parameters)",
+    show_default=False,
+)
 YawOption = typer.Option(None, "--yaw", help="Heading in degrees (default: keep the current one)")
 
 New = list[tuple[str, Message]]
@@ -81,6 +101,9 @@ class _Link:
         wait_until_sent(node, [("vehicle_command_ack", 0), *((topic, 0) for topic in watch)])
         self._after: tuple[int, int] | None = None
         self.latest: dict[str, Any] = {}
+        self.vehicle = Vehicle()
+        self.heard = time.monotonic()
+        """When the last watched message arrived (wall clock)."""
 
     def poll(self) -> New:
         """Drain the watched topics; ``vehicle_status`` counts only once published after the last ack."""
@@ -93,6 +116,8 @@ class _Link:
                     if publisher == ack_publisher and seq <= ack_seq:
                         continue
                 self.latest[topic] = msg
+                self.vehicle.update(topic, msg)
+                self.heard = time.monotonic()
                 new.append((topic, msg))
         return new
 
@@ -123,6 +148,7 @@ class _Link:
                 break
         self._after = (publisher, seq)
         self.latest.pop("vehicle_status", None)
+        self.vehicle.status = None
         if ack.result != ACK.VEHICLE_CMD_RESULT_ACCEPTED:
             result = RESULT_NAMES.get(ack.result, f"result {ack.result}")
             typer.echo(f"{label}: {result}" + (f": {ack.reason}" if ack.reason else ""), err=True)
@@ -130,41 +156,54 @@ class _Link:
         typer.echo(f"{label}: accepted")
         return ack
 
-    def wait_for(self, what: str, check: Callable[[New], str | None], progress: Callable[[], str]) -> None:
-        """Poll until ``check`` returns the completion message (it fails itself when the action cannot
-        complete), printing ``progress`` every second; fail after the timeout."""
-        deadline = time.monotonic() + self.timeout
-        report = time.monotonic() + 1.0
-        while (done := check(self.poll())) is None:
+    def follow(self, action: Action, start: VehicleCommandAck, limit_s: float | None) -> None:
+        """Follow ``action`` from its acknowledgement ``start`` until it is done (exit 0) or failed (exit 1),
+        printing progress and the commander's messages; the time it may take is counted on the vehicle's
+        clock in lockstep (simulated seconds), on the wall clock otherwise."""
+        action.p = _vehicle_params(self.node)
+        lockstep = _lockstep(self.node)
+        clock = "simulated " if lockstep else ""
+        began = time.monotonic()
+        budget: float | None = limit_s
+        report = began + PROGRESS_S
+        while True:
+            for topic, msg in self.poll():
+                if topic == "mavlink_log" and msg.timestamp >= start.timestamp:
+                    typer.echo(f"vehicle: {msg.text}")
+            v = self.vehicle
+            if (failure := action.failed(v)) is not None:
+                fail(failure)
+            if (done := action.done(v)) is not None:
+                typer.echo(done)
+                return
             now = time.monotonic()
-            if now >= deadline:
-                fail(f"{what}: not done within {self.timeout:g} s ({progress()})")
+            if budget is None and v.status is not None and v.position is not None:
+                budget = budget_s(action.nominal_s(v))
+                typer.echo(f"{action.name}: following, for at most {budget:.0f} s ({clock}time)")
+            elapsed = (v.now_us - start.timestamp) / 1e6 if lockstep else now - began
+            if budget is not None and elapsed > budget:
+                fail(f"{action.name}: not done within {budget:.0f} s of {clock}time ({action.progress(v)})")
+            if now - self.heard > SILENT_S:
+                fail(f"{action.name}: nothing heard from the vehicle for {SILENT_S:g} s (did the stack stop?)")
             if now >= report:
-                report += 1.0
-                typer.echo(progress())
+                report += PROGRESS_S
+                typer.echo(action.progress(v))
             time.sleep(POLL_S)
-        typer.echo(done)
 
-    def status(self) -> VehicleStatus | None:
-        return self.latest.get("vehicle_status")
 
-    def position(self) -> VehicleLocalPosition | None:
-        return self.latest.get("vehicle_local_position")
+def _lockstep(node: Node) -> bool:
+    """Whether the stack runs in lockstep (its supervisor says; a stack reached by endpoint alone may not)."""
+    answers = query_json(node.session, keys.supervisor_key(node.vehicle, "status"))
+    return bool(answers and answers[0].get("lockstep"))
 
-    def state(self) -> str:
-        """The vehicle's height and mode in words, for progress lines."""
-        parts = []
-        lpos, status = self.position(), self.status()
-        if lpos is not None:
-            parts.append(f"altitude {0.0 - lpos.z:.1f} m")
-        if status is not None:
-            armed = status.arming_state == NS.ARMING_STATE_ARMED
-            parts.append(mode_name(status.nav_state) + ("" if armed else " (disarmed)"))
-        return ", ".join(parts) or "no vehicle state yet"
 
-    def disarmed(self) -> bool:
-        status = self.status()
-        return status is not None and status.arming_state != NS.ARMING_STATE_ARMED
+def _vehicle_params(node: Node) -> dict[str, float]:
+    """The parameters actions are sized with, as the running stack holds them (else their defaults)."""
+    values = {name: float(catalogue.get(name).default) for name in FOLLOW_PARAMS}
+    for sp in client.list_params(node.session, node.vehicle):
+        if sp.name in values:
+            values[sp.name] = float(sp.value)
+    return values
 
 
 def _send(
@@ -173,13 +212,17 @@ def _send(
     vehicle: str | None,
     endpoint: str | None,
     timeout: float,
-    wait: Callable[[_Link], None] | None = None,
+    action: Action | None = None,
+    limit_s: float | None = None,
 ) -> None:
+    """Send ``cmd``; with an ``action``, follow it (``limit_s``: the time it may take, else sized to it)."""
+    if limit_s is not None:
+        _positive("--wait-timeout", limit_s)
     with connect(vehicle, endpoint) as node:
-        link = _Link(node, timeout, WATCHED if wait else ())
-        link.command(cmd, label)
-        if wait is not None:
-            wait(link)
+        link = _Link(node, timeout, WATCHED if action else ())
+        ack = link.command(cmd, label)
+        if action is not None:
+            link.follow(action, ack, limit_s)
 
 
 def _finite(name: str, value: float) -> float:
@@ -193,11 +236,10 @@ def _optional(name: str, value: float | None) -> float:
     return math.nan if value is None else _finite(name, value)
 
 
-def _wait_disarmed(label: str) -> Callable[[_Link], None]:
-    def wait(link: _Link) -> None:
-        link.wait_for(label, lambda _: f"{label}: landed and disarmed" if link.disarmed() else None, link.state)
-
-    return wait
+def _positive(name: str, value: float) -> float:
+    if not (math.isfinite(value) and value > 0):
+        fail(f"{name} must be a finite number of seconds above 0, got {value:g}; nothing sent", code=2)
+    return value
 
 
 @app.command()
@@ -227,38 +269,29 @@ def takeoff(
     alt: float | None = typer.Option(None, "--alt", help="Metres above home (default: MIS_TAKEOFF_ALT)"),
     yaw: float | None = YawOption,
     wait: bool = WaitOption,
+    wait_timeout: float | None = WaitTimeoutOption,
     timeout: float = TimeoutOption,
     vehicle: str | None = VehicleOption,
     endpoint: str | None = EndpointOption,
 ) -> None:
-    """Take off (arming first if needed) and hold at the takeoff altitude."""
-    cmd = commands.takeoff_command(_optional("--alt", alt), relative=True, yaw_deg=_optional("--yaw", yaw))
-
-    def until_airborne(link: _Link) -> None:
-        def check(_: New) -> str | None:
-            status = link.status()
-            if link.disarmed():
-                fail("takeoff: the vehicle disarmed")
-            if status is None or status.nav_state == NS.NAVIGATION_STATE_AUTO_TAKEOFF:
-                return None
-            if status.nav_state not in (NS.NAVIGATION_STATE_AUTO_LOITER, NS.NAVIGATION_STATE_AUTO_MISSION):
-                fail(f"takeoff interrupted: now in {mode_name(status.nav_state)}")
-            return f"takeoff complete: {link.state()}"
-
-        link.wait_for("takeoff", check, link.state)
-
-    _send(cmd, "takeoff", vehicle, endpoint, timeout, until_airborne if wait else None)
+    """Take off (arming first if needed) and hold at the takeoff altitude; --wait until it is reached."""
+    height = _optional("--alt", alt)
+    cmd = commands.takeoff_command(height, relative=True, yaw_deg=_optional("--yaw", yaw))
+    action = Takeoff("takeoff", TAKEOFF_MODES, height_m=height) if wait else None
+    _send(cmd, "takeoff", vehicle, endpoint, timeout, action, wait_timeout)
 
 
 @app.command()
 def land(
     wait: bool = WaitOption,
+    wait_timeout: float | None = WaitTimeoutOption,
     timeout: float = TimeoutOption,
     vehicle: str | None = VehicleOption,
     endpoint: str | None = EndpointOption,
 ) -> None:
-    """Land where the vehicle is."""
-    _send(commands.land_command(), "land", vehicle, endpoint, timeout, _wait_disarmed("land") if wait else None)
+    """Land where the vehicle is; --wait until it is down and disarmed."""
+    action = Land("land", LAND_MODES, ends_disarmed=True) if wait else None
+    _send(commands.land_command(), "land", vehicle, endpoint, timeout, action, wait_timeout)
 
 
 @app.command()
@@ -274,12 +307,14 @@ def hold(
 @app.command()
 def rtl(
     wait: bool = WaitOption,
+    wait_timeout: float | None = WaitTimeoutOption,
     timeout: float = TimeoutOption,
     vehicle: str | None = VehicleOption,
     endpoint: str | None = EndpointOption,
 ) -> None:
-    """Return to home and land."""
-    _send(commands.return_command(), "rtl", vehicle, endpoint, timeout, _wait_disarmed("rtl") if wait else None)
+    """Return to home and land; --wait until it is down at home and disarmed."""
+    action = Return("rtl", RETURN_MODES, ends_disarmed=True) if wait else None
+    _send(commands.return_command(), "rtl", vehicle, endpoint, timeout, action, wait_timeout)
 
 
 app.command("return", help="Return to home and land (same as rtl).")(rtl)
@@ -296,6 +331,7 @@ def goto(
     yaw: float | None = YawOption,
     speed: float | None = typer.Option(None, "--speed", help="Ground speed in m/s (default: the cruise speed)"),
     wait: bool = WaitOption,
+    wait_timeout: float | None = WaitTimeoutOption,
     timeout: float = TimeoutOption,
     vehicle: str | None = VehicleOption,
     endpoint: str | None = EndpointOption,
@@ -322,25 +358,8 @@ def goto(
             n, e = MapProjection(lpos.ref_lat, lpos.ref_lon).project(la, lo)
             return (n, e, lpos.ref_alt - al)
 
-    def until_there(link: _Link) -> None:
-        def distance() -> float:
-            lpos = link.position()
-            if lpos is None:
-                return math.nan
-            here = (lpos.x, lpos.y, lpos.z)
-            return math.sqrt(sum((t - p) ** 2 for t, p in zip(target(lpos), here, strict=True) if not math.isnan(t)))
-
-        def check(_: New) -> str | None:
-            status = link.status()
-            if link.disarmed():
-                fail("goto: the vehicle disarmed")
-            if status is not None and status.nav_state != NS.NAVIGATION_STATE_AUTO_LOITER:
-                fail(f"goto interrupted: now in {mode_name(status.nav_state)}")
-            return f"goto: reached ({link.state()})" if distance() <= REACHED_M else None
-
-        link.wait_for("goto", check, lambda: f"{distance():.1f} m to go, {link.state()}")
-
-    _send(cmd, "goto", vehicle, endpoint, timeout, until_there if wait else None)
+    action = Goto("goto", GOTO_MODES, target=target, speed=speed_ms) if wait else None
+    _send(cmd, "goto", vehicle, endpoint, timeout, action, wait_timeout)
 
 
 @app.command()
@@ -367,7 +386,7 @@ def _vehicle_home(link: _Link) -> tuple[GeoPoint | None, str]:
         if home is not None and home.valid_hpos and math.isfinite(home.lat) and math.isfinite(home.lon):
             return GeoPoint(home.lat, home.lon, home.alt), "the vehicle's home"
         time.sleep(POLL_S)
-    lpos = link.position()
+    lpos = link.vehicle.position
     if lpos is not None and lpos.xy_valid and all(map(math.isfinite, (lpos.ref_lat, lpos.ref_lon, lpos.ref_alt))):
         lat, lon = MapProjection(lpos.ref_lat, lpos.ref_lon).reproject(lpos.x, lpos.y)
         return GeoPoint(lat, lon, lpos.ref_alt - lpos.z), "the vehicle's position (no home set yet)"
@@ -409,45 +428,22 @@ def _until_commander_knows(link: _Link, result: MissionResult) -> None:
         time.sleep(POLL_S)
 
 
-def _until_finished(link: _Link, mission: Mission, ident: int, start: VehicleCommandAck) -> None:
-    """Wait for the end of the mission (and the landing, if it ends with one); only results published
-    after the start count."""
-    lands = len(mission) > 0 and mission[-1].command in (MAV_CMD_NAV_LAND, MAV_CMD_NAV_RETURN_TO_LAUNCH)
-    progress: list[MissionResult] = []
-
-    def check(new: New) -> str | None:
-        for topic, msg in new:
-            if topic == "mission_result" and msg.mission_id == ident and msg.timestamp > start.timestamp:
-                if msg.failure:
-                    fail(f"mission failed: {msg.reason or f'at item {msg.seq_current}'}")
-                progress.append(msg)
-        finished = bool(progress) and progress[-1].finished
-        if link.disarmed() and not finished:
-            fail("mission: the vehicle disarmed before the end of the mission")
-        if finished and (link.disarmed() or not lands):
-            return "mission finished" + (", landed and disarmed" if lands else "")
-        return None
-
-    def describe() -> str:
-        item = f"item {progress[-1].seq_current + 1}/{progress[-1].seq_total}, " if progress else ""
-        return item + link.state()
-
-    link.wait_for("mission", check, describe)
-
-
 @app.command("mission")
 def mission_(
     file: Path = typer.Argument(..., help="QGroundControl .plan, QGC WPL 110 or a simple waypoint list"),
     no_start: bool = typer.Option(False, "--no-start", help="Upload only; do not start the mission"),
     first: int = typer.Option(0, "--first", help="Item to start at (−1: the current one)"),
     wait: bool = WaitOption,
+    wait_timeout: float | None = WaitTimeoutOption,
     timeout: float = TimeoutOption,
     vehicle: str | None = VehicleOption,
     endpoint: str | None = EndpointOption,
 ) -> None:
     """Upload a mission (global positions placed about the vehicle's home) and start it."""
+    if wait_timeout is not None:
+        _positive("--wait-timeout", wait_timeout)
     with connect(vehicle, endpoint) as node:
-        link = _Link(node, timeout, ("home_position", "mission_result", *WATCHED))
+        link = _Link(node, timeout, ("mission_result", *WATCHED))
         home, origin = _vehicle_home(link)
         try:
             mission = load_mission(file, home)
@@ -467,4 +463,7 @@ def mission_(
         _until_commander_knows(link, result)
         start = link.command(commands.mission_start_command(first), "mission start")
         if wait:
-            _until_finished(link, mission, result.mission_id, start)
+            action = MissionRun(
+                "mission", MISSION_MODES, mission=mission, mission_id=result.mission_id, started_us=start.timestamp
+            )
+            link.follow(action, start, wait_timeout)

@@ -65,9 +65,8 @@ def fly(
     except ValueError as e:
         fail(f"scenario {scenario}: {e}", code=2)
     add_observers(prof, plot=plot_, web=web, save=save, record=record, own_ports=True)
-    options = UpOptions(
-        log_level=log_level, echo_logs=not quiet, echo_only=("scenario",) if quiet else (), kind=run_state.FLY
-    )
+    shown = ("scenario", "rerun_bridge") if web else ("scenario",)  # the web viewer's URL, even with --quiet
+    options = UpOptions(log_level=log_level, echo_logs=not quiet, echo_only=shown, kind=run_state.FLY)
     typer.echo(f"[stack] flight '{name}' (another terminal addresses it with --vehicle {name})")
     code = Supervisor(prof, options, run_dir).run()
     if not result_path.exists():

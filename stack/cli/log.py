@@ -6,25 +6,29 @@ Mounted in the root app as ``app.add_typer(log.app, name="log")`` and ``app.comm
 from __future__ import annotations
 
 import json
+import signal
 import sys
 import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
+from types import FrameType
 
 import typer
 
-from stack.cli.common import EndpointOption, JsonOption, VehicleOption, connect, fail, print_table, to_jsonable
+from stack.cli.common import JsonOption, fail, print_table, to_jsonable
+from stack.cli.replay_stack import ReplayStack
 from stack.record.csvexport import export_csv
 from stack.record.overview import overview
 from stack.record.recorder import RecordingError, RecordingReader
 from stack.record.replay import BusReplayer, ReplayClock, replay_pass
 from stack.record.selection import TopicSelection
-from stack.supervisor import state as run_state
 
 app = typer.Typer(help="Inspect and convert flight recordings (MCAP files written by --record).", no_args_is_help=True)
 
 FileArgument = typer.Argument(..., help="A recording (.mcap) written by `stack up --record` or `stack fly --record`")
+# The vehicle a recording without one is replayed as (the default profile's).
+DEFAULT_VEHICLE = "v1"
 TopicsOption = typer.Option(
     [], "--topics", "-t", help="Only these topics: name or name/instance, repeatable or comma-separated"
 )
@@ -153,15 +157,21 @@ def _rrd_exporter() -> Callable[..., object]:
     return export_rrd
 
 
+def _interrupt(signum: int, frame: FrameType | None) -> None:
+    raise KeyboardInterrupt  # `stack down` (SIGTERM) stops a replay as Ctrl-C does
+
+
 def replay(
     file: Path = FileArgument,
     speed: float = typer.Option(1.0, "--speed", "-s", help="Time scale: 2 = twice as fast; 0 = as fast as possible"),
     loop: bool = typer.Option(False, "--loop", help="Start over at the end, until Ctrl-C"),
     topics: list[str] = TopicsOption,
-    vehicle: str | None = VehicleOption,
-    endpoint: str | None = EndpointOption,
+    wait_subscribers: float = typer.Option(
+        1.0, "--wait-subscribers", help="Seconds to wait for a subscriber (stack topic echo, stack plot) first"
+    ),
 ) -> None:
-    """Republish a recording on a running stack's bus: `stack topic echo`, plots and modules see it as live."""
+    """Republish a recording on a bus of its own, the stack <vehicle>-replay-<pid>, which `stack topic`,
+    `stack plot` and scripts attach to with --vehicle and see as live. It never touches a running stack."""
     if speed < 0.0:
         fail("--speed must be >= 0 (0: as fast as possible)", code=2)
     selection = _selection(topics)
@@ -171,19 +181,19 @@ def replay(
         total = sum(c.message_count for c in channels)
         if total == 0:
             fail(f"{file}: no messages to replay")
-        target = vehicle or _default_vehicle(reader.info.vehicle, endpoint)
-        with connect(target, endpoint, name="replay") as node:
-            replayer = BusReplayer(node)
+        vehicle = reader.info.vehicle or DEFAULT_VEHICLE
+        signal.signal(signal.SIGTERM, _interrupt)
+        with ReplayStack(vehicle, reader.info.lockstep, file) as stack:
+            typer.echo(f"[stack] replay '{stack.name}' (another terminal attaches with --vehicle {stack.name})")
+            replayer = BusReplayer(stack.node)
             sent = 0
             try:
                 replayer.declare(channels)
-                if not replayer.wait_for_subscribers():
+                if not replayer.wait_for_subscribers(wait_subscribers):
                     typer.echo("warning: nobody subscribes to the recorded topics yet; replaying anyway", err=True)
                 pace = "as fast as possible" if speed == 0.0 else f"at {speed:g}x"
-                typer.echo(
-                    f"replaying {total} messages of vehicle '{reader.info.vehicle}' onto vehicle "
-                    f"'{node.vehicle}' {pace}" + (" (looping; Ctrl-C stops)" if loop else "")
-                )
+                looping = " (looping; Ctrl-C stops)" if loop else ""
+                typer.echo(f"replaying {total} messages of vehicle '{vehicle}' {pace}{looping}")
                 clock = ReplayClock(speed)
                 passes = 0
                 while True:
@@ -199,10 +209,3 @@ def replay(
                 replayer.close()
         typer.echo(f"replayed {sent} messages")
         _warn_all(reader)
-
-
-def _default_vehicle(recorded: str, endpoint: str | None) -> str | None:
-    """With an endpoint, the recorded vehicle; otherwise the recorded vehicle's stack if it runs."""
-    if endpoint is not None:
-        return recorded or None
-    return recorded if run_state.addressed_stacks(recorded) else None

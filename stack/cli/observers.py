@@ -29,13 +29,14 @@ def add_observers(
 ) -> None:
     """Insert the recorder first (it stops last, so it records to the end) and the plot bridge last.
 
-    ``own_ports``: the viewer listens on free ports of its own (a flight beside others) instead of the
-    usual ones, where the plots of ``stack up`` join a viewer already open."""
+    ``own_ports``: the native viewer listens on free ports of its own (a flight beside others) instead of
+    the usual ones, where the plots of ``stack up`` join a viewer already open. A web viewer always has
+    ports of its own: it is the stack's, and stops with it."""
     if record is not None:
         prof.modules.insert(0, _entry("recorder", {"path": str(record.resolve())}))
     if plot or web or save:
         args: dict[str, object] = {"web": web, "spawn": not web}
-        if own_ports:
+        if own_ports or web:
             args.update(grpc_port=0, web_port=0)
         if save:
             args["save"] = str(Path(save).resolve())

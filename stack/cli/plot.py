@@ -2,7 +2,8 @@
 
 The command runs the ``rerun_bridge`` module in this process, as a Zenoh client of the stack's
 router: the same code as ``stack up --plot``, attached late. It stays outside the lockstep like any
-passive module and stops cleanly on Ctrl-C, SIGTERM or ``--duration``.
+passive module and stops cleanly on Ctrl-C, SIGTERM or ``--duration``. With no display and neither
+``--web`` nor ``--save`` it says so and exits, rather than plot to nowhere.
 """
 
 from __future__ import annotations
@@ -21,6 +22,7 @@ from stack.bus.node import Node
 from stack.cli.common import EndpointOption, VehicleOption, fail, find_stack, query_json
 from stack.runtime.runner import Runtime, Shutdown
 from stack.runtime.spec import ModuleSpec
+from stack.viz.display import DEFAULT_GRPC_PORT, has_display
 
 
 def _stack_is_lockstep(vehicle: str, bus: BusConfig) -> bool:
@@ -52,13 +54,17 @@ def plot(
     plot_rate: float = typer.Option(50.0, "--plot-rate", help="Most rows per second per topic (0: every message)"),
     window: float = typer.Option(30.0, "--window", help="Seconds of data the time series show (0: all)"),
     bind: str = typer.Option("127.0.0.1", "--bind", help="Address the viewer servers listen on"),
-    grpc_port: int = typer.Option(9876, "--grpc-port", help="Viewer data port (0: any free port)"),
-    web_port: int = typer.Option(9090, "--web-port", help="Web viewer page port (0: any free port)"),
+    grpc_port: int | None = typer.Option(
+        None, "--grpc-port", help=f"Viewer data port (0: any free port; default: {DEFAULT_GRPC_PORT}, any with --web)"
+    ),
+    web_port: int | None = typer.Option(None, "--web-port", help="Web viewer page port (default: any free port)"),
     duration: float = typer.Option(0.0, "--duration", "-d", help="Stop after this many seconds (0: until Ctrl-C)"),
     vehicle: str | None = VehicleOption,
     endpoint: str | None = EndpointOption,
 ) -> None:
     """Live plots of a running stack in Rerun: attitude, rates, motors, position, estimator, 3D view."""
+    if not web and not save and not has_display():
+        fail("no display here for the Rerun viewer: use --web (a viewer in the browser) or --save FILE.rrd")
     vehicle_name, bus = find_stack(vehicle, endpoint)
     lockstep = _stack_is_lockstep(vehicle_name, bus)
     spec = ModuleSpec(
@@ -71,8 +77,9 @@ def plot(
             "web": web,
             "save": save,
             "bind": bind,
-            "grpc_port": grpc_port,
-            "web_port": web_port,
+            # A web viewer of its own on free ports; the native viewer's usual port joins one already open.
+            "grpc_port": (0 if web else DEFAULT_GRPC_PORT) if grpc_port is None else grpc_port,
+            "web_port": 0 if web_port is None else web_port,
             "plot_rate_hz": plot_rate,
             "window_s": window,
         },

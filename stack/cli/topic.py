@@ -5,7 +5,6 @@ from __future__ import annotations
 import itertools
 import json
 import math
-import queue
 import statistics
 import time
 from dataclasses import dataclass
@@ -29,6 +28,8 @@ from stack.cli.common import (
     to_jsonable,
     wait_until_sent,
 )
+from stack.cli.inbox import Inbox
+from stack.cli.message_json import as_dict, parse_field_paths, parse_message, pick
 from stack.msg.base import Message
 from stack.msg.registry import TOPICS, UnknownTopic, fingerprint, message_type, schema_text
 
@@ -127,13 +128,17 @@ def list_topics(
     )
 
 
-def _subscribe(node: Node, topic: str, instance: int) -> tuple[zenoh.Subscriber, queue.Queue[Received]]:
+ECHO_QUEUE = 1000
+"""Messages kept between the subscriber and the printer by default (a few seconds of a fast topic)."""
+
+
+def _subscribe(node: Node, topic: str, instance: int, capacity: int) -> tuple[zenoh.Subscriber, Inbox[Received]]:
     msg_type = _topic_type(topic)
     node.announce("sub", topic, instance)
     wait_until_sent(node, [(topic, instance)])
     decoder = msgspec.msgpack.Decoder(msg_type)
     expected = fingerprint(msg_type)
-    q: queue.Queue[Received] = queue.Queue()
+    inbox: Inbox[Received] = Inbox(capacity)
     warned = []
 
     def on_sample(sample: zenoh.Sample) -> None:
@@ -151,11 +156,11 @@ def _subscribe(node: Node, topic: str, instance: int) -> tuple[zenoh.Subscriber,
                 )
             return
         try:
-            q.put((t, pub, seq, decoder.decode(sample.payload.to_bytes()), index))
+            inbox.put((t, pub, seq, decoder.decode(sample.payload.to_bytes()), index))
         except msgspec.DecodeError as e:
             typer.echo(f"warning: malformed {topic} message dropped: {e}", err=True)
 
-    return node.session.declare_subscriber(keys.topic_key(node.vehicle, topic, instance), on_sample), q
+    return node.session.declare_subscriber(keys.topic_key(node.vehicle, topic, instance), on_sample), inbox
 
 
 @app.command()
@@ -163,36 +168,72 @@ def echo(
     topic: str,
     count: int = typer.Option(0, "-n", "--count", help="Print N messages then exit (0: until Ctrl-C)"),
     instance: int = typer.Option(0, "--instance", "-i"),
-    field: str | None = typer.Option(None, "--field", "-f", help="Print only this field"),
+    field: list[str] = typer.Option(
+        [],
+        "--field",
+        "-f",
+        help="Print only this field; repeat or separate with commas for several; dotted paths and list "
+        "indexes reach into nested fields (q.0, items.1.north)",
+    ),
+    rate: float = typer.Option(0.0, "--rate", "-r", help="At most this many messages a second, the newest (0: all)"),
+    capacity: int = typer.Option(
+        ECHO_QUEUE, "--queue", help="Messages kept waiting for a slow reader (beyond it the oldest are dropped)"
+    ),
     timeout: float = typer.Option(5.0, help="Give up after this many seconds without a message"),
     vehicle: str | None = VehicleOption,
     endpoint: str | None = EndpointOption,
     as_json: bool = JsonOption,
 ) -> None:
-    """Print messages of a topic as they arrive (like PX4's `listener`)."""
+    """Print messages of a topic as they arrive (like PX4's `listener`). Behind a slow reader the oldest
+    waiting messages are dropped, and the drops are counted on stderr."""
     msg_type = _topic_type(topic)
-    if field is not None and field not in msg_type.__struct_fields__:
-        fail(f"{msg_type.__name__} has no field '{field}' (fields: {', '.join(msg_type.__struct_fields__)})")
+    paths = parse_field_paths(field)
+    fields = msg_type.__struct_fields__
+    for path in paths:
+        if path.split(".")[0] not in fields:
+            fail(f"{msg_type.__name__} has no field '{path.split('.')[0]}' (fields: {', '.join(fields)})")
+    if not math.isfinite(rate) or rate < 0:
+        fail(f"--rate must be a finite number of messages a second ≥ 0, got {rate:g}", code=2)
+    if capacity < 1:
+        fail(f"--queue must be at least 1, got {capacity}", code=2)
+    period = 1.0 / rate if rate > 0 else 0.0
     with connect(vehicle, endpoint) as node:
-        sub, q = _subscribe(node, topic, instance)
-        shown = 0
+        # With --rate only the newest waiting message matters: the inbox keeps just that one.
+        sub, inbox = _subscribe(node, topic, instance, 1 if period else capacity)
+        shown = reported = 0
         try:
+            next_time = time.monotonic()
             while count == 0 or shown < count:
-                try:
-                    _, _, _, msg, _ = q.get(timeout=timeout)
-                except queue.Empty:
+                time.sleep(max(0.0, next_time - time.monotonic()))
+                item = inbox.get(timeout)
+                if item is None:
                     fail(f"waited {timeout:g} s without a message on {topic} (instance {instance})")
+                next_time = time.monotonic() + period
                 shown += 1
-                _print_message(topic, instance, msg, field, as_json, shown)
+                if not period and inbox.dropped > reported:
+                    typer.echo(f"[{inbox.dropped - reported} {topic} messages dropped: output too slow]", err=True)
+                    reported = inbox.dropped
+                _print_message(topic, instance, item[3], paths, as_json, shown)
         finally:
             sub.undeclare()
+            if not period and inbox.dropped:
+                typer.echo(f"{topic}: {shown} shown, {inbox.dropped} dropped (output too slow)", err=True)
 
 
-def _print_message(topic: str, instance: int, msg: Message, field: str | None, as_json: bool, n: int) -> None:
-    data = msgspec.structs.asdict(msg)
-    if field is not None:
-        value = data[field]
-        typer.echo(json.dumps(to_jsonable(value)) if as_json else format_value(value))
+def _print_message(topic: str, instance: int, msg: Message, paths: list[str], as_json: bool, n: int) -> None:
+    data = as_dict(msg)
+    if paths:
+        try:
+            picked = {path: pick(data, path) for path in paths}
+        except KeyError as e:
+            fail(f"{type(msg).__name__}: {e.args[0]}")
+        if as_json:
+            only = picked[paths[0]] if len(paths) == 1 else picked
+            typer.echo(json.dumps(to_jsonable(only)))
+        elif len(paths) == 1:
+            typer.echo(format_value(picked[paths[0]]))
+        else:
+            typer.echo("  ".join(f"{path}: {format_value(value)}" for path, value in picked.items()))
         return
     if as_json:
         typer.echo(json.dumps(to_jsonable(data)))
@@ -216,20 +257,17 @@ def hz(
     """Publication rate of a topic, with min/max/std of the intervals, printed every second."""
     _topic_type(topic)
     with connect(vehicle, endpoint) as node:
-        sub, q = _subscribe(node, topic, instance)
+        sub, inbox = _subscribe(node, topic, instance, ECHO_QUEUE)
         arrivals: list[float] = []
         stamps: list[int] = []
         start = time.monotonic()
         next_print = start + 1.0
         try:
             while duration == 0 or time.monotonic() - start < duration:
-                try:
-                    _, _, _, msg, _ = q.get(timeout=0.05)
+                if (item := inbox.get(timeout=0.05)) is not None:
                     arrivals.append(time.monotonic())
-                    stamps.append(msg.timestamp)
+                    stamps.append(item[3].timestamp)
                     del arrivals[: -window - 1], stamps[: -window - 1]
-                except queue.Empty:
-                    pass
                 if time.monotonic() >= next_print:
                     next_print += 1.0
                     _print_rate(topic, arrivals, stamps, as_json)
@@ -265,29 +303,7 @@ def _print_rate(topic: str, arrivals: list[float], stamps: list[int], as_json: b
         )
 
 
-def parse_message(topic: str, text: str) -> Message:
-    """A message from JSON field values, checked against the topic's schema. Raises ValueError."""
-    msg_type = message_type(topic)
-    try:
-        data = json.loads(text)
-    except json.JSONDecodeError as e:
-        raise ValueError(f"not valid JSON: {e}") from None
-    if not isinstance(data, dict):
-        raise ValueError("expected a JSON object of field values, e.g. '{\"roll\": 0.1}'")
-    fields = msgspec.structs.fields(msg_type)
-    checker = msgspec.defstruct(
-        f"{msg_type.__name__}Fields",
-        [(f.name, f.type, f.default) for f in fields],
-        forbid_unknown_fields=True,
-    )
-    try:
-        checked = msgspec.convert(data, checker)
-    except msgspec.ValidationError as e:
-        raise ValueError(f"{msg_type.__name__}: {e}".replace("$.", "")) from None
-    return msg_type(**msgspec.structs.asdict(checked))
-
-
-@app.command()
+@app.command(context_settings={"ignore_unknown_options": True})  # values may be a negative number
 def pub(
     topic: str,
     values: str = typer.Argument(..., help="Field values as JSON, e.g. '{\"roll\": 0.1}'"),

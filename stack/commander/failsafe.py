@@ -14,6 +14,9 @@ for the failures this stack detects:
   2 land, 3 return at critical then land at emergency), but only when the warning is worse than it was at
   arming;
 * **geofence breach**: GF_ACTION (0 none, 1 warn, 2 hold, 3 return, 4 terminate, 5 land);
+* **control chain loss** (a dead or silent estimator or controller, :mod:`stack.commander.control_chain`): of
+  attitude control, terminate in the air and disarm on the ground; of position control, land (through the
+  mode fallback, descend without a position estimate), at once and until the user changes mode or disarms;
 * **mode fallback** (estimator or mission loss): Position falls back to Altitude, Altitude to
   Stabilized, and any mode that cannot run goes to Return — which, when it cannot run either, falls
   through Land and Descend to Terminate. With no local position, an auto mode therefore ends in Descend;
@@ -143,6 +146,9 @@ class FailsafeConditions:
     manual_control_lost: bool = False
     battery_warning: int = BatteryWarning.NONE
     geofence_breached: bool = False
+    attitude_control_lost: bool = False
+    position_control_lost: bool = False
+    landed: bool = True
 
 
 class FailsafeResult(NamedTuple):
@@ -156,6 +162,11 @@ class FailsafeResult(NamedTuple):
     user_takeover: bool
 
 
+_TERMINATE = _Options(FailsafeAction.TERMINATE, Clear.NEVER, Takeover.NEVER)
+_DISARM = _Options(FailsafeAction.DISARM, takeover=Takeover.NEVER)
+_POSITION_CONTROL_LOSS = _Options(FailsafeAction.LAND, Clear.ON_MODE_CHANGE_OR_DISARM, Takeover.MODE_SWITCH_ONLY)
+
+
 @cache
 def _from_link_loss_param(value: int) -> _Options:
     if value == 1:
@@ -165,9 +176,9 @@ def _from_link_loss_param(value: int) -> _Options:
     if value == 3:
         return _Options(FailsafeAction.LAND, Clear.ON_MODE_CHANGE_OR_DISARM)
     if value == 5:
-        return _Options(FailsafeAction.TERMINATE, Clear.NEVER, Takeover.NEVER)
+        return _TERMINATE
     if value == 6:
-        return _Options(FailsafeAction.DISARM, takeover=Takeover.NEVER)
+        return _DISARM
     return _Options(FailsafeAction.NONE)
 
 
@@ -310,6 +321,10 @@ class Failsafe:
             self._check("manual_control_loss", cond.manual_control_lost, _from_link_loss_param(rcl_action))
 
         self._check("geofence_breach", cond.geofence_breached, _from_geofence_param(gf_action))
+        if armed:
+            lost_attitude = _DISARM if cond.landed else _TERMINATE
+            self._check("attitude_control_loss", cond.attitude_control_lost, lost_attitude)
+            self._check("position_control_loss", cond.position_control_lost, _POSITION_CONTROL_LOSS)
 
         warning = cond.battery_warning
         if warning > BatteryWarning.NONE:
@@ -331,6 +346,10 @@ class Failsafe:
             self._delay_us = 0
 
         return self._select(armed, intended, intended_updated, failing)
+
+    def latch_termination(self) -> None:
+        """Terminated already (a restarted commander taking over a terminated vehicle): it stays so."""
+        self._selected = FailsafeAction.TERMINATE
 
     def _dll_exempt(self, intended: int) -> bool:
         mask = int(self._p["COM_DLL_EXCEPT"])

@@ -96,6 +96,14 @@ def _fresh(now_us: int, stamp_us: int, timeout_us: int) -> bool:
     return stamp_us > 0 and now_us - stamp_us < timeout_us
 
 
+def manual_control_present(now_us: int, inp: CommanderInputs, loss_timeout_s: float) -> bool:
+    """Whether manual control input (sticks) is present: the latest is valid and the last valid one at most
+    COM_RC_LOSS_T old (PX4 ``ManualControl.cpp``); what the modes that need it require (PX4
+    ``mode_req_manual_control`` against ``manual_control_signal_lost``)."""
+    last = inp.last_manual_control_us
+    return last > 0 and inp.manual_control_valid and now_us - last <= loss_timeout_s * 1e6
+
+
 _AV = int(Requirement.ANGULAR_VELOCITY)
 _ATT = int(Requirement.ATTITUDE)
 _POS = int(Requirement.LOCAL_POSITION)

@@ -85,6 +85,15 @@ class LandDetectorInputs:
     takeoff_state: int = TakeoffState.DISARMED
 
 
+_TAKEOFF_STATES = frozenset(int(state) for state in TakeoffState)
+
+
+def takeoff_state(value: int) -> TakeoffState | None:
+    """The takeoff state a ``takeoff_status`` reports, or None for "uninitialized" or a value that names none
+    (dropped: the land detector keeps the state it had)."""
+    return TakeoffState(value) if value in _TAKEOFF_STATES else None
+
+
 class LandDetectorState(NamedTuple):
     """``vehicle_land_detected`` content (PX4 field names)."""
 
@@ -142,6 +151,12 @@ class MulticopterLandDetector:
         self._stage_time_us = -1
         self.state = LandDetectorState(False, True, True, True, False, False, False, False, False, False, True, True)
         self.set_params(params or {})
+
+    def resume_in_air(self) -> None:
+        """Start from flying, not from the landed power-on state (a commander restarted in the air)."""
+        for h in (self._ground_contact, self._maybe_landed, self._landed):
+            h.force(False)
+        self.state = self.state._replace(ground_contact=False, maybe_landed=False, landed=False, at_rest=False)
 
     def set_params(self, params: Mapping[str, object]) -> None:
         p = {**DEFAULTS, **params}

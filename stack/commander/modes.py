@@ -12,8 +12,9 @@ One table, :data:`MODES`, keyed by PX4's ``vehicle_status.nav_state`` numbers, h
   QGroundControl and MAVLink send in ``MAV_CMD_DO_SET_MODE`` param2/param3 (with param1 =
   MAV_MODE_FLAG_CUSTOM_MODE_ENABLED).
 
-Manual-control (RC) requirements are listed but not enforced when a mode is chosen; the loss of manual control
-input in flight is a failsafe of its own (NAV_RCL_ACT, :mod:`stack.commander.failsafe`).
+The manual-control (RC) requirement is not one of the run requirements: armed, a switch to a mode that has it
+is refused without manual control input (the commander's mode change, as PX4's ``UserModeIntention::change``),
+and the loss of that input in flight is a failsafe of its own (NAV_RCL_ACT, :mod:`stack.commander.failsafe`).
 """
 
 from __future__ import annotations

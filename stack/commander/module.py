@@ -23,7 +23,7 @@ import math
 
 import msgspec
 
-from stack.commander import land_detector, offboard
+from stack.commander import control_chain, land_detector, offboard
 from stack.commander.events import event_severity
 from stack.commander.health import CommanderInputs
 from stack.commander.home import HomePosition as Home
@@ -32,7 +32,6 @@ from stack.commander.state_machine import PARAMS as COMMANDER_PARAMS
 from stack.commander.state_machine import Commander
 from stack.commander.state_machine import NavigationRequest as Navigation
 from stack.msg.navigation import NavigationRequest
-from stack.msg.setpoints import TakeoffState, TakeoffStatus
 from stack.msg.system import (
     HomePosition,
     MavlinkLog,
@@ -41,6 +40,7 @@ from stack.msg.system import (
     VehicleControlMode,
     VehicleLandDetected,
     VehicleStatus,
+    command_label,
 )
 from stack.params import catalogue
 from stack.runtime.module import Module, Timer
@@ -118,6 +118,9 @@ class CommanderModule(Module):
             "external_autopilot_status",
         ):
             self.subscribe(topic)
+        for topic in control_chain.OUTPUTS:
+            if topic not in ("vehicle_local_position", "trajectory_setpoint"):
+                self.subscribe(topic)
         for topic in ("actuator_armed", "vehicle_status", "vehicle_control_mode", "vehicle_command_ack"):
             self.advertise(topic)
         self.advertise("home_position")
@@ -137,6 +140,31 @@ class CommanderModule(Module):
         self._last_manual_control = 0
         self._offboard_flags: dict[str, bool] | None = None
         self._refusals: list[str] = []
+        self._lockstep = rt.spec.lockstep
+        self._failsafe = {"failsafe_action": "none", "failsafe_cause": ""}
+        self._republish_now = False
+        if not self._lockstep:
+            self.commander.chain.silence_us = control_chain.REALTIME_SILENCE_US
+        self.watch_modules(self._on_module)
+        kept = self.kept_state()
+        if kept is not None:
+            try:
+                self.commander.resume(kept, self.now_us())
+            except ValueError as e:
+                self.log.warning("restarted, but cannot resume (%s): starting afresh", e)
+            else:
+                if self.commander.armed:
+                    self.land_detector.resume_in_air()
+
+    def _on_module(self, module: str, pid: int, alive: bool) -> None:
+        if alive:
+            self.commander.chain.module_alive(module)
+            self._republish_now = True  # a restarted module learns the vehicle's state at once
+            self._land_published = None
+        elif not self._lockstep:
+            # In lockstep a dead module's silence is measured in simulated time, which stands still while the
+            # supervisor restarts it; in real time its liveliness token says at once that it is gone.
+            self.commander.chain.module_died(module)
 
     def on_params_changed(self, changed: set[str]) -> None:
         self.commander.set_params(self.params.values())
@@ -144,6 +172,9 @@ class CommanderModule(Module):
 
     def run(self, msg: None, dt: float) -> None:
         now = self.now_us()
+        for topic in control_chain.OUTPUTS:
+            if self.update(topic) is not None:
+                self.commander.chain.output_seen(topic, now)
         if now >= self._land_due:
             # On the first tick of each 20 ms interval, so every second tick at 100 Hz.
             self._land_due = now - now % LAND_DETECTOR_PERIOD_US + LAND_DETECTOR_PERIOD_US
@@ -155,6 +186,7 @@ class CommanderModule(Module):
             for cmd in commands:
                 self._handle(cmd, now)
         out = self.commander.update(now, inputs)
+        self._failsafe = {"failsafe_action": out.failsafe_action, "failsafe_cause": out.failsafe_cause}
         for ack in out.acks:
             self._acknowledge(ack)
         self._tell_operator(out.events, now)
@@ -177,8 +209,14 @@ class CommanderModule(Module):
             self._home = out.home
             self._home_count += 1
         # Late subscribers (a CLI, a restarted module) learn the state within REPUBLISH_US.
-        if changed or home_changed or navigation != self._navigation or now - self._last_publish >= REPUBLISH_US:
+        if self.commander.chain.late:
+            self._republish_now = True
+            self._land_published = None
+        republish = self._republish_now or now - self._last_publish >= REPUBLISH_US
+        if changed or home_changed or navigation != self._navigation or republish:
+            self._republish_now = False
             self._last_publish = now
+            self.keep_state(self.commander.kept_state())
             self._navigation = navigation
             # PX4 publishes actuator_armed before vehicle_status; the navigator reads its request with the mode.
             self.publish("actuator_armed", msgspec.structs.replace(out.actuator_armed, timestamp=now))
@@ -187,6 +225,10 @@ class CommanderModule(Module):
             self.publish("vehicle_control_mode", msgspec.structs.replace(control, timestamp=now))
             if self._home is not None:
                 self.publish("home_position", home_position_message(self._home, self._home_count, now))
+
+    def status(self) -> dict[str, float | int | str | bool]:
+        """The failsafe in force and why, for `stack status` (PX4's `commander status`)."""
+        return dict(self._failsafe)
 
     def _detect_landing(self, now: int) -> None:
         state = self.land_detector.update(now, self._land_inputs())
@@ -205,6 +247,9 @@ class CommanderModule(Module):
             self.publish("vehicle_land_detected", VehicleLandDetected(timestamp=now, **state._asdict()))
 
     def _handle(self, cmd: VehicleCommand, now: int) -> None:
+        if not self.commander.addressed_to_me(cmd):
+            self.commander.ignored_commands += 1
+            return
         ack = offboard.refusal(cmd, self.latest("offboard_control_mode"), now, float(self.params["COM_OF_LOSS_T"]))
         if ack is None:
             ack = self.commander.handle_command(cmd, now)
@@ -213,7 +258,7 @@ class CommanderModule(Module):
 
     def _acknowledge(self, ack: VehicleCommandAck) -> None:
         if ack.result != VehicleCommandAck.VEHICLE_CMD_RESULT_ACCEPTED:
-            self.log.warning("command %d refused: %s", ack.command, ack.reason)
+            self.log.warning("command %s refused: %s", command_label(ack.command), ack.reason)
             if ack.reason:
                 self._refusals.append(ack.reason)
         self.publish("vehicle_command_ack", ack)
@@ -299,6 +344,7 @@ class CommanderModule(Module):
         if hover is not None and hover.valid:
             inp.hover_thrust, inp.hover_thrust_timestamp_us = hover.hover_thrust, hover.timestamp
         takeoff = latest("takeoff_status")
-        if takeoff is not None and takeoff.takeoff_state >= TakeoffStatus.TAKEOFF_STATE_DISARMED:
-            inp.takeoff_state = TakeoffState(takeoff.takeoff_state)
+        state = land_detector.takeoff_state(takeoff.takeoff_state) if takeoff is not None else None
+        if state is not None:
+            inp.takeoff_state = state
         return inp

@@ -2,13 +2,15 @@
 
 :class:`Commander` is clocked by its caller: ``update(now_us, inputs)`` every cycle (PX4: 100 Hz) with the
 latest :class:`~stack.commander.health.CommanderInputs`, and ``handle_command(cmd, now_us)`` for each
-``vehicle_command``, which always returns a ``vehicle_command_ack``:
+``vehicle_command``, which returns its ``vehicle_command_ack`` (none for another vehicle's command):
 
 * ACCEPTED; DENIED with a reason when a parameter is NaN, infinite or out of range (``result_param2`` names
   the offending parameter, 1–7, as MAVLink's COMMAND_ACK does) or the mode is unknown; TEMPORARILY_REJECTED
   with a reason when the command is valid but the vehicle cannot do it now (pre-arm checks, mode
   requirements, not landed...), which is what PX4 answers for refused arming and mode changes; UNSUPPORTED
-  for any other command. A refused command changes nothing.
+  for any other command. A refused command changes nothing. A command addressed to another system or
+  component (``target_system`` not MAV_SYS_ID or 0, ``target_component`` not MAV_COMP_ID or 0) is ignored
+  without an answer, as PX4's ``Commander::handle_command`` does (:mod:`stack.commander.command_checks`).
 
 Commands (MAVLink ids; PX4 encodings):
 
@@ -21,14 +23,16 @@ Commands (MAVLink ids; PX4 encodings):
   with guided → Position, with stabilize → Stabilized, else Manual).
 * SET_NAV_STATE (100001, PX4-internal): param1 is the nav_state itself — the stack's simple mode id.
 * NAV_TAKEOFF (22): param7 the takeoff altitude AMSL, or NaN for MIS_TAKEOFF_ALT above home; our
-  extension: param2 = 1 makes param7 metres above home. param4 yaw [deg] (NaN keeps the heading). Like
-  PX4's ``commander takeoff`` it arms the vehicle when disarmed. Only from the ground.
+  extension: param2 = 1 makes param7 metres above home; the altitude above home must lie in MIS_TAKEOFF_ALT's
+  range. param4 yaw [deg] (NaN keeps the heading). Like PX4's ``commander takeoff`` it arms the vehicle when
+  disarmed. Only from the ground.
 * NAV_LAND (21), NAV_RETURN_TO_LAUNCH (20), NAV_LOITER_UNLIM (17, Hold): mode changes; Land and Return
   need the vehicle armed (they forbid arming).
 * DO_REPOSITION (192): go to param5/param6 latitude/longitude [deg] and param7 altitude AMSL [m] (each NaN
   keeps the current value), yaw param4 [deg], ground speed param1 [m/s] (≤ 0 or NaN: default); switches to
   Hold. Our extension DO_REPOSITION_LOCAL (100192, PX4-internal id range): the same with param5/6/7 the
-  local north, east, down [m]. Refused when not flying or outside the geofence.
+  local north, east, down [m]. Refused when not flying, beyond MIS_DIST_1WP from home horizontally or
+  vertically, lower than NAV_MC_ALT_RAD above home, or outside the geofence.
 * MISSION_START (300): param1 first item (−1: current); needs a valid mission; arms when disarmed.
 * DO_SET_MISSION_CURRENT (224): param1 the item to fly next (−1: keep; with param2 = 1, "reset", the first
   item); needs a valid mission; in Mission mode the vehicle goes there at once, otherwise when the mission next
@@ -37,7 +41,9 @@ Commands (MAVLink ids; PX4 encodings):
   SYS_FAILURE_EN is 1 (the simulator acts on it, as PX4's simulated sensors do), denied otherwise.
 
 Modes follow PX4's rules: disarmed, any mode may be selected (except Land/Return, which could not arm);
-armed, only a mode whose requirements are met; Takeoff only from the ground; Mission only with a mission.
+armed, only a mode whose requirements are met, and a manual mode (Manual, Stabilized, Acro, Rattitude, Altitude,
+Position) only with manual control input present (COM_RC_LOSS_T); Takeoff only from the ground; Mission only
+with a mission. Yaw parameters are headings: within ±360° or NaN.
 Home is set from the local position when one first appears on the ground, and again on arming.
 Takeoff ends in Hold (COM_TAKEOFF_ACT 0) or Mission (1) once within NAV_MC_ALT_RAD of the takeoff
 altitude. Auto-disarm: COM_DISARM_LAND seconds after landing (not mid-mission), COM_DISARM_PRFLT seconds
@@ -59,6 +65,8 @@ from collections.abc import Callable, Mapping
 from enum import IntEnum
 from typing import NamedTuple
 
+from stack.commander.command_checks import addressed_to, goto_refusal, takeoff_altitude_refusal
+from stack.commander.control_chain import ChainFault, ControlChainMonitor, Loss
 from stack.commander.failsafe import ACTION_NAMES, Failsafe, FailsafeAction, FailsafeConditions
 from stack.commander.failsafe import PARAMS as FAILSAFE_PARAMS
 from stack.commander.geofence import PARAMS as GEOFENCE_PARAMS
@@ -71,6 +79,7 @@ from stack.commander.health import (
     external_autopilot_connected,
     failing_requirements,
     first_missing,
+    manual_control_present,
 )
 from stack.commander.home import HomePosition, home_from_local_position
 from stack.commander.hysteresis import Hysteresis
@@ -86,7 +95,14 @@ from stack.commander.modes import (
 )
 from stack.mathlib.geo import MapProjection
 from stack.msg.estimation import VehicleLocalPosition
-from stack.msg.system import ActuatorArmed, VehicleCommand, VehicleCommandAck, VehicleControlMode, VehicleStatus
+from stack.msg.system import (
+    ActuatorArmed,
+    VehicleCommand,
+    VehicleCommandAck,
+    VehicleControlMode,
+    VehicleStatus,
+    command_label,
+)
 from stack.params import catalogue
 from stack.params.param import Param
 
@@ -116,7 +132,7 @@ _POSITION_AND_ALTITUDE = int(Requirement.LOCAL_POSITION | Requirement.LOCAL_ALT)
 OWN_PARAMS: tuple[Param, ...] = catalogue.params(
     "COM_DISARM_LAND", "COM_DISARM_PRFLT", "COM_DL_LOSS_T", "COM_RC_LOSS_T", "COM_TAKEOFF_ACT", "COM_POS_FS_EPH",
     "COM_ARM_WO_GPS", "SYS_HAS_BARO", "SYS_HAS_MAG", "SYS_HAS_GPS", "SYS_FAILURE_EN", "MIS_TAKEOFF_ALT",
-    "NAV_MC_ALT_RAD", "COM_EXT_AP",
+    "NAV_MC_ALT_RAD", "COM_EXT_AP", "MIS_DIST_1WP", "MAV_SYS_ID", "MAV_COMP_ID",
 )
 PARAMS: tuple[Param, ...] = OWN_PARAMS + FAILSAFE_PARAMS + GEOFENCE_PARAMS
 DEFAULTS: dict[str, object] = {p.name: p.default for p in PARAMS}
@@ -191,6 +207,28 @@ def _finite_or_nan(value: float) -> bool:
     return math.isfinite(value) or math.isnan(value)
 
 
+MAX_YAW_DEG = 360.0
+"""Largest heading magnitude [deg] a command may give (MAVLink's yaw parameters are headings)."""
+
+
+def _yaw_refusal(what: str, value: float) -> _Verdict | None:
+    """Refusal of a yaw parameter (param4) that is neither NaN ("keep the heading") nor a heading in degrees."""
+    if math.isnan(value) or (math.isfinite(value) and abs(value) <= MAX_YAW_DEG):
+        return None
+    return _denied(f"{what}: yaw (param4) must be within ±{MAX_YAW_DEG:g}° or NaN, got {value:g}", 4)
+
+
+def _flag_refusal(what: str, index: int, value: float) -> _Verdict | None:
+    """Refusal of a flag parameter that is neither a finite number nor NaN (not given)."""
+    if _finite_or_nan(value):
+        return None
+    return _denied(f"{what}: param{index} must be finite or NaN, got {value:g}", index)
+
+
+def _finite_position(lpos: VehicleLocalPosition) -> bool:
+    return math.isfinite(lpos.x) and math.isfinite(lpos.y) and math.isfinite(lpos.z)
+
+
 class Commander:
     """PX4's commander as a pure state machine (see the module docstring for the rules)."""
 
@@ -218,7 +256,12 @@ class Commander:
         self._preflight_checked_us = 0
         self._gcs_lost = False
         self._manual_control_lost = False
+        self.chain = ControlChainMonitor()
+        self._chain_faults: tuple[ChainFault, ...] = ()
         self._gcs_lost_counter = 0
+        self.ignored_commands = 0
+        self._command_time_us = 0
+        """Commands addressed to another system or component, dropped unanswered."""
         self._geofence_violation = ""
         self._failsafe_action = FailsafeAction.NONE
         self._failsafe_delayed = FailsafeAction.NONE
@@ -318,13 +361,23 @@ class Commander:
         self._inputs = inputs
         self._failing = failing_requirements(now_us, inputs, self._health, self._home is not None)
 
+    def addressed_to_me(self, cmd: VehicleCommand) -> bool:
+        """Whether ``cmd`` is for this vehicle's autopilot (MAV_SYS_ID, MAV_COMP_ID, or 0 for all)."""
+        return addressed_to(cmd, int(self._p["MAV_SYS_ID"]), int(self._p["MAV_COMP_ID"]))
+
     def handle_command(self, cmd: VehicleCommand, now_us: int) -> VehicleCommandAck | None:
-        """Execute a ``vehicle_command`` and return its acknowledgement, or None when it waits for the external
-        autopilot to arm (it then comes out of ``update`` as one of ``acks``)."""
+        """Execute a ``vehicle_command`` and return its acknowledgement, or None when it is addressed to another
+        system or component (ignored and counted in ``ignored_commands``, as PX4 does) or waits for the external
+        autopilot to arm (its answer then comes out of ``update`` as one of ``acks``)."""
+        if not self.addressed_to_me(cmd):
+            self.ignored_commands += 1
+            return None
+        self._command_time_us = now_us
         handler = self._handlers.get(cmd.command)
         awaiting = self._external_arming
         if handler is None:
-            result, reason, param = (ACK.VEHICLE_CMD_RESULT_UNSUPPORTED, f"Unsupported command {cmd.command}", 0)
+            unsupported = f"Unsupported command {command_label(cmd.command)}"
+            result, reason, param = (ACK.VEHICLE_CMD_RESULT_UNSUPPORTED, unsupported, 0)
         else:
             result, reason, param = handler(cmd, now_us)
         if result == ACK.VEHICLE_CMD_RESULT_ACCEPTED:
@@ -357,7 +410,7 @@ class Commander:
         if armed and not inp.landed and not self._have_taken_off:
             self._have_taken_off = True
             self._takeoff_time_us = now_us
-        if self._home is None and position_known and inp.landed and lpos is not None:
+        if self._home is None and position_known and inp.landed and lpos is not None and _finite_position(lpos):
             self._set_home(lpos)
             self._failing &= ~Requirement.HOME
 
@@ -383,6 +436,7 @@ class Commander:
             self._events.append(f"Takeoff complete, switching to {mode_name(follow)}")
             self._set_intention(follow)
 
+        self._update_control_chain(now_us, armed)
         failing = self._failing
         if self._external_link_down(now_us):
             failing &= ~_ESTIMATES  # without the Pixhawk's sensors the estimates go; its own failsafe flies
@@ -392,6 +446,9 @@ class Commander:
             manual_control_lost=self._manual_control_lost,
             battery_warning=inp.battery_warning,
             geofence_breached=bool(self._geofence_violation),
+            attitude_control_lost=any(f.loss == Loss.ATTITUDE_CONTROL for f in self._chain_faults),
+            position_control_lost=any(f.loss == Loss.POSITION_CONTROL for f in self._chain_faults),
+            landed=inp.landed,
         )
         result = self._failsafe.update(
             now_us, armed, self.user_intended_nav_state, self._intention_updated, conditions, int(p["GF_ACTION"])
@@ -413,6 +470,59 @@ class Commander:
             self._preflight_checked_us = now_us
             self._preflight_ok = not arming_denial(now_us, intended, self._failing, inp, self._health)
 
+    # ------------------------------------------------------------------ resuming after a restart
+
+    def kept_state(self) -> dict[str, object]:
+        """What a commander restarted after a crash resumes from (see :meth:`resume`)."""
+        return {
+            "armed": self.armed,
+            "armed_time_us": self._armed_time_us,
+            "takeoff_time_us": self._takeoff_time_us,
+            "have_taken_off": self._have_taken_off,
+            "intended_nav_state": self.user_intended_nav_state,
+            "home": list(self._home) if self._home is not None else None,
+            "terminated": self._failsafe.selected_action == FailsafeAction.TERMINATE,
+        }
+
+    def resume(self, kept: Mapping[str, object], now_us: int) -> None:
+        """Take over the vehicle as the crashed commander left it: armed (no checks: it is flying), in the mode the
+        user chose, with the same home. Raises ValueError if ``kept`` is not what :meth:`kept_state` wrote."""
+        intended, home = kept.get("intended_nav_state"), kept.get("home")
+        armed_time, takeoff_time = kept.get("armed_time_us"), kept.get("takeoff_time_us")
+        if not isinstance(intended, int) or intended not in MODES:
+            raise ValueError(f"no known mode in {kept!r}")
+        if not isinstance(armed_time, int) or not isinstance(takeoff_time, int):
+            raise ValueError(f"no arming times in {kept!r}")
+        if home is not None and (not isinstance(home, list) or len(home) != len(HomePosition._fields)):
+            raise ValueError(f"no home position in {kept!r}")
+        if home is not None:
+            self._home = HomePosition(*(float(v) for v in home))
+        self.user_intended_nav_state = self.nav_state = intended
+        self._nav_state_timestamp_us = now_us
+        if kept.get("armed") is True:
+            self.arming_state = NS.ARMING_STATE_ARMED
+            self._armed_time_us, self._takeoff_time_us = armed_time, takeoff_time
+            self._have_taken_off = kept.get("have_taken_off") is True
+        if kept.get("terminated") is True:
+            self._failsafe.latch_termination()
+            self.nav_state = NS.NAVIGATION_STATE_TERMINATION
+        armed = "armed" if self.armed else "disarmed"
+        self._events.append(f"Commander restarted: resuming {armed} in {mode_name(self.nav_state)}")
+
+    def _update_control_chain(self, now_us: int, armed: bool) -> None:
+        if self.nav_state == NS.NAVIGATION_STATE_TERMINATION:
+            return  # terminated: the loops are off, and the modules that were lost stay named
+        if self._p["COM_EXT_AP"]:
+            self._chain_faults = ()  # an external autopilot flies the vehicle; its estimates come over its link
+            return
+        faults = tuple(self.chain.update(now_us, armed, control_mode(self.nav_state, armed)))
+        for fault in faults:
+            if fault not in self._chain_faults:
+                self._events.append(fault.describe())
+        if self._chain_faults and not faults and armed:
+            self._events.append("Control chain complete again")
+        self._chain_faults = faults
+
     def _update_link(self, now_us: int) -> None:
         last = self._inputs.last_gcs_heartbeat_us
         lost = last > 0 and now_us - last > int(self._p["COM_DL_LOSS_T"]) * 1_000_000
@@ -423,13 +533,13 @@ class Commander:
             self._events.append("Data link regained")
         self._gcs_lost = lost
 
+    def _manual_control_present(self, now_us: int) -> bool:
+        return manual_control_present(now_us, self._inputs, float(self._p["COM_RC_LOSS_T"]))
+
     def _update_manual_control(self, now_us: int) -> None:
-        """Manual control input counts as lost COM_RC_LOSS_T after the last valid one, or at once when the latest
-        says it is invalid, once some has been seen (PX4 ``ManualControl.cpp``, ``rcAndDataLinkCheck.cpp``)."""
-        inp = self._inputs
-        last = inp.last_manual_control_us
-        loss_us = float(self._p["COM_RC_LOSS_T"]) * 1e6
-        lost = last > 0 and (not inp.manual_control_valid or now_us - last > loss_us)
+        """Manual control input counts as lost when it is no longer present, once some has been seen (PX4
+        ``ManualControl.cpp``, ``rcAndDataLinkCheck.cpp``); never seen, it is a mode requirement, no failsafe."""
+        lost = self._inputs.last_manual_control_us > 0 and not self._manual_control_present(now_us)
         if lost and not self._manual_control_lost:
             self._events.append("Manual control lost")
         elif self._manual_control_lost and not lost:
@@ -609,6 +719,12 @@ class Commander:
             return _rejected(f"{prefix}: no valid mission")
         if self.armed and not can_run(nav_state, self._failing):
             return _rejected(f"{prefix}: requires {first_missing(nav_state, self._failing)}")
+        if (
+            self.armed
+            and mode.requirements & Requirement.MANUAL_CONTROL
+            and not self._manual_control_present(self._command_time_us)
+        ):
+            return _rejected(f"{prefix}: no manual control input")
         return None
 
     def _change_mode(self, nav_state: int) -> _Verdict:
@@ -644,6 +760,9 @@ class Commander:
     def _cmd_arm_disarm(self, cmd: VehicleCommand, now_us: int) -> _Verdict:
         if not math.isfinite(cmd.param1) or round(cmd.param1) not in (0, 1):
             return _denied(f"Arm/disarm: param1 must be 1 (arm) or 0 (disarm), got {cmd.param1:g}", 1)
+        refusal = _flag_refusal("Arm/disarm", 2, cmd.param2)
+        if refusal is not None:
+            return refusal
         forced = math.isfinite(cmd.param2) and round(cmd.param2) == CMD.ARM_FORCE_MAGIC
         reason = ArmDisarmReason.COMMAND_EXTERNAL if cmd.from_external else ArmDisarmReason.COMMAND_INTERNAL
         if round(cmd.param1) == CMD.ARMING_ACTION_ARM:
@@ -692,8 +811,9 @@ class Commander:
         return lpos.ref_alt - lpos.z if lpos is not None else math.nan
 
     def _cmd_takeoff(self, cmd: VehicleCommand, now_us: int) -> _Verdict:
-        if not _finite_or_nan(cmd.param4):
-            return _denied(f"Takeoff: yaw (param4) must be finite or NaN, got {cmd.param4:g}", 4)
+        refusal = _yaw_refusal("Takeoff", cmd.param4) or _flag_refusal("Takeoff", 2, cmd.param2)
+        if refusal is not None:
+            return refusal
         altitude = cmd.param7
         relative = math.isfinite(cmd.param2) and round(cmd.param2) == TAKEOFF_ALTITUDE_RELATIVE
         if math.isnan(altitude):
@@ -705,8 +825,9 @@ class Commander:
             if not math.isfinite(ground):
                 return _denied("Takeoff: altitude given AMSL but the local frame has no altitude reference", 7)
             altitude -= ground
-        if not altitude > 0.0:
-            return _denied(f"Takeoff: altitude must be above home, got {altitude:.1f} m", 7)
+        out_of_range = takeoff_altitude_refusal(altitude)
+        if out_of_range:
+            return _denied(out_of_range, 7)
         ceiling = self._geofence.max_ver_dist
         if ceiling > 0.0 and altitude > ceiling:
             return _denied(f"Takeoff: {altitude:.1f} m above home is beyond GF_MAX_VER_DIST {ceiling:g} m", 7)
@@ -721,10 +842,10 @@ class Commander:
         return ArmDisarmReason.COMMAND_EXTERNAL if cmd.from_external else ArmDisarmReason.COMMAND_INTERNAL
 
     def _check_reposition_params(self, cmd: VehicleCommand) -> _Verdict | None:
-        for index, value in ((1, cmd.param1), (4, cmd.param4), (5, cmd.param5), (6, cmd.param6), (7, cmd.param7)):
+        for index, value in ((1, cmd.param1), (5, cmd.param5), (6, cmd.param6), (7, cmd.param7)):
             if not _finite_or_nan(value):
                 return _denied(f"Reposition: param{index} must be finite or NaN, got {value:g}", index)
-        return None
+        return _yaw_refusal("Reposition", cmd.param4)
 
     def _cmd_reposition_global(self, cmd: VehicleCommand, now_us: int) -> _Verdict:
         refusal = self._check_reposition_params(cmd)
@@ -762,13 +883,27 @@ class Commander:
             return _rejected("Reposition denied: the vehicle is not flying")
         if lpos is None or int(self._failing) & _POSITION_AND_ALTITUDE:
             return _rejected("Reposition denied: no valid local position estimate")
+        if self._home is None:
+            return _rejected("Reposition denied: no home position")
+        altitude_given = not math.isnan(down)
         north = lpos.x if math.isnan(north) else north
         east = lpos.y if math.isnan(east) else east
         down = lpos.z if math.isnan(down) else down
-        if self._home is not None:
-            violation = self._geofence.violation(self._home.position, north, east, down)
-            if violation:
-                return _denied(f"Reposition denied: target outside the geofence ({violation})", 5)
+        if not (math.isfinite(north) and math.isfinite(east) and math.isfinite(down)):
+            return _rejected("Reposition denied: no valid local position estimate")
+        home = self._home.position
+        too_far, param = goto_refusal(
+            home,
+            (north, east, down),
+            altitude_given,
+            float(self._p["MIS_DIST_1WP"]),
+            float(self._p["NAV_MC_ALT_RAD"]),
+        )
+        if too_far:
+            return _denied(too_far, param)
+        violation = self._geofence.violation(home, north, east, down)
+        if violation:
+            return _denied(f"Reposition denied: target outside the geofence ({violation})", 5)
         verdict = self._change_mode(NS.NAVIGATION_STATE_AUTO_LOITER)
         if verdict[0] != ACK.VEHICLE_CMD_RESULT_ACCEPTED:
             return verdict
@@ -796,6 +931,9 @@ class Commander:
         count = self._inputs.mission_count
         if count <= 0:
             return _denied("Set current mission item denied: no valid mission")
+        refusal = _flag_refusal("Set current mission item", 2, cmd.param2)
+        if refusal is not None:
+            return refusal
         seq, reset = cmd.param1, math.isfinite(cmd.param2) and round(cmd.param2) == 1
         if math.isnan(seq) or seq == -1:
             if not reset:
@@ -841,12 +979,15 @@ class Commander:
             self._gcs_lost_counter,
             self._preflight_ok,
             can_set,
+            self._chain_faults,
         )
         changed = key != self._published_key
         if changed or self._messages is None:
             self._published_key = key
             terminated = self.nav_state == NS.NAVIGATION_STATE_TERMINATION
             status = VehicleStatus(
+                system_id=int(self._p["MAV_SYS_ID"]),
+                component_id=int(self._p["MAV_COMP_ID"]),
                 armed_time=self._armed_time_us,
                 takeoff_time=self._takeoff_time_us,
                 arming_state=self.arming_state,
@@ -862,6 +1003,7 @@ class Commander:
                 gcs_connection_lost=self._gcs_lost,
                 gcs_connection_lost_counter=self._gcs_lost_counter,
                 pre_flight_checks_pass=self._preflight_ok,
+                control_lost_modules=[f.module for f in self._chain_faults],
             )
             actuator_armed = ActuatorArmed(
                 armed=armed,

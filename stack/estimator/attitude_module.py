@@ -18,7 +18,7 @@ from stack.msg.estimation import EstimatorStatus, VehicleAngularVelocity, Vehicl
 from stack.msg.sensors import SensorAccel, SensorGyro
 from stack.params import catalogue
 from stack.params.param import Param
-from stack.runtime.module import Module, Trigger
+from stack.runtime.module import KEEP_PERIOD_US, Module, Trigger
 
 ATTITUDE_PARAMS = catalogue.params(
     "ATT_W_ACC", "ATT_W_MAG", "ATT_W_GYRO_BIAS", "ATT_BIAS_MAX", "ATT_MAG_DECL", "ATT_ACC_COMP",
@@ -102,6 +102,23 @@ class AttitudeEstimatorModule(Module):
         self.acceleration = VelocityDerivative(float(self.params["ATT_ACC_COMP_LP"]))
         self._accel_time = 0
         self._velocity_time = 0
+        self._kept_at = 0
+        self._resume(self.kept_state())
+
+    def _resume(self, kept: dict | None) -> None:
+        """Restarted after a crash (maybe in flight, where a still-vehicle alignment cannot happen): carry on from
+        the attitude and gyro bias the previous instance kept, the accelerometer correcting the tilt."""
+        if kept is None:
+            return
+        q, bias = kept.get("q"), kept.get("gyro_bias")
+        valid = isinstance(q, list) and len(q) == 4 and isinstance(bias, list) and len(bias) == 3
+        if not valid or not all(isinstance(v, float) and math.isfinite(v) for v in (*q, *bias)):
+            self.log.warning("restarted, but the kept attitude is not usable: aligning afresh")
+            return
+        self.estimator.reset(tuple(q))
+        limit = self.estimator.bias_max
+        self.estimator.gyro_bias = tuple(max(-limit, min(limit, b)) for b in bias)
+        self.log.info("restarted: resuming from the kept attitude")
 
     def _values(self, params: tuple[Param, ...]) -> dict[str, object]:
         return {p.name: self.params[p.name] for p in params}
@@ -128,7 +145,10 @@ class AttitudeEstimatorModule(Module):
         )
         if self.estimator.initialised:
             self.publish("vehicle_attitude", VehicleAttitude(timestamp_sample=t, q=self.estimator.q))
-            self._attitude_time = self.now_us()
+            self._attitude_time = now = self.now_us()
+            if now - self._kept_at >= KEEP_PERIOD_US:
+                self._kept_at = now
+                self.keep_state({"q": list(self.estimator.q), "gyro_bias": list(self.estimator.gyro_bias)})
         self.imu.add(t, xyz, accel_msg)
         if t - self.imu.start_us >= STATUS_INTERVAL_US:
             self._publish_status(gyro_msg)

@@ -305,6 +305,46 @@ class LocalPositionKF:
         self.gps_pos_test_ratio = self.gps_vel_test_ratio = self.baro_test_ratio = 0.0
         self._update_process_noise()
 
+    def snapshot(self) -> dict[str, object]:
+        """The estimate and its frame (state, covariance, origin, height reference), as JSON-able values, for an
+        instance restarted after a crash to :meth:`resume` from."""
+        origin = [self._map.lat0_deg, self._map.lon0_deg] if self._map is not None else None
+        return {
+            "x": self.x.tolist(),
+            "P": self.P.tolist(),
+            "origin": origin,
+            "ref_alt": self._ref_alt,
+            "ref_timestamp": self._ref_timestamp,
+            "z_initialised": self._z_initialised,
+            "baro_initialised": self._baro_initialised,
+            "hgt_ref": self._hgt_ref,
+        }
+
+    def resume(self, snap: dict[str, object]) -> None:
+        """Carry on from a :meth:`snapshot` in the same frame (the time base restarts with the next sample).
+        Raises ValueError, changing nothing, if ``snap`` is not one."""
+        try:
+            x = np.array(snap["x"], dtype=float)
+            P = np.array(snap["P"], dtype=float)
+            origin = snap["origin"]
+            ref_alt = float(snap["ref_alt"])  # type: ignore[arg-type]
+            ref_timestamp = int(snap["ref_timestamp"])  # type: ignore[call-overload]
+            hgt_ref = int(snap["hgt_ref"])  # type: ignore[call-overload]
+            flags = (snap["z_initialised"], snap["baro_initialised"])
+        except (KeyError, TypeError, ValueError) as e:
+            raise ValueError(f"not a snapshot: {e}") from None
+        if x.shape != (N_X,) or P.shape != (N_X, N_X) or not (np.isfinite(x).all() and np.isfinite(P).all()):
+            raise ValueError("not a snapshot: the state or covariance has the wrong shape or is not finite")
+        if origin is not None and not (isinstance(origin, list) and len(origin) == 2):
+            raise ValueError(f"not a snapshot: origin {origin!r}")
+        if not all(isinstance(f, bool) for f in flags) or hgt_ref not in (HGT_REF_BARO, HGT_REF_GPS):
+            raise ValueError("not a snapshot: flags")
+        self.reset()
+        self.x, self.P = x, P
+        self._map = MapProjection(float(origin[0]), float(origin[1])) if origin is not None else None
+        self._ref_alt, self._ref_timestamp, self._hgt_ref = ref_alt, ref_timestamp, hgt_ref
+        self._z_initialised, self._baro_initialised = flags
+
     @property
     def hgt_ref(self) -> int:
         """The height reference in use (``HGT_REF_BARO`` or ``HGT_REF_GPS``), latched at reset."""

@@ -20,7 +20,7 @@ from stack.estimator.position_kf import LocalPositionEstimate, LocalPositionKF
 from stack.mathlib.atmosphere import isa_altitude_m
 from stack.mathlib.quaternion import yaw
 from stack.msg.estimation import VehicleGlobalPosition, VehicleLocalPosition
-from stack.runtime.module import Module, Timer
+from stack.runtime.module import KEEP_PERIOD_US, Module, Timer
 
 PERIOD_US = 20_000
 
@@ -105,6 +105,15 @@ class LocalPositionEstimatorModule(Module):
         self.advertise("vehicle_local_position")
         self.advertise("vehicle_global_position")
         self.kf = LocalPositionKF(**self._kf_params())
+        self._kept_at = 0
+        kept = self.kept_state()
+        if kept is not None:
+            try:
+                self.kf.resume(kept)
+            except ValueError as e:
+                self.log.warning("restarted, but cannot resume (%s): initialising afresh", e)
+            else:
+                self.log.info("restarted: resuming the estimate in the same frame")
 
     def _kf_params(self) -> dict[str, float]:
         return {p.name: float(self.params[p.name]) for p in position_kf.PARAMS}
@@ -130,5 +139,8 @@ class LocalPositionEstimatorModule(Module):
             self.kf.fuse_gps(gps)
         est = self.kf.estimate()
         now = self.now_us()
+        if now - self._kept_at >= KEEP_PERIOD_US:
+            self._kept_at = now
+            self.keep_state(self.kf.snapshot())
         self.publish("vehicle_local_position", local_position_message(est, yaw(attitude.q), now))
         self.publish("vehicle_global_position", global_position_message(est, now))

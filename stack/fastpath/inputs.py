@@ -68,6 +68,10 @@ class FastInput(InputBuffer):
         return self._fast_decode_errors + self.sub.decode_errors
 
     @property
+    def ring_decode_errors(self) -> int:
+        return self._fast_decode_errors
+
+    @property
     def lost(self) -> int:
         return sum(r.lost for r in self.readers)
 

@@ -28,7 +28,7 @@ from dataclasses import dataclass
 from pymavlink.dialects.v20 import common as mavlink2
 
 from stack.mavlink import px4_modes
-from stack.msg.system import VehicleCommand, VehicleCommandAck
+from stack.msg.system import VehicleCommand, VehicleCommandAck, command_label
 
 CMD = VehicleCommand
 INT32_MAX = 0x7FFF_FFFF
@@ -123,7 +123,8 @@ def from_command_int(
         elif msg.frame not in AMSL_FRAMES:
             return Refusal(
                 mavlink2.MAV_RESULT_DENIED,
-                f"Command {msg.command} refused: frame {msg.frame} is not supported (use a global frame)",
+                f"Command {command_label(msg.command)} refused: frame {msg.frame} is not supported "
+                "(use a global frame)",
             )
     params = [msg.param1, msg.param2, msg.param3, msg.param4, _degrees(msg.x), _degrees(msg.y), z]
     return _vehicle_command(msg.command, _px4_meaning(msg.command, params), source, own)

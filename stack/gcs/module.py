@@ -52,6 +52,7 @@ from stack.msg.navigation import MissionResult
 from stack.msg.registry import fingerprint, message_type
 from stack.msg.system import TelemetryStatus, VehicleCommand, VehicleCommandAck
 from stack.msg.system import VehicleStatus as NS
+from stack.params import catalogue
 from stack.params.param import ParamError
 from stack.runtime.module import Arg, Module, Timer
 
@@ -164,6 +165,8 @@ class MavlinkModule(Module):
     TRIGGER = Timer(1.0)
     DT_RANGE = (0.1, 10.0)
     OUTSIDE_LOCKSTEP = True
+    PARAMS = catalogue.params("MAV_SYS_ID", "MAV_COMP_ID")
+    """The vehicle's MAVLink identity: what it sends as, and which commands and messages are for it."""
     ARGS = (
         Arg(
             "device",
@@ -172,7 +175,6 @@ class MavlinkModule(Module):
             "radio), tcpin:HOST:PORT, udpout:HOST:PORT",
         ),
         Arg("remote", "127.0.0.1:14550", "UDP: where to send until a peer has written (PX4's -o); empty: nowhere"),
-        Arg("system_id", 1, "MAVLink system id of the vehicle (PX4 MAV_SYS_ID); the autopilot is component 1"),
         Arg("mav_type", 2, "MAV_TYPE in the HEARTBEAT (PX4 MAV_TYPE): 2 quadrotor, 13 hexarotor, 14 octorotor"),
         Arg(
             "signing_key",
@@ -188,7 +190,7 @@ class MavlinkModule(Module):
         self.endpoint = parse_endpoint(str(a["device"]))
         remote = _remote(str(a["remote"]))
         key = signing.load_key(str(a["signing_key"])) if a["signing_key"] else None
-        self.own = (int(a["system_id"]), identity.MAV_COMP_ID_AUTOPILOT1)
+        self.own = (int(self.params["MAV_SYS_ID"]), int(self.params["MAV_COMP_ID"]))
         self.mav_type = int(a["mav_type"])
         self.clock = StampClock(rt.spec.lockstep, wall_clock_us)
         for topic in (

@@ -37,10 +37,12 @@ class MapProjection:
         return north, east
 
     def reproject(self, north: float, east: float) -> tuple[float, float]:
-        """Local north, east (m) → geodetic (deg)."""
+        """Local north, east (m) → geodetic (deg); NaN for a non-finite position."""
         x = north / EARTH_RADIUS_M
         y = east / EARTH_RADIUS_M
         c = math.sqrt(x * x + y * y)
+        if not math.isfinite(c):
+            return math.nan, math.nan
         if c == 0.0:
             return self.lat0_deg, self.lon0_deg
         sin_c, cos_c = math.sin(c), math.cos(c)

@@ -14,6 +14,8 @@ Quat = tuple[float, float, float, float]
 Mat3 = tuple[Vec3, Vec3, Vec3]
 
 IDENTITY: Quat = (1.0, 0.0, 0.0, 0.0)
+NAN_QUAT: Quat = (math.nan, math.nan, math.nan, math.nan)
+"""What a quaternion that names no rotation (zero, or not finite) normalises to."""
 
 
 def mul(p: Quat, q: Quat) -> Quat:
@@ -42,7 +44,17 @@ def norm(q: Quat) -> float:
 
 
 def normalized(q: Quat) -> Quat:
+    """``q`` scaled to unit length; NAN_QUAT when it is zero or not finite."""
     n = math.sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3])
+    if not 0.0 < n < math.inf:
+        if not is_finite(q):
+            return NAN_QUAT
+        # The squares of huge components overflow and of tiny ones underflow: scale first.
+        m = max(abs(c) for c in q)
+        if m == 0.0:
+            return NAN_QUAT
+        q = (q[0] / m, q[1] / m, q[2] / m, q[3] / m)
+        n = math.sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3])
     return (q[0] / n, q[1] / n, q[2] / n, q[3] / n)
 
 
@@ -172,8 +184,8 @@ def from_two_vectors(src: Vec3, dst: Vec3) -> Quat:
     """Shortest rotation taking the direction of src onto the direction of dst."""
     cr = (src[1] * dst[2] - src[2] * dst[1], src[2] * dst[0] - src[0] * dst[2], src[0] * dst[1] - src[1] * dst[0])
     dt = src[0] * dst[0] + src[1] * dst[1] + src[2] * dst[2]
-    ns = math.sqrt(src[0] ** 2 + src[1] ** 2 + src[2] ** 2)
-    nd = math.sqrt(dst[0] ** 2 + dst[1] ** 2 + dst[2] ** 2)
+    ns = math.sqrt(src[0] * src[0] + src[1] * src[1] + src[2] * src[2])
+    nd = math.sqrt(dst[0] * dst[0] + dst[1] * dst[1] + dst[2] * dst[2])
     w = dt + ns * nd
     if w < 1e-9 * ns * nd:
         # Opposite directions: rotate by pi about any axis orthogonal to src.

@@ -39,6 +39,7 @@ from pymavlink.dialects.v20 import common as mavlink2
 
 from stack.mavlink import px4_modes
 from stack.mavlink.px4_modes import Px4Mode
+from stack.msg.system import command_label
 
 # -- streams ---------------------------------------------------------------------------------------------
 
@@ -418,7 +419,7 @@ def _describe(command: CommandLong) -> str:
     if command.command == mavlink2.MAV_CMD_DO_SET_MODE:
         main, sub = round(command.params[1]), round(command.params[2])
         return f"mode {px4_modes.describe((main << 16) | (sub << 24))}"
-    return f"command {command.command}"
+    return f"command {command_label(command.command)}"
 
 
 # -- latency ---------------------------------------------------------------------------------------------

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from enum import IntEnum
 
+import msgspec
+
 from stack.msg.base import NAN, Message
 
 
@@ -82,6 +84,8 @@ class VehicleStatus(Message):
     power_input_valid: bool = True
     usb_connected: bool = False
     pre_flight_checks_pass: bool = False
+    control_lost_modules: list[str] = msgspec.field(default_factory=list)
+    """The control chain's dead or silent modules (not in PX4, whose loops share one process)."""
 
 
 class ActuatorArmed(Message):
@@ -161,6 +165,23 @@ class VehicleCommandAck(Message):
     target_component: int = 0
     from_external: bool = False
     reason: str = ""
+
+
+def _short_names(cls: type, prefix: str) -> dict[int, str]:
+    """Constant value → name without ``prefix``, from a message class's ``PREFIX_NAME = value`` attributes."""
+    return {v: k.removeprefix(prefix) for k, v in vars(cls).items() if k.startswith(prefix) and isinstance(v, int)}
+
+
+COMMAND_NAMES = _short_names(VehicleCommand, "VEHICLE_CMD_")
+"""Command id → MAVLink's MAV_CMD name without the prefix (``NAV_LAND``), for the commands the stack knows."""
+RESULT_NAMES = _short_names(VehicleCommandAck, "VEHICLE_CMD_RESULT_")
+"""Acknowledgement result → MAVLink's MAV_RESULT name without the prefix (``TEMPORARILY_REJECTED``)."""
+
+
+def command_label(command: int) -> str:
+    """A command for people: ``NAV_LAND (21)``, or the bare number of a command the stack does not know."""
+    name = COMMAND_NAMES.get(command)
+    return f"{name} ({command})" if name else str(command)
 
 
 class ParameterUpdate(Message):

@@ -25,6 +25,7 @@ from stack.params import (
     hte,
     land_detector,
     lpe,
+    mavlink,
     mc_att,
     mc_rate,
     mixer_output,
@@ -59,6 +60,7 @@ GROUPS = (
     mixer_output,
     sim,
     pixhawk,
+    mavlink,
 )
 
 

@@ -195,6 +195,8 @@ class FlightModeManager:
 
     def update(self, inp: NavigatorInputs, dt: float) -> TrajectoryCommand | None:
         """The trajectory setpoint for this cycle, or None when the mode flies without one."""
+        if math.isinf(inp.state.yaw):  # no heading, as NaN says (the trigonometry raises on infinity)
+            inp = inp._replace(state=inp.state._replace(yaw=NAN))
         if not inp.armed:
             self._active = None
             return None

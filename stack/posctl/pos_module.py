@@ -89,6 +89,7 @@ class MulticopterPositionControl(Module):
         self.takeoff = Takeoff(takeoff_params(self.params))
         self.velocity_derivative = VelocityDerivative(float(self.params["MPC_VELD_LP"]))
         self._enabled_since_us = 0
+        self._first_run = True
         self._takeoff_published: tuple[int, float] | None = None
         self._takeoff_published_us = 0
         self._failsafe_action = ""
@@ -115,6 +116,14 @@ class MulticopterPositionControl(Module):
             )
             self._publish_takeoff_status(now)
             return
+        if land is None:
+            return  # restarted in flight: the takeoff state waits for the land detector's word, not "landed"
+        if self._first_run:
+            self._first_run = False
+            # Started armed in the air (restarted after a crash): flying already, no takeoff from zero thrust.
+            self.takeoff.update_state(
+                lpos.timestamp_sample, armed=armed, landed=landed, want_takeoff=False, skip_takeoff=not landed
+            )
         if not self._enabled_since_us:
             self._enabled_since_us = now
             self.control.reset_integral()

@@ -233,8 +233,10 @@ class PositionControl:
             self._lim_tilt = tilt_max
 
     def set_hover_thrust(self, hover_thrust: float) -> None:
-        """Set the hover thrust directly, clamped to [0.05, 0.9]; the integrator is left untouched."""
-        self._hover_thrust = min(max(hover_thrust, HOVER_THRUST_MIN), HOVER_THRUST_MAX)
+        """Set the hover thrust directly, clamped to [0.05, 0.9]; the integrator is left untouched. NaN is
+        dropped."""
+        if hover_thrust == hover_thrust:
+            self._hover_thrust = min(max(hover_thrust, HOVER_THRUST_MIN), HOVER_THRUST_MAX)
 
     def update_hover_thrust(self, hover_thrust_new: float) -> None:
         """Switch to a new hover thrust estimate without a thrust step.
@@ -263,11 +265,13 @@ class PositionControl:
     # -- per-cycle inputs ------------------------------------------------------------------------
 
     def set_state(self, pos: Vec3, vel: Vec3, vel_dot: Vec3, yaw: float) -> None:
-        """Current estimate: position [m], velocity [m/s], filtered velocity derivative [m/s²], yaw."""
+        """Current estimate: position [m], velocity [m/s], filtered velocity derivative [m/s²], yaw (a
+        non-finite yaw keeps the last finite one, the heading a missing yaw setpoint holds)."""
         self._pos = pos
         self._vel = vel
         self._vel_dot = vel_dot
-        self._yaw = yaw
+        if _isfinite(yaw):
+            self._yaw = yaw
 
     def set_setpoint(self, pos: Vec3, vel: Vec3, acc: Vec3, yaw: float, yawspeed: float) -> None:
         """Trajectory setpoint (NaN = not controlled; velocity and acceleration act as feed-forward)."""
@@ -281,14 +285,14 @@ class PositionControl:
 
     def update(self, dt: float) -> bool:
         """Run one control cycle; True if the output thrust and attitude setpoints are valid."""
-        if not self.input_valid():
-            return False
-        self._position_control()
-        self._velocity_control(dt)
         if not _isfinite(self._yawspeed_sp):
             self._yawspeed_sp = 0.0
         if not _isfinite(self._yaw_sp):
             self._yaw_sp = self._yaw
+        if not self.input_valid():
+            return False
+        self._position_control()
+        self._velocity_control(dt)
         a = self._acc_sp
         t = self._thr_sp
         return (
@@ -396,13 +400,11 @@ class PositionControl:
             ex -= arw_gain * (asx - ax_prod)
             ey -= arw_gain * (asy - ay_prod)
 
+        # An error or a dt that is not finite (a NaN setpoint axis, a bad clock) leaves the integrator as it is.
         kix, kiy, kiz = self._gain_vel_i
-        if _isfinite(ex):
-            vel_int[0] += ex * kix * dt
-        if _isfinite(ey):
-            vel_int[1] += ey * kiy * dt
-        if _isfinite(ez):
-            vel_int[2] += ez * kiz * dt
+        for i, increment in enumerate((ex * kix * dt, ey * kiy * dt, ez * kiz * dt)):
+            if _isfinite(increment):
+                vel_int[i] += increment
 
     def _acceleration_control(self, ax: float, ay: float, az: float) -> Vec3:
         if not (_isfinite(ax) and _isfinite(ay) and _isfinite(az)):

@@ -1,15 +1,15 @@
-"""Republishing a recording on a running stack's bus, so every tool and module sees it as live.
+"""Republishing a recording on a bus, so every tool sees it as live.
 
 What subscribers see: each recorded message's exact payload, its recorded schema fingerprint,
 publication time and header flags (a lockstep recording keeps its simulated times and lockstep
-flag), on the same topic and instance, under the target vehicle. The publisher is the replay's
+flag), on the same topic and instance, under the recorded vehicle. The publisher is the replay's
 own bus node (publisher id random per replay, named ``replay`` in the graph), with its own
 sequence and topic index numbers (1, 2, ... from the start of the replay); recorded publisher ids
 are not reused, so a replay never impersonates a live module.
 
-Replay onto a stack of observers (``stack topic echo``, plots, a recorder) or of real-time
-modules; modules running in lockstep follow the simulator's clock and would mix the replayed
-messages with their own.
+``stack replay`` publishes on a bus of its own (:mod:`stack.cli.replay_stack`), never on a running
+stack's: modules there would mix the replayed messages with their own, and lockstep ones would meet
+the recording's simulated times beside their run's.
 
 Pacing follows the recording clock (each message's log time: the simulated time of a lockstep
 recording, the receive time of a real-time one), scaled by the speed factor; speed 0 sends as fast

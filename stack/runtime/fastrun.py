@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import select
+from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
 import msgspec
@@ -38,10 +39,13 @@ class FastDriver:
     scenario that ends, a coordinator at its last step): what a module wrote is always delivered.
     """
 
-    def __init__(self, rt: Runtime) -> None:
+    def __init__(self, rt: Runtime, announce: Callable[[], None]) -> None:
         att = rt.fast
         assert att is not None
         self.rt = rt
+        self._announce = announce
+        """Says the module is alive: only once it is ready on the fast path, as the supervisor takes that word
+        for the end of a restart, after which lockstep time stops waiting for it."""
         self.att = att
         self.region = att.region
         self.w = att.region.words
@@ -78,6 +82,10 @@ class FastDriver:
 
     # -- loops -------------------------------------------------------------------------------------
 
+    def _ready(self, role: int, **kwargs: Any) -> None:
+        self.att.ready(role, **kwargs)
+        self._announce()
+
     def run(self) -> None:
         cls = self.rt.module_cls
         if cls.LOCKSTEP_COORDINATOR:
@@ -86,17 +94,17 @@ class FastDriver:
             assert isinstance(cls.TRIGGER, Timer)
             self._run_passive(cls.TRIGGER.period_us)
         elif isinstance(cls.TRIGGER, Trigger):
-            self.att.ready(ROLE_TRIGGERED, trigger=f"{cls.TRIGGER.topic}/{cls.TRIGGER.instance}")
+            self._ready(ROLE_TRIGGERED, trigger=f"{cls.TRIGGER.topic}/{cls.TRIGGER.instance}")
             self._run_triggered()
         elif isinstance(cls.TRIGGER, Timer):
-            self.att.ready(ROLE_TIMED, period_us=cls.TRIGGER.period_us)
+            self._ready(ROLE_TIMED, period_us=cls.TRIGGER.period_us)
             self._run_timed()
         else:
             raise RuntimeError(f"{cls.__name__} declares neither a trigger nor a timer")
 
     def _run_coordinator(self) -> None:
         rt = self.rt
-        self.att.ready(ROLE_COORDINATOR)
+        self._ready(ROLE_COORDINATOR)
         coordinator = FastCoordinator(self.att, rt.module.step_period_us(), rt.spec.stall_timeout_s)
         try:
             rt.state = "waiting for modules"
@@ -206,7 +214,7 @@ class FastDriver:
         reader that fell behind (it marks how far it has read itself: see stack.fastpath.alltopics)."""
         rt, w = self.rt, self.w
         flags = (FLAG_LOSSLESS if rt.module_cls.LOSSLESS else 0) | (FLAG_READS_ALL if rt.reads_all_topics else 0)
-        self.att.ready(ROLE_PASSIVE, flags=flags)
+        self._ready(ROLE_PASSIVE, flags=flags)
         poll = select.poll()
         poll.register(self.att.eventfd, select.POLLIN)
         read_time = self.region.slot_word(self.att.slot, S_READ_TIME)

@@ -29,6 +29,7 @@ import functools
 import logging
 import time
 from collections import deque
+from collections.abc import Callable
 
 from stack.bus.node import stable_publisher_id
 from stack.bus.topics import Received
@@ -59,6 +60,9 @@ class InProcessRuntime(Runtime):
         self.module = self.module_cls(self)
         self._param_pub = bus.publisher(self, "parameter_update", 0)
         self.data = self._data_inputs()
+
+    def watch_modules(self, on_change: Callable[[str, int, bool], None]) -> None:
+        """Nothing to watch: every module runs in this one process."""
 
     def add_input(self, topic: str, instance: int, queue: bool, capacity: int) -> None:
         self.inputs[(topic, instance)] = InputBuffer(self.bus.subscribe(self, topic, instance), queue)

@@ -49,6 +49,11 @@ class InputBuffer:
     def foreign(self) -> int:
         return self.sub.foreign
 
+    @property
+    def ring_decode_errors(self) -> int:
+        """Malformed messages read from elsewhere than the subscriber (the fast path's rings)."""
+        return 0
+
     def pull(self) -> None:
         """Move everything Zenoh has delivered into the pending list."""
         poll = self.sub.poll

@@ -336,6 +336,10 @@ class LockstepCoordinator:
         self._watchdog = threading.Thread(target=self._watch, name="lockstep-watchdog", daemon=True)
         self._watchdog.start()
 
+    @property
+    def rejected(self) -> int:
+        return self._acks.rejected
+
     # -- membership ---------------------------------------------------------------------------
 
     def _on_member_token(self, sample: zenoh.Sample) -> None:

@@ -25,14 +25,23 @@ The algorithm itself is a plain class with no Zenoh in it; the module is thin gl
 
 from __future__ import annotations
 
+import json
 import logging
+import os
+from collections.abc import Callable
 from dataclasses import dataclass
+from pathlib import Path
 from typing import TYPE_CHECKING, Any, ClassVar
 
 from stack.params.param import Param, ParamError, ParamValue, convert
 
 if TYPE_CHECKING:
     from stack.runtime.runner import Runtime
+
+
+KEEP_PERIOD_US = 200_000
+"""How often a module whose state changes every run (an estimator) keeps it for an instance restarted after a
+crash: in lockstep the kept state is at most this old when it resumes (simulated time waits for the restart)."""
 
 
 @dataclass(frozen=True)
@@ -99,6 +108,7 @@ class Module:
         self.params = rt.params
         self.args: dict[str, ParamValue] = rt.args
         self.log = logging.getLogger(rt.name)
+        self._kept: dict[str, Any] | None = None
 
     # -- declarations (call from __init__) -------------------------------------------------------
 
@@ -150,6 +160,33 @@ class Module:
     def status(self) -> dict[str, float | int | str | bool]:
         """Figures of the module's own for its heartbeat (called from the heartbeat thread)."""
         return {}
+
+    def watch_modules(self, on_change: Callable[[str, int, bool], None]) -> None:
+        """``on_change(module, pid, alive)`` for each module process of this vehicle as it runs, starts or dies
+        (called from another thread)."""
+        self.rt.watch_modules(on_change)
+
+    def keep_state(self, state: dict[str, Any]) -> None:
+        """Keep what an instance restarted after a crash resumes from (JSON, in the run directory; written
+        atomically, and only when it changed)."""
+        if state == self._kept or not self.rt.spec.run_dir:
+            return
+        self._kept = state
+        path = Path(self.rt.spec.run_dir) / f"{self.rt.spec.name}.resume.json"
+        tmp = path.with_suffix(".tmp")
+        tmp.write_text(json.dumps(state))
+        os.replace(tmp, path)
+
+    def kept_state(self) -> dict[str, Any] | None:
+        """What the previous instance kept, when this one is a restart; None on a first start (or if unreadable)."""
+        if not self.rt.spec.late_join or not self.rt.spec.run_dir:
+            return None
+        path = Path(self.rt.spec.run_dir) / f"{self.rt.spec.name}.resume.json"
+        try:
+            state = json.loads(path.read_text())
+        except (OSError, ValueError):
+            return None
+        return state if isinstance(state, dict) else None
 
     def close(self) -> None:
         """Release resources (the runtime closes the session itself)."""

@@ -10,7 +10,10 @@ from __future__ import annotations
 import logging
 import os
 import time
+from collections.abc import Callable
 from typing import Any
+
+import zenoh
 
 from stack.bus import keys
 from stack.bus.node import Node, wall_clock_us
@@ -69,8 +72,10 @@ class Runtime:
         self.fast: Attachment | None = None
         self.trigger_input: FastInput | None = None
         self.reads_all_topics = False
+        self._lockstep: LockstepMember | LockstepCoordinator | None = None
         self.node: Node
         self.module: Module
+        self._module_watchers: list[zenoh.Subscriber] = []
 
     # -- clock -------------------------------------------------------------------------------------
 
@@ -78,6 +83,17 @@ class Runtime:
         return self._now if self.lockstep else wall_clock_us()
 
     # -- declarations used by Module -----------------------------------------------------------------
+
+    def watch_modules(self, on_change: Callable[[str, int, bool], None]) -> None:
+        """Call ``on_change(module, pid, alive)`` for every module process of this vehicle that is running or comes
+        or goes (their liveliness tokens; called from a Zenoh thread). The subscriber lives as long as the session."""
+
+        def changed(sample: zenoh.Sample) -> None:
+            module, pid = str(sample.key_expr).split("/")[-2:]
+            on_change(module, int(pid), sample.kind == zenoh.SampleKind.PUT)
+
+        key = keys.alive_query(self.spec.vehicle)
+        self._module_watchers.append(self.node.session.liveliness().declare_subscriber(key, changed, history=True))
 
     def add_input(self, topic: str, instance: int, queue: bool, capacity: int) -> None:
         if self.fast is not None:
@@ -136,12 +152,15 @@ class Runtime:
                 services.append(ParamService(node.session, node.vehicle, self.name, self.params))
                 services.append(Heartbeat(node.session, node.vehicle, self.name, self.snapshot))
                 if self.fast is not None:
-                    node.declare_token(keys.alive_token(node.vehicle, self.name, os.getpid()))
-                    self.state = "running"
-                    log.info("%s ready (%s, shared-memory fast path)", self.name, self.describe_trigger())
-                    FastDriver(self).run()
+
+                    def announce() -> None:
+                        node.declare_token(keys.alive_token(node.vehicle, self.name, os.getpid()))
+                        self.state = "running"
+                        log.info("%s ready (%s, shared-memory fast path)", self.name, self.describe_trigger())
+
+                    FastDriver(self, announce).run()
                     return
-                lockstep_part = self._make_lockstep()
+                lockstep_part = self._lockstep = self._make_lockstep()
                 node.declare_token(keys.alive_token(node.vehicle, self.name, os.getpid()))
                 # Over Zenoh the simulator starts once every module of the roster has synced; on the fast path
                 # it waits for the participants only, which an outside module is not.
@@ -411,16 +430,18 @@ class Runtime:
         span = max(now - self._last_beat, 1e-3)
         runs = self._loop_runs
         avg = self._loop_sum / runs * 1e6 if runs else 0.0
+        # Every subscriber's drops, inputs or not (a link's telemetry subscriptions, withdrawn ones too).
+        decode, schema, foreign = self.node.drop_counts()
         status = {
             "state": self.state,
             "trigger": self.describe_trigger(),
             "runs": self.runs,
             "msgs_in": sum(buf.received for buf in self.inputs.values()),
             "msgs_out": sum(p.count for p in self.outputs.values()),
-            "decode_errors": sum(buf.decode_errors for buf in self.inputs.values()),
-            "schema_errors": sum(buf.schema_errors for buf in self.inputs.values()),
-            "foreign": sum(buf.foreign for buf in self.inputs.values()),
-            "rejected": self.rejected + self.errors,
+            "decode_errors": decode + sum(buf.ring_decode_errors for buf in self.inputs.values()),
+            "schema_errors": schema,
+            "foreign": foreign,
+            "rejected": self.rejected + self.errors + (self._lockstep.rejected if self._lockstep else 0),
             "loop_avg_us": avg,
             "loop_max_us": self._loop_max * 1e6,
             "trigger_rate_hz": runs / span,

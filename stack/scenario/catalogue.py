@@ -44,9 +44,9 @@ class Scenario:
 
 
 def scenarios() -> dict[str, Scenario]:
-    from stack.scenario import attitude_step, failsafes, gps_loss, link_loss, mission_box, takeoff_land
+    from stack.scenario import attitude_step, failsafes, gps_loss, link_loss, mission_box, module_kill, takeoff_land
 
-    flights = (attitude_step, takeoff_land, mission_box, gps_loss, failsafes, link_loss)
+    flights = (attitude_step, takeoff_land, mission_box, gps_loss, failsafes, link_loss, module_kill)
     return {s.name: s for s in (f.SCENARIO for f in flights)}
 
 

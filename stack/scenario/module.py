@@ -36,11 +36,19 @@ class ScenarioModule(Module):
         self.subscribe("vehicle_command_ack", queue=True)
         for topic in ("vehicle_command", *self.scenario.publish):
             self.advertise(topic)
-        self.ctx = ScriptContext(self.publish, lambda: self.now_us() * 1e-6)
+        self._pids: dict[str, int] = {}
+        self.watch_modules(self._on_module)
+        self.ctx = ScriptContext(self.publish, lambda: self.now_us() * 1e-6, lambda: dict(self._pids))
         self.script = self.scenario.script(self.ctx)
         self.waiting = None
         self.started_wall: float | None = None
         self.started_sim = 0.0
+
+    def _on_module(self, module: str, pid: int, alive: bool) -> None:
+        if alive:
+            self._pids[module] = pid
+        elif self._pids.get(module) == pid:
+            del self._pids[module]
 
     def run(self, msg: None, dt: float) -> None:
         if self.started_wall is None:

@@ -8,11 +8,13 @@ setpoints and commands. It only talks to the stack over the bus, as any user's s
 from __future__ import annotations
 
 import math
+import os
+import signal
 from collections.abc import Callable, Generator
 from dataclasses import dataclass, field
 from typing import Any
 
-from stack.msg.system import VehicleCommand, VehicleCommandAck
+from stack.msg.system import RESULT_NAMES, VehicleCommand, VehicleCommandAck, command_label
 
 Wait = Callable[[], bool]
 Script = Callable[["ScriptContext"], Generator[Wait, None, None]]
@@ -40,9 +42,15 @@ class Series:
 class ScriptContext:
     """The script's handle on the stack; the scenario module drives it once per tick."""
 
-    def __init__(self, publish: Callable[[str, Any], None], now_s: Callable[[], float]) -> None:
+    def __init__(
+        self,
+        publish: Callable[[str, Any], None],
+        now_s: Callable[[], float],
+        pids: Callable[[], dict[str, int]] = dict,
+    ) -> None:
         self._publish = publish
         self._now_s = now_s
+        self._pids = pids
         self.latest: dict[str, Any] = {}
         self.series: dict[str, Series] = {}
         self.events: list[tuple[float, str]] = []
@@ -84,6 +92,21 @@ class ScriptContext:
     def take_acks(self, acks: list[VehicleCommandAck]) -> None:
         self._acks.extend(acks)
 
+    # -- processes -----------------------------------------------------------------------------------------
+
+    def pid(self, module: str) -> int | None:
+        """The process id of a running module of the stack (None while it is not running)."""
+        return self._pids().get(module)
+
+    def kill(self, module: str) -> int:
+        """SIGKILL a module of the stack, as a crash would end it; returns the pid it had."""
+        pid = self.pid(module)
+        if pid is None:
+            raise ScenarioError(f"module {module} is not running")
+        os.kill(pid, signal.SIGKILL)
+        self.log(f"killed {module} (pid {pid})")
+        return pid
+
     # -- commands ----------------------------------------------------------------------------------------
 
     def publish(self, topic: str, msg: Any) -> None:
@@ -93,13 +116,13 @@ class ScriptContext:
         """Send a vehicle_command and wait for its acknowledgement; a refusal raises ScenarioError."""
         self._acks.clear()
         self.publish("vehicle_command", VehicleCommand(command=command, from_external=True, **params))
-        yield self.until(
-            lambda: any(a.command == command for a in self._acks), timeout, f"the ack of command {command}"
-        )
+        label = command_label(command)
+        yield self.until(lambda: any(a.command == command for a in self._acks), timeout, f"the ack of command {label}")
         ack = next(a for a in self._acks if a.command == command)
         if ack.result != VehicleCommandAck.VEHICLE_CMD_RESULT_ACCEPTED:
-            raise ScenarioError(f"command {command} refused (result {ack.result}): {ack.reason or 'no reason given'}")
-        self.log(f"command {command} accepted")
+            result = RESULT_NAMES.get(ack.result, str(ack.result))
+            raise ScenarioError(f"command {label} refused ({result}): {ack.reason or 'no reason given'}")
+        self.log(f"command {label} accepted")
         return ack
 
 

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 
+from stack.commander.command_checks import addressed_to
 from stack.mathlib.vector import Vec3
 from stack.msg.sensors import SensorAccel, SensorBaro, SensorGps, SensorGyro, SensorMag
 from stack.msg.simulation import SimGroundtruth
@@ -46,7 +47,7 @@ class SimulatorModule(Module):
     PARAMS = (
         *catalogue.params(
             "SIH_LOC_LAT0", "SIH_LOC_LON0", "SIH_LOC_H0", "SIM_GPS_USED", "SIM_WIND_SPD", "SIM_WIND_DIR",
-            "SIM_WIND_GUST", "SIM_WIND_GUST_T", "SYS_FAILURE_EN",
+            "SIM_WIND_GUST", "SIM_WIND_GUST_T", "SYS_FAILURE_EN", "MAV_SYS_ID", "MAV_COMP_ID",
         ),
         *battery.PARAMS,
     )
@@ -112,7 +113,9 @@ class SimulatorModule(Module):
     def _inject_failures(self) -> None:
         """PX4's ``failure`` command (MAV_CMD_INJECT_FAILURE) as the simulated sensors implement it: GPS off/ok."""
         for cmd in self.take("vehicle_command"):
-            if cmd.command != VehicleCommand.VEHICLE_CMD_INJECT_FAILURE:
+            if cmd.command != VehicleCommand.VEHICLE_CMD_INJECT_FAILURE or not addressed_to(
+                cmd, int(self.params["MAV_SYS_ID"]), int(self.params["MAV_COMP_ID"])
+            ):
                 continue
             if not self.params["SYS_FAILURE_EN"]:
                 self.log.warning("failure injection ignored: SYS_FAILURE_EN is 0 (the commander denies it)")
@@ -130,7 +133,11 @@ class SimulatorModule(Module):
 
     def motor_commands(self) -> tuple[float, ...]:
         outputs = self.latest("actuator_outputs_sim")
-        if outputs is None:
+        armed = self.latest("actuator_armed")
+        # As PX4's output drivers do, the motors stop on disarm, lockdown, kill or termination whatever the last
+        # output said: a dead allocator cannot keep them turning.
+        stopped = armed is not None and (not armed.armed or armed.lockdown or armed.kill or armed.termination)
+        if outputs is None or stopped:
             return (0.0,) * self.motor_count
         commands = outputs.output[: self.motor_count]
         return tuple(c if math.isfinite(c) else 0.0 for c in commands)

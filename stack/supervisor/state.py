@@ -1,13 +1,15 @@
 """Where runs live and how another terminal finds a running stack.
 
 ``$STACK_HOME`` (default ``~/.stack``) holds ``runs/<stamp>-<profile or scenario>-<name>/`` (per-module
-logs and specs) and ``state/<vehicle>.<pid>.json``, one per running supervisor, with its pid, how it was started
-(``kind``: ``up`` or ``fly``) and the bus endpoint, so ``stack status``, ``stack topic ...`` and
-``stack down`` work from any terminal.
+logs and specs) and ``state/<vehicle>.<pid>.json``, one per running supervisor, with its pid (and the
+process's start time), how it was started (``kind``: ``up``, ``fly`` or ``replay``) and the bus endpoint,
+so ``stack status``, ``stack topic ...`` and ``stack down`` work from any terminal. A state whose process
+is gone, a zombie, or a pid since reused by another program (a supervisor killed by SIGKILL cannot clean
+up) is removed when read.
 
-A stack is addressed by name: a ``stack up`` stack by its vehicle, a flight by ``<vehicle>-fly-<pid>``
-(each flight is a stack of its own, on its own bus, beside any other). A command that names no stack
-addresses the ``stack up`` stacks, or the flights when no ``stack up`` runs.
+A stack is addressed by name: a ``stack up`` stack by its vehicle, a flight by ``<vehicle>-fly-<pid>``, a
+replay by ``<vehicle>-replay-<pid>`` (each a stack of its own, on its own bus, beside any other). A command
+that names no stack addresses the ``stack up`` stacks, or the others when no ``stack up`` runs.
 """
 
 from __future__ import annotations
@@ -21,6 +23,9 @@ import psutil
 
 UP = "up"
 FLY = "fly"
+REPLAY = "replay"
+# psutil derives a process's start time from the boot time and clock ticks: the same value on every read.
+CREATE_TIME_TOLERANCE_S = 0.05
 
 
 def stack_home() -> Path:
@@ -47,10 +52,35 @@ def flight_name(vehicle: str, pid: int) -> str:
     return f"{vehicle}-{FLY}-{pid}"
 
 
+def replay_name(vehicle: str, pid: int) -> str:
+    return f"{vehicle}-{REPLAY}-{pid}"
+
+
 def stack_name(state: dict[str, object]) -> str:
     """The name a running stack is addressed by."""
-    vehicle = str(state["vehicle"])
-    return flight_name(vehicle, int(state["pid"])) if state.get("kind") == FLY else vehicle
+    vehicle, kind = str(state["vehicle"]), state.get("kind", UP)
+    return vehicle if kind == UP else f"{vehicle}-{kind}-{state['pid']}"
+
+
+def process_identity() -> dict[str, object]:
+    """This process's pid and start time, for a state record (see :func:`is_alive`)."""
+    return {"pid": os.getpid(), "pid_created": psutil.Process().create_time()}
+
+
+def is_alive(state: dict[str, object]) -> bool:
+    """Whether the process that wrote the state still runs: not gone, not a zombie, and (when the state
+    says when it started) not another program that got the pid since."""
+    pid = state.get("pid")
+    if not isinstance(pid, int):
+        return False
+    try:
+        proc = psutil.Process(pid)
+        if proc.status() == psutil.STATUS_ZOMBIE:
+            return False
+        created = state.get("pid_created")
+        return not isinstance(created, float) or abs(proc.create_time() - created) <= CREATE_TIME_TOLERANCE_S
+    except psutil.Error:
+        return False
 
 
 def state_path(vehicle: str, pid: int) -> Path:
@@ -77,8 +107,7 @@ def running_stacks() -> list[dict[str, object]]:
             state = json.loads(path.read_text())
         except (json.JSONDecodeError, OSError):
             continue
-        pid = state.get("pid")
-        if isinstance(pid, int) and psutil.pid_exists(pid):
+        if is_alive(state):
             found.append(state)
         else:
             path.unlink(missing_ok=True)

@@ -46,6 +46,8 @@ BACKOFF_MAX_S = 10.0
 # How often the supervisor checks its modules (and applies topic-graph changes to a fast-path run).
 MONITOR_PERIOD_S = 0.05
 ROUTER_PORT_ATTEMPTS = 5
+# A stack whose start-up a signal interrupted exits as a shell reports a program killed by it (130: SIGINT).
+INTERRUPTED_EXIT_BASE = 128
 
 
 @dataclass
@@ -122,6 +124,7 @@ class Supervisor:
         self.run_id = secrets.randbits(63) | 1
         self.fast: FastPathHost | None = None
         self._stop = threading.Event()
+        self._signal: int | None = None  # the signal that stopped the stack, if one did
         self._alive: dict[str, int] = {}
         self._alive_changed = threading.Condition()
         self._heartbeats: dict[str, ModuleHeartbeat] = {}
@@ -191,9 +194,13 @@ class Supervisor:
                     self.fast.roster_complete()
                 self._say(f"all {len(self.modules)} modules up" + (" (lockstep)" if self.profile.lockstep else ""))
                 self._monitor()
+            elif self._signal is not None:
+                self._say_interrupted(self._signal)
             else:
                 self.failed = True
         finally:
+            if self._signal is not None and self.roster_complete:
+                self._say(f"{signal.Signals(self._signal).name}: stopping")
             self._stop_all()
             for entity in entities:
                 entity.undeclare()
@@ -201,13 +208,25 @@ class Supervisor:
                 self.fast.close()
             session.close()
             run_state.remove_state(self.vehicle, os.getpid())
+        if self._signal is not None and not self.roster_complete:
+            self._say("stopped: start-up interrupted")
+            return INTERRUPTED_EXIT_BASE + self._signal
         code = 1 if self.failed or any(r.failures for r in (*self.modules, *self.programs)) else 0
         self._say("stopped" + (" with failures" if code else ""))
         return code
 
+    def _say_interrupted(self, signum: int) -> None:
+        """What a Ctrl-C or SIGTERM during start-up leaves: which modules had started, which was starting."""
+        started = [r.entry.name for r in (*self.programs, *self.modules) if r.state == "running"]
+        starting = [r.entry.name for r in (*self.programs, *self.modules) if r.state == "starting"]
+        total = len(self.programs) + len(self.modules)
+        done = f"{len(started)} of {total} started" + (f" ({', '.join(started)})" if started else "")
+        doing = f", {starting[0]} starting" if starting else ""
+        self._say(f"start-up interrupted by {signal.Signals(signum).name}: {done}{doing}; stopping them")
+
     def state_record(self) -> dict[str, object]:
         return {
-            "pid": os.getpid(),
+            **run_state.process_identity(),
             "kind": self.options.kind,
             "vehicle": self.vehicle,
             "profile": str(self.profile.path),
@@ -220,8 +239,9 @@ class Supervisor:
         }
 
     def _on_signal(self, signum: int, frame: object) -> None:
+        # No printing here: the handler may interrupt this thread inside _say, which holds the print lock.
         if not self._stop.is_set():
-            self._say(f"{signal.Signals(signum).name}: stopping")
+            self._signal = signum
         self._stop.set()
 
     # -- starting ----------------------------------------------------------------------------------

@@ -32,7 +32,7 @@ import rerun as rr
 
 from stack.mathlib.quaternion import angle_between, to_euler
 from stack.mathlib.vector import Vec3
-from stack.msg.system import VehicleCommand, VehicleCommandAck, VehicleStatus
+from stack.msg.system import RESULT_NAMES, VehicleCommandAck, VehicleStatus, command_label
 from stack.viz import layout as lay
 from stack.viz.geometry import GENERIC_QUAD_X, disc_radius, rotor_disc
 
@@ -76,8 +76,6 @@ def _names(cls: type, prefix: str) -> dict[int, str]:
 
 
 NAV_STATE_NAMES = _names(VehicleStatus, "NAVIGATION_STATE_")
-COMMAND_NAMES = _names(VehicleCommand, "VEHICLE_CMD_")
-RESULT_NAMES = _names(VehicleCommandAck, "VEHICLE_CMD_RESULT_")
 ACK_OK = (VehicleCommandAck.VEHICLE_CMD_RESULT_ACCEPTED, VehicleCommandAck.VEHICLE_CMD_RESULT_IN_PROGRESS)
 
 
@@ -531,9 +529,8 @@ class FlightLogger:
             self._event(t, w, text, "ERROR" if m.failsafe else "INFO")
 
     def _on_vehicle_command_ack(self, m: Any, t: int, w: int | None) -> None:
-        command = COMMAND_NAMES.get(m.command, str(m.command))
         result = RESULT_NAMES.get(m.result, str(m.result))
-        text = f"command {command} ({m.command}): {result}" + (f", {m.reason}" if m.reason else "")
+        text = f"command {command_label(m.command)}: {result}" + (f", {m.reason}" if m.reason else "")
         self._event(t, w, text, "INFO" if m.result in ACK_OK else "WARN")
 
     def _on_home_position(self, m: Any, t: int, w: int | None) -> None:

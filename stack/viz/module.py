@@ -34,6 +34,7 @@ import zenoh
 from stack.bus import keys
 from stack.runtime.inputs import InputBuffer
 from stack.runtime.module import Arg, Module, Timer
+from stack.viz.display import DEFAULT_GRPC_PORT, has_display
 
 if TYPE_CHECKING:
     from stack.runtime.runner import Runtime
@@ -79,7 +80,7 @@ class RerunBridgeModule(Module):
         Arg("web", False, "Serve the Rerun web viewer and log its URL"),
         Arg("save", "", "Also write the plots to this .rrd file"),
         Arg("bind", "127.0.0.1", "Address the viewer servers listen on (loopback unless you choose otherwise)"),
-        Arg("grpc_port", 9876, "Port of the viewer's data server (0: any free port)"),
+        Arg("grpc_port", DEFAULT_GRPC_PORT, "Port of the viewer's data server (0: any free port)"),
         Arg("web_port", 9090, "Port of the web viewer page (0: any free port)"),
         Arg("plot_rate_hz", 50.0, "Most rows per second per plotted topic (0: every message)"),
         Arg("pose_rate_hz", 20.0, "Rate of the 3D pose, trails and setpoint marker"),
@@ -91,7 +92,7 @@ class RerunBridgeModule(Module):
         super().__init__(rt)
         from stack.viz.layout import default_blueprint
         from stack.viz.logger import TOPICS, FlightLogger, new_recording
-        from stack.viz.viewer import PlotSinks, has_display
+        from stack.viz.viewer import PlotSinks
 
         args = self.args
         self.capacity = int(args["queue"])

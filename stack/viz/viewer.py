@@ -26,21 +26,14 @@ import rerun as rr
 import rerun.blueprint as rrb
 
 from stack.bus.ports import free_port
+from stack.viz.display import DEFAULT_GRPC_PORT
 
 LOOPBACK = "127.0.0.1"
 LOOPBACK_NAMES = ("127.0.0.1", "localhost", "::1")
-DEFAULT_GRPC_PORT = 9876
 DEFAULT_WEB_PORT = 9090
 START_TIMEOUT_S = 15.0
 
 log = logging.getLogger("stack.viz")
-
-
-def has_display() -> bool:
-    """Whether a native viewer window can open here."""
-    if sys.platform in ("darwin", "win32"):
-        return True
-    return bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
 
 
 def rerun_command() -> list[str]:
@@ -92,7 +85,8 @@ class PlotSinks:
 
     - ``save``: an .rrd file path ("" for none).
     - ``web``: start ``rerun --serve-web`` bound to ``bind`` and stream to it; ``web_url`` is the
-      address to open in a browser. The server stops with :meth:`close`.
+      address to open in a browser. The server stops with :meth:`close`, and with this process if it is
+      killed. A port given (not 0) must be free: two web viewers never share one.
     - ``spawn``: stream to a native viewer on ``bind``:``grpc_port``, starting one (detached, it
       outlives the session like ``rr.spawn``'s) unless one already listens there. Ignored with ``web``.
     - ports of 0 pick free ones.
@@ -122,6 +116,9 @@ class PlotSinks:
             Path(save).parent.mkdir(parents=True, exist_ok=True)
             sinks.append(rr.FileSink(save))
         if web:
+            for port in (grpc_port, web_port):
+                if port and accepts_connections(host, port):
+                    raise RuntimeError(f"port {port} on {host} is taken (another viewer?): choose another or 0 (any)")
             grpc_port = grpc_port or free_port(host)
             web_port = web_port or free_port(host)
             self.server = self._start(
@@ -148,8 +145,10 @@ class PlotSinks:
 
     @staticmethod
     def _start(args: list[str], detach: bool) -> subprocess.Popen[bytes]:
+        """A detached viewer outlives this process; the web server dies with it, even if it is killed."""
+        own = [] if detach else [sys.executable, "-m", "stack.supervisor.child", str(os.getpid())]
         return subprocess.Popen(
-            [*rerun_command(), *args],
+            [*own, *rerun_command(), *args],
             env=viewer_environment(),
             stdin=subprocess.DEVNULL,
             stdout=subprocess.DEVNULL,

@@ -5,7 +5,7 @@ import math
 import msgspec
 import pytest
 
-from stack.cli.topic import parse_message
+from stack.cli.message_json import parse_message
 from stack.msg.base import Message
 from stack.msg.registry import TOPICS, fingerprint, message_type, schema_text
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import subprocess
 import threading
 from pathlib import Path
 
@@ -10,7 +11,7 @@ import psutil
 import pytest
 
 from stack.supervisor import state as run_state
-from tests.support.harness import run_cli
+from tests.support.harness import RunningStack, chain_profile, run_cli, wait_no_processes
 
 
 @pytest.fixture
@@ -78,3 +79,35 @@ def test_several_flights_and_no_stack_up_ask_for_a_name(home):
     assert (
         out.stderr.strip() == "error: no running stack found named 'v1' (start one with `stack up`, or pass --endpoint)"
     )
+
+
+def test_a_state_whose_pid_is_a_zombie_or_another_program_is_removed(home):
+    me = register("v1", os.getpid(), run_state.UP) | run_state.process_identity()
+    run_state.write_state("v1", me)
+    assert run_state.addressed_stacks(None) == [me]
+    # The pid now belongs to a program started after the supervisor that wrote the state.
+    run_state.write_state("v1", me | {"pid_created": me["pid_created"] - 100.0})
+    zombie = subprocess.Popen(["sleep", "0"])
+    while psutil.Process(zombie.pid).status() != psutil.STATUS_ZOMBIE:
+        pass
+    register("v2", zombie.pid, run_state.UP)
+    assert run_state.addressed_stacks(None) == []
+    assert not list((home / "state").iterdir())
+    zombie.wait()
+
+
+def test_after_sigkill_of_the_supervisor_no_command_believes_a_stack_runs(tmp_path):
+    home = tmp_path / "home"
+    stack = RunningStack(home, chain_profile(tmp_path / "chain.toml", lockstep=False))
+    try:
+        stack.wait_up()
+        assert len(list((home / "state").glob("*.json"))) == 1
+        stack.proc.kill()  # SIGKILL: no clean-up, and not reaped yet (a zombie, as under a parent that never waits)
+        for command in ("status", "down"):
+            out = run_cli(home, command)
+            assert out.returncode == 1
+            assert out.stderr.startswith("error: no running stack found"), out.stderr
+        assert not list((home / "state").glob("*.json"))
+    finally:
+        stack.kill()
+    assert not wait_no_processes(home, timeout=15)

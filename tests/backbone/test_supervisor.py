@@ -152,3 +152,26 @@ def test_status_reports_each_module(tmp_path):
     finally:
         stack.stop()
     assert not wait_no_processes(home)
+
+
+def test_ctrl_c_during_start_up_says_it_was_interrupted_and_what_had_started(tmp_path):
+    home = tmp_path / "home"
+    profile = chain_profile(
+        tmp_path / "chain.toml", lockstep=False, extra='\n[[module]]\nmodule = "tests.support.modules:SlowStart"\n'
+    )
+    for sig, code in ((signal.SIGINT, 130), (signal.SIGTERM, 143)):
+        stack = RunningStack(home, profile)
+        try:
+            stack.wait_for(r"starting slow_start")
+            assert stack.stop(sig) == code
+        finally:
+            stack.kill()
+        name = signal.Signals(sig).name
+        assert (
+            f"start-up interrupted by {name}: 4 of 5 started (tick_source, doubler, summer, pacer), "
+            "slow_start starting; stopping them"
+        ) in stack.output
+        assert stack.output.rstrip().endswith("[stack] stopped: start-up interrupted")
+        assert "failures" not in stack.output and "exit code" not in stack.output
+        assert not wait_no_processes(home)
+        assert run_cli(home, "status").returncode == 1

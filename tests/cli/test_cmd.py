@@ -87,11 +87,14 @@ def test_return_needs_an_armed_vehicle(stack):
         line = refused(stack.cli("cmd", name))
         assert line.startswith("rtl: TEMPORARILY_REJECTED: ") and "disarmed" in line
     assert refused(stack.cli("cmd", "land")).startswith("land: TEMPORARILY_REJECTED: ")
+    # The commander logs refusals by the command's MAVLink name.
+    log = (stack.run_dir() / "commander.log").read_text()
+    assert "command NAV_LAND (21) refused: " in log and "command NAV_RETURN_TO_LAUNCH (20) refused: " in log
 
 
 def test_the_commander_denies_out_of_range_parameters(stack):
     low = refused(stack.cli("cmd", "takeoff", "--alt", "-5"))
-    assert low == "takeoff: DENIED: Takeoff: altitude must be above home, got -5.0 m"
+    assert low == "takeoff: DENIED: Takeoff: -5.0 m above home is outside MIS_TAKEOFF_ALT's range (0, 80] m"
     far = refused(stack.cli("cmd", "goto", "--lat", "100", "--lon", "8"))
     assert far == "goto: DENIED: Reposition: latitude 100 is outside ±90°"
 

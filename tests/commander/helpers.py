@@ -65,12 +65,15 @@ class Clock:
         self.period = period_us
         self.position = (0.0, 0.0, 0.0)
         self.landed = True
+        self.sticks = False
+        """Manual control input arrives every cycle."""
         self.overrides: dict[str, object] = dict(overrides or {})
         self.events: list[str] = []
         self.last: CommanderOutputs = commander.update(self.t, self.inputs())
 
     def inputs(self):
-        return healthy(self.t, self.position, self.landed, **self.overrides)
+        sticks = {"last_manual_control_us": self.t, "manual_control_valid": True} if self.sticks else {}
+        return healthy(self.t, self.position, self.landed, **{**sticks, **self.overrides})
 
     def step(self, seconds: float = 0.0) -> CommanderOutputs:
         """Advance by ``seconds`` (at least one cycle) and return the last outputs."""

@@ -5,7 +5,7 @@ import pytest
 from stack.commander import commands as C
 from stack.commander.state_machine import VEHICLE_CMD_DO_REPOSITION_LOCAL, VEHICLE_CMD_SET_NAV_STATE
 from stack.mathlib.geo import MapProjection
-from stack.msg.system import VehicleCommand
+from stack.msg.system import VehicleCommand, command_label
 from stack.msg.system import VehicleCommandAck as ACK
 from stack.msg.system import VehicleStatus as NS
 from tests.commander.helpers import REF, make_clock
@@ -40,15 +40,25 @@ BAD_COMMANDS = [
     (CMD(command=VEHICLE_CMD_SET_NAV_STATE, param1=99.0), 1, "unknown mode id 99"),
     (CMD(command=VEHICLE_CMD_SET_NAV_STATE, param1=2.5), 1, "unknown mode id 2.5"),
     (CMD(command=VEHICLE_CMD_SET_NAV_STATE, param1=float(NS.NAVIGATION_STATE_DESCEND)), 1, "Unsupported mode"),
-    (C.takeoff_command(-5.0), 7, "must be above home"),
-    (C.takeoff_command(0.0), 7, "must be above home"),
+    (C.takeoff_command(-5.0), 7, "-5.0 m above home is outside MIS_TAKEOFF_ALT's range (0, 80] m"),
+    (C.takeoff_command(0.0), 7, "outside MIS_TAKEOFF_ALT's range"),
+    (C.takeoff_command(1e9), 7, "1000000000.0 m above home is outside MIS_TAKEOFF_ALT's range (0, 80] m"),
     (C.takeoff_command(80.0), 7, "beyond GF_MAX_VER_DIST 50 m"),
     (C.takeoff_command(INF), 7, "must be finite"),
-    (C.takeoff_command(400.0, relative=False), 7, "must be above home, got -89.4 m"),
+    (C.takeoff_command(400.0, relative=False), 7, "-89.4 m above home is outside MIS_TAKEOFF_ALT's range"),
     (C.takeoff_command(5.0, yaw_deg=INF), 4, "yaw"),
+    (C.takeoff_command(5.0, yaw_deg=1e300), 4, "yaw (param4) must be within ±360° or NaN"),
+    (CMD(command=CMD.VEHICLE_CMD_NAV_TAKEOFF, param2=INF, param7=5.0), 2, "Takeoff: param2 must be finite or NaN"),
     (C.goto_local_command(500.0, 0.0, -10.0), 5, "outside the geofence"),
     (C.goto_local_command(0.0, 0.0, -70.0), 5, "beyond GF_MAX_VER_DIST"),
     (C.goto_local_command(INF, 0.0, -10.0), 5, "param5 must be finite or NaN"),
+    (C.goto_local_command(1e9, 0.0, -5.0), 5, "1000000000.0 m from home, beyond MIS_DIST_1WP 900 m"),
+    (C.goto_local_command(0.0, 0.0, 1e9), 7, "below NAV_MC_ALT_RAD 0.8 m (it would fly into the ground)"),
+    (C.goto_local_command(0.0, 0.0, -0.5), 7, "0.5 m above home, below NAV_MC_ALT_RAD"),
+    (C.goto_local_command(5.0, 0.0, -5.0, yaw_deg=-INF), 4, "yaw (param4) must be within ±360° or NaN"),
+    (CMD(command=CMD.VEHICLE_CMD_COMPONENT_ARM_DISARM, param1=0.0, param2=INF), 2, "Arm/disarm: param2 must be"),
+    (CMD(command=CMD.VEHICLE_CMD_DO_SET_MODE, param1=INF, param2=1.0), 1, "base mode (param1) must be 0–255"),
+    (CMD(command=CMD.VEHICLE_CMD_DO_SET_MODE, param1=1.0, param2=1e300), 2, "unknown or unsupported"),
     (C.goto_global_command(95.0, 8.5, 500.0), 5, "latitude 95 is outside"),
     (C.goto_global_command(47.4, NAN, 500.0), 5, "give both latitude"),
     (C.goto_global_command(47.4, 200.0, 500.0), 6, "longitude 200"),
@@ -91,7 +101,9 @@ def test_unknown_commands_are_unsupported(command):
     before = _snapshot(clock.step())
     ack = clock.send(CMD(command=command, param1=1.0))
     assert ack.result == ACK.VEHICLE_CMD_RESULT_UNSUPPORTED
-    assert ack.reason == f"Unsupported command {command}"
+    assert ack.reason == f"Unsupported command {command_label(command)}"
+    if command == CMD.VEHICLE_CMD_NAV_WAYPOINT:
+        assert ack.reason == "Unsupported command NAV_WAYPOINT (16)"  # by MAVLink's name where it has one
     assert _snapshot(clock.step()) == before
 
 
@@ -126,6 +138,8 @@ def test_mode_refusals_are_temporary_and_explained():
     ack = clock.send(C.takeoff_command(10.0))
     assert ack.reason == "Switching to Takeoff is currently not possible: already flying"
     clock.overrides = {"local_position": None}
+    clock.step()
+    clock.sticks = True
     clock.step()
     ack = clock.send(C.set_mode_command("posctl"))
     assert ack.result == ACK.VEHICLE_CMD_RESULT_TEMPORARILY_REJECTED

@@ -245,6 +245,8 @@ def test_geofence_height_and_default_hold():
 def test_user_takes_over_from_a_return_by_switching_mode():
     clock = _in_mission(GF_ACTION=3, GF_MAX_HOR_DIST=50.0)
     assert clock.fly_to((60.0, 0.0, -10.0)).vehicle_status.nav_state == NS.NAVIGATION_STATE_AUTO_RTL
+    clock.sticks = True  # the pilot takes the sticks
+    clock.step()
     assert clock.send(C.set_mode_command("posctl")).result == ACK.VEHICLE_CMD_RESULT_ACCEPTED
     out = clock.step()
     assert out.vehicle_status.nav_state == NS.NAVIGATION_STATE_POSCTL

@@ -744,3 +744,31 @@ def test_baro_reference_gps_altitude_gate_includes_the_offset_variance(factor: f
     x_expected, P_expected = textbook_gps_update(x, P, y, var, rows)
     np.testing.assert_allclose(kf.x, x_expected, rtol=0.0, atol=1e-12)
     np.testing.assert_allclose(kf.P, P_expected, rtol=0.0, atol=1e-12)
+
+
+@BOTH_REFS
+def test_a_filter_resumed_from_a_snapshot_carries_on_in_the_same_frame(hgt_ref: int) -> None:
+    kf = LocalPositionKF(EKF2_HGT_REF=hgt_ref, LPE_GPS_DELAY=0.0)
+    simulate(kf, 20.0, trajectory=hover)
+    before = kf.estimate()
+    resumed = LocalPositionKF(EKF2_HGT_REF=hgt_ref, LPE_GPS_DELAY=0.0)
+    resumed.resume(kf.snapshot())
+    run = simulate(resumed, 5.0, start_s=20.0, trajectory=hover)
+    after = resumed.estimate()
+    assert (after.ref_lat, after.ref_lon) == (before.ref_lat, before.ref_lon)
+    assert after.xy_valid and after.z_valid and after.xy_reset_counter == 0  # no new origin
+    assert run.z_valid.all() and horizontal(run, 20.0).max() < 0.3
+
+
+@pytest.mark.parametrize(
+    "broken",
+    [{}, {"x": [0.0] * 3}, {"x": [math.nan] * 10}, {"origin": "here"}, {"hgt_ref": 7}, {"z_initialised": 1}],
+)
+def test_a_snapshot_that_is_not_one_is_refused_and_changes_nothing(broken: dict) -> None:
+    kf = LocalPositionKF(LPE_GPS_DELAY=0.0)
+    simulate(kf, 5.0, trajectory=hover)
+    snap = kf.snapshot()
+    other = LocalPositionKF(LPE_GPS_DELAY=0.0)
+    with pytest.raises(ValueError):
+        other.resume({} if not broken else snap | broken)
+    assert other.snapshot()["origin"] is None

@@ -122,6 +122,14 @@ def climbed_above(peer: Peer, metres: float, after: int) -> None:
         raise AssertionError(f"{e}; the vehicle said {texts(peer, after)}") from None
 
 
+def takeoff_amsl(peer: Peer, metres: float) -> float:
+    """The altitude ``metres`` above where the vehicle is now, as QGroundControl sends it.
+
+    Not above the first HOME_POSITION: an earlier flight's home may sit below this one's.
+    """
+    return peer.wait("GLOBAL_POSITION_INT", after=peer.mark()).alt / 1000.0 + metres
+
+
 def prearm_ok(peer: Peer, timeout: float = 30.0) -> None:
     mark = peer.mark()
     peer.wait("SYS_STATUS", lambda m: m.onboard_control_sensors_health & M.MAV_SYS_STATUS_PREARM_CHECK, timeout, mark)
@@ -403,9 +411,7 @@ def test_sticks_reach_manual_control_setpoint_and_their_loss_is_noticed(vehicle:
 def test_qgroundcontrols_takeoff_from_the_ground_then_link_loss_returns(vehicle: Vehicle) -> None:
     gcs = vehicle.gcs
     prearm_ok(gcs)
-    home = gcs.wait("HOME_POSITION", timeout=10.0)
-    takeoff_amsl = home.altitude / 1000.0 + 3.0
-    ack = gcs.command(M.MAV_CMD_NAV_TAKEOFF, -1, 0, 0, NAN, NAN, NAN, takeoff_amsl)  # as QGroundControl sends it
+    ack = gcs.command(M.MAV_CMD_NAV_TAKEOFF, -1, 0, 0, NAN, NAN, NAN, takeoff_amsl(gcs, 3.0))  # as QGC sends it
     assert ack.result == M.MAV_RESULT_ACCEPTED
     wait_mode(gcs, Px4Mode.AUTO_TAKEOFF)
     assert gcs.command(M.MAV_CMD_COMPONENT_ARM_DISARM, 1).result == M.MAV_RESULT_ACCEPTED  # then QGC arms
@@ -449,11 +455,10 @@ def test_sticks_stopping_in_flight_are_the_manual_control_loss_failsafe(vehicle:
     gcs = vehicle.gcs
     start = gcs.mark()
     prearm_ok(gcs)
-    home = gcs.wait("HOME_POSITION", timeout=10.0)
     stop, thread = _stream(gcs, lambda: gcs.mav.manual_control_send(1, 0, 0, 500, 0, 0), 20.0)  # centred sticks
     try:
         time.sleep(0.5)
-        ack = gcs.command(M.MAV_CMD_NAV_TAKEOFF, -1, 0, 0, NAN, NAN, NAN, home.altitude / 1000.0 + 3.0)
+        ack = gcs.command(M.MAV_CMD_NAV_TAKEOFF, -1, 0, 0, NAN, NAN, NAN, takeoff_amsl(gcs, 3.0))
         assert ack.result == M.MAV_RESULT_ACCEPTED
         assert gcs.command(M.MAV_CMD_COMPONENT_ARM_DISARM, 1).result == M.MAV_RESULT_ACCEPTED
         climbed_above(gcs, 2.5, start)

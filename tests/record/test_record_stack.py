@@ -1,10 +1,11 @@
-"""Recording real stacks and replaying recordings onto one (processes, loopback only, headless)."""
+"""Recording real stacks and replaying recordings into stacks of their own (processes, loopback only, headless)."""
 
 import csv
 import json
 import math
 import os
 import random
+import re
 import signal
 import subprocess
 import sys
@@ -141,19 +142,33 @@ def replay_source(path) -> list:
         return list(reader.iter_messages())
 
 
+def start_replay(home, *args) -> tuple[subprocess.Popen[str], str]:
+    """`stack replay ARGS` in the background, and the name of the stack it replays into."""
+    replay = subprocess.Popen(
+        [sys.executable, "-m", "tests.record.logcli", "replay", *args],
+        env=stack_env(home),
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        cwd=REPO,
+    )
+    assert replay.stdout is not None
+    first = replay.stdout.readline()
+    found = re.match(r"\[stack\] replay '(\S+)' \(another terminal attaches with --vehicle \1\)$", first)
+    assert found, first
+    return replay, found.group(1)
+
+
 def test_replay_republishes_exactly_what_was_recorded(tmp_path):
     home = tmp_path / "home"
     source = tmp_path / "source.mcap"
     recorded = replay_source(source)
-    profile = write_profile(
-        tmp_path / "listen.toml",
-        '[stack]\nvehicle = "t1"\nlockstep = false\n\n[[module]]\nmodule = "tests.support.modules:CommandCounter"\n',
-    )
-    stack = RunningStack(home, profile)
+    replay, name = start_replay(home, str(source), "--speed", "4", "--wait-subscribers", "60")
     listener = None
     try:
-        stack.wait_up()
+        assert name == f"t1-replay-{replay.pid}"
         out_file = tmp_path / "heard.msgpack"
+        # The replay is the only stack of this home: the listener finds it unnamed.
         listener = subprocess.Popen(
             [sys.executable, "-m", "tests.record.listener", str(len(recorded)), str(out_file)],
             env=stack_env(home),
@@ -163,17 +178,18 @@ def test_replay_republishes_exactly_what_was_recorded(tmp_path):
         )
         assert listener.stdout is not None and listener.stdout.readline().strip() == "ready"
         start = time.monotonic()
-        out = log_cli(home, "replay", str(source), "--speed", "4")
+        stdout, stderr = replay.communicate(timeout=120)
         elapsed = time.monotonic() - start
-        assert out.returncode == 0, out.stderr
-        assert f"replayed {len(recorded)} messages" in out.stdout
+        assert replay.returncode == 0, stderr
+        assert f"replayed {len(recorded)} messages" in stdout
         assert listener.wait(timeout=60) == 0
     finally:
-        if listener is not None and listener.poll() is None:
-            listener.kill()
-        assert stack.stop() == 0
-    assert not wait_no_processes(home)
-    assert elapsed >= 8.0 / 4 - 0.1  # paced by the recording's clock at 4x
+        for proc in (listener, replay):
+            if proc is not None and proc.poll() is None:
+                proc.kill()
+                proc.wait()
+    assert not list((home / "state").glob("*.json"))
+    assert elapsed >= 8.0 / 4 - 0.5  # paced by the recording's clock at 4x
 
     heard = msgspec.msgpack.decode(out_file.read_bytes())
     assert len(heard) == len(recorded)
@@ -254,3 +270,49 @@ def test_the_flight_stack_is_recorded_without_loss_and_exports(tmp_path):
     out = log_cli(home, "log", "export", str(mcap), "--csv", str(tmp_path / "csv"), "--rrd", str(tmp_path / "f.rrd"))
     assert out.returncode == 0, out.stderr
     assert (tmp_path / "f.rrd").stat().st_size > 0 and (tmp_path / "csv" / "vehicle_attitude_0.csv").exists()
+
+
+def test_a_replay_is_a_stack_of_its_own_beside_a_live_lockstep_stack(tmp_path):
+    home = tmp_path / "home"
+    source = tmp_path / "source.mcap"
+    replay_source(source)  # vehicle t1, lockstep times, as the live stack
+    live = RunningStack(home, chain_profile(tmp_path / "chain.toml"))
+    replay = None
+    try:
+        live.wait_up()
+        live.wait_for(r"lockstep starting")
+        replay, name = start_replay(home, str(source), "--loop", "--speed", "4")
+        before = max(m.get("sim_time_us", 0) for m in live.status()["modules"])
+        out = live.cli("status", "--vehicle", name, "--json")
+        assert out.returncode == 0, out.stderr
+        assert json.loads(out.stdout) == {
+            "vehicle": "t1",
+            "profile": "replay of source.mcap",
+            "lockstep": True,
+            "modules": [],
+        }
+        echo = ("topic", "echo", "trajectory_setpoint", "-n", "1", "--json")  # recorded, and not in the chain
+        out = live.cli(*echo, "--vehicle", name, "--timeout", "30")
+        assert out.returncode == 0, out.stderr
+        assert json.loads(out.stdout)["position"][1] == 1.0
+        out = live.cli(*echo, "--timeout", "3")  # unnamed: the `stack up` stack, which never sees the replay
+        assert out.returncode == 1 and "without a message on trajectory_setpoint" in out.stderr
+        plots = tmp_path / "replay.rrd"
+        out = live.cli("plot", "--save", str(plots), "--duration", "8", "--vehicle", name)
+        assert out.returncode == 0 and plots.stat().st_size > 0, out.stderr
+        report = live.status()
+        assert max(m.get("sim_time_us", 0) for m in report["modules"]) > before
+        for m in report["modules"]:
+            assert m["state"] == "running"
+            assert (m["foreign"], m["decode_errors"], m["schema_errors"]) == (0, 0, 0), m
+        out = live.cli("down", "--vehicle", name)
+        assert out.returncode == 0, out.stderr
+        stdout, stderr = replay.communicate(timeout=30)
+        assert replay.returncode == 0 and "interrupted" in stderr and "replayed" in stdout
+        assert live.proc.poll() is None
+    finally:
+        if replay is not None and replay.poll() is None:
+            replay.kill()
+            replay.wait()
+        assert live.stop() == 0
+    assert not wait_no_processes(home)

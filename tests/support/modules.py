@@ -222,6 +222,21 @@ class Probe(Module):
             Path(str(self.args["out"])).write_text(json.dumps(self.seen))
 
 
+class SlowStart(Module):
+    """Takes ``seconds`` to start (a start-up a signal can interrupt)."""
+
+    NAME = "slow_start"
+    TRIGGER = Timer(10.0)
+    ARGS = (Arg("seconds", 60.0),)
+
+    def __init__(self, rt) -> None:
+        super().__init__(rt)
+        time.sleep(float(self.args["seconds"]))
+
+    def run(self, msg: object, dt: float) -> None:
+        pass
+
+
 class BrokenInit(Module):
     """Fails while starting (supervisor failure handling)."""
 

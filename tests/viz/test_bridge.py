@@ -12,7 +12,7 @@ import psutil
 from stack.record.recorder import RecordingReader
 from stack.viz import layout as lay
 from stack.viz.export import export_rrd
-from tests.support.harness import REPO, RunningStack, chain_profile, stack_env, wait_no_processes
+from tests.support.harness import REPO, RunningStack, chain_profile, run_cli, stack_env, wait_no_processes
 from tests.viz.rrd import read_rrd
 
 STEPS = 1000
@@ -136,3 +136,13 @@ def test_stack_plot_attaches_to_a_running_stack(tmp_path):
     # lockstep: sim_time is the simulated clock (4 ms steps), decimated to 50 Hz buckets
     assert all(t % 4000 == 0 for t in times)
     assert len({t // 20000 for t in times}) == len(times)
+
+
+def test_stack_plot_without_a_display_says_to_use_web_or_save(tmp_path, monkeypatch):
+    for name in ("DISPLAY", "WAYLAND_DISPLAY"):
+        monkeypatch.delenv(name, raising=False)
+    out = run_cli(tmp_path, "plot")
+    assert out.returncode == 1
+    assert out.stderr == (
+        "error: no display here for the Rerun viewer: use --web (a viewer in the browser) or --save FILE.rrd\n"
+    )

@@ -1,0 +1,44 @@
+"""`stack --version`, and -h as well as --help on every command; negative numbers are values, not options."""
+
+import click
+import pytest
+import typer.main
+from typer.testing import CliRunner
+
+import stack
+from stack.cli.app import app
+from tests.cli.test_cmd import NOWHERE
+from tests.support.harness import run_cli
+
+
+def commands(group: click.Group, prefix: tuple[str, ...] = ()) -> list[tuple[str, ...]]:
+    found = [prefix]
+    for name, command in group.commands.items():
+        if isinstance(command, click.Group):
+            found += commands(command, (*prefix, name))
+        else:
+            found.append((*prefix, name))
+    return found
+
+
+def test_version(tmp_path):
+    out = run_cli(tmp_path, "--version")
+    assert out.returncode == 0 and out.stdout.strip() == f"stack {stack.__version__}"
+
+
+@pytest.mark.parametrize("path", commands(typer.main.get_command(app)), ids=" ".join)
+def test_every_command_takes_dash_h(path):
+    short = CliRunner().invoke(app, [*path, "-h"], terminal_width=120)
+    long = CliRunner().invoke(app, [*path, "--help"], terminal_width=120)
+    assert short.exit_code == 0 and "Usage:" in short.output, short.output
+    assert short.output == long.output
+
+
+@pytest.mark.parametrize(
+    "args",
+    [("param", "set", "MPC_THR_MIN", "-1"), ("cmd", "goto", "-5", "3", "-10"), ("cmd", "takeoff", "--alt", "-5")],
+)
+def test_negative_numbers_are_values(tmp_path, args):
+    out = run_cli(tmp_path, *args, "--endpoint", NOWHERE)
+    # They reach for the bus (none there), not refused as unknown options.
+    assert out.returncode == 1 and out.stderr.startswith("error: cannot reach the stack at"), out.stderr

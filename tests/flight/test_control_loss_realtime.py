@@ -1,0 +1,68 @@
+"""Issue 12: in real time a control module killed in flight is a failsafe, and never a flyaway.
+
+In real time the vehicle flies on without the dead module until the supervisor restarts it (0.5 s and more), so
+the commander acts: a dead rate controller is a loss of attitude control (flight termination: the motors stop and
+the vehicle falls where it was), a dead position controller a loss of position control (the vehicle lands once the
+restarted controller flies again). Both are named in ``vehicle_status``. The clock is the wall clock, so the
+margins are wide.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+
+from stack.msg.system import VehicleStatus as NS
+from tests.support.harness import RunningStack, wait_no_processes
+from tests.support.hover import echo, kill, restarted, start_hovering, truth, wait
+
+pytestmark = pytest.mark.flight
+
+ALTITUDE_M = 5.0
+
+
+@pytest.fixture
+def hovering(tmp_path: Path) -> Iterator[RunningStack]:
+    stack = start_hovering(tmp_path, ALTITUDE_M)
+    try:
+        yield stack
+    finally:
+        code = stack.stop()
+    assert code == 0 or "stopped" in stack.output, stack.output
+    assert "Traceback" not in stack.output
+    assert not wait_no_processes(tmp_path)
+
+
+def test_a_dead_rate_controller_terminates_the_flight_where_it_was(hovering: RunningStack) -> None:
+    stack = hovering
+    north, east, _, _ = kill(stack, "mc_rate_control")
+    wait(
+        stack,
+        lambda: echo(stack, "vehicle_status")["nav_state"] == NS.NAVIGATION_STATE_TERMINATION,
+        10.0,
+        "termination",
+    )
+    assert echo(stack, "vehicle_status")["control_lost_modules"] == ["mc_rate_control"]
+    assert echo(stack, "actuator_armed")["termination"]
+    wait(stack, lambda: -truth(stack)[2] < 0.5, 20.0, "the fall")
+    wait(stack, lambda: restarted(stack, "mc_rate_control"), 30.0, "restart")
+    time.sleep(2.0)
+    down = truth(stack)
+    assert math.hypot(down[0] - north, down[1] - east) < 5.0  # fell where it was: no flyaway
+    assert -down[2] < 0.5
+    assert echo(stack, "vehicle_status")["nav_state"] == NS.NAVIGATION_STATE_TERMINATION  # latched
+
+
+def test_a_dead_position_controller_lands_the_vehicle_where_it_was(hovering: RunningStack) -> None:
+    stack = hovering
+    north, east, _, _ = kill(stack, "mc_pos_control")
+    wait(stack, lambda: echo(stack, "vehicle_status")["nav_state"] == NS.NAVIGATION_STATE_AUTO_LAND, 10.0, "Land")
+    wait(stack, lambda: restarted(stack, "mc_pos_control"), 30.0, "restart")
+    wait(stack, lambda: echo(stack, "vehicle_status")["arming_state"] == NS.ARMING_STATE_DISARMED, 60.0, "landing")
+    down = truth(stack)
+    assert math.hypot(down[0] - north, down[1] - east) < 5.0
+    assert -down[2] < 0.5
