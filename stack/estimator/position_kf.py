@@ -68,6 +68,11 @@ Additions, with the reason:
   compiled-in ``gps_hgt_bias_nsd``. A separate name because it is a different sensor's error: GNSS
   altitude wanders by metres over minutes, and the offset must follow that so that it, and not z,
   absorbs the GPS altitude error.
+- ``LPE_PN_VZ`` 0.1 m/s²/√Hz: the velocity propagation noise of the vertical axis, which LPE takes
+  from ``LPE_PN_V`` like the horizontal ones (the same 0.1 by default). The unmodelled acceleration
+  that noise stands for is mostly the attitude error tilting gravity into the accelerometer: g·δ
+  horizontally but only g·δ²/2 vertically, so a vehicle whose accelerometer has no vibration can hold
+  a far smaller vertical figure, and the height estimate then averages its barometer over longer.
 - ``EKF2_GPS_P_GATE``, ``EKF2_GPS_V_GATE``, ``EKF2_BARO_GATE`` 5 σ: LPE has no configurable gate (it
   only flags a fault at a fixed χ² level and fuses anyway), so EKF2's gates are used.
 - ``EKF2_ABL_LIM`` 0.4 m/s² and ``EKF2_ABIAS_INIT`` 0.2 m/s²: accelerometer bias limit and initial
@@ -98,9 +103,9 @@ X_X, X_Y, X_Z, X_VX, X_VY, X_VZ, X_BX, X_BY, X_BZ, X_HGT_OFS = range(N_X)
 
 PARAMS: tuple[Param, ...] = catalogue.params(
     "EKF2_HGT_REF", "LPE_GPS_XY", "LPE_GPS_Z", "LPE_GPS_VXY", "LPE_GPS_VZ", "LPE_GPS_DELAY", "LPE_BAR_Z",
-    "LPE_ACC_XY", "LPE_ACC_Z", "LPE_PN_P", "LPE_PN_V", "LPE_PN_B", "LPE_PN_BARO", "LPE_PN_GPS_Z", "LPE_EPH_MAX",
-    "LPE_EPV_MAX", "LPE_XY_PUB", "LPE_VXY_PUB", "LPE_Z_PUB", "EKF2_GPS_P_GATE", "EKF2_GPS_V_GATE", "EKF2_BARO_GATE",
-    "EKF2_ABL_LIM", "EKF2_ABIAS_INIT",
+    "LPE_ACC_XY", "LPE_ACC_Z", "LPE_PN_P", "LPE_PN_V", "LPE_PN_VZ", "LPE_PN_B", "LPE_PN_BARO", "LPE_PN_GPS_Z",
+    "LPE_EPH_MAX", "LPE_EPV_MAX", "LPE_XY_PUB", "LPE_VXY_PUB", "LPE_Z_PUB", "EKF2_GPS_P_GATE", "EKF2_GPS_V_GATE",
+    "EKF2_BARO_GATE", "EKF2_ABL_LIM", "EKF2_ABIAS_INIT",
 )
 _DEFINITIONS = {p.name: p for p in PARAMS}
 
@@ -461,7 +466,7 @@ class LocalPositionKF:
     def _update_process_noise(self) -> None:
         p = self.params
         vxy = p["LPE_PN_V"] ** 2 + p["LPE_ACC_XY"] ** 2
-        vz = p["LPE_PN_V"] ** 2 + p["LPE_ACC_Z"] ** 2
+        vz = p["LPE_PN_VZ"] ** 2 + p["LPE_ACC_Z"] ** 2
         # The offset is only a state while both height sensors are in use.
         if self._hgt_ref == HGT_REF_GPS:
             ofs = p["LPE_PN_BARO"] ** 2 if self._map is not None else 0.0

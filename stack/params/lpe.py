@@ -1,5 +1,5 @@
 """Local Position Estimator (PX4 ``src/modules/local_position_estimator/params.c``), with PX4's LPE
-defaults. LPE_PN_BARO, LPE_PN_GPS_Z and LPE_XY_PUB are the stack's additions; ``stack.estimator.position_kf``
+defaults. LPE_PN_VZ, LPE_PN_BARO, LPE_PN_GPS_Z and LPE_XY_PUB are the stack's additions; ``stack.estimator.position_kf``
 says why."""
 
 from stack.params.param import Param
@@ -15,6 +15,7 @@ PARAMS: tuple[Param, ...] = (
     Param("LPE_ACC_Z", 0.02, 1e-5, 2.0, "m/s^2/sqrt(Hz)", "Accelerometer z noise density"),
     Param("LPE_PN_P", 0.1, 0.0, 1.0, "m/s/sqrt(Hz)", "Position propagation noise density"),
     Param("LPE_PN_V", 0.1, 0.0, 1.0, "m/s^2/sqrt(Hz)", "Velocity propagation noise density"),
+    Param("LPE_PN_VZ", 0.1, 0.0, 1.0, "m/s^2/sqrt(Hz)", "Vertical velocity propagation noise density (added)"),
     Param("LPE_PN_B", 1e-3, 0.0, 1.0, "m/s^3/sqrt(Hz)", "Accelerometer bias random walk"),
     Param("LPE_PN_BARO", 0.01, 0.0, 1.0, "m/s/sqrt(Hz)", "Baro offset random walk, GPS height reference (added)"),
     Param("LPE_PN_GPS_Z", 0.13, 0.0, 1.0, "m/s/sqrt(Hz)", "GPS altitude offset random walk, baro reference (added)"),

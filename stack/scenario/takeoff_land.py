@@ -47,6 +47,7 @@ def evaluate(ctx: ScriptContext) -> dict[str, Any]:
     return {
         "hover_alt_error_max_m": max(alt_errors, default=math.nan),
         "hover_pos_error_rms_m": rms(pos_errors),
+        "hover_pos_error_max_m": max(pos_errors, default=math.nan),
         "landed_and_disarmed": autonomy.landed_and_disarmed(ctx),
         "est_pos_error_rms_m": autonomy.estimate_error_rms(ctx, frames, *flight),
         "max_tilt_deg": autonomy.max_tilt_deg(frames, *flight),

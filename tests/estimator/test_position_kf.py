@@ -463,6 +463,21 @@ def test_unaided_variance_stops_growing_at_p_max(hgt_ref: int) -> None:
     assert diag.max() < 2e6  # ...and stopped near LPE's P_MAX
 
 
+def test_vertical_velocity_grows_with_lpe_pn_vz_and_horizontal_with_lpe_pn_v() -> None:
+    def velocity_variances(**params: float) -> np.ndarray:
+        kf = LocalPositionKF(**params)
+        t_us = 1_000_000
+        for _ in range(21):  # 1 s unaided (the first prediction starts the clock)
+            t_us += 50_000
+            assert kf.predict(t_us, (0.0, 0.0, -CONSTANTS_ONE_G), quat.IDENTITY)
+        return np.diagonal(kf.P)[3:6]
+
+    same = velocity_variances()  # PX4's LPE: one LPE_PN_V for every axis
+    quiet = velocity_variances(LPE_PN_VZ=0.01)
+    assert quiet[:2] == pytest.approx(same[:2])
+    assert same[2] - quiet[2] == pytest.approx(0.1**2 - 0.01**2, rel=0.05)  # 1 s of the difference
+
+
 @BOTH_REFS
 def test_garbage_inputs_are_rejected_without_corrupting_the_state(hgt_ref: int) -> None:
     kf = LocalPositionKF(EKF2_HGT_REF=hgt_ref, LPE_GPS_DELAY=0.0)
