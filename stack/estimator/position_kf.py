@@ -38,6 +38,7 @@ Corrections:
   and re-runs the later predictions and baro fusions. This is the exact linear-KF answer, unlike
   LPE, which only computes the residual against the delayed state and applies it to the current one.
 - Barometer altitude, fused at arrival (PX4's baro delay is 0).
+- The land detector: while landed, zero horizontal velocity (LPE's land measurement).
 - Gates: EKF2-style innovation tests per group (horizontal position, vertical position,
   horizontal velocity, vertical velocity, baro): a group is fused when every component satisfies
   ``r² ≤ gate²·S``. A group that has been rejected for longer than 7 s (EKF2's
@@ -104,11 +105,12 @@ X_X, X_Y, X_Z, X_VX, X_VY, X_VZ, X_BX, X_BY, X_BZ, X_HGT_OFS = range(N_X)
 PARAMS: tuple[Param, ...] = catalogue.params(
     "EKF2_HGT_REF", "LPE_GPS_XY", "LPE_GPS_Z", "LPE_GPS_VXY", "LPE_GPS_VZ", "LPE_GPS_DELAY", "LPE_BAR_Z",
     "LPE_ACC_XY", "LPE_ACC_Z", "LPE_PN_P", "LPE_PN_V", "LPE_PN_VZ", "LPE_PN_B", "LPE_PN_BARO", "LPE_PN_GPS_Z",
-    "LPE_EPH_MAX", "LPE_EPV_MAX", "LPE_XY_PUB", "LPE_VXY_PUB", "LPE_Z_PUB", "EKF2_GPS_P_GATE", "EKF2_GPS_V_GATE",
-    "EKF2_BARO_GATE", "EKF2_ABL_LIM", "EKF2_ABIAS_INIT",
+    "LPE_LAND_VXY", "LPE_EPH_MAX", "LPE_EPV_MAX", "LPE_XY_PUB", "LPE_VXY_PUB", "LPE_Z_PUB", "EKF2_GPS_P_GATE",
+    "EKF2_GPS_V_GATE", "EKF2_BARO_GATE", "EKF2_ABL_LIM", "EKF2_ABIAS_INIT",
 )
 _DEFINITIONS = {p.name: p for p in PARAMS}
 
+_LAND_ROWS = np.array((X_VX, X_VY))
 GPS_DELAY_MAX_US = 500_000  # LPE: history length; older measurements are dropped
 GPS_TIMEOUT_US = 1_000_000  # LPE: no horizontal GPS fusion for this long = dead reckoning
 GPS_INIT_COUNT = 10  # LPE REQ_GPS_INIT_COUNT
@@ -201,7 +203,7 @@ class _Step:
     prediction (transition F, dt, NED specific force plus gravity, rotation), a baro fusion, or
     neither (the start of the history)."""
 
-    __slots__ = ("P", "baro_alt", "prediction", "t_us", "x")
+    __slots__ = ("P", "baro_alt", "landed", "prediction", "t_us", "x")
 
     def __init__(self, t_us: int, x: np.ndarray, P: np.ndarray) -> None:
         self.t_us = t_us
@@ -209,6 +211,7 @@ class _Step:
         self.P = P
         self.prediction: tuple[np.ndarray, float, float, float, float, quat.Mat3] | None = None
         self.baro_alt: float | None = None
+        self.landed = False
 
 
 def _step_time(step: _Step) -> int:
@@ -852,6 +855,31 @@ class LocalPositionKF:
         self.alt_reset_counter += 1
         self.delta_alt = delta_alt
 
+    # ------------------------------------------------------------------ land detector
+
+    def fuse_land(self) -> bool:
+        """Fuse the land detector's "landed" at the current filter time: the vehicle stands still, so
+        its horizontal velocity is zero with σ ``LPE_LAND_VXY`` (LPE's land measurement, fused by
+        default, ``LPE_FUSION`` bit 4; its height-above-ground row needs a terrain state this filter
+        does not have). Without it a vehicle waiting on the ground follows the GPS velocity noise
+        and its position wanders by decimetres. True when fused (after the origin is set)."""
+        t_now = self._t_us
+        if t_now is None or self._map is None:
+            return False
+        self.x, self.P = self._land_update(self.x, self.P)
+        step = _Step(t_now, self.x, self.P)
+        step.landed = True
+        self._hist.append(step)
+        return True
+
+    def _land_update(self, x: np.ndarray, P: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        pht = P[:, _LAND_ROWS]
+        s = pht[_LAND_ROWS, :] + np.eye(2) * self.params["LPE_LAND_VXY"] ** 2
+        gain = np.linalg.solve(s, pht.T).T
+        x = x - gain @ x[_LAND_ROWS]
+        P = P - gain @ pht.T
+        return x, 0.5 * (P + P.T)
+
     # ------------------------------------------------------------------ history
 
     def _replay(self, start: int) -> None:
@@ -864,6 +892,8 @@ class LocalPositionKF:
                 x, P = self._propagate(x, P, step.prediction)
             elif step.baro_alt is not None:
                 x, P, _ = self._baro_update(x, P, step.baro_alt)
+            elif step.landed:
+                x, P = self._land_update(x, P)
             step.x, step.P = x, P
         self.x, self.P = x, P
 

@@ -102,6 +102,7 @@ class LocalPositionEstimatorModule(Module):
         self.subscribe("sensor_baro", queue=True)
         self.subscribe("sensor_gps", queue=True)
         self.subscribe("vehicle_attitude")
+        self.subscribe("vehicle_land_detected")
         self.advertise("vehicle_local_position")
         self.advertise("vehicle_global_position")
         self.kf = LocalPositionKF(**self._kf_params())
@@ -137,6 +138,9 @@ class LocalPositionEstimatorModule(Module):
                 self.kf.fuse_baro(isa_altitude_m(baro.pressure))
         for gps in self.take("sensor_gps"):
             self.kf.fuse_gps(gps)
+        land = self.latest("vehicle_land_detected")
+        if land is not None and land.landed:
+            self.kf.fuse_land()
         est = self.kf.estimate()
         now = self.now_us()
         if now - self._kept_at >= KEEP_PERIOD_US:

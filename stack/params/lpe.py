@@ -19,6 +19,7 @@ PARAMS: tuple[Param, ...] = (
     Param("LPE_PN_B", 1e-3, 0.0, 1.0, "m/s^3/sqrt(Hz)", "Accelerometer bias random walk"),
     Param("LPE_PN_BARO", 0.01, 0.0, 1.0, "m/s/sqrt(Hz)", "Baro offset random walk, GPS height reference (added)"),
     Param("LPE_PN_GPS_Z", 0.13, 0.0, 1.0, "m/s/sqrt(Hz)", "GPS altitude offset random walk, baro reference (added)"),
+    Param("LPE_LAND_VXY", 0.05, 0.01, 10.0, "m/s", "Horizontal velocity standard deviation while landed"),
     Param("LPE_EPH_MAX", 3.0, 1.0, 5.0, "m", "Largest GPS eph to set the origin"),
     Param("LPE_EPV_MAX", 5.0, 1.0, 5.0, "m", "Largest GPS epv to set the origin"),
     Param("LPE_XY_PUB", 2.0, 0.3, 100.0, "m", "eph above which the horizontal position is invalid (added)"),

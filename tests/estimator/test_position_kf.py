@@ -123,13 +123,15 @@ def simulate(
     baro_sigma: float = 0.1,
     baro_step: tuple[float, float] = (math.inf, 0.0),
     imu_per_predict: int = 1,
+    landed_until: float = 0.0,
 ) -> Run:
     """Drive ``kf`` along ``trajectory`` with noisy sensors; GPS arrives ``gps_latency_s`` late and is
     stamped with its true sample time (``gps_stamp="sample"``) or its arrival time ("arrival").
     ``start_s`` continues an earlier run of the same filter; the baro jumps by ``baro_step[1]`` metres
     from ``baro_step[0]`` seconds on, the GPS altitude likewise with ``gps_alt_step``.
     ``imu_per_predict`` = 5 runs the filter like its module: every 20 ms with the mean accelerometer
-    sample, then the baro and GPS samples that arrived meanwhile."""
+    sample, then the baro and GPS samples that arrived meanwhile. Until ``landed_until`` seconds the land
+    detector reports landed."""
     rng = np.random.default_rng(seed)
     truth_map = MapProjection(LAT0, LON0)
     pending: list[tuple[int, Gps]] = []
@@ -171,6 +173,8 @@ def simulate(
         while pending and pending[0][0] <= t_us:
             arrival, gps = pending.pop(0)
             kf.fuse_gps(gps if gps_stamp == "sample" else replace(gps, timestamp_sample=arrival))
+        if t < landed_until:
+            kf.fuse_land()
 
         est = kf.estimate()
         if est.xy_global:
@@ -476,6 +480,37 @@ def test_vertical_velocity_grows_with_lpe_pn_vz_and_horizontal_with_lpe_pn_v() -
     quiet = velocity_variances(LPE_PN_VZ=0.01)
     assert quiet[:2] == pytest.approx(same[:2])
     assert same[2] - quiet[2] == pytest.approx(0.1**2 - 0.01**2, rel=0.05)  # 1 s of the difference
+
+
+def test_landed_vehicle_holds_still_instead_of_following_gps_velocity_noise() -> None:
+    """LPE's land measurement: while landed the horizontal velocity is zero, so the position averages the
+    GPS fixes instead of wandering with the integrated GPS velocity noise (which became the error of home
+    at arming). After takeoff the filter follows the GPS velocity again."""
+
+    def wander(run: Run, sel: np.ndarray) -> np.ndarray:
+        xy = run.pos_err[sel, :2]
+        return np.sum((xy - xy.mean(axis=0)) ** 2, axis=1)
+
+    free, held = [], []
+    for seed in range(6):
+        on_ground = flight_like(LocalPositionKF(**SIM_PROFILE), 20.0, seed=seed, trajectory=hover)
+        landed = flight_like(LocalPositionKF(**SIM_PROFILE), 20.0, seed=seed, trajectory=hover, landed_until=20.0)
+        ground = landed.t >= 5.0
+        assert rms(landed.vel_err[ground, :2]) < 0.005 and rms(on_ground.vel_err[ground, :2]) > 0.01
+        free.append(wander(on_ground, ground))
+        held.append(wander(landed, ground))
+    assert math.sqrt(np.mean(held)) < 0.75 * math.sqrt(np.mean(free))
+    flown = flight_like(LocalPositionKF(**SIM_PROFILE), 14.0, landed_until=5.0)
+    assert rms(flown.vel_err[flown.t > 8.0, :2]) < 0.05
+
+
+def test_land_fusion_needs_the_origin_and_survives_a_delayed_gps_replay() -> None:
+    kf = LocalPositionKF(LPE_GPS_DELAY=0.1)
+    assert not kf.fuse_land()  # no time base
+    flight_like(kf, 0.5, gps_latency_s=0.1)
+    assert not kf.fuse_land()  # no origin yet: nothing to hold still in
+    run = flight_like(kf, 8.0, start_s=0.5, gps_latency_s=0.1, landed_until=8.5)
+    assert rms(run.vel_err[run.t > 4.0, :2]) < 0.01
 
 
 @BOTH_REFS
