@@ -234,7 +234,9 @@ def sweep(args: argparse.Namespace, home: Path) -> int:
         flown = sorted(flown, key=lambda r: r["seed"])
         summary = summarise(case, flown)
         summaries.append(summary)
-        print(f"\n{case.name} on {case.profile}: {'holds' if summary['passed'] else 'FAILS'} on every seed")
+        failed = sum(not r["passed"] for r in flown)
+        verdict = "holds on every seed" if summary["passed"] else f"FAILS on {failed} of {len(flown)} seeds"
+        print(f"\n{case.name} on {case.profile}: {verdict}")
         if args.per_seed:
             print_seeds(case, flown)
             print()
