@@ -29,6 +29,7 @@ from stack.mavlink import px4_modes
 from stack.mavlink.convert import StatustextAssembler
 from stack.mavlink.framing import FrameParser
 from stack.mavlink.px4_modes import Px4Mode
+from stack.supervisor.profile import DEFAULT_PROFILE, load_profile
 from tests.gcs.peer import Link, Peer, links_profile, udp_port
 from tests.support.harness import RunningStack, wait_no_processes
 
@@ -162,7 +163,7 @@ def test_qgroundcontrols_connect_sequence(vehicle: Vehicle) -> None:
     assert by_name["NAV_DLL_ACT"].param_type == M.MAV_PARAM_TYPE_INT32
     assert decode(by_name["NAV_DLL_ACT"].param_value, M.MAV_PARAM_TYPE_INT32) == 2  # bytewise, not 2.0
     assert struct.pack("<f", by_name["COM_DL_LOSS_T"].param_value) == struct.pack("<i", 10)
-    assert by_name["MPC_XY_P"].param_value == pytest.approx(1.8)
+    assert by_name["MPC_XY_P"].param_value == pytest.approx(load_profile(DEFAULT_PROFILE).params["MPC_XY_P"])
 
     mark = gcs.mark()
     gcs.mav.mission_request_list_send(1, 1, M.MAV_MISSION_TYPE_MISSION)
