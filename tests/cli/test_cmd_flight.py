@@ -7,19 +7,14 @@ import time
 
 import pytest
 
-from tests.support.harness import REPO, RunningStack, wait_no_processes
+from tests.support.harness import REPO, default_stack
 
 pytestmark = pytest.mark.flight
 
 
 @pytest.fixture(scope="module")
 def stack(tmp_path_factory):
-    home = tmp_path_factory.mktemp("cmd_flight") / "home"
-    running = RunningStack(home, REPO / "launch" / "sitl_quad.toml", "--quiet")
-    running.wait_up()
-    yield running
-    assert running.stop() == 0
-    assert not wait_no_processes(home)
+    yield from default_stack(tmp_path_factory.mktemp("cmd_flight") / "home")
 
 
 def local_position(stack) -> dict:

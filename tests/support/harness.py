@@ -11,6 +11,7 @@ import sys
 import threading
 import time
 import tomllib
+from collections.abc import Iterator
 from pathlib import Path
 
 import psutil
@@ -146,6 +147,16 @@ def wait_no_processes(home: Path, timeout: float = 10.0) -> list[psutil.Process]
             return []
         time.sleep(0.1)
     return left
+
+
+def default_stack(home: Path) -> Iterator[RunningStack]:
+    """`stack up` of the default profile for a module-scoped fixture: yields it running, then stops it
+    and checks it stopped cleanly and left no process behind."""
+    running = RunningStack(home, REPO / "launch" / "sitl_quad.toml", "--quiet")
+    running.wait_up()
+    yield running
+    assert running.stop() == 0
+    assert not wait_no_processes(home)
 
 
 def write_profile(path: Path, text: str) -> Path:
