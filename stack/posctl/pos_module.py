@@ -20,7 +20,7 @@ from stack.msg.setpoints import TakeoffState, TakeoffStatus, VehicleAttitudeSetp
 from stack.params import catalogue
 from stack.posctl.position_control import PositionControl, PositionControlParams, failsafe_setpoint
 from stack.posctl.takeoff import Takeoff, TakeoffParams, wants_takeoff
-from stack.runtime.module import Module, Trigger
+from stack.runtime.module import KEEP_PERIOD_US, Module, Trigger
 
 NAN = math.nan
 SETPOINT_WAIT_US = 200_000
@@ -93,6 +93,9 @@ class MulticopterPositionControl(Module):
         self._takeoff_published: tuple[int, float] | None = None
         self._takeoff_published_us = 0
         self._failsafe_action = ""
+        kept = self.kept_state()
+        self._kept_integral = kept.get("velocity_integral") if kept is not None else None
+        self._kept_at = 0
 
     def on_params_changed(self, changed: set[str]) -> None:
         self.control.set_params(control_params(self.params))
@@ -127,6 +130,12 @@ class MulticopterPositionControl(Module):
         if not self._enabled_since_us:
             self._enabled_since_us = now
             self.control.reset_integral()
+            if self._kept_integral is not None and not landed:
+                if self.control.resume_integral(self._kept_integral):
+                    self.log.info("restarted in flight: resuming the velocity integral %s", self._kept_integral)
+                else:
+                    self.log.warning("restarted, but the kept velocity integral is unusable: starting from zero")
+            self._kept_integral = None
 
         position = (lpos.x if lpos.xy_valid else NAN, lpos.y if lpos.xy_valid else NAN, lpos.z if lpos.z_valid else NAN)
         velocity = (
@@ -184,6 +193,9 @@ class MulticopterPositionControl(Module):
             self._failsafe_action = ""
         self._publish_setpoints(lpos.timestamp_sample, now)
         self._publish_takeoff_status(now)
+        if now - self._kept_at >= KEEP_PERIOD_US:
+            self._kept_at = now
+            self.keep_state({"velocity_integral": list(self.control.velocity_integral)})
 
     def _fresh_setpoint(self, now: int):
         sp = self.latest("trajectory_setpoint")

@@ -262,6 +262,16 @@ class PositionControl:
     def reset_integral(self) -> None:
         self._vel_int[0] = self._vel_int[1] = self._vel_int[2] = 0.0
 
+    def resume_integral(self, vel_int: Vec3) -> bool:
+        """Take over the integrator state of an earlier instance (what holds the vehicle against a steady
+        wind); refused, changing nothing, unless it is three finite values of at most g each."""
+        if not isinstance(vel_int, list | tuple) or len(vel_int) != 3:
+            return False
+        if not all(isinstance(v, float | int) and abs(v) <= _G for v in vel_int):
+            return False
+        self._vel_int[:] = [float(v) for v in vel_int]
+        return True
+
     # -- per-cycle inputs ------------------------------------------------------------------------
 
     def set_state(self, pos: Vec3, vel: Vec3, vel_dot: Vec3, yaw: float) -> None:

@@ -108,7 +108,8 @@ class Takeoff:
         """Advance the state machine; several transitions may happen in one call, as in PX4.
 
         want_takeoff: a setpoint asks to climb (PX4 ``vehicle_constraints.want_takeoff``);
-        skip_takeoff: jump straight to flight when armed (e.g. armed in the air).
+        skip_takeoff: jump straight to flight when armed (e.g. armed in the air; in the air, with the
+        flight tilt limit at once).
         """
         # Spool-up timer: true COM_SPOOLUP_TIME after the vehicle was armed.
         if armed:
@@ -133,6 +134,10 @@ class Takeoff:
             state = TakeoffState.READY_FOR_TAKEOFF
 
         if armed and skip_takeoff:
+            if state != TakeoffState.FLIGHT and not landed:
+                # Already flying (a restart in the air): no slew up from the ground's tilt limit, which
+                # would tip a vehicle leaning into the wind upright and let the wind carry it off.
+                self._tilt_limit = math.radians(self._params.mpc_tiltmax_air)
             state = TakeoffState.FLIGHT
         if not armed:
             state = TakeoffState.DISARMED

@@ -242,6 +242,18 @@ def test_reset_integral():
     assert pc.velocity_integral == (0.0, 0.0, 0.0)
 
 
+def test_a_restart_resumes_the_integral_of_the_earlier_instance_and_refuses_garbage():
+    earlier = PositionControl()
+    for _ in range(10):
+        _run(earlier, vel_sp=(1.0, -1.0, 0.5))
+    restarted = PositionControl()
+    assert restarted.resume_integral(list(earlier.velocity_integral))
+    assert restarted.velocity_integral == earlier.velocity_integral
+    for garbage in ([math.nan, 0.0, 0.0], [0.0, 0.0], [20.0, 0.0, 0.0], ["1", 0.0, 0.0], {"x": 1.0}, None):
+        assert not restarted.resume_integral(garbage)
+        assert restarted.velocity_integral == earlier.velocity_integral
+
+
 def test_blind_horizontal_flight_keeps_leaning_into_the_learned_wind():
     pc = PositionControl()
     for _ in range(200):  # a steady northward velocity error stands for a wind from the north

@@ -74,7 +74,8 @@ def test_tilt_limit_and_minimum_thrust():
     takeoff = Takeoff()
     assert takeoff.update_tilt_limit(DT) == pytest.approx(math.radians(12.0))
     assert takeoff.minimum_thrust(0.12) == 0.0
-    _step(takeoff, 0, skip_takeoff=True, landed=False)
+    _step(takeoff, 0, skip_takeoff=True, landed=True)  # armed on the ground outside position control
+    _step(takeoff, DT_US, skip_takeoff=True, landed=False)  # lifted off: flying
     assert takeoff.minimum_thrust(0.12) == 0.12
     # Slews up to MPC_TILTMAX_AIR at 0.2 rad/s.
     tilt = [takeoff.update_tilt_limit(DT) for _ in range(400)]
@@ -82,6 +83,13 @@ def test_tilt_limit_and_minimum_thrust():
     assert tilt[-1] == pytest.approx(math.radians(45.0))
     reached = next(i for i, x in enumerate(tilt) if x >= math.radians(45.0) - 1e-12)
     assert (reached + 1) * DT == pytest.approx(math.radians(33.0) / 0.2, abs=DT)
+
+
+def test_started_in_the_air_the_tilt_limit_is_the_flight_one_at_once():
+    """A position controller restarted in flight must not tip a vehicle leaning into the wind upright."""
+    takeoff = Takeoff()
+    _step(takeoff, 0, skip_takeoff=True, landed=False)
+    assert takeoff.update_tilt_limit(DT) == pytest.approx(math.radians(45.0))
 
 
 def test_setpoint_shaping_per_state():
