@@ -163,7 +163,8 @@ def test_qgroundcontrols_connect_sequence(vehicle: Vehicle) -> None:
     assert by_name["NAV_DLL_ACT"].param_type == M.MAV_PARAM_TYPE_INT32
     assert decode(by_name["NAV_DLL_ACT"].param_value, M.MAV_PARAM_TYPE_INT32) == 2  # bytewise, not 2.0
     assert struct.pack("<f", by_name["COM_DL_LOSS_T"].param_value) == struct.pack("<i", 10)
-    assert by_name["MPC_XY_P"].param_value == pytest.approx(load_profile(DEFAULT_PROFILE).params["MPC_XY_P"])
+    pos_control = next(m for m in load_profile(DEFAULT_PROFILE).modules if m.name == "mc_pos_control")
+    assert by_name["MPC_XY_P"].param_value == pytest.approx(pos_control.params["MPC_XY_P"])
 
     mark = gcs.mark()
     gcs.mav.mission_request_list_send(1, 1, M.MAV_MISSION_TYPE_MISSION)
