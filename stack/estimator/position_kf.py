@@ -200,8 +200,8 @@ class LocalPositionEstimate:
 
 class _Step:
     """One entry of the history: the event that moved the filter to (x, P) at time t_us — a
-    prediction (transition F, dt, NED specific force plus gravity, rotation), a baro fusion, or
-    neither (the start of the history)."""
+    prediction (transition F, dt, NED specific force plus gravity, rotation), a baro fusion, a land
+    fusion, or neither (the start of the history)."""
 
     __slots__ = ("P", "baro_alt", "landed", "prediction", "t_us", "x")
 
