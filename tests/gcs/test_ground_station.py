@@ -108,8 +108,13 @@ def wait_text(peer: Peer, start: str, after: int, timeout: float = 10.0) -> str:
     raise AssertionError(f"no STATUSTEXT '{start}...' within {timeout:g} s; got {texts(peer, after)}")
 
 
-def wait_mode(peer: Peer, mode: Px4Mode, timeout: float = 20.0) -> None:
-    mark = peer.mark()
+def wait_mode(peer: Peer, mode: Px4Mode, timeout: float = 20.0, after: int | None = None) -> None:
+    """Wait for a HEARTBEAT in ``mode`` received after ``after`` (default: now).
+
+    HEARTBEAT goes out at 1 Hz of wall time: a mode held for less (a lockstep takeoff) may never be in one, so such a
+    mode is better seen in the commander's "Mode: ..." STATUSTEXT.
+    """
+    mark = peer.mark() if after is None else after
     peer.wait(
         "HEARTBEAT", lambda m: m.get_srcComponent() == 1 and px4_modes.decode(m.custom_mode) is mode, timeout, mark
     )
@@ -413,9 +418,11 @@ def test_sticks_reach_manual_control_setpoint_and_their_loss_is_noticed(vehicle:
 def test_qgroundcontrols_takeoff_from_the_ground_then_link_loss_returns(vehicle: Vehicle) -> None:
     gcs = vehicle.gcs
     prearm_ok(gcs)
-    ack = gcs.command(M.MAV_CMD_NAV_TAKEOFF, -1, 0, 0, NAN, NAN, NAN, takeoff_amsl(gcs, 3.0))  # as QGC sends it
+    altitude = takeoff_amsl(gcs, 3.0)
+    before = gcs.mark()
+    ack = gcs.command(M.MAV_CMD_NAV_TAKEOFF, -1, 0, 0, NAN, NAN, NAN, altitude)  # as QGC sends it
     assert ack.result == M.MAV_RESULT_ACCEPTED
-    wait_mode(gcs, Px4Mode.AUTO_TAKEOFF)
+    assert wait_text(gcs, "Mode: Takeoff", before)  # over within a wall second: maybe in no HEARTBEAT
     assert gcs.command(M.MAV_CMD_COMPONENT_ARM_DISARM, 1).result == M.MAV_RESULT_ACCEPTED  # then QGC arms
     climbed_above(gcs, 2.5, gcs.mark())
     wait_mode(gcs, Px4Mode.AUTO_LOITER)
@@ -443,7 +450,7 @@ def test_qgroundcontrols_takeoff_from_the_ground_then_link_loss_returns(vehicle:
     mark = gcs.mark()
     gcs.heartbeats = False  # the ground station goes silent: NAV_DLL_ACT = 2 (Return) after COM_DL_LOSS_T
     try:
-        wait_mode(gcs, Px4Mode.AUTO_RTL, timeout=30.0)
+        wait_mode(gcs, Px4Mode.AUTO_RTL, timeout=30.0, after=mark)
     finally:
         gcs.heartbeats = True
     assert wait_text(gcs, "Connection to ground station lost", mark)
@@ -471,7 +478,7 @@ def test_sticks_stopping_in_flight_are_the_manual_control_loss_failsafe(vehicle:
     finally:
         stop.set()
         thread.join()
-    wait_mode(gcs, Px4Mode.AUTO_RTL, timeout=30.0)  # NAV_RCL_ACT = 2 (Return), PX4's default
+    wait_mode(gcs, Px4Mode.AUTO_RTL, timeout=30.0, after=mark)  # NAV_RCL_ACT = 2 (Return), PX4's default
     assert wait_text(gcs, "Manual control lost", mark)
     assert "manual_control_loss" in wait_text(gcs, "Failsafe activated", mark)
     gcs.wait("HEARTBEAT", lambda m: not m.base_mode & M.MAV_MODE_FLAG_SAFETY_ARMED, 60.0, gcs.mark())
