@@ -5,6 +5,8 @@ It obeys ``vehicle_control_mode`` as PX4's mc_att_control did while it had ratti
 - attitude control enabled: rates from the attitude error (PX4's tilt-prioritised law), the
   setpoint coming from ``vehicle_attitude_setpoint`` or, in Stabilized, from the sticks; optionally
   through ArduPilot's input shaping (MC_INPUT_SHAPING), whose target rates are fed forward;
+- the RotorS mode: the sticks mapped as RotorS' joystick interface maps them (roll, pitch, yaw rate, thrust in
+  newtons, published on ``roll_pitch_yawrate_thrust_setpoint``) make the attitude setpoint;
 - rattitude: above MC_RATT_TH roll/pitch stick deflection the sticks command rates, below attitude;
 - manual rates (acro): rates from the sticks;
 - otherwise it stays silent and the rate loop follows ``vehicle_rates_setpoint`` from elsewhere.
@@ -12,16 +14,18 @@ It obeys ``vehicle_control_mode`` as PX4's mc_att_control did while it had ratti
 
 from __future__ import annotations
 
-from stack.attctl import attitude_control, input_shaping, rate_control, stabilized
+from stack.attctl import attitude_control, input_shaping, rate_control, rotors_joy, stabilized
 from stack.attctl.attitude_control import AttitudeControl
 from stack.attctl.input_shaping import AttitudeSetpointShaping
 from stack.attctl.rate_control import AcroStickMapping
-from stack.attctl.stabilized import StabilizedAttitudeSetpoint, rattitude_uses_rate_control
+from stack.attctl.rotors_joy import JoyMapping
+from stack.attctl.stabilized import StabilizedAttitudeSetpoint, rattitude_uses_rate_control, rotors_attitude_setpoint
 from stack.mathlib import quaternion as quat
+from stack.mixer.effectiveness import collective_thrust_max
 from stack.msg.estimation import VehicleAttitude
-from stack.msg.setpoints import VehicleAttitudeSetpoint, VehicleRatesSetpoint
+from stack.msg.setpoints import RollPitchYawrateThrustSetpoint, VehicleAttitudeSetpoint, VehicleRatesSetpoint
 from stack.msg.system import VehicleControlMode
-from stack.params import catalogue
+from stack.params import ca, catalogue
 from stack.params.param import Param
 from stack.runtime.module import Module, Trigger
 
@@ -46,6 +50,8 @@ class MulticopterAttitudeControl(Module):
         input_shaping.PARAMS,
         stabilized.PARAMS,
         rate_control.ACRO_PARAMS,
+        rotors_joy.PARAMS,
+        ca.ROTOR_PARAMS,
         catalogue.params("MC_INPUT_SHAPING"),
     )
 
@@ -60,11 +66,14 @@ class MulticopterAttitudeControl(Module):
             self.subscribe(topic)
         self.advertise("vehicle_rates_setpoint")
         self.advertise("vehicle_attitude_setpoint")
+        self.advertise("roll_pitch_yawrate_thrust_setpoint")
         values = self.params.values()
         self.control = AttitudeControl(values)
         self.shaping = AttitudeSetpointShaping(values, bool(values["MC_INPUT_SHAPING"]))
         self.sticks = StabilizedAttitudeSetpoint(values)
         self.acro = AcroStickMapping(values)
+        self.joy = JoyMapping(values)
+        self._thrust_max = collective_thrust_max(values)
         self._reset_counter = 0
         self._was_stabilized = False
 
@@ -74,6 +83,8 @@ class MulticopterAttitudeControl(Module):
         self.shaping.set_params(values, bool(values["MC_INPUT_SHAPING"]))
         self.sticks.set_params(values)
         self.acro.set_params(values)
+        self.joy.set_params(values)
+        self._thrust_max = collective_thrust_max(values)
 
     def run(self, att: VehicleAttitude, dt: float) -> None:
         q = att.q
@@ -109,8 +120,11 @@ class MulticopterAttitudeControl(Module):
             and not mode.flag_control_altitude_enabled
             and not mode.flag_control_velocity_enabled
             and not mode.flag_control_position_enabled
+            and not mode.flag_control_rpyt_enabled
         )
-        if stabilized_mode and sticks is not None:
+        if mode.flag_control_rpyt_enabled and sticks is not None:
+            setpoint = self._rotors(q, sticks)
+        elif stabilized_mode and sticks is not None:
             if not self._was_stabilized:
                 self.sticks.reset()
             self.sticks.update_throttle_limits(
@@ -133,6 +147,23 @@ class MulticopterAttitudeControl(Module):
             "vehicle_rates_setpoint",
             VehicleRatesSetpoint(roll=rates[0], pitch=rates[1], yaw=rates[2], thrust_body=setpoint.thrust_body),
         )
+
+    def _rotors(self, q: tuple[float, float, float, float], sticks) -> VehicleAttitudeSetpoint:
+        command = self.joy.command(sticks.roll, sticks.pitch, sticks.yaw, sticks.throttle)
+        self.publish(
+            "roll_pitch_yawrate_thrust_setpoint",
+            RollPitchYawrateThrustSetpoint(
+                timestamp_sample=sticks.timestamp_sample,
+                roll=command.roll,
+                pitch=command.pitch,
+                yaw_rate=command.yaw_rate,
+                thrust=command.thrust,
+            ),
+        )
+        sp = rotors_attitude_setpoint(q, command, self._thrust_max)
+        setpoint = VehicleAttitudeSetpoint(yaw_sp_move_rate=sp.yaw_sp_move_rate, q_d=sp.q_d, thrust_body=sp.thrust_body)
+        self.publish("vehicle_attitude_setpoint", setpoint)
+        return setpoint
 
     def _body_rates(self) -> tuple[float, float, float]:
         """Measured body rates: at large tilt errors the shaper's yaw demand blends toward the yaw rate."""

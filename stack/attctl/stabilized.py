@@ -6,8 +6,9 @@ roll / pitch / yaw-rate / thrust command.
   v1.13), with the manual throttle slews of its ``Run()``.
 * ``rattitude_uses_rate_control`` is the rattitude switch of the older mc_att_control (MC_RATT_TH in
   ``mc_att_control_main.cpp``, removed from PX4 in 2021).
-* ``rotors_attitude_setpoint`` converts the RotorS ``roll_pitch_yawrate_thrust_controller`` command
-  (``rotors_control/src/library/roll_pitch_yawrate_thrust_controller.cpp``) to our NED / FRD conventions.
+* ``rotors_attitude_setpoint`` turns a RotorS ``roll_pitch_yawrate_thrust_controller`` command
+  (``rotors_control/src/library/roll_pitch_yawrate_thrust_controller.cpp``), in the stack's frames, into an
+  attitude setpoint, so PX4's attitude loop can fly the RotorS mode.
 
 Sticks follow manual_control_setpoint: each in [−1, 1], pitch +1 = stick forward = nose down,
 yaw + = clockwise, throttle −1 = minimum.
@@ -19,6 +20,7 @@ import math
 from collections.abc import Mapping
 from typing import NamedTuple
 
+from stack.attctl.rotors_joy import RollPitchYawrateThrust
 from stack.mathlib import quaternion as quat
 from stack.mathlib.filters import AlphaFilter, SlewRate
 from stack.mathlib.quaternion import Quat
@@ -155,21 +157,19 @@ def rattitude_uses_rate_control(roll: float, pitch: float, threshold: float = 0.
     return abs(roll) > threshold or abs(pitch) > threshold
 
 
-def rotors_attitude_setpoint(q: Quat, roll: float, pitch: float, yaw_rate: float, thrust: float,
-                             max_thrust: float) -> AttitudeSetpoint:
-    """Attitude setpoint from a RotorS ``RollPitchYawrateThrust`` command.
+def rotors_attitude_setpoint(q: Quat, command: RollPitchYawrateThrust, max_thrust: float) -> AttitudeSetpoint:
+    """Attitude setpoint for PX4's attitude loop from a RotorS command in the stack's frames.
 
-    RotorS works in ENU with a FLU body and builds R_des = Rz(ψ_current)·Rx(φ)·Ry(θ). Conjugating with
-    the ENU→NED and FLU→FRD axis changes gives R_des = Rz(ψ_NED)·Rx(φ)·Ry(−θ): roll keeps its sign
-    (right side down), RotorS pitch is positive nose *down* so it flips, and the kept heading is simply
-    the current NED yaw. The yaw rate (counter-clockwise positive about ENU up) becomes −yaw_rate about
-    NED down and is passed as the yaw feed-forward; the thrust [N] is normalised by ``max_thrust`` [N].
-    Angles in rad, rates in rad/s.
+    RotorS' controller holds R_des = Rz(ψ_current)·Rx(φ)·Ry(θ) in ENU/FLU; conjugated into NED/FRD with the
+    stack's pitch (+ nose up) that is R_des = Rz(ψ_NED)·Rx(roll)·Ry(pitch): the heading kept is the current one and
+    the commanded yaw rate (clockwise +, about NED down) is the yaw feed-forward. The thrust [N] is normalised by
+    ``max_thrust`` [N], the collective thrust at full command, and clipped to [0, 1].
     """
     half_yaw = 0.5 * quat.yaw(q)
+    heading = (math.cos(half_yaw), 0.0, 0.0, math.sin(half_yaw))
     q_d = quat.mul(
-        quat.mul((math.cos(half_yaw), 0.0, 0.0, math.sin(half_yaw)), quat.from_axis_angle((1.0, 0.0, 0.0), roll)),
-        quat.from_axis_angle((0.0, 1.0, 0.0), -pitch),
+        quat.mul(heading, quat.from_axis_angle((1.0, 0.0, 0.0), command.roll)),
+        quat.from_axis_angle((0.0, 1.0, 0.0), command.pitch),
     )
-    collective = min(max(thrust / max_thrust, 0.0), 1.0) if max_thrust > 0.0 else 0.0
-    return AttitudeSetpoint(q_d, -yaw_rate, (0.0, 0.0, -collective))
+    collective = min(max(command.thrust / max_thrust, 0.0), 1.0) if max_thrust > 0.0 else 0.0
+    return AttitudeSetpoint(q_d, command.yaw_rate, (0.0, 0.0, -collective))

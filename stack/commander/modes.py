@@ -8,6 +8,9 @@ One table, :data:`MODES`, keyed by PX4's ``vehicle_status.nav_state`` numbers, h
   (rotary wing: Manual is stabilised like Stabilized). ``flag_control_allocation_enabled`` is set in every
   mode but Termination, as PX4's own modes leave the allocator on. Rattitude is the older PX4's mode (removed
   from PX4 in 2021): manual, attitude and rates plus ``flag_control_rattitude_enabled``;
+* RotorS is the stack's own mode in PX4's first external mode slot (EXTERNAL1, as a ROS 2 mode registers): the
+  sticks map to roll, pitch, yaw rate and thrust in newtons as RotorS' ``rotors_joy_interface`` maps them
+  (``flag_control_rpyt_enabled``), flown by the RotorS controller or by PX4's attitude loop;
 * ``custom_mode`` — the PX4 custom main/sub mode (``px4_custom_mode.h``, from :mod:`stack.mavlink.px4_modes`)
   QGroundControl and MAVLink send in ``MAV_CMD_DO_SET_MODE`` param2/param3 (with param1 =
   MAV_MODE_FLAG_CUSTOM_MODE_ENABLED).
@@ -95,6 +98,7 @@ _RATES = "flag_control_rates_enabled"
 _ALLOCATION = "flag_control_allocation_enabled"
 _TERMINATION = "flag_control_termination_enabled"
 _RATTITUDE = "flag_control_rattitude_enabled"
+_RPYT = "flag_control_rpyt_enabled"
 _MC_POSITION_CONTROL = "flag_multicopter_position_control_enabled"
 
 _POSITION_LOOPS = frozenset({_ALTITUDE, _CLIMB_RATE, _POSITION, _VELOCITY, "flag_control_acceleration_enabled"})
@@ -148,6 +152,13 @@ MODES: dict[int, ModeInfo] = {
             "rattitude",
             _AV_ATT | R.MANUAL_CONTROL,
             _STAB_FLAGS | {_RATTITUDE},
+        ),
+        ModeInfo(
+            NS.NAVIGATION_STATE_EXTERNAL1,
+            "RotorS",
+            "rotors",
+            _AV_ATT | R.MANUAL_CONTROL,
+            _STAB_FLAGS | {_RPYT},
         ),
         ModeInfo(
             NS.NAVIGATION_STATE_ALTCTL,

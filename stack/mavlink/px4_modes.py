@@ -42,6 +42,7 @@ class AutoSubMode(IntEnum):
     FOLLOW_TARGET = 8
     PRECLAND = 9
     VTOL_TAKEOFF = 10
+    EXTERNAL1 = 11
 
 
 class PosctlSubMode(IntEnum):
@@ -69,6 +70,7 @@ class Px4Mode(Enum):
     AUTO_FOLLOW_TARGET = (MainMode.AUTO, AutoSubMode.FOLLOW_TARGET)
     AUTO_PRECLAND = (MainMode.AUTO, AutoSubMode.PRECLAND)
     AUTO_VTOL_TAKEOFF = (MainMode.AUTO, AutoSubMode.VTOL_TAKEOFF)
+    EXTERNAL1 = (MainMode.AUTO, AutoSubMode.EXTERNAL1)
     ACRO = (MainMode.ACRO, 0)
     OFFBOARD = (MainMode.OFFBOARD, 0)
     STABILIZED = (MainMode.STABILIZED, 0)
@@ -140,6 +142,7 @@ NAV_STATE_MODE: dict[int, Px4Mode] = {
     NS.NAVIGATION_STATE_AUTO_TAKEOFF: Px4Mode.AUTO_TAKEOFF,
     NS.NAVIGATION_STATE_AUTO_LAND: Px4Mode.AUTO_LAND,
     NS.NAVIGATION_STATE_RATTITUDE: Px4Mode.RATTITUDE,
+    NS.NAVIGATION_STATE_EXTERNAL1: Px4Mode.EXTERNAL1,
 }
 """``get_px4_custom_mode(nav_state)`` for the stack's nav states (Rattitude: PX4's legacy main mode 8).
 Descend and Land share AUTO.LAND, as in PX4."""

@@ -57,3 +57,8 @@ def effectiveness_from_params(params: Mapping[str, object]) -> np.ndarray:
     ct = [float(p[f"CA_ROTOR{i}_CT"]) for i in range(n)]
     km = [float(p[f"CA_ROTOR{i}_KM"]) for i in range(n)]
     return rotor_effectiveness(np.array(pos).reshape(n, 3), np.array(axes).reshape(n, 3), np.array(ct), np.array(km))
+
+
+def collective_thrust_max(params: Mapping[str, object]) -> float:
+    """The collective thrust [N] along −z body with every rotor at full command."""
+    return float(-effectiveness_from_params(params)[5].sum())

@@ -41,6 +41,22 @@ class VehicleAttitudeSetpoint(Message):
     thrust_body: F3 = ZERO3
 
 
+class RollPitchYawrateThrustSetpoint(Message):
+    """The RotorS interface (``mav_msgs/RollPitchYawrateThrust``) in the stack's frames.
+
+    Roll and pitch [rad] are the angles of R_d = Rz(yaw)·Rx(roll)·Ry(pitch) about the current heading, yaw_rate
+    [rad/s] the commanded heading rate and thrust [N] the collective thrust magnitude along −z body. Unlike
+    mav_msgs (body FLU, world ENU), they are FRD/NED: pitch + is nose up and yaw_rate + is clockwise seen from above,
+    so RotorS' pitch and yaw rate are the negatives of these. Every field must be finite.
+    """
+
+    timestamp_sample: int = 0
+    roll: float = 0.0
+    pitch: float = 0.0
+    yaw_rate: float = 0.0
+    thrust: float = 0.0
+
+
 class VehicleRatesSetpoint(Message):
     """Desired body rates [rad/s]; NaN on an axis holds the current rate."""
 

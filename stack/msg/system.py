@@ -29,6 +29,8 @@ class VehicleControlMode(Message):
     source_id: int = 0
     # PX4's rattitude mode (removed from PX4 in 2021, kept here): sticks beyond MC_RATT_TH command rates.
     flag_control_rattitude_enabled: bool = False
+    # The RotorS interface (not in PX4): roll, pitch, yaw rate and thrust from roll_pitch_yawrate_thrust_setpoint.
+    flag_control_rpyt_enabled: bool = False
 
 
 class VehicleStatus(Message):
@@ -50,6 +52,8 @@ class VehicleStatus(Message):
     NAVIGATION_STATE_STAB = 15
     NAVIGATION_STATE_AUTO_TAKEOFF = 17
     NAVIGATION_STATE_AUTO_LAND = 18
+    # PX4's first external mode slot (a mode registered from outside, as ROS 2 modes are): the RotorS interface.
+    NAVIGATION_STATE_EXTERNAL1 = 23
     # Not in current PX4 (removed with rattitude); a free number outside PX4's used range.
     NAVIGATION_STATE_RATTITUDE = 31
 

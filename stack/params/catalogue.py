@@ -32,6 +32,7 @@ from stack.params import (
     mpc,
     navigator,
     pixhawk,
+    rotors,
     rtl,
     sensors,
     sim,
@@ -61,6 +62,7 @@ GROUPS = (
     sim,
     pixhawk,
     mavlink,
+    rotors,
 )
 
 

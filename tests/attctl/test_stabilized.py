@@ -4,6 +4,7 @@ import math
 
 import pytest
 
+from stack.attctl.rotors_joy import JoyMapping, RollPitchYawrateThrust
 from stack.attctl.stabilized import StabilizedAttitudeSetpoint, rattitude_uses_rate_control, rotors_attitude_setpoint
 from stack.mathlib import quaternion as quat
 
@@ -130,26 +131,37 @@ def test_rattitude_switches_to_rates_beyond_the_threshold():
 
 def test_rotors_command_keeps_heading_and_converts_to_ned():
     q = quat.from_euler(0.2, 0.1, 0.7)
-    level = rotors_attitude_setpoint(q, 0.0, 0.0, 0.0, 5.0, 20.0)
+    level = rotors_attitude_setpoint(q, RollPitchYawrateThrust(0.0, 0.0, 0.0, 5.0), 20.0)
     assert level.q_d == pytest.approx(quat.from_euler(0.0, 0.0, 0.7), abs=1e-12)
     assert level.thrust_body == pytest.approx((0.0, 0.0, -0.25))
-    # RotorS positive pitch is nose down and accelerates forward: the thrust leans forward in NED.
+    # Pitch + is nose up in the stack's frames: the thrust leans backwards (south).
     heading_north = quat.IDENTITY
-    forward = rotors_attitude_setpoint(heading_north, 0.0, 0.3, 0.0, 10.0, 20.0)
-    assert quat.to_euler(forward.q_d) == pytest.approx((0.0, -0.3, 0.0))
-    thrust_dir = quat.rotate(forward.q_d, (0.0, 0.0, -1.0))
-    assert thrust_dir[0] == pytest.approx(math.sin(0.3))
-    # Positive roll is right side down in both conventions; the thrust leans right (east).
-    right = rotors_attitude_setpoint(heading_north, 0.3, 0.0, 0.0, 10.0, 20.0)
+    back = rotors_attitude_setpoint(heading_north, RollPitchYawrateThrust(0.0, 0.3, 0.0, 10.0), 20.0)
+    assert quat.to_euler(back.q_d) == pytest.approx((0.0, 0.3, 0.0))
+    assert quat.rotate(back.q_d, (0.0, 0.0, -1.0))[0] == pytest.approx(-math.sin(0.3))
+    # Positive roll is right side down: the thrust leans right (east).
+    right = rotors_attitude_setpoint(heading_north, RollPitchYawrateThrust(0.3, 0.0, 0.0, 10.0), 20.0)
     assert quat.rotate(right.q_d, (0.0, 0.0, -1.0))[1] == pytest.approx(math.sin(0.3))
-    # Counter-clockwise (ENU) yaw rate is negative about NED down; thrust is clipped to [0, 1].
-    spin = rotors_attitude_setpoint(heading_north, 0.0, 0.0, 0.5, 30.0, 20.0)
-    assert spin.yaw_sp_move_rate == -0.5
+    # The yaw rate is the feed-forward about NED down; thrust is clipped to [0, 1].
+    spin = rotors_attitude_setpoint(heading_north, RollPitchYawrateThrust(0.0, 0.0, 0.5, 30.0), 20.0)
+    assert spin.yaw_sp_move_rate == 0.5
     assert spin.thrust_body == (0.0, 0.0, -1.0)
 
 
 def test_rotors_roll_then_pitch_order():
     # R = Rz·Rx·Ry: the pitch rotation is about the already-rolled y axis.
-    sp = rotors_attitude_setpoint(quat.IDENTITY, 0.4, -0.3, 0.0, 1.0, 1.0)
+    sp = rotors_attitude_setpoint(quat.IDENTITY, RollPitchYawrateThrust(0.4, 0.3, 0.0, 1.0), 1.0)
     expected = quat.mul(quat.from_axis_angle((1.0, 0.0, 0.0), 0.4), quat.from_axis_angle((0.0, 1.0, 0.0), 0.3))
     assert sp.q_d == pytest.approx(expected, abs=1e-12)
+
+
+def test_joy_mapping_is_joy_cpps_scaling_in_the_stacks_frames():
+    joy = JoyMapping()
+    full = joy.command(roll=1.0, pitch=1.0, yaw=-1.0, throttle=1.0)  # right, forward, anticlockwise, full
+    assert full == pytest.approx((math.radians(10.0), -math.radians(10.0), -math.radians(45.0), 30.0))
+    assert joy.command(0.0, 0.0, 0.0, 0.0).thrust == pytest.approx(15.0)  # joy.cpp: (axis2 + 1)·30/2
+    assert joy.command(0.0, 0.0, 0.0, -1.0).thrust == 0.0
+    assert joy.command(5.0, -5.0, 0.0, 9.0) == joy.command(1.0, -1.0, 0.0, 1.0)  # sticks clipped to ±1
+    assert joy.command(math.nan, math.inf, math.nan, math.nan) == (0.0, 0.0, 0.0, 0.0)  # not finite: centred, idle
+    scaled = JoyMapping({"RJOY_ROLL_MAX": 20.0, "RJOY_THR_MAX": 10.0}).command(0.5, 0.0, 0.0, 1.0)
+    assert scaled.roll == pytest.approx(math.radians(10.0)) and scaled.thrust == pytest.approx(10.0)

@@ -23,6 +23,7 @@ EXPECTED_FLAGS = {
     NS.NAVIGATION_STATE_STAB: STAB,
     NS.NAVIGATION_STATE_ACRO: {"manual", "rates", "allocation"},
     NS.NAVIGATION_STATE_RATTITUDE: STAB | {"rattitude"},
+    NS.NAVIGATION_STATE_EXTERNAL1: STAB | {"rpyt"},  # the RotorS interface
     NS.NAVIGATION_STATE_ALTCTL: STAB | {"altitude", "climb_rate", "mc_position"},
     NS.NAVIGATION_STATE_POSCTL: STAB | {"altitude", "climb_rate", "position", "velocity", "mc_position"},
     NS.NAVIGATION_STATE_AUTO_MISSION: AUTO,
@@ -76,6 +77,8 @@ def test_every_mode_is_in_the_table():
         (3, 1, None),  # Position's Orbit sub mode: not supported
         (6, 0, NS.NAVIGATION_STATE_OFFBOARD),
         (4, 9, None),  # precision land: not supported
+        (4, 11, NS.NAVIGATION_STATE_EXTERNAL1),  # the RotorS interface in PX4's first external mode slot
+        (4, 12, None),
         (10, 0, None),  # termination is not selectable
         (42, 0, None),
     ],
@@ -97,6 +100,7 @@ def test_names_and_aliases():
     assert nav_state_from_name("Position") == NS.NAVIGATION_STATE_POSCTL
     assert nav_state_from_name("auto:loiter") == nav_state_from_name("hold") == NS.NAVIGATION_STATE_AUTO_LOITER
     assert nav_state_from_name("rattitude") == NS.NAVIGATION_STATE_RATTITUDE
+    assert nav_state_from_name("rotors") == nav_state_from_name("RotorS") == NS.NAVIGATION_STATE_EXTERNAL1
     with pytest.raises(ValueError, match="unknown mode 'descend'"):
         nav_state_from_name("descend")
 
