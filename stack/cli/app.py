@@ -14,7 +14,7 @@ import typer
 import stack
 from stack.bus import keys
 from stack.bus.node import Node
-from stack.cli import cmd, fly, log, mavlink, param, pixhawk_sim, plot, topic, vehicle_summary
+from stack.cli import cmd, fly, log, mavlink, param, pixhawk_sim, plot, teleop, topic, vehicle_summary
 from stack.cli.common import (
     EndpointOption,
     JsonOption,
@@ -51,6 +51,7 @@ app.command("fly")(fly.fly)
 app.command("plot")(plot.plot)
 app.command("replay")(log.replay)
 app.command("pixhawk-sim")(pixhawk_sim.pixhawk_sim)
+app.command("teleop")(teleop.teleop)
 
 
 def _print_version(value: bool) -> None:

@@ -89,6 +89,24 @@ New = list[tuple[str, Message]]
 """Messages received by one poll: (topic, message)."""
 
 
+def from_ground_station(cmd: VehicleCommand) -> VehicleCommand:
+    """``cmd`` as the CLI sends it: from a ground station's system and component."""
+    return msgspec.structs.replace(cmd, source_system=CLI_SYSTEM, source_component=CLI_COMPONENT)
+
+
+def answers(ack: VehicleCommandAck, cmd: VehicleCommand) -> bool:
+    """Whether ``ack`` is the commander's answer to ``cmd`` as :func:`from_ground_station` sent it."""
+    return (ack.command, ack.target_system, ack.target_component) == (cmd.command, CLI_SYSTEM, CLI_COMPONENT)
+
+
+def outcome(label: str, ack: VehicleCommandAck) -> str:
+    """``<label>: accepted``, or ``<label>: <RESULT>: <reason>``."""
+    if ack.result == ACK.VEHICLE_CMD_RESULT_ACCEPTED:
+        return f"{label}: accepted"
+    result = RESULT_NAMES.get(ack.result, f"result {ack.result}")
+    return f"{label}: {result}" + (f": {ack.reason}" if ack.reason else "")
+
+
 class _Link:
     """One session with the vehicle. The acknowledgement and watched topics are subscribed to before
     anything is sent, so no answer is missed; into ring buffers, so a slow reader never holds up the bus."""
@@ -133,7 +151,7 @@ class _Link:
 
     def command(self, cmd: VehicleCommand, label: str) -> VehicleCommandAck:
         """Send ``cmd``, print its acknowledgement; exit non-zero unless it was accepted."""
-        cmd = msgspec.structs.replace(cmd, source_system=CLI_SYSTEM, source_component=CLI_COMPONENT)
+        cmd = from_ground_station(cmd)
         self.publisher("vehicle_command", NO_COMMANDER).publish(cmd)
         deadline = time.monotonic() + self.timeout
         while True:
@@ -144,24 +162,23 @@ class _Link:
                 time.sleep(POLL_S)
                 continue
             _, publisher, seq, ack, _ = item
-            if (ack.command, ack.target_system, ack.target_component) == (cmd.command, CLI_SYSTEM, CLI_COMPONENT):
+            if answers(ack, cmd):
                 break
         self._after = (publisher, seq)
         self.latest.pop("vehicle_status", None)
         self.vehicle.status = None
         if ack.result != ACK.VEHICLE_CMD_RESULT_ACCEPTED:
-            result = RESULT_NAMES.get(ack.result, f"result {ack.result}")
-            typer.echo(f"{label}: {result}" + (f": {ack.reason}" if ack.reason else ""), err=True)
+            typer.echo(outcome(label, ack), err=True)
             raise typer.Exit(1)
-        typer.echo(f"{label}: accepted")
+        typer.echo(outcome(label, ack))
         return ack
 
     def follow(self, action: Action, start: VehicleCommandAck, limit_s: float | None) -> None:
         """Follow ``action`` from its acknowledgement ``start`` until it is done (exit 0) or failed (exit 1),
         printing progress and the commander's messages; the time it may take is counted on the vehicle's
         clock in lockstep (simulated seconds), on the wall clock otherwise."""
-        action.p = _vehicle_params(self.node)
-        lockstep = _lockstep(self.node)
+        action.p = vehicle_params(self.node)
+        lockstep = is_lockstep(self.node)
         clock = "simulated " if lockstep else ""
         began = time.monotonic()
         budget: float | None = limit_s
@@ -191,15 +208,15 @@ class _Link:
             time.sleep(POLL_S)
 
 
-def _lockstep(node: Node) -> bool:
+def is_lockstep(node: Node) -> bool:
     """Whether the stack runs in lockstep (its supervisor says; a stack reached by endpoint alone may not)."""
-    answers = query_json(node.session, keys.supervisor_key(node.vehicle, "status"))
-    return bool(answers and answers[0].get("lockstep"))
+    status = query_json(node.session, keys.supervisor_key(node.vehicle, "status"))
+    return bool(status and status[0].get("lockstep"))
 
 
-def _vehicle_params(node: Node) -> dict[str, float]:
-    """The parameters actions are sized with, as the running stack holds them (else their defaults)."""
-    values = {name: float(catalogue.get(name).default) for name in FOLLOW_PARAMS}
+def vehicle_params(node: Node, names: tuple[str, ...] = FOLLOW_PARAMS) -> dict[str, float]:
+    """Parameters as the running stack holds them (else their defaults); by default those actions are sized with."""
+    values = {name: float(catalogue.get(name).default) for name in names}
     for sp in client.list_params(node.session, node.vehicle):
         if sp.name in values:
             values[sp.name] = float(sp.value)
