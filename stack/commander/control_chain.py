@@ -12,9 +12,16 @@ those of the estimate and control failures (``src/modules/commander/failsafe/fai
 * losing the position estimate, the flight mode manager or the position controller is a loss of **position
   control**: land (descend if the position estimate is gone too).
 
+On the RotorS profiles RotorS' controller (roll_pitch_yawrate_thrust_controller) stands in for attitude and rate
+control and the allocator, and its joystick interface maps the sticks in the RotorS mode: losing either is a
+loss of attitude control too.
+
 A module is watched only once its output has been seen since the stack started (a profile without it, e.g. an
 external autopilot's, never flags it), only while armed, and only while the control mode runs its loop; a loop
-that has just been switched on gets the silence limit to speak. In Offboard the setpoints (position, attitude or rates)
+that has just been switched on gets the silence limit to speak. Once the modules running have been reported, only
+theirs are watched: the RotorS controller publishes the allocator's ``actuator_motors``, and an Offboard rate
+setpoint is mc_att_control's ``vehicle_rates_setpoint``, on profiles that run neither module. Before any report,
+of the modules that share an output only the first is watched. In Offboard the setpoints (position, attitude or rates)
 come from outside and their loss is the Offboard failsafe, so only the estimators, rate control and the
 allocator are watched there.
 """
@@ -76,6 +83,10 @@ def _allocation(mode: VehicleControlMode) -> bool:
     return mode.flag_control_allocation_enabled
 
 
+def _rotors_sticks(mode: VehicleControlMode) -> bool:
+    return mode.flag_control_rpyt_enabled
+
+
 CHAIN: tuple[ChainLink, ...] = (
     ChainLink("attitude_estimator_q", "vehicle_attitude", Loss.ATTITUDE_CONTROL, _always),
     ChainLink("local_position_estimator", "vehicle_local_position", Loss.POSITION_CONTROL, _always),
@@ -84,8 +95,10 @@ CHAIN: tuple[ChainLink, ...] = (
     ChainLink("mc_att_control", "vehicle_rates_setpoint", Loss.ATTITUDE_CONTROL, _attitude_control),
     ChainLink("mc_rate_control", "vehicle_torque_setpoint", Loss.ATTITUDE_CONTROL, _rate_control),
     ChainLink("control_allocator", "actuator_motors", Loss.ATTITUDE_CONTROL, _allocation),
+    ChainLink("roll_pitch_yawrate_thrust_controller", "actuator_motors", Loss.ATTITUDE_CONTROL, _allocation),
+    ChainLink("rotors_joy_interface", "roll_pitch_yawrate_thrust_setpoint", Loss.ATTITUDE_CONTROL, _rotors_sticks),
 )
-OUTPUTS: tuple[str, ...] = tuple(link.output for link in CHAIN)
+OUTPUTS: tuple[str, ...] = tuple(dict.fromkeys(link.output for link in CHAIN))
 
 
 @dataclass(frozen=True)
@@ -104,11 +117,18 @@ class ControlChainMonitor:
 
     def __init__(self, chain: tuple[ChainLink, ...] = CHAIN, silence_us: int = SILENCE_US) -> None:
         self._chain = chain
+        self._stand_ins = frozenset(
+            link.module for i, link in enumerate(chain) if any(other.output == link.output for other in chain[:i])
+        )
+        """Modules whose output an earlier module of the chain also publishes."""
         self.silence_us = silence_us
         self._seen: dict[str, int] = {}
         """Each output's last arrival on the commander's clock (outputs never seen are absent)."""
         self._watch_since: dict[str, int] = {}
+        """When each watched module's watch began."""
         self._dead: set[str] = set()
+        self._running: set[str] = set()
+        """The modules reported running (or dead) so far."""
         self.late = False
         """Whether a watched output was late (older than STALE_US) at the last update."""
 
@@ -116,10 +136,18 @@ class ControlChainMonitor:
         self._seen[topic] = now_us
 
     def module_died(self, module: str) -> None:
+        self._running.add(module)
         self._dead.add(module)
 
     def module_alive(self, module: str) -> None:
+        self._running.add(module)
         self._dead.discard(module)
+
+    def _watched(self, link: ChainLink) -> bool:
+        """Whether the profile runs ``link``'s module, as far as the reports tell."""
+        if self._running:
+            return link.module in self._running
+        return link.module not in self._stand_ins
 
     def update(self, now_us: int, armed: bool, mode: VehicleControlMode) -> list[ChainFault]:
         """The faults now, attitude-control losses first."""
@@ -127,10 +155,10 @@ class ControlChainMonitor:
         self.late = False
         watched: list[tuple[ChainLink, int]] = []
         for link in self._chain:
-            if not (armed and link.output in self._seen and link.runs(mode)):
-                self._watch_since.pop(link.output, None)
+            if not (armed and link.output in self._seen and link.runs(mode) and self._watched(link)):
+                self._watch_since.pop(link.module, None)
                 continue
-            since = self._watch_since.setdefault(link.output, now_us)
+            since = self._watch_since.setdefault(link.module, now_us)
             watched.append((link, max(self._seen[link.output], since)))
         newest = max((heard for _, heard in watched), default=now_us)
         for link, heard in watched:

@@ -21,6 +21,8 @@ MODULES: dict[str, str] = {
     "mc_att_control": "stack.attctl.att_module:MulticopterAttitudeControl",
     "mc_rate_control": "stack.attctl.rate_module:MulticopterRateControl",
     "control_allocator": "stack.mixer.module:ControlAllocatorModule",
+    "roll_pitch_yawrate_thrust_controller": "stack.attctl.rpyt_module:RollPitchYawrateThrustController",
+    "rotors_joy_interface": "stack.attctl.rotors_joy_module:RotorsJoyInterface",
     "commander": "stack.commander.module:CommanderModule",
     "mc_pos_control": "stack.posctl.pos_module:MulticopterPositionControl",
     "flight_mode_manager": "stack.posctl.fmm_module:FlightModeManagerModule",

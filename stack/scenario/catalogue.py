@@ -44,9 +44,18 @@ class Scenario:
 
 
 def scenarios() -> dict[str, Scenario]:
-    from stack.scenario import attitude_step, failsafes, gps_loss, link_loss, mission_box, module_kill, takeoff_land
+    from stack.scenario import (
+        attitude_step,
+        failsafes,
+        gps_loss,
+        link_loss,
+        mission_box,
+        module_kill,
+        rpyt_step,
+        takeoff_land,
+    )
 
-    flights = (attitude_step, takeoff_land, mission_box, gps_loss, failsafes, link_loss, module_kill)
+    flights = (attitude_step, takeoff_land, mission_box, gps_loss, failsafes, link_loss, module_kill, rpyt_step)
     return {s.name: s for s in (f.SCENARIO for f in flights)}
 
 

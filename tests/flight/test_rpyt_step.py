@@ -1,0 +1,112 @@
+"""Issue 13: RotorS' roll-pitch-yawrate-thrust controller flies the RotorS profiles, through the real CLI.
+
+rpyt_step flies steps of roll, pitch and yaw rate through the RotorS mode's sticks on each RotorS profile and two
+seeds, judged by the limits of its profile; RotorS' law has no integrator, so the yaw rate settles short of the
+command by the rotors' drag torque over the yaw-rate gain, which the vehicle model predicts. The same seed flies
+the same flight. takeoff_land holds the default limits in PX4's auto modes, flown by the same controller.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+
+import pytest
+
+from stack.params import catalogue
+from stack.sim.vehicle import load_vehicle
+from stack.supervisor.profile import load_profile
+from tests.flight.flights import Flight, fly_scenario
+
+pytestmark = pytest.mark.flight
+
+PROFILES = ("rotors_firefly", "rotors_hummingbird", "rotors_pelican")
+SEEDS = (1, 2)
+G = 9.80665
+Fly = Callable[..., Flight]
+
+
+@pytest.fixture(scope="module")
+def fly(tmp_path_factory: pytest.TempPathFactory) -> Fly:
+    """``fly(scenario, profile, seed, run=0)``, each flown once per module."""
+    flights: dict[tuple[str, str, int, int], Flight] = {}
+
+    def flight(scenario: str, profile: str, seed: int, run: int = 0) -> Flight:
+        key = (scenario, profile, seed, run)
+        if key not in flights:
+            home = tmp_path_factory.mktemp(f"fly-{scenario}-{profile}-seed{seed}-run{run}")
+            flights[key] = fly_scenario(home, scenario, seed, profile)
+        return flights[key]
+
+    return flight
+
+
+def _param(entry, name: str) -> float:
+    return float(entry.params.get(name, catalogue.get(name).default))
+
+
+def predicted_yaw_rate_error_dps(profile: str) -> float:
+    """r·c/(K_ω,z + c): the steady yaw rate ω balances K_ω,z·(r − ω) against the drag torque c·ω, where
+    c = k_D·Σω_i·l_i² (each hub, l_i from the centre, moves at ω·l_i against its rotor's H-force k_D·ω_i·v)
+    at the hover rotor speed ω_i = ω_max·√(hover thrust fraction)."""
+    modules = {entry.name: entry for entry in load_profile(profile).modules}
+    controller = modules["roll_pitch_yawrate_thrust_controller"]
+    vehicle = load_vehicle(str(controller.args["vehicle"]))
+    rotor_speed = vehicle.motor.max_rotor_speed * vehicle.hover_command
+    drag = vehicle.motor.rotor_drag_coefficient * rotor_speed * sum(r.position[0] ** 2 + r.position[1] ** 2
+                                                                   for r in vehicle.rotors)
+    gain = _param(controller, "RPYT_RATE_GAIN_Z")
+    return _param(modules["rotors_joy_interface"], "RJOY_YAWRATE_MAX") * drag / (gain + drag)
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+@pytest.mark.parametrize("profile", PROFILES)
+def test_every_check_passed_by_the_profile_s_limits(fly: Fly, profile: str, seed: int) -> None:
+    flight = fly("rpyt_step", profile, seed)
+    report = flight.report
+    assert report["error"] is None, flight.output
+    assert report["profile"] == profile
+    assert [c["name"] for c in report["checks"] if not c["passed"]] == [], report["metrics"]
+    assert report["passed"] is True and flight.returncode == 0, flight.output
+    limits = {c["name"]: c["limit"] for c in report["checks"]}
+    assert limits == {**limits, **load_profile(profile).scenario_limits.get("rpyt_step", {})}
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+@pytest.mark.parametrize("profile", PROFILES)
+def test_the_yaw_rate_falls_short_by_the_rotor_drag_over_the_rate_gain(fly: Fly, profile: str, seed: int) -> None:
+    metrics = fly("rpyt_step", profile, seed).report["metrics"]
+    predicted = predicted_yaw_rate_error_dps(profile)
+    assert metrics["yaw_rate_up_ss_error_dps"] == pytest.approx(predicted, rel=0.02)
+    assert abs(metrics["yaw_rate_back_ss_error_dps"]) < 0.02 * predicted  # no drag without rotation
+    for axis in ("roll", "pitch"):
+        assert metrics[f"{axis}_up_rise_time_s"] > 0.0 and math.isfinite(metrics[f"{axis}_ss_error_deg"])
+
+
+def test_the_same_seed_flies_the_same_flight(fly: Fly) -> None:
+    assert fly("rpyt_step", "rotors_hummingbird", 1).report["metrics"] == fly(
+        "rpyt_step", "rotors_hummingbird", 1, run=1
+    ).report["metrics"]
+
+
+def test_takeoff_land_in_the_auto_modes_meets_the_default_limits(fly: Fly) -> None:
+    flight = fly("takeoff_land", "rotors_pelican", 1)
+    assert flight.report["error"] is None, flight.output
+    assert flight.report["passed"] is True and flight.returncode == 0, flight.output
+    assert flight.report["metrics"]["landed_and_disarmed"] is True
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+def test_the_rotors_mode_on_px4s_attitude_loop_follows_the_sticks(fly: Fly, seed: int) -> None:
+    """The default profile flies the RotorS mode with PX4's attitude and rate loops: it follows roll and pitch
+    faster than RotorS' law, and, holding a heading moved by the commanded rate, the yaw rate with no shortfall."""
+    flight = fly("rpyt_step", "sitl_quad", seed)
+    metrics = flight.report["metrics"]
+    assert flight.report["error"] is None, flight.output
+    assert metrics["landed_and_disarmed"] is True
+    for axis in ("roll", "pitch"):
+        for step in ("up", "over", "back"):
+            assert metrics[f"{axis}_{step}_rise_time_s"] < 0.15, (axis, step, metrics)
+            assert abs(metrics[f"{axis}_{step}_ss_error_deg"]) < 1.0, (axis, step, metrics)
+    assert metrics["yaw_rate_up_rise_time_s"] < 0.3
+    assert abs(metrics["yaw_rate_up_ss_error_dps"]) < 1.0
