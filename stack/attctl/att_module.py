@@ -19,8 +19,10 @@ from stack.attctl.attitude_control import AttitudeControl
 from stack.attctl.input_shaping import AttitudeSetpointShaping
 from stack.attctl.rate_control import AcroStickMapping
 from stack.attctl.rotors_joy import JoyMapping
-from stack.attctl.stabilized import StabilizedAttitudeSetpoint, rattitude_uses_rate_control, rotors_attitude_setpoint
+from stack.attctl.stabilized import rattitude_uses_rate_control, rotors_attitude_setpoint
+from stack.attctl.stick_attitude import StickAttitudeSetpoint
 from stack.mathlib import quaternion as quat
+from stack.mathlib.scalar import wrap_pi
 from stack.mixer.effectiveness import collective_thrust_max
 from stack.msg.estimation import VehicleAttitude
 from stack.msg.setpoints import RollPitchYawrateThrustSetpoint, VehicleAttitudeSetpoint, VehicleRatesSetpoint
@@ -62,6 +64,7 @@ class MulticopterAttitudeControl(Module):
             "vehicle_control_mode",
             "manual_control_setpoint",
             "vehicle_angular_velocity",
+            "vehicle_land_detected",
         ):
             self.subscribe(topic)
         self.advertise("vehicle_rates_setpoint")
@@ -70,12 +73,13 @@ class MulticopterAttitudeControl(Module):
         values = self.params.values()
         self.control = AttitudeControl(values)
         self.shaping = AttitudeSetpointShaping(values, bool(values["MC_INPUT_SHAPING"]))
-        self.sticks = StabilizedAttitudeSetpoint(values)
+        self.sticks = StickAttitudeSetpoint(values)
         self.acro = AcroStickMapping(values)
         self.joy = JoyMapping(values)
         self._thrust_max = collective_thrust_max(values)
         self._reset_counter = 0
-        self._was_stabilized = False
+        self._rotors_heading: float | None = None
+        """The RotorS mode's heading setpoint [rad], integrated from its yaw rate (None outside the mode)."""
 
     def on_params_changed(self, changed: set[str]) -> None:
         values = self.params.values()
@@ -92,8 +96,11 @@ class MulticopterAttitudeControl(Module):
             self._reset_counter = att.quat_reset_counter
             self.control.adapt_to_reset(att.delta_q_reset)
             self.shaping.adapt_to_reset(att.delta_q_reset)
+            self._rotors_heading = None
         mode = self.latest("vehicle_control_mode") or _NO_MODE
         sticks = self.latest("manual_control_setpoint")
+        land = self.latest("vehicle_land_detected")
+        stick_setpoint = self.sticks.update(q, mode, sticks, land is not None and land.landed, dt, self.now_us())
         attitude_enabled = mode.flag_control_attitude_enabled
         if (
             mode.flag_control_rattitude_enabled
@@ -102,7 +109,7 @@ class MulticopterAttitudeControl(Module):
         ):
             attitude_enabled = False  # rattitude: large stick deflections fly rates
         if attitude_enabled:
-            self._attitude(q, mode, sticks, dt)
+            self._attitude(q, mode, sticks, stick_setpoint, dt)
         elif mode.flag_control_manual_enabled and mode.flag_control_rates_enabled and sticks is not None:
             self.shaping.release()
             rates = self.acro.rates(sticks.roll, sticks.pitch, sticks.yaw)
@@ -114,32 +121,24 @@ class MulticopterAttitudeControl(Module):
         else:
             self.shaping.release()
 
-    def _attitude(self, q: tuple[float, float, float, float], mode: VehicleControlMode, sticks, dt: float) -> None:
-        stabilized_mode = (
-            mode.flag_control_manual_enabled
-            and not mode.flag_control_altitude_enabled
-            and not mode.flag_control_velocity_enabled
-            and not mode.flag_control_position_enabled
-            and not mode.flag_control_rpyt_enabled
-        )
-        if mode.flag_control_rpyt_enabled and sticks is not None:
-            setpoint = self._rotors(q, sticks)
-        elif stabilized_mode and sticks is not None:
-            if not self._was_stabilized:
-                self.sticks.reset()
-            self.sticks.update_throttle_limits(
-                dt, landed=False, armed=mode.flag_armed, now_us=self.now_us(), armed_time_us=0
-            )
-            sp = self.sticks.generate(
-                q, sticks.roll, sticks.pitch, sticks.yaw, sticks.throttle, dt, reset_yaw=not mode.flag_armed
-            )
-            setpoint = VehicleAttitudeSetpoint(
-                yaw_sp_move_rate=sp.yaw_sp_move_rate, q_d=sp.q_d, thrust_body=sp.thrust_body
-            )
+    def _attitude(
+        self,
+        q: tuple[float, float, float, float],
+        mode: VehicleControlMode,
+        sticks,
+        setpoint: VehicleAttitudeSetpoint | None,
+        dt: float,
+    ) -> None:
+        """Rates from the attitude setpoint: Stabilized's from the sticks (``setpoint``), the RotorS mode's, or the
+        one on the bus."""
+        if setpoint is not None:
             self.publish("vehicle_attitude_setpoint", setpoint)
+        elif mode.flag_control_rpyt_enabled and sticks is not None:
+            setpoint = self._rotors(q, sticks, mode.flag_armed, dt)
         else:
             setpoint = self.latest("vehicle_attitude_setpoint")
-        self._was_stabilized = stabilized_mode
+        if not mode.flag_control_rpyt_enabled:
+            self._rotors_heading = None
         if setpoint is None or not quat.is_finite(setpoint.q_d):
             return
         rates = self.shaping.rates(self.control, setpoint.q_d, setpoint.yaw_sp_move_rate, q, self._body_rates(), dt)
@@ -148,8 +147,12 @@ class MulticopterAttitudeControl(Module):
             VehicleRatesSetpoint(roll=rates[0], pitch=rates[1], yaw=rates[2], thrust_body=setpoint.thrust_body),
         )
 
-    def _rotors(self, q: tuple[float, float, float, float], sticks) -> VehicleAttitudeSetpoint:
+    def _rotors(self, q: tuple[float, float, float, float], sticks, armed: bool, dt: float) -> VehicleAttitudeSetpoint:
+        """The RotorS mode's setpoint. RotorS' own law keeps the current heading and damps the yaw rate towards the
+        command; PX4's attitude loop follows a heading, so the commanded rate moves one along from the current."""
         command = self.joy.command(sticks.roll, sticks.pitch, sticks.yaw, sticks.throttle)
+        heading = self._rotors_heading
+        self._rotors_heading = quat.yaw(q) if heading is None or not armed else wrap_pi(heading + command.yaw_rate * dt)
         self.publish(
             "roll_pitch_yawrate_thrust_setpoint",
             RollPitchYawrateThrustSetpoint(
@@ -160,7 +163,7 @@ class MulticopterAttitudeControl(Module):
                 thrust=command.thrust,
             ),
         )
-        sp = rotors_attitude_setpoint(q, command, self._thrust_max)
+        sp = rotors_attitude_setpoint(self._rotors_heading, command, self._thrust_max)
         setpoint = VehicleAttitudeSetpoint(yaw_sp_move_rate=sp.yaw_sp_move_rate, q_d=sp.q_d, thrust_body=sp.thrust_body)
         self.publish("vehicle_attitude_setpoint", setpoint)
         return setpoint

@@ -157,15 +157,15 @@ def rattitude_uses_rate_control(roll: float, pitch: float, threshold: float = 0.
     return abs(roll) > threshold or abs(pitch) > threshold
 
 
-def rotors_attitude_setpoint(q: Quat, command: RollPitchYawrateThrust, max_thrust: float) -> AttitudeSetpoint:
+def rotors_attitude_setpoint(heading: float, command: RollPitchYawrateThrust, max_thrust: float) -> AttitudeSetpoint:
     """Attitude setpoint for PX4's attitude loop from a RotorS command in the stack's frames.
 
-    RotorS' controller holds R_des = Rz(ψ_current)·Rx(φ)·Ry(θ) in ENU/FLU; conjugated into NED/FRD with the
-    stack's pitch (+ nose up) that is R_des = Rz(ψ_NED)·Rx(roll)·Ry(pitch): the heading kept is the current one and
-    the commanded yaw rate (clockwise +, about NED down) is the yaw feed-forward. The thrust [N] is normalised by
-    ``max_thrust`` [N], the collective thrust at full command, and clipped to [0, 1].
+    RotorS' controller holds R_des = Rz(ψ)·Rx(φ)·Ry(θ) in ENU/FLU; conjugated into NED/FRD with the stack's pitch
+    (+ nose up) that is R_des = Rz(``heading``)·Rx(roll)·Ry(pitch), and the commanded yaw rate (clockwise +, about
+    NED down) is the yaw feed-forward. The thrust [N] is normalised by ``max_thrust`` [N], the collective thrust at
+    full command, and clipped to [0, 1].
     """
-    half_yaw = 0.5 * quat.yaw(q)
+    half_yaw = 0.5 * heading
     heading = (math.cos(half_yaw), 0.0, 0.0, math.sin(half_yaw))
     q_d = quat.mul(
         quat.mul(heading, quat.from_axis_angle((1.0, 0.0, 0.0), command.roll)),

@@ -131,26 +131,25 @@ def test_rattitude_switches_to_rates_beyond_the_threshold():
 
 def test_rotors_command_keeps_heading_and_converts_to_ned():
     q = quat.from_euler(0.2, 0.1, 0.7)
-    level = rotors_attitude_setpoint(q, RollPitchYawrateThrust(0.0, 0.0, 0.0, 5.0), 20.0)
+    level = rotors_attitude_setpoint(quat.yaw(q), RollPitchYawrateThrust(0.0, 0.0, 0.0, 5.0), 20.0)
     assert level.q_d == pytest.approx(quat.from_euler(0.0, 0.0, 0.7), abs=1e-12)
     assert level.thrust_body == pytest.approx((0.0, 0.0, -0.25))
     # Pitch + is nose up in the stack's frames: the thrust leans backwards (south).
-    heading_north = quat.IDENTITY
-    back = rotors_attitude_setpoint(heading_north, RollPitchYawrateThrust(0.0, 0.3, 0.0, 10.0), 20.0)
+    back = rotors_attitude_setpoint(0.0, RollPitchYawrateThrust(0.0, 0.3, 0.0, 10.0), 20.0)
     assert quat.to_euler(back.q_d) == pytest.approx((0.0, 0.3, 0.0))
     assert quat.rotate(back.q_d, (0.0, 0.0, -1.0))[0] == pytest.approx(-math.sin(0.3))
     # Positive roll is right side down: the thrust leans right (east).
-    right = rotors_attitude_setpoint(heading_north, RollPitchYawrateThrust(0.3, 0.0, 0.0, 10.0), 20.0)
+    right = rotors_attitude_setpoint(0.0, RollPitchYawrateThrust(0.3, 0.0, 0.0, 10.0), 20.0)
     assert quat.rotate(right.q_d, (0.0, 0.0, -1.0))[1] == pytest.approx(math.sin(0.3))
     # The yaw rate is the feed-forward about NED down; thrust is clipped to [0, 1].
-    spin = rotors_attitude_setpoint(heading_north, RollPitchYawrateThrust(0.0, 0.0, 0.5, 30.0), 20.0)
+    spin = rotors_attitude_setpoint(0.0, RollPitchYawrateThrust(0.0, 0.0, 0.5, 30.0), 20.0)
     assert spin.yaw_sp_move_rate == 0.5
     assert spin.thrust_body == (0.0, 0.0, -1.0)
 
 
 def test_rotors_roll_then_pitch_order():
     # R = Rz·Rx·Ry: the pitch rotation is about the already-rolled y axis.
-    sp = rotors_attitude_setpoint(quat.IDENTITY, RollPitchYawrateThrust(0.4, 0.3, 0.0, 1.0), 1.0)
+    sp = rotors_attitude_setpoint(0.0, RollPitchYawrateThrust(0.4, 0.3, 0.0, 1.0), 1.0)
     expected = quat.mul(quat.from_axis_angle((1.0, 0.0, 0.0), 0.4), quat.from_axis_angle((0.0, 1.0, 0.0), 0.3))
     assert sp.q_d == pytest.approx(expected, abs=1e-12)
 
