@@ -119,6 +119,8 @@ def _terminal(keyboard: bool) -> Iterator[None]:
         raise _Stopped(signum)
 
     previous = {s: signal.signal(s, stop) for s in STOP_SIGNALS}
+    # Ctrl-C quits even when teleop was started with SIGINT ignored (a child inherits SIG_IGN across exec).
+    previous[signal.SIGINT] = signal.signal(signal.SIGINT, signal.default_int_handler)
     fd = sys.stdin.fileno()
     saved = termios.tcgetattr(fd) if keyboard else None
     try:
