@@ -1,7 +1,8 @@
 """Fly every scenario over many seeds, calm and in wind, side by side, and judge each metric's worst seed.
 
     python benchmarks/sweep.py [--scenarios takeoff_land,mission_box] [--seeds 1-20] [--jobs 2]
-                               [--profile P] [--wind both|calm|wind] [--per-seed] [--summary out.md|out.json]
+                               [--profile P] [--wind both|calm|wind] [--wind-speed 8] [--per-seed]
+                               [--summary out.md|out.json]
 
 Each flight is one ``stack fly SCENARIO --seed N --quiet [--wind]`` in a fresh interpreter. A flight is a
 stack of its own (its bus, ports, run directory and state), so ``--jobs`` of them run side by side in one
@@ -64,7 +65,7 @@ def parse_seeds(text: str) -> list[int]:
     return seeds
 
 
-def fly(scenario: str, profile: str, seed: int, wind: bool, home: Path) -> dict[str, Any]:
+def fly(scenario: str, profile: str, seed: int, wind: bool, home: Path, wind_speed: float | None) -> dict[str, Any]:
     """One ``stack fly``; its report (with ``log``, the flight's output), or ``{"seed", "passed": False,
     "error", "log"}`` when it left none."""
     stem = f"{scenario}{'-wind' if wind else ''}-seed{seed}"
@@ -75,7 +76,7 @@ def fly(scenario: str, profile: str, seed: int, wind: bool, home: Path) -> dict[
     with log.open("w") as out:
         try:
             code = subprocess.run(
-                [sys.executable, "-m", "stack", *args, *(["--wind"] if wind else [])],
+                [sys.executable, "-m", "stack", *args, *(_wind_args(wind_speed) if wind else [])],
                 env=env,
                 stdout=out,
                 stderr=subprocess.STDOUT,
@@ -88,6 +89,10 @@ def fly(scenario: str, profile: str, seed: int, wind: bool, home: Path) -> dict[
         tail = " | ".join(log.read_text().splitlines()[-3:])
         return {"seed": seed, "passed": False, "error": f"no report, {how}: {tail}", "log": str(log)}
     return json.loads(report.read_text()) | {"log": str(log)}
+
+
+def _wind_args(wind_speed: float | None) -> list[str]:
+    return ["--wind"] if wind_speed is None else ["--wind-speed", f"{wind_speed:g}"]
 
 
 def simulates_wind(profile: str) -> bool:
@@ -220,7 +225,7 @@ def sweep(args: argparse.Namespace, home: Path) -> int:
     reports: list[list[dict[str, Any]]] = [[] for _ in todo]
     with ThreadPoolExecutor(max_workers=args.jobs) as pool:
         futures = {
-            pool.submit(fly, case.scenario.name, case.profile, seed, case.wind, home): i
+            pool.submit(fly, case.scenario.name, case.profile, seed, case.wind, home, args.wind_speed): i
             for i, case in enumerate(todo)
             for seed in args.seeds
         }
@@ -266,6 +271,9 @@ def main() -> None:
     parser.add_argument("--profile", default=DEFAULT_PROFILE, help="launch profile (a name in launch/ or a path)")
     parser.add_argument(
         "--wind", choices=sorted(CONDITIONS), default="both", help="calm, in wind (limits doubled), or both"
+    )
+    parser.add_argument(
+        "--wind-speed", type=float, help="the wind's speed in m/s (default: --wind's 5 m/s with gusts, from the west)"
     )
     parser.add_argument("--per-seed", action="store_true", help="also print every check's value on every seed")
     parser.add_argument("--summary", type=Path, help="write the summary to this file: JSON if .json, else markdown")

@@ -32,6 +32,9 @@ def fly(
     wind: bool = typer.Option(
         False, "--wind", help=f"Fly in {WIND_SPEED:g} m/s wind with gusts; the limits are doubled"
     ),
+    wind_speed: float | None = typer.Option(
+        None, "--wind-speed", min=0.0, max=30.0, help="Fly in this wind (m/s) instead of --wind's; implies --wind"
+    ),
     transport: str | None = TransportOption,
 ) -> None:
     """Fly a scripted scenario (in lockstep, deterministic for a seed) and report how well the stack flew.
@@ -61,7 +64,8 @@ def fly(
     run_dir = run_state.new_run_dir(scenario, name)
     result_path = run_dir / "scenario_result.json"
     try:
-        prepare_flight(prof, scenario, result_path, wind)
+        wind = wind or wind_speed is not None
+        prepare_flight(prof, scenario, result_path, wind, WIND_SPEED if wind_speed is None else wind_speed)
     except ValueError as e:
         fail(f"scenario {scenario}: {e}", code=2)
     add_observers(prof, plot=plot_, web=web, save=save, record=record, own_ports=True)
@@ -77,6 +81,7 @@ def fly(
         "profile": prof.name,
         "seed": prof.seed,
         "wind": wind,
+        "wind_speed_m_s": (WIND_SPEED if wind_speed is None else wind_speed) if wind else 0.0,
         "passed": result["passed"],
         "sim_time_s": result["sim_time_s"],
         "wall_time_s": result["wall_time_s"],
@@ -95,7 +100,7 @@ def fly(
 
 def _print_summary(report: dict, path: Path) -> None:
     status = "PASSED" if report["passed"] else "FAILED"
-    windy = ", in wind" if report["wind"] else ""
+    windy = f", in {report['wind_speed_m_s']:g} m/s wind" if report["wind"] else ""
     typer.echo(
         f"\n{report['scenario']} on {report['profile']} (seed {report['seed']}{windy}): {status} — "
         f"{report['sim_time_s']:.1f} s simulated in {report['wall_time_s']:.1f} s "

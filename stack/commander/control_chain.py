@@ -12,6 +12,14 @@ those of the estimate and control failures (``src/modules/commander/failsafe/fai
 * losing the position estimate, the flight mode manager or the position controller is a loss of **position
   control**: land (descend if the position estimate is gone too).
 
+A fixed-wing vehicle's chain (:data:`FW_CHAIN`, watched instead when MAV_TYPE makes the vehicle a plane) is
+the estimators, the airspeed selector (``airspeed_validated``), the navigator (``position_setpoint_triplet``,
+in the auto modes but Descend), fw_pos_control (``vehicle_attitude_setpoint``, in the modes with a position or altitude
+loop), fw_att_control (``vehicle_torque_setpoint``, while the rate loop runs) and the allocator; losing the
+navigator or fw_pos_control is a loss of position control (the failsafe then descends), losing the airspeed
+only a warning. The navigator publishes at 20 Hz and the airspeed selector at 10 Hz, as PX4's do: their silence
+and lateness limits are those of a 50 Hz loop stretched by the same factor.
+
 On the RotorS profiles RotorS' controller (roll_pitch_yawrate_thrust_controller) stands in for attitude and rate
 control and the allocator, and its joystick interface maps the sticks in the RotorS mode: losing either is a
 loss of attitude control too.
@@ -48,10 +56,17 @@ state at once and on every cycle, so that a module restarted after a crash, whic
 control mode and the land state long before it would count as silent."""
 
 
+CONTROL_PERIOD_US = 20_000
+"""The period of the chain's 50 Hz loops, which SILENCE_US and STALE_US are sized for."""
+
+
 class Loss(IntEnum):
+    """What a module's loss costs, least severe first."""
+
     NONE = 0
-    POSITION_CONTROL = 1
-    ATTITUDE_CONTROL = 2
+    AIRSPEED = 1
+    POSITION_CONTROL = 2
+    ATTITUDE_CONTROL = 3
 
 
 @dataclass(frozen=True)
@@ -61,6 +76,8 @@ class ChainLink:
     loss: Loss
     runs: Callable[[VehicleControlMode], bool]
     """Whether the control mode runs this module's loop (it is only watched while armed)."""
+    period_us: int = CONTROL_PERIOD_US
+    """How often the module publishes its output; a slower one's silence and lateness limits stretch alike."""
 
 
 def _always(mode: VehicleControlMode) -> bool:
@@ -87,6 +104,21 @@ def _rotors_sticks(mode: VehicleControlMode) -> bool:
     return mode.flag_control_rpyt_enabled
 
 
+def _fw_position_control(mode: VehicleControlMode) -> bool:
+    loops = (
+        mode.flag_control_position_enabled
+        or mode.flag_control_velocity_enabled
+        or mode.flag_control_altitude_enabled
+        or mode.flag_control_climb_rate_enabled
+    )
+    return loops and not mode.flag_control_offboard_enabled
+
+
+def _navigation(mode: VehicleControlMode) -> bool:
+    """The navigator's modes: the auto modes but Descend, which the position controller flies on its own."""
+    return mode.flag_control_auto_enabled and mode.flag_control_position_enabled
+
+
 CHAIN: tuple[ChainLink, ...] = (
     ChainLink("attitude_estimator_q", "vehicle_attitude", Loss.ATTITUDE_CONTROL, _always),
     ChainLink("local_position_estimator", "vehicle_local_position", Loss.POSITION_CONTROL, _always),
@@ -98,7 +130,22 @@ CHAIN: tuple[ChainLink, ...] = (
     ChainLink("roll_pitch_yawrate_thrust_controller", "actuator_motors", Loss.ATTITUDE_CONTROL, _allocation),
     ChainLink("rotors_joy_interface", "roll_pitch_yawrate_thrust_setpoint", Loss.ATTITUDE_CONTROL, _rotors_sticks),
 )
-OUTPUTS: tuple[str, ...] = tuple(dict.fromkeys(link.output for link in CHAIN))
+NAVIGATOR_PERIOD_US = 50_000
+"""PX4's navigator runs at 20 Hz."""
+AIRSPEED_SELECTOR_PERIOD_US = 100_000
+"""PX4's airspeed_selector runs at 10 Hz."""
+FW_CHAIN: tuple[ChainLink, ...] = (
+    ChainLink("attitude_estimator_q", "vehicle_attitude", Loss.ATTITUDE_CONTROL, _always),
+    ChainLink("local_position_estimator", "vehicle_local_position", Loss.POSITION_CONTROL, _always),
+    ChainLink("airspeed_selector", "airspeed_validated", Loss.AIRSPEED, _always, AIRSPEED_SELECTOR_PERIOD_US),
+    ChainLink("navigator", "position_setpoint_triplet", Loss.POSITION_CONTROL, _navigation, NAVIGATOR_PERIOD_US),
+    ChainLink("fw_pos_control", "vehicle_attitude_setpoint", Loss.POSITION_CONTROL, _fw_position_control),
+    ChainLink("fw_att_control", "vehicle_torque_setpoint", Loss.ATTITUDE_CONTROL, _rate_control),
+    ChainLink("control_allocator", "actuator_motors", Loss.ATTITUDE_CONTROL, _allocation),
+)
+"""A fixed-wing vehicle's chain."""
+OUTPUTS: tuple[str, ...] = tuple(dict.fromkeys(link.output for link in CHAIN + FW_CHAIN))
+"""Every output either chain watches (the commander's glue reports their arrivals)."""
 
 
 @dataclass(frozen=True)
@@ -108,19 +155,21 @@ class ChainFault:
     dead: bool
 
     def describe(self) -> str:
-        what = "attitude" if self.loss == Loss.ATTITUDE_CONTROL else "position"
-        return f"{self.module} {'dead' if self.dead else 'silent'}: {what} control lost"
+        what = _LOSS_TEXT.get(self.loss, "nothing")
+        return f"{self.module} {'dead' if self.dead else 'silent'}: {what} lost"
+
+
+_LOSS_TEXT = {
+    Loss.ATTITUDE_CONTROL: "attitude control",
+    Loss.POSITION_CONTROL: "position control",
+    Loss.AIRSPEED: "airspeed",
+}
 
 
 class ControlChainMonitor:
     """Which chain modules are dead or silent now (I/O-free: the glue reports outputs and deaths)."""
 
     def __init__(self, chain: tuple[ChainLink, ...] = CHAIN, silence_us: int = SILENCE_US) -> None:
-        self._chain = chain
-        self._stand_ins = frozenset(
-            link.module for i, link in enumerate(chain) if any(other.output == link.output for other in chain[:i])
-        )
-        """Modules whose output an earlier module of the chain also publishes."""
         self.silence_us = silence_us
         self._seen: dict[str, int] = {}
         """Each output's last arrival on the commander's clock (outputs never seen are absent)."""
@@ -131,6 +180,20 @@ class ControlChainMonitor:
         """The modules reported running (or dead) so far."""
         self.late = False
         """Whether a watched output was late (older than STALE_US) at the last update."""
+        self.use(chain)
+
+    @property
+    def chain(self) -> tuple[ChainLink, ...]:
+        return self._chain
+
+    def use(self, chain: tuple[ChainLink, ...]) -> None:
+        """Watch ``chain`` from now on (the vehicle type changed); what was seen and reported is kept."""
+        self._chain = chain
+        self._stand_ins = frozenset(
+            link.module for i, link in enumerate(chain) if any(other.output == link.output for other in chain[:i])
+        )
+        """Modules whose output an earlier module of the chain also publishes."""
+        self._watch_since.clear()
 
     def output_seen(self, topic: str, now_us: int) -> None:
         self._seen[topic] = now_us
@@ -162,9 +225,10 @@ class ControlChainMonitor:
             watched.append((link, max(self._seen[link.output], since)))
         newest = max((heard for _, heard in watched), default=now_us)
         for link, heard in watched:
-            self.late |= now_us - heard > STALE_US
+            stretch = max(link.period_us / CONTROL_PERIOD_US, 1.0)
+            self.late |= now_us - heard > STALE_US * stretch
             dead = link.module in self._dead
-            if dead or newest - heard > self.silence_us:
+            if dead or newest - heard > self.silence_us * stretch:
                 faults.append(ChainFault(link.module, link.loss, dead))
         faults.sort(key=lambda f: -f.loss)
         return faults

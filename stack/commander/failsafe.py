@@ -16,7 +16,10 @@ for the failures this stack detects:
 * **geofence breach**: GF_ACTION (0 none, 1 warn, 2 hold, 3 return, 4 terminate, 5 land);
 * **control chain loss** (a dead or silent estimator or controller, :mod:`stack.commander.control_chain`): of
   attitude control, terminate in the air and disarm on the ground; of position control, land (through the
-  mode fallback, descend without a position estimate), at once and until the user changes mode or disarms;
+  mode fallback, descend without a position estimate) — a fixed-wing vehicle descends (Descend: the
+  fixed-wing position controller's circling descent), since its landing needs the navigator and the position
+  controller — at once and until the user changes mode or disarms; of the airspeed, warn (PX4's airspeed
+  selector only advises a return; the fixed-wing controllers fly on without airspeed);
 * **mode fallback** (estimator or mission loss): Position falls back to Altitude, Altitude to
   Stabilized, and any mode that cannot run goes to Return — which, when it cannot run either, falls
   through Land and Descend to Terminate. With no local position, an auto mode therefore ends in Descend;
@@ -40,7 +43,7 @@ from typing import NamedTuple
 
 from stack.commander.geofence import GeofenceAction
 from stack.commander.health import can_run, missing_cause
-from stack.commander.modes import AUTO_NAV_STATES, Requirement
+from stack.commander.modes import AUTO_NAV_STATES, FIXED_WING, ROTARY_WING, Requirement
 from stack.msg.system import BatteryWarning, VehicleStatus
 from stack.params import catalogue
 from stack.params.param import Param
@@ -148,6 +151,7 @@ class FailsafeConditions:
     geofence_breached: bool = False
     attitude_control_lost: bool = False
     position_control_lost: bool = False
+    airspeed_lost: bool = False
     landed: bool = True
 
 
@@ -165,6 +169,8 @@ class FailsafeResult(NamedTuple):
 _TERMINATE = _Options(FailsafeAction.TERMINATE, Clear.NEVER, Takeover.NEVER)
 _DISARM = _Options(FailsafeAction.DISARM, takeover=Takeover.NEVER)
 _POSITION_CONTROL_LOSS = _Options(FailsafeAction.LAND, Clear.ON_MODE_CHANGE_OR_DISARM, Takeover.MODE_SWITCH_ONLY)
+_FW_POSITION_CONTROL_LOSS = _Options(FailsafeAction.DESCEND, Clear.ON_MODE_CHANGE_OR_DISARM, Takeover.MODE_SWITCH_ONLY)
+_AIRSPEED_LOSS = _Options(FailsafeAction.WARN)
 
 
 @cache
@@ -217,14 +223,16 @@ BATTERY_CAUSES = {
 }
 
 
-def mode_fallback(failing: Requirement, intended: int) -> tuple[FailsafeAction, int]:
+def mode_fallback(
+    failing: Requirement, intended: int, vehicle_type: int = ROTARY_WING
+) -> tuple[FailsafeAction, int]:
     """PX4 ``checkModeFallback``: the fallback action for the intended mode and the mode it leads to."""
     action = FailsafeAction.NONE
-    if intended == NS.NAVIGATION_STATE_POSCTL and not can_run(intended, failing):
+    if intended == NS.NAVIGATION_STATE_POSCTL and not can_run(intended, failing, vehicle_type):
         action, intended = FailsafeAction.FALLBACK_ALTCTL, NS.NAVIGATION_STATE_ALTCTL
-    if intended == NS.NAVIGATION_STATE_ALTCTL and not can_run(intended, failing):
+    if intended == NS.NAVIGATION_STATE_ALTCTL and not can_run(intended, failing, vehicle_type):
         action, intended = FailsafeAction.FALLBACK_STAB, NS.NAVIGATION_STATE_STAB
-    if not can_run(intended, failing):
+    if not can_run(intended, failing, vehicle_type):
         action, intended = FailsafeAction.RTL, NS.NAVIGATION_STATE_AUTO_RTL
     return action, intended
 
@@ -240,20 +248,23 @@ _FALLBACK_CHAIN = (
 )
 
 
-def runnable_action(action: FailsafeAction, failing: Requirement) -> FailsafeAction:
+def runnable_action(
+    action: FailsafeAction, failing: Requirement, vehicle_type: int = ROTARY_WING
+) -> FailsafeAction:
     """The action itself if its mode can run, else the next one down PX4's fallback chain."""
     chain = _FALLBACK_CHAIN
     if action not in chain:
         return action
     for candidate in chain[chain.index(action) :]:
-        if can_run(ACTION_MODES[candidate], failing):
+        if can_run(ACTION_MODES[candidate], failing, vehicle_type):
             return candidate
     return FailsafeAction.TERMINATE
 
 
 class Failsafe:
     """Call ``update`` every commander cycle with the arming state, the user's intended mode (and whether
-    the user just changed it) and the current failure conditions."""
+    the user just changed it) and the current failure conditions. ``vehicle_type`` (rotary wing unless set)
+    decides which modes can run and the action on a loss of position control."""
 
     __slots__ = (
         "_actions",
@@ -265,6 +276,7 @@ class Failsafe:
         "_selected",
         "_takeover_active",
         "_was_armed",
+        "vehicle_type",
     )
 
     def __init__(self, params: Mapping[str, object] | None = None) -> None:
@@ -276,6 +288,7 @@ class Failsafe:
         self._battery_warning_at_arming = BatteryWarning.NONE
         self._manual_control_lost_at_arming = False
         self._last_update_us = 0
+        self.vehicle_type = ROTARY_WING
         self.set_params(params or {})
 
     def set_params(self, params: Mapping[str, object]) -> None:
@@ -311,6 +324,7 @@ class Failsafe:
             self._remove_actions(Clear.ON_MODE_CHANGE_OR_DISARM)
 
         failing = cond.failing
+        vehicle_type = self.vehicle_type
         landing = intended == NS.NAVIGATION_STATE_AUTO_LAND
         dll_action = int(p["NAV_DLL_ACT"])
         if dll_action != 0 and armed and not landing and not self._dll_exempt(intended):
@@ -324,23 +338,26 @@ class Failsafe:
         if armed:
             lost_attitude = _DISARM if cond.landed else _TERMINATE
             self._check("attitude_control_loss", cond.attitude_control_lost, lost_attitude)
-            self._check("position_control_loss", cond.position_control_lost, _POSITION_CONTROL_LOSS)
+            lost_position = _FW_POSITION_CONTROL_LOSS if vehicle_type == FIXED_WING else _POSITION_CONTROL_LOSS
+            self._check("position_control_loss", cond.position_control_lost, lost_position)
+            self._check("airspeed_loss", cond.airspeed_lost, _AIRSPEED_LOSS)
 
         warning = cond.battery_warning
         if warning > BatteryWarning.NONE:
             bat_action = int(p["COM_LOW_BAT_ACT"]) if warning > self._battery_warning_at_arming else 0
             self._check(BATTERY_CAUSES[BatteryWarning(min(warning, 4))], True, _from_battery_param(bat_action, warning))
 
-        fallback, _ = mode_fallback(failing, intended)
+        fallback, _ = mode_fallback(failing, intended, vehicle_type)
         if fallback != FailsafeAction.NONE:
-            self._check(missing_cause(intended, failing), True, _Options(fallback, takeover=Takeover.ALWAYS))
+            cause = missing_cause(intended, failing, vehicle_type)
+            self._check(cause, True, _Options(fallback, takeover=Takeover.ALWAYS))
 
         for key in [k for k, a in self._actions.items() if not a.checked]:
             self._condition_cleared(key)
         for active in self._actions.values():
             active.checked = False
 
-        if self._selected > FailsafeAction.HOLD or not can_run(NS.NAVIGATION_STATE_AUTO_LOITER, failing):
+        if self._selected > FailsafeAction.HOLD or not can_run(NS.NAVIGATION_STATE_AUTO_LOITER, failing, vehicle_type):
             self._delay_us = 0
         if self._takeover_active:
             self._delay_us = 0
@@ -433,17 +450,17 @@ class Failsafe:
         user_takeover = False
         if selected in _TAKEOVER_ACTIONS and takeover != Takeover.NEVER and (self._takeover_active or wants_takeover):
             selected, delayed, user_takeover = FailsafeAction.WARN, FailsafeAction.NONE, True
-            fallback, _ = mode_fallback(failing, intended)
+            fallback, _ = mode_fallback(failing, intended, self.vehicle_type)
             if fallback > selected:
                 selected = fallback
 
-        selected = runnable_action(selected, failing)
+        selected = runnable_action(selected, failing, self.vehicle_type)
 
         # Already landing: a Return would only climb away from the landing spot.
         if (
             intended == NS.NAVIGATION_STATE_AUTO_LAND
             and FailsafeAction.RTL in (selected, delayed)
-            and can_run(NS.NAVIGATION_STATE_AUTO_LAND, failing)
+            and can_run(NS.NAVIGATION_STATE_AUTO_LAND, failing, self.vehicle_type)
         ):
             selected, delayed = FailsafeAction.WARN, FailsafeAction.NONE
         return self._result(selected, delayed, cause, intended, user_takeover)

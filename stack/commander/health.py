@@ -1,7 +1,8 @@
 """Health and arming checks: which estimates and sensors are usable, and whether arming is allowed.
 
 After PX4 ``HealthAndArmingChecks`` (``estimatorCheck``, ``sensor checks``, ``batteryCheck``, ``modeCheck``):
-the result is the set of mode requirements that currently fail (so "can mode X run" is one mask test) and,
+the result is the set of mode requirements that currently fail (so "can mode X run" is one mask test, against
+the vehicle type's requirements, :mod:`stack.commander.modes`) and,
 for arming, the first reason in PX4's spirit ("Arming denied: ..."):
 
 * the mode forbids arming (Return, Land, Descend, Termination);
@@ -12,6 +13,9 @@ for arming, the first reason in PX4's spirit ("Arming denied: ..."):
 * the mode's own requirements (a valid local position for Position and the auto modes, an altitude
   estimate, a mission);
 * a 3-D GPS fix when SYS_HAS_GPS and either COM_ARM_WO_GPS = 0 or the mode needs a position;
+* a fixed-wing vehicle's airspeed (PX4 ``airspeedCheck.cpp``, unless SYS_HAS_NUM_ASPD is 0): the airspeed
+  sensor's data fresh, the validated airspeed (``airspeed_validated``, the airspeed selector's) fresh and
+  finite, and not above FW_AIRSPD_MAX (a badly calibrated sensor, or a wind no flight could make headway in);
 * the battery warning is below CRITICAL (PX4: LOW only warns);
 * with COM_EXT_AP, the external autopilot (a Pixhawk the stack flies through) is connected, and armable
   if it is in Offboard already.
@@ -27,7 +31,15 @@ import math
 from dataclasses import dataclass
 from functools import cache
 
-from stack.commander.modes import MODES, REQUIREMENT_CAUSE, REQUIREMENT_TEXT, RUN_REQUIREMENTS, Requirement
+from stack.commander.modes import (
+    FIXED_WING,
+    MODES,
+    REQUIREMENT_CAUSE,
+    REQUIREMENT_TEXT,
+    ROTARY_WING,
+    RUN_REQUIREMENTS,
+    Requirement,
+)
 from stack.mathlib.quaternion import IDENTITY, Quat
 from stack.msg.estimation import VehicleLocalPosition
 from stack.msg.sensors import SensorGps
@@ -49,7 +61,9 @@ class CommanderInputs:
     command link); ``last_manual_control_us`` the time of the last valid manual control input (sticks from a
     radio, a joystick or a ground station) and ``manual_control_valid`` whether the latest one is valid;
     ``mission_count`` is the number of items of the loaded, valid mission (0: none) and
-    ``mission_finished`` whether its last item has been reached.
+    ``mission_finished`` whether its last item has been reached; ``airspeed_timestamp_us`` is the last
+    ``airspeed`` (the sensor), ``airspeed_validated_timestamp_us`` and ``calibrated_airspeed`` the last
+    ``airspeed_validated`` (NaN: invalid).
     """
 
     attitude_timestamp_us: int = 0
@@ -72,6 +86,9 @@ class CommanderInputs:
     mission_finished: bool = False
     external_autopilot: ExternalAutopilotStatus | None = None
     """The external autopilot the stack flies through (``external_autopilot_status``), when there is one."""
+    airspeed_timestamp_us: int = 0
+    airspeed_validated_timestamp_us: int = 0
+    calibrated_airspeed: float = math.nan
 
 
 @dataclass(slots=True)
@@ -90,6 +107,12 @@ class HealthParams:
     """COM_POS_FS_EPH: horizontal position error [m] above which the local position is invalid."""
     com_ext_ap: bool = False
     """COM_EXT_AP: the plant is an external autopilot (a Pixhawk), which must be connected and armable."""
+    vehicle_type: int = ROTARY_WING
+    """``vehicle_status.vehicle_type`` (from MAV_TYPE)."""
+    sys_has_num_aspd: bool = True
+    """SYS_HAS_NUM_ASPD: a fixed-wing vehicle has an airspeed sensor, required to arm."""
+    fw_airspd_max: float = 20.0
+    """FW_AIRSPD_MAX [m/s]: the highest airspeed reading arming accepts."""
 
 
 def _fresh(now_us: int, stamp_us: int, timeout_us: int) -> bool:
@@ -112,7 +135,14 @@ _ALT = int(Requirement.LOCAL_ALT)
 _MISSION = int(Requirement.MISSION)
 _HOME = int(Requirement.HOME)
 # Plain-int masks: IntFlag arithmetic and construction cost about a microsecond per operation.
-_RUN_MASKS: dict[int, int] = {state: int(m.requirements & RUN_REQUIREMENTS) for state, m in MODES.items()}
+_RUN_MASKS: dict[int, dict[int, int]] = {
+    vehicle_type: {
+        state: int(m.requirements_for(vehicle_type) & RUN_REQUIREMENTS)
+        for state, m in MODES.items()
+        if m.available(vehicle_type)
+    }
+    for vehicle_type in (ROTARY_WING, FIXED_WING)
+}
 _PREVENTS_ARMING = frozenset(s for s, m in MODES.items() if m.requirements & Requirement.PREVENT_ARMING)
 _REQUIREMENT_ORDER: tuple[tuple[int, Requirement], ...] = tuple((int(r), r) for r in REQUIREMENT_TEXT)
 _as_requirement = cache(Requirement)
@@ -146,14 +176,15 @@ def failing_requirements(now_us: int, inp: CommanderInputs, params: HealthParams
     return _as_requirement(failing)
 
 
-def can_run(nav_state: int, failing: Requirement) -> bool:
-    mask = _RUN_MASKS.get(nav_state)
+def can_run(nav_state: int, failing: Requirement, vehicle_type: int = ROTARY_WING) -> bool:
+    """Whether the vehicle type has the mode and its requirements are met."""
+    mask = _RUN_MASKS[vehicle_type].get(nav_state)
     return mask is not None and not (mask & int(failing))
 
 
-def missing_requirement(nav_state: int, failing: Requirement) -> Requirement:
+def missing_requirement(nav_state: int, failing: Requirement, vehicle_type: int = ROTARY_WING) -> Requirement:
     """The first run requirement of the mode that is not met (NONE if it can run)."""
-    missing = _RUN_MASKS.get(nav_state, 0) & int(failing)
+    missing = _RUN_MASKS[vehicle_type].get(nav_state, 0) & int(failing)
     if missing:
         for bit, req in _REQUIREMENT_ORDER:
             if missing & bit:
@@ -161,14 +192,18 @@ def missing_requirement(nav_state: int, failing: Requirement) -> Requirement:
     return Requirement.NONE
 
 
-def first_missing(nav_state: int, failing: Requirement) -> str:
+def first_missing(nav_state: int, failing: Requirement, vehicle_type: int = ROTARY_WING) -> str:
     """What the mode misses, e.g. "a valid local position estimate" ("" if it can run)."""
-    return REQUIREMENT_TEXT.get(missing_requirement(nav_state, failing), "")
+    return REQUIREMENT_TEXT.get(missing_requirement(nav_state, failing, vehicle_type), "")
 
 
-def missing_cause(nav_state: int, failing: Requirement) -> str:
+def missing_cause(nav_state: int, failing: Requirement, vehicle_type: int = ROTARY_WING) -> str:
     """The failsafe cause name for what the mode misses, e.g. "local_position_invalid"."""
-    return REQUIREMENT_CAUSE.get(missing_requirement(nav_state, failing), "")
+    return REQUIREMENT_CAUSE.get(missing_requirement(nav_state, failing, vehicle_type), "")
+
+
+def vehicle_type_name(vehicle_type: int) -> str:
+    return "a fixed-wing vehicle" if vehicle_type == FIXED_WING else "a rotary-wing vehicle"
 
 
 def arming_denial(now_us: int, nav_state: int, failing: Requirement, inp: CommanderInputs, params: HealthParams) -> str:
@@ -178,13 +213,18 @@ def arming_denial(now_us: int, nav_state: int, failing: Requirement, inp: Comman
     mode = MODES.get(nav_state)
     if mode is None:
         return f"Arming denied: nav_state {nav_state} is not a supported mode"
+    vehicle_type = params.vehicle_type
+    if not mode.available(vehicle_type):
+        return f"Arming denied: {mode.name} mode is not available on {vehicle_type_name(vehicle_type)}"
     if nav_state in _PREVENTS_ARMING:
         return f"Arming denied: not possible in {mode.name} mode, switch mode first"
+    needs_airspeed = vehicle_type == FIXED_WING and params.sys_has_num_aspd
     sensors = (
         ("gyro", inp.gyro_timestamp_us, True),
         ("accelerometer", inp.accel_timestamp_us, True),
         ("barometer", inp.baro_timestamp_us, params.sys_has_baro),
         ("magnetometer", inp.mag_timestamp_us, params.sys_has_mag),
+        ("airspeed", inp.airspeed_timestamp_us, needs_airspeed),
     )
     for name, stamp, required in sensors:
         if required and not _fresh(now_us, stamp, SENSOR_TIMEOUT_US):
@@ -194,10 +234,14 @@ def arming_denial(now_us: int, nav_state: int, failing: Requirement, inp: Comman
         return "Arming denied: no angular velocity estimate"
     if failing_bits & _ATT:
         return "Arming denied: attitude estimate invalid"
-    missing = first_missing(nav_state, _as_requirement(failing_bits & ~_HOME))
+    missing = first_missing(nav_state, _as_requirement(failing_bits & ~_HOME), vehicle_type)
     if missing:
         return f"Arming denied: {mode.name} mode requires {missing}"
-    needs_position = bool(_RUN_MASKS[nav_state] & (_POS | _POS_RELAXED))
+    if needs_airspeed:
+        denial = airspeed_denial(now_us, inp, params.fw_airspd_max)
+        if denial:
+            return denial
+    needs_position = bool(_RUN_MASKS[vehicle_type][nav_state] & (_POS | _POS_RELAXED))
     if params.sys_has_gps and (needs_position or not params.com_arm_wo_gps):
         if not _fresh(now_us, inp.gps_timestamp_us, SENSOR_TIMEOUT_US):
             return "Arming denied: no GPS data"
@@ -209,6 +253,18 @@ def arming_denial(now_us: int, nav_state: int, failing: Requirement, inp: Comman
         return "Arming denied: battery critically low"
     if params.com_ext_ap:
         return external_autopilot_denial(now_us, inp.external_autopilot)
+    return ""
+
+
+def airspeed_denial(now_us: int, inp: CommanderInputs, airspeed_max: float) -> str:
+    """PX4 ``airspeedCheck.cpp``: why the validated airspeed forbids arming ("" if it does not)."""
+    if not _fresh(now_us, inp.airspeed_validated_timestamp_us, SENSOR_TIMEOUT_US):
+        return "Arming denied: no validated airspeed (is airspeed_selector running?)"
+    airspeed = inp.calibrated_airspeed
+    if not math.isfinite(airspeed):
+        return "Arming denied: airspeed invalid"
+    if abs(airspeed) > airspeed_max:
+        return f"Arming denied: airspeed too high ({airspeed:.1f} m/s, FW_AIRSPD_MAX {airspeed_max:g} m/s)"
     return ""
 
 

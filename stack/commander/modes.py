@@ -4,16 +4,24 @@ One table, :data:`MODES`, keyed by PX4's ``vehicle_status.nav_state`` numbers, h
 
 * ``requirements`` — PX4 ``ModeUtil/mode_requirements.cpp`` for a rotary-wing vehicle: the estimates and
   data the mode cannot run without, and whether it forbids arming (Return, Land, Descend, Termination);
+  ``fixed_wing_requirements`` where a fixed-wing vehicle's differ (Mission, Hold and Return need only the
+  relaxed local position, Takeoff no horizontal position at all: a runway takeoff holds its heading);
 * ``control_flags`` — the ``vehicle_control_mode`` flags PX4 ``ModeUtil/control_mode.cpp`` sets for it
-  (rotary wing: Manual is stabilised like Stabilized). ``flag_control_allocation_enabled`` is set in every
+  (rotary wing: Manual is stabilised like Stabilized; fixed wing: Manual is direct, no attitude or rate loop,
+  and ``flag_multicopter_position_control_enabled`` is never set). ``flag_control_allocation_enabled`` is set in every
   mode but Termination, as PX4's own modes leave the allocator on. Rattitude is the older PX4's mode (removed
   from PX4 in 2021): manual, attitude and rates plus ``flag_control_rattitude_enabled``;
 * RotorS is the stack's own mode in PX4's first external mode slot (EXTERNAL1, as a ROS 2 mode registers): the
   sticks map to roll, pitch, yaw rate and thrust in newtons as RotorS' ``rotors_joy_interface`` maps them
   (``flag_control_rpyt_enabled``), flown by the RotorS controller or by PX4's attitude loop;
+* ``fixed_wing`` — whether a plane has the mode: the RotorS interface and Rattitude are multicopter modes
+  (PX4's fixed-wing attitude controller has no rattitude here), refused on a plane with that reason;
 * ``custom_mode`` — the PX4 custom main/sub mode (``px4_custom_mode.h``, from :mod:`stack.mavlink.px4_modes`)
   QGroundControl and MAVLink send in ``MAV_CMD_DO_SET_MODE`` param2/param3 (with param1 =
   MAV_MODE_FLAG_CUSTOM_MODE_ENABLED).
+
+The vehicle type (``vehicle_status.vehicle_type``) comes from PX4's MAV_TYPE parameter, as PX4's commander
+derives it (``commander_helper.cpp``): 1 is a fixed-wing vehicle, the rotor types a rotary-wing one.
 
 The manual-control (RC) requirement is not one of the run requirements: armed, a switch to a mode that has it
 is refused without manual control input (the commander's mode change, as PX4's ``UserModeIntention::change``),
@@ -30,6 +38,15 @@ from stack.mavlink.px4_modes import MainMode
 from stack.msg.system import VehicleControlMode, VehicleStatus
 
 NS = VehicleStatus
+ROTARY_WING = NS.VEHICLE_TYPE_ROTARY_WING
+FIXED_WING = NS.VEHICLE_TYPE_FIXED_WING
+MAV_TYPE_FIXED_WING = 1
+
+
+def vehicle_type_from_mav_type(mav_type: int) -> int:
+    """``vehicle_status.vehicle_type`` for a MAV_TYPE (PX4 ``is_fixed_wing``/``is_rotary_wing``): a fixed-wing
+    vehicle for MAV_TYPE_FIXED_WING, else rotary wing (the MAV_TYPE parameter admits no other kind)."""
+    return FIXED_WING if mav_type == MAV_TYPE_FIXED_WING else ROTARY_WING
 
 
 class Requirement(IntFlag):
@@ -120,6 +137,18 @@ class ModeInfo:
     control_flags: frozenset[str]
     user_selectable: bool = True
     """False for the failsafe-only modes (Descend, Termination)."""
+    fixed_wing_requirements: Requirement | None = None
+    """A fixed-wing vehicle's requirements where they differ from ``requirements``."""
+    fixed_wing: bool = True
+    """Whether a fixed-wing vehicle has this mode."""
+
+    def requirements_for(self, vehicle_type: int) -> Requirement:
+        if vehicle_type == FIXED_WING and self.fixed_wing_requirements is not None:
+            return self.fixed_wing_requirements
+        return self.requirements
+
+    def available(self, vehicle_type: int) -> bool:
+        return self.fixed_wing or vehicle_type != FIXED_WING
 
     @property
     def custom_mode(self) -> tuple[int, int]:
@@ -152,6 +181,7 @@ MODES: dict[int, ModeInfo] = {
             "rattitude",
             _AV_ATT | R.MANUAL_CONTROL,
             _STAB_FLAGS | {_RATTITUDE},
+            fixed_wing=False,
         ),
         ModeInfo(
             NS.NAVIGATION_STATE_EXTERNAL1,
@@ -159,6 +189,7 @@ MODES: dict[int, ModeInfo] = {
             "rotors",
             _AV_ATT | R.MANUAL_CONTROL,
             _STAB_FLAGS | {_RPYT},
+            fixed_wing=False,
         ),
         ModeInfo(
             NS.NAVIGATION_STATE_ALTCTL,
@@ -180,6 +211,7 @@ MODES: dict[int, ModeInfo] = {
             "auto:mission",
             _AV_ATT | R.LOCAL_POSITION | R.LOCAL_ALT | R.MISSION,
             _AUTO_FLAGS,
+            fixed_wing_requirements=_AV_ATT | R.LOCAL_POSITION_RELAXED | R.LOCAL_ALT | R.MISSION,
         ),
         ModeInfo(
             NS.NAVIGATION_STATE_AUTO_LOITER,
@@ -187,6 +219,7 @@ MODES: dict[int, ModeInfo] = {
             "auto:loiter",
             _AV_ATT | R.LOCAL_POSITION | R.LOCAL_ALT,
             _AUTO_FLAGS,
+            fixed_wing_requirements=_AV_ATT | R.LOCAL_POSITION_RELAXED | R.LOCAL_ALT,
         ),
         ModeInfo(
             NS.NAVIGATION_STATE_AUTO_RTL,
@@ -194,6 +227,7 @@ MODES: dict[int, ModeInfo] = {
             "auto:rtl",
             _AV_ATT | R.LOCAL_POSITION | R.LOCAL_ALT | R.HOME | R.PREVENT_ARMING,
             _AUTO_FLAGS,
+            fixed_wing_requirements=_AV_ATT | R.LOCAL_POSITION_RELAXED | R.LOCAL_ALT | R.HOME | R.PREVENT_ARMING,
         ),
         ModeInfo(
             NS.NAVIGATION_STATE_AUTO_TAKEOFF,
@@ -201,6 +235,7 @@ MODES: dict[int, ModeInfo] = {
             "auto:takeoff",
             _AV_ATT | R.LOCAL_ALT | R.LOCAL_POSITION,
             _AUTO_FLAGS,
+            fixed_wing_requirements=_AV_ATT | R.LOCAL_ALT,
         ),
         ModeInfo(
             NS.NAVIGATION_STATE_AUTO_LAND,
@@ -248,6 +283,13 @@ MODE_ALIASES: dict[str, int] = {
 }
 
 VALID_NAV_STATES_MASK = sum(1 << s for s in MODES)
+"""The modes a rotary-wing vehicle has (all of them)."""
+
+
+def valid_nav_states_mask(vehicle_type: int) -> int:
+    """``vehicle_status.valid_nav_states_mask``: the modes a vehicle of this type has."""
+    return sum(1 << s for s, m in MODES.items() if m.available(vehicle_type))
+
 
 AUTO_NAV_STATES = frozenset(s for s, m in MODES.items() if _AUTO in m.control_flags)
 
@@ -300,10 +342,16 @@ def nav_state_from_base_mode(base_mode: int) -> int | None:
     return None
 
 
-def control_mode(nav_state: int, armed: bool) -> VehicleControlMode:
-    """``vehicle_control_mode`` for a nav_state (PX4 ``getVehicleControlMode``, rotary wing)."""
+def control_mode(nav_state: int, armed: bool, vehicle_type: int = ROTARY_WING) -> VehicleControlMode:
+    """``vehicle_control_mode`` for a nav_state (PX4 ``getVehicleControlMode``): a fixed-wing vehicle's Manual
+    has no attitude or rate loop (the sticks drive the surfaces), and only a rotary-wing vehicle's position
+    loops are the multicopter position controller's."""
     mode = MODES.get(nav_state)
     flags = dict.fromkeys(mode.control_flags, True) if mode else {}
-    if not _POSITION_LOOPS.isdisjoint(flags):
+    if vehicle_type == FIXED_WING:
+        if nav_state == NS.NAVIGATION_STATE_MANUAL:
+            flags.pop(_ATTITUDE, None)
+            flags.pop(_RATES, None)
+    elif not _POSITION_LOOPS.isdisjoint(flags):
         flags[_MC_POSITION_CONTROL] = True
     return VehicleControlMode(flag_armed=armed, source_id=nav_state, **flags)

@@ -12,7 +12,9 @@ PX4's commander does with ``mavlink_log_*``: ground-station links send them as S
 
 PX4's land detector runs in the same process on every second tick, at its 50 Hz
 (LAND_DETECTOR_UPDATE_INTERVAL in ``src/modules/land_detector/LandDetector.h``), and publishes
-``vehicle_land_detected`` when its result changes or at 1 Hz, as ``LandDetector.cpp`` does. In PX4 both
+``vehicle_land_detected`` when its result changes or at 1 Hz, as ``LandDetector.cpp`` does: the multicopter
+detector, or the fixed-wing one (:mod:`stack.commander.fw_land_detector`, on ``airspeed_validated``) when
+MAV_TYPE makes the vehicle a plane. In PX4 both
 read the 250 Hz attitude and IMU topics in-process for free; here they read the estimator's 10 Hz
 ``estimator_status`` and ``vehicle_imu_status`` summaries.
 """
@@ -23,11 +25,13 @@ import math
 
 import msgspec
 
-from stack.commander import control_chain, land_detector, offboard
+from stack.commander import control_chain, fw_land_detector, land_detector, offboard
 from stack.commander.events import event_severity
+from stack.commander.fw_land_detector import FixedwingLandDetector, FixedwingLandDetectorInputs
 from stack.commander.health import CommanderInputs
 from stack.commander.home import HomePosition as Home
 from stack.commander.land_detector import LandDetectorInputs, MulticopterLandDetector
+from stack.commander.modes import FIXED_WING
 from stack.commander.state_machine import PARAMS as COMMANDER_PARAMS
 from stack.commander.state_machine import Commander
 from stack.commander.state_machine import NavigationRequest as Navigation
@@ -94,6 +98,7 @@ class CommanderModule(Module):
         COMMANDER_PARAMS
         + OFFBOARD_PARAMS
         + tuple(p for p in land_detector.PARAMS if p.name not in {q.name for q in COMMANDER_PARAMS})
+        + fw_land_detector.PARAMS
     )
 
     def __init__(self, rt) -> None:
@@ -116,6 +121,7 @@ class CommanderModule(Module):
             "takeoff_status",
             "mission_result",
             "external_autopilot_status",
+            "airspeed",
         ):
             self.subscribe(topic)
         for topic in control_chain.OUTPUTS:
@@ -128,7 +134,7 @@ class CommanderModule(Module):
         self.advertise("navigation_request")
         self.advertise("mavlink_log")
         self.commander = Commander(self.params.values())
-        self.land_detector = MulticopterLandDetector(self.params.values())
+        self.land_detector = self._new_land_detector()
         self._land_due = 0
         self._land_published: tuple[bool, ...] | None = None
         self._land_published_at = 0
@@ -166,6 +172,11 @@ class CommanderModule(Module):
             # supervisor restarts it; in real time its liveliness token says at once that it is gone.
             self.commander.chain.module_died(module)
 
+    def _new_land_detector(self) -> MulticopterLandDetector | FixedwingLandDetector:
+        if self.commander.vehicle_type == FIXED_WING:
+            return FixedwingLandDetector(self.params.values())
+        return MulticopterLandDetector(self.params.values())
+
     def on_params_changed(self, changed: set[str]) -> None:
         self.commander.set_params(self.params.values())
         self.land_detector.set_params(self.params.values())
@@ -179,8 +190,9 @@ class CommanderModule(Module):
             # On the first tick of each 20 ms interval, so every second tick at 100 Hz.
             self._land_due = now - now % LAND_DETECTOR_PERIOD_US + LAND_DETECTOR_PERIOD_US
             self._detect_landing(now)
-        inputs = self._inputs(now)
+        # Commands first: a command sent on seeing an input (MISSION_START on a mission_result) then finds it.
         commands = self.take("vehicle_command")
+        inputs = self._inputs(now)
         if commands:
             self.commander.set_inputs(now, inputs)
             for cmd in commands:
@@ -231,7 +243,15 @@ class CommanderModule(Module):
         return dict(self._failsafe)
 
     def _detect_landing(self, now: int) -> None:
-        state = self.land_detector.update(now, self._land_inputs())
+        detector = self.land_detector
+        fixed_wing = self.commander.vehicle_type == FIXED_WING
+        if fixed_wing != isinstance(detector, FixedwingLandDetector):
+            # The vehicle type changed (only ever while disarmed, hence landed): its own detector from now on.
+            detector = self.land_detector = self._new_land_detector()
+        if isinstance(detector, FixedwingLandDetector):
+            state = detector.update(now, self._fw_land_inputs())
+        else:
+            state = detector.update(now, self._land_inputs())
         # LandDetector.cpp publishes when one of these changes, or at 1 Hz.
         key = (
             state.landed,
@@ -291,6 +311,8 @@ class CommanderModule(Module):
             # stamps them with the latest simulated time it saw, which lags
             self._last_manual_control = now
         sticks = latest("manual_control_setpoint")
+        airspeed = latest("airspeed")
+        validated = latest("airspeed_validated")
         return CommanderInputs(
             attitude_timestamp_us=est.attitude_timestamp if est is not None and est.attitude_valid else 0,
             attitude_q=est.q if est is not None else (1.0, 0.0, 0.0, 0.0),
@@ -311,6 +333,9 @@ class CommanderModule(Module):
             mission_count=mission.seq_total if mission is not None and mission.valid else 0,
             mission_finished=mission is not None and mission.valid and mission.finished,
             external_autopilot=latest("external_autopilot_status"),
+            airspeed_timestamp_us=airspeed.timestamp if airspeed is not None else 0,
+            airspeed_validated_timestamp_us=validated.timestamp if validated is not None else 0,
+            calibrated_airspeed=validated.calibrated_airspeed_m_s if validated is not None else math.nan,
         )
 
     def _land_inputs(self) -> LandDetectorInputs:
@@ -347,4 +372,20 @@ class CommanderModule(Module):
         state = land_detector.takeoff_state(takeoff.takeoff_state) if takeoff is not None else None
         if state is not None:
             inp.takeoff_state = state
+        return inp
+
+    def _fw_land_inputs(self) -> FixedwingLandDetectorInputs:
+        latest = self.latest
+        inp = FixedwingLandDetectorInputs(armed=self.commander.armed)
+        lpos = latest("vehicle_local_position")
+        if lpos is not None:
+            inp.local_position_timestamp_us = lpos.timestamp
+            inp.v_xy_valid, inp.vx, inp.vy, inp.vz = lpos.v_xy_valid, lpos.vx, lpos.vy, lpos.vz
+        validated = latest("airspeed_validated")
+        if validated is not None:
+            inp.airspeed_timestamp_us, inp.true_airspeed = validated.timestamp, validated.true_airspeed_m_s
+        imu = latest("vehicle_imu_status")
+        if imu is not None:
+            inp.angular_velocity = imu.mean_gyro
+            inp.acceleration = imu.mean_accel
         return inp

@@ -46,9 +46,17 @@ Position) only with manual control input present (COM_RC_LOSS_T); Takeoff only f
 with a mission. Yaw parameters are headings: within ±360° or NaN.
 Home is set from the local position when one first appears on the ground, and again on arming.
 Takeoff ends in Hold (COM_TAKEOFF_ACT 0) or Mission (1) once within NAV_MC_ALT_RAD of the takeoff
-altitude. Auto-disarm: COM_DISARM_LAND seconds after landing (not mid-mission), COM_DISARM_PRFLT seconds
-after arming without taking off. The command link counts as lost COM_DL_LOSS_T seconds after the last
+altitude — a fixed-wing vehicle's within NAV_FW_ALT_RAD, or within half the takeoff altitude when that is
+less (as PX4 guards a multicopter's takeoff: a low takeoff altitude must not end the takeoff on the runway).
+Auto-disarm: COM_DISARM_LAND seconds after landing (not mid-mission), COM_DISARM_PRFLT seconds after arming
+without taking off. The command link counts as lost COM_DL_LOSS_T seconds after the last
 ground-station/companion message, once one has been seen.
+
+The vehicle type is MAV_TYPE's (:func:`~stack.commander.modes.vehicle_type_from_mav_type`), taken while
+disarmed (a change made armed waits for the disarm, as PX4's commander does): it decides the modes the vehicle
+has (a plane has neither Rattitude nor the RotorS mode; switching to one is denied with that reason), their
+requirements and control flags (:mod:`stack.commander.modes`), the airspeed pre-arm check, the control chain
+watched (:mod:`stack.commander.control_chain`) and ``vehicle_status.vehicle_type``/``system_type``.
 
 With COM_EXT_AP the plant is an external autopilot (a PX4 Pixhawk the ``pixhawk`` module flies through,
 see :mod:`stack.mavlink.plant`): arming also needs it connected and armable; the commander arms, holds the
@@ -66,7 +74,7 @@ from enum import IntEnum
 from typing import NamedTuple
 
 from stack.commander.command_checks import addressed_to, goto_refusal, takeoff_altitude_refusal
-from stack.commander.control_chain import ChainFault, ControlChainMonitor, Loss
+from stack.commander.control_chain import CHAIN, FW_CHAIN, ChainFault, ControlChainMonitor, Loss
 from stack.commander.failsafe import ACTION_NAMES, Failsafe, FailsafeAction, FailsafeConditions
 from stack.commander.failsafe import PARAMS as FAILSAFE_PARAMS
 from stack.commander.geofence import PARAMS as GEOFENCE_PARAMS
@@ -80,18 +88,22 @@ from stack.commander.health import (
     failing_requirements,
     first_missing,
     manual_control_present,
+    vehicle_type_name,
 )
 from stack.commander.home import HomePosition, home_from_local_position
 from stack.commander.hysteresis import Hysteresis
 from stack.commander.modes import (
+    FIXED_WING,
     MAV_MODE_FLAG_CUSTOM_MODE_ENABLED,
     MODES,
-    VALID_NAV_STATES_MASK,
+    ROTARY_WING,
     Requirement,
     control_mode,
     mode_name,
     nav_state_from_base_mode,
     nav_state_from_custom_mode,
+    valid_nav_states_mask,
+    vehicle_type_from_mav_type,
 )
 from stack.mathlib.geo import MapProjection
 from stack.msg.estimation import VehicleLocalPosition
@@ -132,7 +144,8 @@ _POSITION_AND_ALTITUDE = int(Requirement.LOCAL_POSITION | Requirement.LOCAL_ALT)
 OWN_PARAMS: tuple[Param, ...] = catalogue.params(
     "COM_DISARM_LAND", "COM_DISARM_PRFLT", "COM_DL_LOSS_T", "COM_RC_LOSS_T", "COM_TAKEOFF_ACT", "COM_POS_FS_EPH",
     "COM_ARM_WO_GPS", "SYS_HAS_BARO", "SYS_HAS_MAG", "SYS_HAS_GPS", "SYS_FAILURE_EN", "MIS_TAKEOFF_ALT",
-    "NAV_MC_ALT_RAD", "COM_EXT_AP", "MIS_DIST_1WP", "MAV_SYS_ID", "MAV_COMP_ID",
+    "NAV_MC_ALT_RAD", "COM_EXT_AP", "MIS_DIST_1WP", "MAV_SYS_ID", "MAV_COMP_ID", "MAV_TYPE", "NAV_FW_ALT_RAD",
+    "SYS_HAS_NUM_ASPD", "FW_AIRSPD_MAX",
 )
 PARAMS: tuple[Param, ...] = OWN_PARAMS + FAILSAFE_PARAMS + GEOFENCE_PARAMS
 DEFAULTS: dict[str, object] = {p.name: p.default for p in PARAMS}
@@ -236,6 +249,9 @@ class Commander:
         self, params: Mapping[str, object] | None = None, initial_nav_state: int = NS.NAVIGATION_STATE_MANUAL
     ) -> None:
         self._inputs = CommanderInputs()
+        self.vehicle_type = ROTARY_WING
+        """``vehicle_status.vehicle_type``, from MAV_TYPE (``mav_type``) while disarmed."""
+        self.mav_type = int(DEFAULTS["MAV_TYPE"])
         self._failsafe = Failsafe()
         self._geofence = CylinderGeofence()
         self._health = HealthParams()
@@ -284,8 +300,8 @@ class Commander:
         self._external_link_up_at: int | None = None
         """When the external autopilot's link (last) came up; None while it is down."""
         self._published_key: tuple | None = None
-        self._can_set: dict[int, int] = {}
-        """``can_set_nav_states_mask`` by failing requirements, which change rarely."""
+        self._can_set: dict[tuple[int, int], int] = {}
+        """``can_set_nav_states_mask`` by vehicle type and failing requirements, which change rarely."""
         self._messages: tuple[VehicleStatus, VehicleControlMode, ActuatorArmed] | None = None
         self._handlers: dict[int, Callable[[VehicleCommand, int], _Verdict]] = {
             CMD.VEHICLE_CMD_COMPONENT_ARM_DISARM: self._cmd_arm_disarm,
@@ -320,7 +336,26 @@ class Commander:
             com_arm_wo_gps=bool(p["COM_ARM_WO_GPS"]),
             com_pos_fs_eph=float(p["COM_POS_FS_EPH"]),
             com_ext_ap=bool(p["COM_EXT_AP"]),
+            vehicle_type=self.vehicle_type,
+            sys_has_num_aspd=bool(p["SYS_HAS_NUM_ASPD"]),
+            fw_airspd_max=float(p["FW_AIRSPD_MAX"]),
         )
+        self._take_vehicle_type()
+
+    def _take_vehicle_type(self) -> None:
+        """Take MAV_TYPE's vehicle type, unless armed (then it waits for the disarm)."""
+        mav_type = int(self._p["MAV_TYPE"])
+        if self.armed or mav_type == self.mav_type:
+            return
+        self.mav_type = mav_type
+        vehicle_type = vehicle_type_from_mav_type(mav_type)
+        if vehicle_type == self.vehicle_type:
+            return
+        self.vehicle_type = vehicle_type
+        self._failsafe.vehicle_type = vehicle_type
+        self._health.vehicle_type = vehicle_type
+        self.chain.use(FW_CHAIN if vehicle_type == FIXED_WING else CHAIN)
+        self._preflight_checked = None
 
     @property
     def armed(self) -> bool:
@@ -344,8 +379,8 @@ class Commander:
         return frozenset(self._handlers)
 
     def can_run(self, nav_state: int) -> bool:
-        """Whether the mode's requirements are met now."""
-        return can_run(nav_state, self._failing)
+        """Whether the vehicle has the mode and its requirements are met now."""
+        return can_run(nav_state, self._failing, self.vehicle_type)
 
     # ------------------------------------------------------------------ cycle
 
@@ -431,7 +466,7 @@ class Commander:
             and self._takeoff_reached()
         ):
             follow = NS.NAVIGATION_STATE_AUTO_LOITER
-            if int(p["COM_TAKEOFF_ACT"]) == 1 and can_run(NS.NAVIGATION_STATE_AUTO_MISSION, self._failing):
+            if int(p["COM_TAKEOFF_ACT"]) == 1 and self.can_run(NS.NAVIGATION_STATE_AUTO_MISSION):
                 follow = NS.NAVIGATION_STATE_AUTO_MISSION
             self._events.append(f"Takeoff complete, switching to {mode_name(follow)}")
             self._set_intention(follow)
@@ -448,6 +483,7 @@ class Commander:
             geofence_breached=bool(self._geofence_violation),
             attitude_control_lost=any(f.loss == Loss.ATTITUDE_CONTROL for f in self._chain_faults),
             position_control_lost=any(f.loss == Loss.POSITION_CONTROL for f in self._chain_faults),
+            airspeed_lost=any(f.loss == Loss.AIRSPEED for f in self._chain_faults),
             landed=inp.landed,
         )
         result = self._failsafe.update(
@@ -515,7 +551,7 @@ class Commander:
         if self._p["COM_EXT_AP"]:
             self._chain_faults = ()  # an external autopilot flies the vehicle; its estimates come over its link
             return
-        faults = tuple(self.chain.update(now_us, armed, control_mode(self.nav_state, armed)))
+        faults = tuple(self.chain.update(now_us, armed, control_mode(self.nav_state, armed, self.vehicle_type)))
         for fault in faults:
             if fault not in self._chain_faults:
                 self._events.append(fault.describe())
@@ -616,7 +652,11 @@ class Commander:
         if lpos is None or self._home is None or int(self._failing) & int(Requirement.LOCAL_ALT):
             return False
         target_z = self._home.z - self._takeoff_altitude
-        return lpos.z <= target_z + float(self._p["NAV_MC_ALT_RAD"])
+        if self.vehicle_type == FIXED_WING:
+            acceptance = min(float(self._p["NAV_FW_ALT_RAD"]), self._takeoff_altitude / 2.0)
+        else:
+            acceptance = float(self._p["NAV_MC_ALT_RAD"])
+        return lpos.z <= target_z + acceptance
 
     def _note_failsafe(self, action: FailsafeAction, delayed: FailsafeAction, cause: str, takeover: bool) -> None:
         if action != self._failsafe_action or delayed != self._failsafe_delayed:
@@ -699,6 +739,7 @@ class Commander:
         self._latest_disarming_reason = int(reason)
         self._auto_disarm.force(False)
         self._events.append(f"Disarmed ({reason.name.lower()})")
+        self._take_vehicle_type()
         return ""
 
     def _set_intention(self, nav_state: int) -> None:
@@ -710,6 +751,8 @@ class Commander:
         mode = MODES.get(nav_state)
         if mode is None or not mode.user_selectable:
             return _denied(f"Unsupported mode (nav_state {nav_state})", 1)
+        if not mode.available(self.vehicle_type):
+            return _denied(f"{mode.name} mode is not available on {vehicle_type_name(self.vehicle_type)}", 1)
         prefix = f"Switching to {mode.name} is currently not possible"
         if nav_state == NS.NAVIGATION_STATE_AUTO_TAKEOFF and self.armed and not self._inputs.landed:
             return _rejected(f"{prefix}: already flying")
@@ -717,8 +760,8 @@ class Commander:
             return _rejected(f"{prefix}: the vehicle is disarmed")
         if nav_state == NS.NAVIGATION_STATE_AUTO_MISSION and self._failing & Requirement.MISSION:
             return _rejected(f"{prefix}: no valid mission")
-        if self.armed and not can_run(nav_state, self._failing):
-            return _rejected(f"{prefix}: requires {first_missing(nav_state, self._failing)}")
+        if self.armed and not self.can_run(nav_state):
+            return _rejected(f"{prefix}: requires {first_missing(nav_state, self._failing, self.vehicle_type)}")
         if (
             self.armed
             and mode.requirements & Requirement.MANUAL_CONTROL
@@ -960,10 +1003,11 @@ class Commander:
     def _outputs(self) -> CommanderOutputs:
         armed = self.armed
         failing = int(self._failing)
-        can_set = self._can_set.get(failing)
+        vehicle_type = self.vehicle_type
+        can_set = self._can_set.get((vehicle_type, failing))
         if can_set is None:
-            can_set = sum(1 << state for state in MODES if can_run(state, self._failing))
-            self._can_set[failing] = can_set
+            can_set = sum(1 << state for state in MODES if can_run(state, self._failing, vehicle_type))
+            self._can_set[vehicle_type, failing] = can_set
         key = (
             self.arming_state,
             self.nav_state,
@@ -980,6 +1024,7 @@ class Commander:
             self._preflight_ok,
             can_set,
             self._chain_faults,
+            self.mav_type,
         )
         changed = key != self._published_key
         if changed or self._messages is None:
@@ -996,7 +1041,7 @@ class Commander:
                 nav_state_timestamp=self._nav_state_timestamp_us,
                 nav_state_user_intention=self.user_intended_nav_state,
                 nav_state=self.nav_state,
-                valid_nav_states_mask=VALID_NAV_STATES_MASK,
+                valid_nav_states_mask=valid_nav_states_mask(vehicle_type),
                 can_set_nav_states_mask=can_set,
                 failsafe=self._failsafe_action > FailsafeAction.WARN,
                 failsafe_and_user_took_over=self._failsafe_takeover,
@@ -1004,6 +1049,8 @@ class Commander:
                 gcs_connection_lost_counter=self._gcs_lost_counter,
                 pre_flight_checks_pass=self._preflight_ok,
                 control_lost_modules=[f.module for f in self._chain_faults],
+                vehicle_type=vehicle_type,
+                system_type=self.mav_type,
             )
             actuator_armed = ActuatorArmed(
                 armed=armed,
@@ -1012,7 +1059,7 @@ class Commander:
                 lockdown=terminated,
                 termination=terminated,
             )
-            self._messages = (status, control_mode(self.nav_state, armed), actuator_armed)
+            self._messages = (status, control_mode(self.nav_state, armed, vehicle_type), actuator_armed)
         events = tuple(self._events)
         self._events.clear()
         acks = tuple(self._acks)

@@ -72,9 +72,14 @@ def _degrees_or_nan(angle_rad: float) -> float:
 def _params(e: MissionItemEntry) -> tuple[float, float, float, float]:
     if e.command == mi.MAV_CMD_NAV_WAYPOINT:
         return e.hold_time, e.acceptance_radius, 0.0, _degrees_or_nan(e.yaw)
+    radius = e.loiter_radius if math.isfinite(e.loiter_radius) else 0.0
     if e.command == mi.MAV_CMD_NAV_LOITER_TIME:
-        return e.hold_time, 0.0, 0.0, math.nan
-    if e.command in (mi.MAV_CMD_NAV_LOITER_UNLIM, mi.MAV_CMD_NAV_TAKEOFF, mi.MAV_CMD_NAV_LAND):
+        return e.hold_time, 0.0, radius, math.nan
+    if e.command == mi.MAV_CMD_NAV_LOITER_TURNS:
+        return e.loiter_turns, 0.0, radius, math.nan
+    if e.command == mi.MAV_CMD_NAV_LOITER_UNLIM:
+        return 0.0, 0.0, radius, _degrees_or_nan(e.yaw)
+    if e.command in (mi.MAV_CMD_NAV_TAKEOFF, mi.MAV_CMD_NAV_LAND):
         return 0.0, 0.0, 0.0, _degrees_or_nan(e.yaw)
     if e.command == mi.MAV_CMD_DO_CHANGE_SPEED:
         return SPEED_TYPE_GROUND, e.speed if math.isfinite(e.speed) else NO_CHANGE, NO_CHANGE, 0.0

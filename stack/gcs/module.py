@@ -165,8 +165,9 @@ class MavlinkModule(Module):
     TRIGGER = Timer(1.0)
     DT_RANGE = (0.1, 10.0)
     OUTSIDE_LOCKSTEP = True
-    PARAMS = catalogue.params("MAV_SYS_ID", "MAV_COMP_ID")
-    """The vehicle's MAVLink identity: what it sends as, and which commands and messages are for it."""
+    PARAMS = catalogue.params("MAV_SYS_ID", "MAV_COMP_ID", "MAV_TYPE")
+    """The vehicle's MAVLink identity: what it sends as, and which commands and messages are for it; MAV_TYPE
+    is the HEARTBEAT's type, read at every heartbeat (PX4's mavlink module reads the parameter too)."""
     ARGS = (
         Arg(
             "device",
@@ -175,7 +176,6 @@ class MavlinkModule(Module):
             "radio), tcpin:HOST:PORT, udpout:HOST:PORT",
         ),
         Arg("remote", "127.0.0.1:14550", "UDP: where to send until a peer has written (PX4's -o); empty: nowhere"),
-        Arg("mav_type", 2, "MAV_TYPE in the HEARTBEAT (PX4 MAV_TYPE): 2 quadrotor, 13 hexarotor, 14 octorotor"),
         Arg(
             "signing_key",
             "",
@@ -191,7 +191,6 @@ class MavlinkModule(Module):
         remote = _remote(str(a["remote"]))
         key = signing.load_key(str(a["signing_key"])) if a["signing_key"] else None
         self.own = (int(self.params["MAV_SYS_ID"]), int(self.params["MAV_COMP_ID"]))
-        self.mav_type = int(a["mav_type"])
         self.clock = StampClock(rt.spec.lockstep, wall_clock_us)
         for topic in (
             "vehicle_command",
@@ -249,7 +248,7 @@ class MavlinkModule(Module):
             self.endpoint,
             system_id=self.own[0],
             component_id=self.own[1],
-            heartbeat=lambda: identity.heartbeat(self.view.status, self.mav_type),
+            heartbeat=self._heartbeat,
             opener=_open(remote),
         )
         if key is not None:
@@ -269,11 +268,15 @@ class MavlinkModule(Module):
             self.endpoint,
             f" (sending to {remote[0]}:{remote[1]} until a peer writes)" if remote else "",
             self.own[0],
-            self.mav_type,
+            int(self.params["MAV_TYPE"]),
             ", signed" if key is not None else "",
         )
         self._thread = threading.Thread(target=self._link_loop, name="mavlink", daemon=True)
         self._thread.start()
+
+    def _heartbeat(self) -> dict[str, int]:
+        """The HEARTBEAT's fields now: the commander's state, and MAV_TYPE as the parameter is now."""
+        return identity.heartbeat(self.view.status, int(self.params["MAV_TYPE"]))
 
     # -- the link thread ------------------------------------------------------------------------------
 

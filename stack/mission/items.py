@@ -4,7 +4,7 @@ A :class:`MissionItem` keeps the MAVLink command and frame it came from, its geo
 one, and its position in local NED metres about home (north, east, down; NaN where the item leaves the
 value to the vehicle, e.g. a takeoff or landing "here"). Angles are radians, times seconds.
 
-Supported commands (MAV_CMD): NAV_WAYPOINT 16, NAV_LOITER_UNLIM 17, NAV_LOITER_TIME 19,
+Supported commands (MAV_CMD): NAV_WAYPOINT 16, NAV_LOITER_UNLIM 17, NAV_LOITER_TURNS 18, NAV_LOITER_TIME 19,
 NAV_RETURN_TO_LAUNCH 20, NAV_LAND 21, NAV_TAKEOFF 22, DO_CHANGE_SPEED 178. Supported frames (MAV_FRAME):
 GLOBAL 0 and GLOBAL_INT 5 (altitude AMSL), GLOBAL_RELATIVE_ALT 3 and GLOBAL_RELATIVE_ALT_INT 6 (altitude
 above home), MISSION 2 (no position), LOCAL_NED 1 (x north, y east, z down in metres about home).
@@ -22,6 +22,7 @@ NAN = math.nan
 
 MAV_CMD_NAV_WAYPOINT = 16
 MAV_CMD_NAV_LOITER_UNLIM = 17
+MAV_CMD_NAV_LOITER_TURNS = 18
 MAV_CMD_NAV_LOITER_TIME = 19
 MAV_CMD_NAV_RETURN_TO_LAUNCH = 20
 MAV_CMD_NAV_LAND = 21
@@ -31,6 +32,7 @@ MAV_CMD_DO_CHANGE_SPEED = 178
 COMMAND_NAMES: dict[int, str] = {
     MAV_CMD_NAV_WAYPOINT: "waypoint",
     MAV_CMD_NAV_LOITER_UNLIM: "loiter",
+    MAV_CMD_NAV_LOITER_TURNS: "loiter_turns",
     MAV_CMD_NAV_LOITER_TIME: "loiter_time",
     MAV_CMD_NAV_RETURN_TO_LAUNCH: "rtl",
     MAV_CMD_NAV_LAND: "land",
@@ -38,9 +40,9 @@ COMMAND_NAMES: dict[int, str] = {
     MAV_CMD_DO_CHANGE_SPEED: "speed",
 }
 
-POSITION_COMMANDS = frozenset(
-    {MAV_CMD_NAV_WAYPOINT, MAV_CMD_NAV_LOITER_UNLIM, MAV_CMD_NAV_LOITER_TIME, MAV_CMD_NAV_LAND, MAV_CMD_NAV_TAKEOFF}
-)
+LOITER_COMMANDS = frozenset({MAV_CMD_NAV_LOITER_UNLIM, MAV_CMD_NAV_LOITER_TURNS, MAV_CMD_NAV_LOITER_TIME})
+"""Commands that circle a position (a fixed-wing orbits it; a multicopter holds over it)."""
+POSITION_COMMANDS = frozenset({MAV_CMD_NAV_WAYPOINT, MAV_CMD_NAV_LAND, MAV_CMD_NAV_TAKEOFF}) | LOITER_COMMANDS
 """Commands that fly to a position."""
 HERE_COMMANDS = frozenset({MAV_CMD_NAV_LAND, MAV_CMD_NAV_TAKEOFF})
 """Commands for which a latitude/longitude of 0 or NaN means "where the vehicle is"."""
@@ -95,6 +97,11 @@ class MissionItem:
     speed: float = NAN
     """DO_CHANGE_SPEED: new cruise speed [m/s]; NaN otherwise."""
     autocontinue: bool = True
+    loiter_radius: float = NAN
+    """Loiter items: the circle's radius [m], positive clockwise, negative counter-clockwise (MAVLink param3);
+    NaN uses NAV_LOITER_RAD."""
+    loiter_turns: float = NAN
+    """LOITER_TURNS: the number of full circles (param1)."""
 
     @property
     def name(self) -> str:
@@ -158,16 +165,24 @@ def item_from_mavlink(
         if math.isinf(v):
             raise ValueError(f"param{i + 1} is infinite")
 
-    has_yaw = command in POSITION_COMMANDS and command != MAV_CMD_NAV_LOITER_TIME and math.isfinite(p[3])
+    has_yaw = command in POSITION_COMMANDS - LOITER_COMMANDS and math.isfinite(p[3])
     yaw = math.radians(p[3]) if has_yaw else NAN
     hold = 0.0
     radius = 0.0
     speed = NAN
+    loiter_radius = NAN
+    loiter_turns = NAN
+    if command in LOITER_COMMANDS and math.isfinite(p[2]) and p[2] != 0.0:
+        loiter_radius = p[2]
     if command == MAV_CMD_NAV_WAYPOINT:
         hold = 0.0 if math.isnan(p[0]) else p[0]
         radius = 0.0 if math.isnan(p[1]) else p[1]
     elif command == MAV_CMD_NAV_LOITER_TIME:
         hold = 0.0 if math.isnan(p[0]) else p[0]
+    elif command == MAV_CMD_NAV_LOITER_TURNS:
+        loiter_turns = p[0]
+        if not (math.isfinite(loiter_turns) and loiter_turns > 0.0):
+            raise ValueError(f"loiter turns (param1) must be > 0, got {loiter_turns:g}")
     elif command == MAV_CMD_DO_CHANGE_SPEED:
         speed = p[1] if math.isfinite(p[1]) and p[1] > 0.0 else NAN
     if hold < 0.0:
@@ -229,4 +244,6 @@ def item_from_mavlink(
         hold_time=hold,
         speed=speed,
         autocontinue=autocontinue,
+        loiter_radius=loiter_radius,
+        loiter_turns=loiter_turns,
     )

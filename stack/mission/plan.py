@@ -28,6 +28,8 @@ from stack.mission.items import (
     GLOBAL_RELATIVE_FRAMES,
     MAV_CMD_DO_CHANGE_SPEED,
     MAV_CMD_NAV_LOITER_TIME,
+    MAV_CMD_NAV_LOITER_TURNS,
+    MAV_CMD_NAV_LOITER_UNLIM,
     MAV_CMD_NAV_WAYPOINT,
     MAV_FRAME_GLOBAL_RELATIVE_ALT,
     MAV_FRAME_MISSION,
@@ -107,6 +109,10 @@ def _json_number(value: float) -> float | None:
     return value if math.isfinite(value) else None
 
 
+def _radius(item: MissionItem) -> float:
+    return item.loiter_radius if math.isfinite(item.loiter_radius) else 0.0
+
+
 def _item_json(item: MissionItem, home: GeoPoint | None, source: str) -> dict[str, object]:
     frame = MAV_FRAME_MISSION
     lat = lon = alt = math.nan
@@ -129,7 +135,11 @@ def _item_json(item: MissionItem, home: GeoPoint | None, source: str) -> dict[st
     if item.command == MAV_CMD_NAV_WAYPOINT:
         params = [item.hold_time, item.acceptance_radius, 0.0, yaw_deg, lat, lon, alt]
     elif item.command == MAV_CMD_NAV_LOITER_TIME:
-        params = [item.hold_time, 0.0, 0.0, 0.0, lat, lon, alt]
+        params = [item.hold_time, 0.0, _radius(item), 0.0, lat, lon, alt]
+    elif item.command == MAV_CMD_NAV_LOITER_TURNS:
+        params = [item.loiter_turns, 0.0, _radius(item), 0.0, lat, lon, alt]
+    elif item.command == MAV_CMD_NAV_LOITER_UNLIM:
+        params = [0.0, 0.0, _radius(item), yaw_deg, lat, lon, alt]
     elif item.command == MAV_CMD_DO_CHANGE_SPEED:
         params = [1.0, item.speed if math.isfinite(item.speed) else -1.0, -1.0, 0.0, 0.0, 0.0, 0.0]
     elif item.has_position:

@@ -9,7 +9,13 @@ multicopter, and the ``mission_result`` it publishes):
   then after the item's hold time;
 * a takeoff is reached at its altitude (within NAV_MC_ALT_RAD); a landing when the land detector says
   landed; an unlimited loiter is reached on arrival but never left; a speed change takes effect at once;
-  a return-to-launch item hands the vehicle to Return mode (``return_requested``);
+* for a fixed-wing (``fixed_wing=True``, PX4's fixed-wing branches of the same function) the vertical
+  acceptance is NAV_FW_ALT_RAD, a waypoint's horizontal acceptance is at least the guidance's switching
+  distance (``update``'s ``acceptance_radius``, PX4 ``Navigator::get_acceptance_radius``), and a loiter
+  item is reached on its circle (within a fifth of the radius, or NAV_ACC_RAD if larger, of it);
+  LOITER_TURNS then counts the angle flown about the centre until its turns are done (a multicopter takes
+  it as reached on arrival);
+* a return-to-launch item hands the vehicle to Return mode (``return_requested``);
 * an item without autocontinue is held once reached; after the last item the mission is finished and the
   vehicle stays at the last position.
 
@@ -26,8 +32,10 @@ from typing import NamedTuple
 from stack.mathlib.scalar import wrap_pi
 from stack.mathlib.vector import NAN3, Vec3
 from stack.mission.items import (
+    LOITER_COMMANDS,
     MAV_CMD_DO_CHANGE_SPEED,
     MAV_CMD_NAV_LAND,
+    MAV_CMD_NAV_LOITER_TURNS,
     MAV_CMD_NAV_LOITER_UNLIM,
     MAV_CMD_NAV_RETURN_TO_LAUNCH,
     MAV_CMD_NAV_TAKEOFF,
@@ -37,7 +45,10 @@ from stack.mission.items import (
 from stack.params import catalogue
 from stack.params.param import Param
 
-PARAMS: tuple[Param, ...] = catalogue.params("NAV_ACC_RAD", "NAV_MC_ALT_RAD", "MIS_YAW_ERR", "MIS_YAW_TMT")
+PARAMS: tuple[Param, ...] = catalogue.params(
+    "NAV_ACC_RAD", "NAV_MC_ALT_RAD", "NAV_FW_ALT_RAD", "NAV_LOITER_RAD", "MIS_YAW_ERR", "MIS_YAW_TMT"
+)
+LOITER_ON_CIRCLE_FRACTION = 0.2
 DEFAULTS: dict[str, object] = {p.name: p.default for p in PARAMS}
 
 
@@ -70,8 +81,11 @@ class MissionTracker:
     __slots__ = (
         "_cruise_speed",
         "_finished",
+        "_fixed_wing",
         "_home",
         "_items",
+        "_loiter_angle",
+        "_loiter_bearing",
         "_p",
         "_position_reached_us",
         "_previous",
@@ -82,8 +96,16 @@ class MissionTracker:
         "_yaw_reached_us",
     )
 
-    def __init__(self, mission: Mission | Sequence[MissionItem], params: Mapping[str, object] | None = None) -> None:
+    def __init__(
+        self,
+        mission: Mission | Sequence[MissionItem],
+        params: Mapping[str, object] | None = None,
+        fixed_wing: bool = False,
+    ) -> None:
         self._items: tuple[MissionItem, ...] = tuple(mission)
+        self._fixed_wing = fixed_wing
+        self._loiter_angle = 0.0
+        self._loiter_bearing = math.nan
         self._home: Vec3 = (0.0, 0.0, 0.0)
         self._seq = 0
         self._seq_reached = -1
@@ -124,11 +146,14 @@ class MissionTracker:
         self._activate(self._seq if first_index < 0 else first_index, position)
         return self._progress()
 
-    def update(self, now_us: int, position: Vec3, yaw: float, landed: bool) -> MissionProgress:
+    def update(
+        self, now_us: int, position: Vec3, yaw: float, landed: bool, acceptance_radius: float = math.nan
+    ) -> MissionProgress:
+        """``acceptance_radius``: a fixed-wing guidance's waypoint switching distance (NaN: none)."""
         if self._finished or not self._items:
             return self._progress()
         item = self._items[self._seq]
-        if self._item_complete(item, now_us, position, yaw, landed):
+        if self._item_complete(item, now_us, position, yaw, landed, acceptance_radius):
             self._seq_reached = self._seq
             if item.command == MAV_CMD_NAV_LAND or self._seq == len(self._items) - 1:
                 self._finished = True
@@ -143,6 +168,8 @@ class MissionTracker:
             self._seq = index
             self._position_reached_us = -1
             self._yaw_reached_us = -1
+            self._loiter_angle = 0.0
+            self._loiter_bearing = math.nan
             item = self._items[index]
             if item.command == MAV_CMD_DO_CHANGE_SPEED:
                 self._cruise_speed = item.speed
@@ -172,19 +199,43 @@ class MissionTracker:
             down = hz + item.down
         return (north, east, down)
 
-    def _item_complete(self, item: MissionItem, now_us: int, position: Vec3, yaw: float, landed: bool) -> bool:
+    def loiter_radius(self, item: MissionItem) -> float:
+        """The item's loiter radius [m] (sign: + clockwise), NAV_LOITER_RAD when it gives none."""
+        return item.loiter_radius if math.isfinite(item.loiter_radius) else self._p["NAV_LOITER_RAD"]
+
+    def _item_complete(
+        self, item: MissionItem, now_us: int, position: Vec3, yaw: float, landed: bool, guidance_radius: float
+    ) -> bool:
         p = self._p
         target = self._target
+        altitude_radius = p["NAV_FW_ALT_RAD"] if self._fixed_wing else p["NAV_MC_ALT_RAD"]
         if item.command == MAV_CMD_NAV_LAND:
             return landed
         if item.command == MAV_CMD_NAV_TAKEOFF:
-            return position[2] <= target[2] + p["NAV_MC_ALT_RAD"]
+            return position[2] <= target[2] + altitude_radius
+        orbiting = self._fixed_wing and item.command in LOITER_COMMANDS
         if self._position_reached_us < 0:
             radius = item.acceptance_radius if item.acceptance_radius > 0.0 else p["NAV_ACC_RAD"]
             horizontal = math.hypot(position[0] - target[0], position[1] - target[1])
-            if horizontal > radius or abs(position[2] - target[2]) > p["NAV_MC_ALT_RAD"]:
+            if orbiting:
+                circle = abs(self.loiter_radius(item))
+                if abs(horizontal - circle) > max(LOITER_ON_CIRCLE_FRACTION * circle, radius):
+                    return False
+            else:
+                if self._fixed_wing and guidance_radius > radius:
+                    radius = guidance_radius
+                if horizontal > radius:
+                    return False
+            if abs(position[2] - target[2]) > altitude_radius:
                 return False
             self._position_reached_us = now_us
+        if orbiting and item.command == MAV_CMD_NAV_LOITER_TURNS:
+            bearing = math.atan2(position[1] - target[1], position[0] - target[0])
+            if math.isfinite(self._loiter_bearing):
+                self._loiter_angle += wrap_pi(bearing - self._loiter_bearing)
+            self._loiter_bearing = bearing
+            if abs(self._loiter_angle) < 2.0 * math.pi * item.loiter_turns:
+                return False
         if self._yaw_reached_us < 0:
             if math.isfinite(item.yaw):
                 aligned = abs(wrap_pi(yaw - item.yaw)) <= math.radians(p["MIS_YAW_ERR"])

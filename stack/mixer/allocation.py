@@ -61,22 +61,23 @@ class AllocationResult(NamedTuple):
     """Per motor: 0 ok, +2 at maximum, −2 at minimum."""
 
 
-def normalized_allocation(effectiveness: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """PX4's multirotor allocation matrix: (N × 6 mix, 6-vector scale) such that u = mix · setpoint.
+def normalized_allocation(effectiveness: np.ndarray, normalize_rpy: bool = True) -> tuple[np.ndarray, np.ndarray]:
+    """PX4's allocation matrix: (N × 6 mix, 6-vector scale) such that u = mix · setpoint.
 
-    The pseudo-inverse columns are divided by the scale: roll and pitch share
-    max over the two of √(‖col‖² / (n_nonzero/2)), yaw uses its largest element, each thrust axis the mean
-    |entry| of its non-zero entries (an axis without actuators takes the z scale). Entries below 1e-3 → 0.
+    The pseudo-inverse columns are divided by the scale: with ``normalize_rpy`` (multirotors) roll and pitch share
+    max over the two of √(‖col‖² / (n_nonzero/2)) and yaw uses its largest element; each thrust axis, always, the
+    mean |entry| of its non-zero entries (an axis without actuators takes the z scale). Entries below 1e-3 → 0.
     """
     mix = np.linalg.pinv(np.asarray(effectiveness, dtype=float))
     scale = np.ones(6)
-    rp_scale = []
-    for axis in (0, 1):
-        col = mix[:, axis]
-        nonzero = int(np.count_nonzero(np.abs(col) > MIX_ZERO_THRESHOLD))
-        rp_scale.append(math.sqrt(float(col @ col) / (nonzero / 2.0)) if nonzero > 0 else 1.0)
-    scale[0] = scale[1] = max(rp_scale)
-    scale[2] = float(mix[:, 2].max()) if mix.shape[0] > 0 else 1.0
+    if normalize_rpy:
+        rp_scale = []
+        for axis in (0, 1):
+            col = mix[:, axis]
+            nonzero = int(np.count_nonzero(np.abs(col) > MIX_ZERO_THRESHOLD))
+            rp_scale.append(math.sqrt(float(col @ col) / (nonzero / 2.0)) if nonzero > 0 else 1.0)
+        scale[0] = scale[1] = max(rp_scale)
+        scale[2] = float(mix[:, 2].max()) if mix.shape[0] > 0 else 1.0
     for axis in (5, 4, 3):
         magnitudes = np.abs(mix[:, axis])
         nonzero = int(np.count_nonzero(magnitudes > FLT_EPSILON))

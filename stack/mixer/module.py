@@ -1,24 +1,34 @@
-"""control_allocator: torque and thrust setpoints → motor commands, run on every torque setpoint.
+"""control_allocator: torque and thrust setpoints → actuator commands, run on every torque setpoint.
 
-The allocation is built from the CA_ROTOR* geometry (rebuilt when those parameters change). Motors
-idle when armed and are stopped when disarmed. The saturation of each axis goes back to the rate
-loop in ``control_allocator_status``. While the land detector reports ground contact, airmode is off
-(see :meth:`ControlAllocator.allocate`).
+CA_AIRFRAME chooses the allocation, rebuilt when its parameters change:
+
+- 0, multirotor: from the CA_ROTOR* geometry. Motors idle when armed and are stopped when disarmed. The saturation
+  of each axis goes back to the rate loop in ``control_allocator_status``. While the land detector reports ground
+  contact, airmode is off (see :meth:`ControlAllocator.allocate`).
+- 1, fixed wing: the CA_ROTOR* motors pushing forward, then the CA_SV_CS* control surfaces
+  (:mod:`stack.mixer.fixedwing`). ``actuator_motors`` carries the motors, ``actuator_servos`` the surfaces, and
+  the outputs list the motors then the surfaces (the default plane: throttle, aileron, elevator, rudder).
+  Disarmed: motors stopped, surfaces centred.
 """
 
 from __future__ import annotations
 
 import math
 
-from stack.mixer import allocation, effectiveness, output
+from stack.mathlib.vector import Vec3
+from stack.mixer import allocation, effectiveness, fixedwing, output
 from stack.mixer.allocation import ControlAllocator
-from stack.mixer.output import MotorOutput
+from stack.mixer.fixedwing import FixedWingAllocator
+from stack.mixer.output import MotorOutput, servo_outputs
 from stack.msg.actuators import ActuatorMotors, ActuatorOutputs, ControlAllocatorStatus
+from stack.msg.fixedwing import ActuatorServos
 from stack.msg.setpoints import VehicleTorqueSetpoint
+from stack.params import ca
 from stack.runtime.module import Module, Trigger
 
 OUTPUTS = 16
 MOTOR_SLOTS = 12
+SERVO_SLOTS = 8
 
 
 def _pad(values: tuple[float, ...], size: int, fill: float) -> tuple[float, ...]:
@@ -27,10 +37,10 @@ def _pad(values: tuple[float, ...], size: int, fill: float) -> tuple[float, ...]
 
 class ControlAllocatorModule(Module):
     NAME = "control_allocator"
-    DESCRIPTION = "Control allocation (PX4 control_allocator) and motor outputs"
+    DESCRIPTION = "Control allocation (PX4 control_allocator) and motor and servo outputs"
     TRIGGER = Trigger("vehicle_torque_setpoint")
     DT_RANGE = (0.0002, 0.02)
-    PARAMS = effectiveness.PARAMS + allocation.PARAMS + output.PARAMS
+    PARAMS = effectiveness.PARAMS + allocation.PARAMS + output.PARAMS + ca.AIRFRAME_PARAMS + fixedwing.PARAMS
 
     def __init__(self, rt) -> None:
         super().__init__(rt)
@@ -39,12 +49,22 @@ class ControlAllocatorModule(Module):
         self.subscribe("vehicle_land_detected")
         for topic in ("actuator_motors", "actuator_outputs", "actuator_outputs_sim", "control_allocator_status"):
             self.advertise(topic)
+        self.advertise("actuator_servos")
         self._build()
 
     def _build(self) -> None:
         values = self.params.values()
         if int(values["CA_ROTOR_COUNT"]) < 1:
             raise ValueError("CA_ROTOR_COUNT is 0: set the airframe geometry (a profile's [stack] airframe)")
+        self.plane: FixedWingAllocator | None = None
+        if int(values["CA_AIRFRAME"]) == ca.AIRFRAME_FIXED_WING:
+            self.plane = FixedWingAllocator.from_params(values)
+            if self.plane.num_motors + self.plane.num_surfaces > OUTPUTS:
+                raise ValueError(f"CA_ROTOR_COUNT + CA_SV_CS_COUNT exceeds the {OUTPUTS} outputs")
+            self.outputs = MotorOutput(self.plane.num_motors, values, idle=False)
+            self.log.info("fixed-wing allocation: %d motors, %d control surfaces",
+                          self.plane.num_motors, self.plane.num_surfaces)
+            return
         self.allocator = ControlAllocator.from_params(values)
         self.outputs = MotorOutput(self.allocator.num_motors, values)
         self.log.info("allocation for %d rotors, airmode %s", self.allocator.num_motors, values["MC_AIRMODE"])
@@ -59,6 +79,9 @@ class ControlAllocatorModule(Module):
         thrust = tuple(v if math.isfinite(v) else 0.0 for v in thrust)
         armed_msg = self.latest("actuator_armed")
         armed = armed_msg is not None and armed_msg.armed and not armed_msg.lockdown and not armed_msg.kill
+        if self.plane is not None:
+            self._run_fixed_wing(self.plane, torque_sp.timestamp_sample, torque, thrust, armed, dt)
+            return
         land = self.latest("vehicle_land_detected")
         on_ground = land is not None and (land.ground_contact or land.maybe_landed or land.landed)
         result = self.allocator.allocate(torque, thrust, on_ground)
@@ -71,6 +94,35 @@ class ControlAllocatorModule(Module):
         )
         self.publish("actuator_outputs", ActuatorOutputs(noutputs=n, output=_pad(out.pwm, OUTPUTS, 0.0)))
         self.publish("actuator_outputs_sim", ActuatorOutputs(noutputs=n, output=_pad(out.sim, OUTPUTS, 0.0)))
+        self.publish(
+            "control_allocator_status",
+            ControlAllocatorStatus(
+                torque_setpoint_achieved=result.torque_achieved,
+                unallocated_torque=result.unallocated_torque,
+                thrust_setpoint_achieved=result.thrust_achieved,
+                unallocated_thrust=result.unallocated_thrust,
+                actuator_saturation=_pad(result.actuator_saturation, OUTPUTS, 0),
+            ),
+        )
+
+    def _run_fixed_wing(self, plane: FixedWingAllocator, t: int, torque: Vec3, thrust: Vec3, armed: bool,
+                        dt: float) -> None:
+        result = plane.allocate(torque, thrust)
+        motors = self.outputs.update(result.motors, armed, dt)
+        servos = servo_outputs(result.servos, armed)
+        n = plane.num_motors + plane.num_surfaces
+        self.publish(
+            "actuator_motors",
+            ActuatorMotors(timestamp_sample=t, control=_pad(motors.actuator_motors, MOTOR_SLOTS, math.nan)),
+        )
+        self.publish(
+            "actuator_servos",
+            ActuatorServos(timestamp_sample=t, control=_pad(servos.actuator_servos, SERVO_SLOTS, math.nan)),
+        )
+        pwm = _pad(motors.pwm + servos.pwm, OUTPUTS, 0.0)
+        self.publish("actuator_outputs", ActuatorOutputs(noutputs=n, output=pwm))
+        sim = _pad(motors.sim + servos.sim, OUTPUTS, 0.0)
+        self.publish("actuator_outputs_sim", ActuatorOutputs(noutputs=n, output=sim))
         self.publish(
             "control_allocator_status",
             ControlAllocatorStatus(

@@ -11,6 +11,11 @@ the motors idle reliably; PX4's own legacy multicopter scripts used 1075, and DS
 plays the same role). The simulator view keeps the fixed ESC calibration range [1000, 2000] µs → [0, 1],
 so the idle is visible to the simulated motors; disarmed outputs (PWM_MAIN_DIS) read 0 there, as in
 pwm_out_sim, which leaves them unwritten.
+
+A plane's motor has no idle: its idle is a throttle (FW_THR_IDLE) the position controller commands, so a zero
+throttle stops the motor (the ESC range's 1000 µs; PX4's fixed-wing outputs start at 1000 µs). Control surfaces are
+servos centred at 1500 µs, ±500 µs at full deflection (PX4's servo defaults), their simulator view the command
+itself in [−1, 1]; disarmed they are centred.
 """
 
 from __future__ import annotations
@@ -32,6 +37,10 @@ DEFAULTS: dict[str, object] = {p.name: p.default for p in PARAMS}
 ESC_RANGE_MIN_US = 1000.0
 """ESC calibration endpoints: the pulse widths the simulator reads as 0 and 1 (pwm_out_sim's range)."""
 ESC_RANGE_MAX_US = 2000.0
+SERVO_CENTRE_US = 1500.0
+"""A control surface's pulse width at zero deflection."""
+SERVO_HALF_RANGE_US = 500.0
+"""Pulse-width change from the centre to full deflection."""
 
 
 def command_from_thrust(thrust: float, factor: float) -> float:
@@ -65,10 +74,13 @@ class MotorOutputs(NamedTuple):
 class MotorOutput:
     """Stateful output stage for N motors (the slew limits remember the last thrusts)."""
 
-    __slots__ = ("_factor", "_prev", "_pwm_dis", "_pwm_max", "_pwm_min", "_slew_time")
+    __slots__ = ("_factor", "_idle", "_prev", "_pwm_dis", "_pwm_max", "_pwm_min", "_slew_time")
 
-    def __init__(self, num_motors: int, params: Mapping[str, object] | None = None) -> None:
+    def __init__(self, num_motors: int, params: Mapping[str, object] | None = None, *, idle: bool = True) -> None:
+        """``idle``: an armed zero command spins the motors at PWM_MAIN_MIN (multirotors); without, it stops them
+        at the ESC range's minimum (a plane)."""
         self._prev = [0.0] * num_motors
+        self._idle = idle
         self.set_params(params or {})
 
     def set_params(self, params: Mapping[str, object]) -> None:
@@ -76,7 +88,7 @@ class MotorOutput:
         self._factor = float(p["THR_MDL_FAC"])
         self._slew_time = [float(p[f"CA_R{i}_SLEW"]) for i in range(len(self._prev))]
         self._pwm_dis = float(p["PWM_MAIN_DIS"])
-        self._pwm_min = float(p["PWM_MAIN_MIN"])
+        self._pwm_min = float(p["PWM_MAIN_MIN"]) if self._idle else ESC_RANGE_MIN_US
         self._pwm_max = float(p["PWM_MAIN_MAX"])
 
     def update(self, thrusts: Sequence[float], armed: bool, dt: float) -> MotorOutputs:
@@ -106,3 +118,18 @@ class MotorOutput:
             pwm.append(us)
             sim.append(min(max((us - ESC_RANGE_MIN_US) / (ESC_RANGE_MAX_US - ESC_RANGE_MIN_US), 0.0), 1.0))
         return MotorOutputs(tuple(motors), tuple(pwm), tuple(sim))
+
+
+class ServoOutputs(NamedTuple):
+    actuator_servos: tuple[float, ...]
+    """Surface commands in [−1, 1] (0 when disarmed)."""
+    pwm: tuple[float, ...]
+    """Pulse widths [µs]: 1500 ± 500 at full deflection, 1500 when disarmed."""
+    sim: tuple[float, ...]
+    """actuator_outputs_sim: the command in [−1, 1], 0 when disarmed."""
+
+
+def servo_outputs(servos: Sequence[float], armed: bool) -> ServoOutputs:
+    """The outputs of control-surface commands (non-finite ones centred)."""
+    commands = tuple(min(max(u, -1.0), 1.0) if armed and math.isfinite(u) else 0.0 for u in servos)
+    return ServoOutputs(commands, tuple(SERVO_CENTRE_US + u * SERVO_HALF_RANGE_US for u in commands), commands)

@@ -30,6 +30,8 @@ class MissionItemEntry(msgspec.Struct, array_like=True, gc=False):
     hold_time: float = 0.0
     speed: float = NAN
     autocontinue: bool = True
+    loiter_radius: float = NAN
+    loiter_turns: float = NAN
 
 
 class Mission(Message):

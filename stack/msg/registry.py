@@ -17,6 +17,15 @@ from stack.msg.estimation import (
     VehicleImuStatus,
     VehicleLocalPosition,
 )
+from stack.msg.fixedwing import (
+    ActuatorServos,
+    Airspeed,
+    AirspeedValidated,
+    PositionControllerStatus,
+    PositionSetpointTriplet,
+    TecsStatus,
+    Wind,
+)
 from stack.msg.navigation import Mission, MissionResult, NavigationRequest
 from stack.msg.sensors import SensorAccel, SensorBaro, SensorGps, SensorGyro, SensorMag
 from stack.msg.setpoints import (
@@ -95,6 +104,13 @@ TOPICS: dict[str, type[Message]] = {
     "mission_result": MissionResult,
     "navigation_request": NavigationRequest,
     "external_autopilot_status": ExternalAutopilotStatus,
+    "airspeed": Airspeed,
+    "airspeed_validated": AirspeedValidated,
+    "wind": Wind,
+    "actuator_servos": ActuatorServos,
+    "position_setpoint_triplet": PositionSetpointTriplet,
+    "tecs_status": TecsStatus,
+    "position_controller_status": PositionControllerStatus,
 }
 
 

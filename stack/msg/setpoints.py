@@ -34,11 +34,18 @@ class VehicleLocalPositionSetpoint(Message):
 
 
 class VehicleAttitudeSetpoint(Message):
-    """Desired attitude (body FRD → NED) and normalised body thrust (multicopter: (0, 0, −collective))."""
+    """Desired attitude (body FRD → NED) and normalised body thrust (multicopter: (0, 0, −collective); fixed wing:
+    (throttle, 0, 0)).
+
+    Fixed wing only: ``fw_control_yaw_wheel`` asks fw_att_control to steer the heading of ``q_d`` with the wheel
+    controller (runway takeoff and landing, auto modes; PX4's ``fw_control_yaw``), ``reset_integral`` to restart
+    its roll, pitch and yaw integrators (PX4's ``roll/pitch/yaw_reset_integral``)."""
 
     yaw_sp_move_rate: float = NAN
     q_d: F4 = Q_IDENTITY
     thrust_body: F3 = ZERO3
+    fw_control_yaw_wheel: bool = False
+    reset_integral: bool = False
 
 
 class RollPitchYawrateThrustSetpoint(Message):

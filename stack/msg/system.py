@@ -58,6 +58,7 @@ class VehicleStatus(Message):
     NAVIGATION_STATE_RATTITUDE = 31
 
     VEHICLE_TYPE_ROTARY_WING = 1
+    VEHICLE_TYPE_FIXED_WING = 2
 
     timestamp_sample: int = 0
     armed_time: int = 0

@@ -15,12 +15,15 @@ from __future__ import annotations
 from collections.abc import Iterable
 
 from stack.params import (
+    airspeed,
     atc,
     att_q,
     battery,
     ca,
     commander,
     ekf2,
+    fw_att,
+    fw_pos,
     geofence,
     hte,
     land_detector,
@@ -63,6 +66,9 @@ GROUPS = (
     pixhawk,
     mavlink,
     rotors,
+    fw_att,
+    fw_pos,
+    airspeed,
 )
 
 

@@ -6,6 +6,8 @@ from stack.params.param import Param
 PARAMS: tuple[Param, ...] = (
     Param("NAV_ACC_RAD", 2.0, 0.05, 200.0, "m", "Horizontal acceptance radius (multicopter default)"),
     Param("NAV_MC_ALT_RAD", 0.8, 0.05, 200.0, "m", "Vertical acceptance radius (waypoints, the takeoff altitude)"),
+    Param("NAV_FW_ALT_RAD", 10.0, 0.05, 200.0, "m", "Fixed-wing vertical acceptance radius (waypoints, takeoff)"),
+    Param("NAV_LOITER_RAD", 80.0, 25.0, 1000.0, "m", "Fixed-wing loiter radius (Hold, Return, items giving none)"),
     Param(
         "MIS_TAKEOFF_ALT",
         2.5,

@@ -12,6 +12,15 @@ PARAMS: tuple[Param, ...] = (
     Param("SIM_WIND_DIR", 0.0, 0.0, 360.0, "deg", "Direction the wind blows from (ArduPilot SIM_WIND_DIR)"),
     Param("SIM_WIND_GUST", 0.0, 0.0, 20.0, "m/s", "Horizontal gust standard deviation"),
     Param("SIM_WIND_GUST_T", 2.0, 0.1, 60.0, "s", "Gust correlation time"),
+    Param(
+        "SIM_WIND_HREF",
+        0.0,
+        0.0,
+        100.0,
+        "m",
+        "Height the wind figures hold at; below it the wind falls off logarithmically to the ground (0: the same "
+        "wind at every height)",
+    ),
     Param("SIM_BAT_DRAIN", 60.0, 0.0, None, "s", "Timed drain: full to empty while armed (0 = drain from current)"),
     Param("SIM_BAT_MIN_PCT", 50.0, 0.0, 100.0, "%", "The simulated charge never falls below this"),
 )

@@ -7,6 +7,15 @@ PARAMS: tuple[Param, ...] = (
     Param("SYS_HAS_MAG", 1, 0, 1, "", "Magnetometers fitted and required to arm (PX4 counts them; the stack has one)"),
     Param("SYS_HAS_GPS", 1, 0, 1, "", "A GNSS receiver is fitted", values=ENABLED),
     Param(
+        "SYS_HAS_NUM_ASPD",
+        1,
+        0,
+        1,
+        "",
+        "Airspeed sensors a fixed-wing vehicle has: 1 makes a fresh, valid airspeed a pre-arm check, 0 skips it "
+        "(PX4's default is 0; the stack's planes fly with one)",
+    ),
+    Param(
         "SYS_FAILURE_EN",
         0,
         0,

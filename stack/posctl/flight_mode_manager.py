@@ -36,6 +36,7 @@ from stack.mathlib.scalar import interpolate
 from stack.mathlib.vector import Vec3
 from stack.mission import feasibility, tracker
 from stack.mission.items import MAV_CMD_NAV_LAND, MAV_CMD_NAV_TAKEOFF, MAV_CMD_NAV_WAYPOINT, Mission
+from stack.mission.store import MissionStatus, MissionStore
 from stack.mission.tracker import MissionTracker
 from stack.msg.navigation import NavigationRequest
 from stack.msg.setpoints import ManualControlSetpoint
@@ -79,18 +80,6 @@ class NavigatorInputs(NamedTuple):
     manual: ManualControlSetpoint | None
 
 
-class MissionStatus(NamedTuple):
-    """What ``mission_result`` reports."""
-
-    mission_id: int
-    valid: bool
-    reason: str
-    seq_total: int
-    seq_current: int
-    seq_reached: int
-    finished: bool
-
-
 class FlightModeManager:
     """``load_mission`` on upload, ``update(inputs, dt)`` every cycle (see the module docstring)."""
 
@@ -101,10 +90,7 @@ class FlightModeManager:
         self.yaw = YawSlew()
         self.manual_position = ManualPositionTask(DEFAULTS)
         self.manual_altitude = ManualAltitudeTask(DEFAULTS)
-        self.mission: Mission | None = None
-        self.tracker: MissionTracker | None = None
-        self._mission_id = 0
-        self._mission_reason = ""
+        self.missions = MissionStore()
         self._active: tuple[int, bool] | None = None
         self._reposition_counter = 0
         self._mission_start_counter = 0
@@ -125,8 +111,7 @@ class FlightModeManager:
         self.rtl.set_params(merged)
         self.manual_position.set_params(merged)
         self.manual_altitude.set_params(merged)
-        if self.tracker is not None:
-            self.tracker.set_params(merged)
+        self.missions.set_params(merged)
         self._smoothing_key = None
 
     def _configure_smoothing(self, cruise: float = NAN, climb: float = NAN, radius: float = NAN) -> None:
@@ -154,42 +139,32 @@ class FlightModeManager:
 
     # ------------------------------------------------------------------ missions
 
+    @property
+    def mission(self) -> Mission | None:
+        return self.missions.mission
+
+    @property
+    def tracker(self) -> MissionTracker | None:
+        return self.missions.tracker
+
     def load_mission(self, mission: Mission, mission_id: int) -> str:
-        """Take an uploaded mission; returns why it was refused ("" when accepted). A refused upload
-        leaves no mission, as in PX4 (the vehicle holds an invalid mission until the next upload)."""
-        problem = feasibility.mission_problem(mission, self._p)
-        if problem:
-            self.load_mission_refused(mission_id, problem)
-            return problem
-        self._replace_mission(mission_id, mission, "")
-        return ""
+        """Take an uploaded mission; returns why it was refused ("" when accepted)."""
+        problem = self.missions.load(mission, mission_id, self._p)
+        self._mission_replaced()
+        return problem
 
     def load_mission_refused(self, mission_id: int, reason: str) -> None:
         """An upload that could not even be read: no mission, and the reason for ``mission_result``."""
-        self._replace_mission(mission_id, None, reason)
+        self.missions.refuse(mission_id, reason)
+        self._mission_replaced()
 
-    def _replace_mission(self, mission_id: int, mission: Mission | None, reason: str) -> None:
-        self._mission_id = mission_id
-        self._mission_reason = reason
-        self.mission = mission
-        self.tracker = MissionTracker(mission, self._p) if mission is not None else None
+    def _mission_replaced(self) -> None:
         self._mission_returning = False
         if self._active is not None and self._active[0] == NS.NAVIGATION_STATE_AUTO_MISSION:
             self._active = None  # restart the mission task with the new mission on the next update
 
     def mission_status(self) -> MissionStatus:
-        if self.tracker is None or self.mission is None:
-            return MissionStatus(self._mission_id, False, self._mission_reason, 0, 0, -1, False)
-        progress = self.tracker.progress
-        return MissionStatus(
-            self._mission_id,
-            True,
-            "",
-            progress.seq_total,
-            progress.seq_current,
-            progress.seq_reached,
-            progress.finished,
-        )
+        return self.missions.status()
 
     # ------------------------------------------------------------------ cycle
 

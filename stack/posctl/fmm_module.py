@@ -12,16 +12,14 @@ from __future__ import annotations
 import math
 
 from stack.commander.home import HomePosition
-from stack.mission.transfer import mission_from_message
+from stack.mission.store import MissionResultPublisher
 from stack.msg.estimation import VehicleLocalPosition
-from stack.msg.navigation import MissionResult
 from stack.msg.setpoints import TakeoffStatus, TrajectorySetpoint
-from stack.posctl.flight_mode_manager import PARAMS, FlightModeManager, MissionStatus, NavigatorInputs
+from stack.posctl.flight_mode_manager import PARAMS, FlightModeManager, NavigatorInputs
 from stack.posctl.flight_task import VehicleState
 from stack.runtime.module import Module, Trigger
 
 NAN = math.nan
-MISSION_RESULT_REPUBLISH_US = 1_000_000
 
 
 def vehicle_state(lpos: VehicleLocalPosition, landed: bool, flying: bool) -> VehicleState:
@@ -61,16 +59,15 @@ class FlightModeManagerModule(Module):
         self.advertise("trajectory_setpoint")
         self.advertise("mission_result")
         self.manager = FlightModeManager(self.params.values())
-        self._published_status: MissionStatus | None = None
-        self._published_us = 0
+        m = self.manager
+        self.results = MissionResultPublisher(m.load_mission, m.load_mission_refused, m.mission_status)
 
     def on_params_changed(self, changed: set[str]) -> None:
         self.manager.set_params(self.params.values())
 
     def run(self, lpos: VehicleLocalPosition, dt: float) -> None:
         now = self.now_us()
-        for upload in self.take("mission"):
-            self._load(upload)
+        self.results.take_uploads(self)
         status = self.latest("vehicle_status")
         land = self.latest("vehicle_land_detected")
         takeoff = self.latest("takeoff_status")
@@ -103,39 +100,4 @@ class FlightModeManagerModule(Module):
                     yawspeed=command.yawspeed,
                 ),
             )
-        self._publish_mission_result(now)
-
-    def _load(self, upload) -> None:
-        try:
-            mission = mission_from_message(upload)
-        except ValueError as e:
-            problem = f"malformed mission: {e}"
-            self.manager.load_mission_refused(upload.mission_id, problem)
-        else:
-            problem = self.manager.load_mission(mission, upload.mission_id)
-        if problem:
-            self.reject(f"mission {upload.mission_id}: {problem}")
-        else:
-            self.log.info("mission %d accepted: %d items", upload.mission_id, len(upload.items))
-        self._published_status = None
-
-    def _publish_mission_result(self, now: int) -> None:
-        status = self.manager.mission_status()
-        if status == self._published_status and now - self._published_us < MISSION_RESULT_REPUBLISH_US:
-            return
-        self._published_status = status
-        self._published_us = now
-        self.publish(
-            "mission_result",
-            MissionResult(
-                timestamp=now,
-                mission_id=status.mission_id,
-                seq_reached=status.seq_reached,
-                seq_current=status.seq_current,
-                seq_total=status.seq_total,
-                valid=status.valid,
-                finished=status.finished,
-                failure=not status.valid and bool(status.reason),
-                reason=status.reason,
-            ),
-        )
+        self.results.publish_result(self, now)

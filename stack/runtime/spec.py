@@ -32,6 +32,10 @@ MODULES: dict[str, str] = {
     "rerun_bridge": "stack.viz.module:RerunBridgeModule",
     "recorder": "stack.record.module:RecorderModule",
     "scenario": "stack.scenario.module:ScenarioModule",
+    "airspeed_selector": "stack.fw.airspeed_module:AirspeedSelectorModule",
+    "fw_att_control": "stack.fw.att_module:FixedwingAttitudeControl",
+    "fw_pos_control": "stack.fw.pos_module:FixedwingPositionControl",
+    "navigator": "stack.fw.navigator_module:NavigatorModule",
 }
 
 

@@ -51,11 +51,16 @@ def scenarios() -> dict[str, Scenario]:
         link_loss,
         mission_box,
         module_kill,
+        plane_loiter_wind,
+        plane_mission,
         rpyt_step,
         takeoff_land,
     )
 
-    flights = (attitude_step, takeoff_land, mission_box, gps_loss, failsafes, link_loss, module_kill, rpyt_step)
+    flights = (
+        attitude_step, takeoff_land, mission_box, gps_loss, failsafes, link_loss, module_kill, rpyt_step, plane_mission,
+        plane_loiter_wind,
+    )
     return {s.name: s for s in (f.SCENARIO for f in flights)}
 
 

@@ -23,13 +23,15 @@ WIND_PARAMS: dict[str, object] = {
 """The issue's "5 m/s with gusts": a westerly at 5 m/s with 1.5 m/s (1 σ) gusts of 2 s correlation time."""
 
 
-def prepare_flight(prof: Profile, scenario: str, result_path: Path, wind: bool) -> None:
-    """Set the scenario's parameters (and the wind's), and add the scenario module writing ``result_path``
-    with the profile's limits for it (doubled in wind); a parameter no module has is a ValueError."""
+def prepare_flight(
+    prof: Profile, scenario: str, result_path: Path, wind: bool, wind_speed: float = WIND_SPEED
+) -> None:
+    """Set the scenario's parameters (and the wind's, at ``wind_speed``), and add the scenario module writing
+    ``result_path`` with the profile's limits for it (doubled in wind); a parameter no module has is a ValueError."""
     chosen = get_scenario(scenario)
     set_params(prof, chosen.params)
     if wind:
-        set_params(prof, WIND_PARAMS)
+        set_params(prof, {**WIND_PARAMS, "SIM_WIND_SPD": wind_speed})
     limits = dict(prof.scenario_limits.get(scenario, {}))
     if wind:
         limits = windy_limits(chosen.checks, limits)

@@ -1,8 +1,9 @@
 """The simulator module: the default plant, and the lockstep coordinator of a simulated stack.
 
-Each step it reads the latest ``actuator_outputs_sim``, advances the physics by one IMU period and
-publishes the sensors that fell due (accelerometer before gyro, the estimator's trigger), the
-ground truth and, at 10 Hz, the battery (PX4's battery simulator: drains while armed). In lockstep it drives
+Each step it reads the latest ``actuator_outputs_sim`` (a multicopter's motors; a plane's throttle,
+aileron, elevator and rudder in output[0..3]), advances the physics by one IMU period and publishes
+the sensors that fell due (accelerometer before gyro, the estimator's trigger; a plane's airspeed),
+the ground truth and, at 10 Hz, the battery (PX4's battery simulator: drains while armed). In lockstep it drives
 simulated time; with ``--realtime`` it is paced by the wall clock.
 """
 
@@ -12,15 +13,18 @@ import math
 
 from stack.commander.command_checks import addressed_to
 from stack.mathlib.vector import Vec3
+from stack.msg.fixedwing import Airspeed
 from stack.msg.sensors import SensorAccel, SensorBaro, SensorGps, SensorGyro, SensorMag
 from stack.msg.simulation import SimGroundtruth
 from stack.msg.system import BatteryStatus, VehicleCommand
 from stack.params import catalogue
 from stack.runtime.module import Arg, Module
 from stack.sim import battery
+from stack.sim.airspeed_sensor import AirspeedSample
 from stack.sim.battery import BatteryModel
 from stack.sim.sensors import BaroSample, GpsSample, ImuSample, MagSample
 from stack.sim.simulator import Simulator
+from stack.sim.vehicle import FixedwingModel, VehicleModel, load_vehicle
 from stack.sim.wind import WindParams
 
 # Device ids as PX4's simulated drivers report them (SIH's IMU id; the others distinct).
@@ -29,16 +33,17 @@ BATTERY_PERIOD_US = 100_000
 MAG_DEVICE_ID = 197388
 BARO_DEVICE_ID = 6620172
 GPS_DEVICE_ID = 11469064
+AIRSPEED_DEVICE_ID = 1377548  # DRV_DIFF_PRESS_DEVTYPE_SIM, bus 1, address 5, simulation
 
 
 class SimulatorModule(Module):
     NAME = "simulator"
-    DESCRIPTION = "Rigid-body multicopter simulator (PX4 SIH-like): physics, sensors, ground truth"
+    DESCRIPTION = "Rigid-body simulator (PX4 SIH-like), multicopter or airplane: physics, sensors, ground truth"
     LOCKSTEP_COORDINATOR = True
     ARGS = (
         Arg("vehicle", "sih_quad", "Vehicle model: a name in stack/sim/vehicles or a path to a model file"),
         Arg("imu_rate_hz", 250.0, "IMU rate = lockstep step rate (PX4 SITL IMU_INTEG_RATE)"),
-        Arg("physics_rate_hz", 1000.0, "RK4 physics rate"),
+        Arg("physics_rate_hz", 1000.0, "Physics step rate (a multicopter's RK4; for the SIH airplane 500 is enough)"),
         Arg("mag_rate_hz", 50.0),
         Arg("baro_rate_hz", 20.0),
         Arg("gps_rate_hz", 10.0),
@@ -47,7 +52,7 @@ class SimulatorModule(Module):
     PARAMS = (
         *catalogue.params(
             "SIH_LOC_LAT0", "SIH_LOC_LON0", "SIH_LOC_H0", "SIM_GPS_USED", "SIM_WIND_SPD", "SIM_WIND_DIR",
-            "SIM_WIND_GUST", "SIM_WIND_GUST_T", "SYS_FAILURE_EN", "MAV_SYS_ID", "MAV_COMP_ID",
+            "SIM_WIND_GUST", "SIM_WIND_GUST_T", "SIM_WIND_HREF", "SYS_FAILURE_EN", "MAV_SYS_ID", "MAV_COMP_ID",
         ),
         *battery.PARAMS,
     )
@@ -55,8 +60,10 @@ class SimulatorModule(Module):
     def __init__(self, rt) -> None:
         super().__init__(rt)
         p, a = self.params, self.args
-        self.sim = Simulator(
-            model=str(a["vehicle"]),
+        model = load_vehicle(str(a["vehicle"]))
+        plant = Simulator if isinstance(model, VehicleModel | FixedwingModel) else _jsbsim_plant()
+        self.sim = plant(
+            model=model,
             seed=rt.spec.seed,
             physics_rate_hz=float(a["physics_rate_hz"]),
             imu_rate_hz=float(a["imu_rate_hz"]),
@@ -67,23 +74,26 @@ class SimulatorModule(Module):
             wind=self._wind_params(),
         )
         self.sim.set_gps_enabled(int(p["SIM_GPS_USED"]) >= 4)
-        self.motor_count = self.sim.model.rotor_count
+        self.input_count = model.input_count
         self.subscribe("actuator_outputs_sim")
         self.subscribe("actuator_armed")
         self.subscribe("vehicle_command", queue=True)
         for topic in ("sensor_accel", "sensor_gyro", "sensor_mag", "sensor_baro", "sensor_gps", "sim_groundtruth"):
             self.advertise(topic)
+        if not isinstance(model, VehicleModel):
+            self.advertise("airspeed")
         self.advertise("battery_status")
         self.battery = BatteryModel(self.params.values())
         self._battery_due_us = 0
         self.epoch_us: int | None = None
-        self.log.info(
-            "vehicle %s: %d rotors, %.3f kg, hover thrust fraction %.3f",
-            self.sim.model.name,
-            self.motor_count,
-            self.sim.model.mass,
-            self.sim.model.hover_thrust_fraction,
-        )
+        if isinstance(model, FixedwingModel):
+            self.log.info("vehicle %s: fixed-wing, %.3f kg, %.1f N static thrust", model.name, model.mass,
+                          model.thruster.max_thrust)
+        elif not isinstance(model, VehicleModel):
+            self.log.info("vehicle %s: JSBSim %s, %.1f kg", model.name, model.aircraft, self.sim.mass)
+        else:
+            self.log.info("vehicle %s: %d rotors, %.3f kg, hover thrust fraction %.3f", model.name,
+                          model.rotor_count, model.mass, model.hover_thrust_fraction)
 
     def _wind_params(self) -> WindParams:
         p = self.params
@@ -95,6 +105,7 @@ class SimulatorModule(Module):
             gust_std_vertical=0.5 * gust,
             gust_time_constant=float(p["SIM_WIND_GUST_T"]),
             enabled=speed > 0.0 or gust > 0.0,
+            reference_height=float(p["SIM_WIND_HREF"]),
         )
 
     def on_params_changed(self, changed: set[str]) -> None:
@@ -102,7 +113,7 @@ class SimulatorModule(Module):
             enabled = int(self.params["SIM_GPS_USED"]) >= 4
             self.sim.set_gps_enabled(enabled)
             self.log.info("GPS %s", "restored" if enabled else "lost (fewer than 4 satellites)")
-        if changed & {"SIM_WIND_SPD", "SIM_WIND_DIR", "SIM_WIND_GUST", "SIM_WIND_GUST_T"}:
+        if changed & {"SIM_WIND_SPD", "SIM_WIND_DIR", "SIM_WIND_GUST", "SIM_WIND_GUST_T", "SIM_WIND_HREF"}:
             self.sim.set_wind(self._wind_params())
         if changed & {p.name for p in battery.PARAMS}:
             self.battery.set_params(self.params.values())
@@ -138,8 +149,8 @@ class SimulatorModule(Module):
         # output said: a dead allocator cannot keep them turning.
         stopped = armed is not None and (not armed.armed or armed.lockdown or armed.kill or armed.termination)
         if outputs is None or stopped:
-            return (0.0,) * self.motor_count
-        commands = outputs.output[: self.motor_count]
+            return (0.0,) * self.input_count
+        commands = outputs.output[: self.input_count]
         return tuple(c if math.isfinite(c) else 0.0 for c in commands)
 
     def run(self, msg: object, dt: float) -> None:
@@ -158,6 +169,8 @@ class SimulatorModule(Module):
                 self._publish_baro(sample, epoch)
             elif isinstance(sample, GpsSample):
                 self._publish_gps(sample, epoch)
+            elif isinstance(sample, AirspeedSample):
+                self._publish_airspeed(sample, epoch)
         self._publish_truth(epoch)
         if self.sim.time_us >= self._battery_due_us:
             self._battery_due_us = self.sim.time_us + BATTERY_PERIOD_US
@@ -219,6 +232,20 @@ class SimulatorModule(Module):
             ),
         )
 
+    def _publish_airspeed(self, s: AirspeedSample, epoch: int) -> None:
+        self.publish(
+            "airspeed",
+            Airspeed(
+                timestamp_sample=epoch + s.time_us,
+                device_id=AIRSPEED_DEVICE_ID,
+                indicated_airspeed_m_s=s.indicated_airspeed,
+                true_airspeed_m_s=s.true_airspeed,
+                differential_pressure_pa=s.differential_pressure,
+                air_temperature_celsius=s.temperature,
+                confidence=1.0,
+            ),
+        )
+
     def _publish_battery(self, epoch: int) -> None:
         armed = self.latest("actuator_armed")
         state = self.battery.update(BATTERY_PERIOD_US * 1e-6, armed is not None and armed.armed)
@@ -245,3 +272,9 @@ class SimulatorModule(Module):
                 motors=t.motors,
             ),
         )
+
+
+def _jsbsim_plant():
+    from stack.sim.jsbsim_plant import JsbsimPlant  # JSBSim loads only for a vehicle that needs it
+
+    return JsbsimPlant

@@ -45,11 +45,11 @@ from stack.mathlib.quaternion import (
     from_rotation_vector,
     mul,
     normalized,
-    rotate_inv,
     to_rotation_vector,
 )
 from stack.mathlib.scalar import CONSTANTS_ONE_G
 from stack.mathlib.vector import ZERO3, Vec3
+from stack.sim.rigid_body import RigidBodyState
 from stack.sim.vehicle import VehicleModel
 
 SIH_MAX_BODY_RATE = 6.0 * math.pi
@@ -132,7 +132,7 @@ def _derivative_rotor_drag(
     )
 
 
-class MulticopterPhysics:
+class MulticopterPhysics(RigidBodyState):
     """The rigid-body plant of one multicopter (see the module docstring for the model).
 
     ``max_body_rate`` (rad/s, default 6π as SIH) clamps each body-rate component; ``gravity`` in m/s².
@@ -380,62 +380,9 @@ class MulticopterPhysics:
     # Truth accessors (for the ground-truth topic and the sensor models).
 
     @property
-    def position(self) -> Vec3:
-        """Position NED about the home point (m)."""
-        return self._position
-
-    @property
-    def velocity(self) -> Vec3:
-        """Velocity NED (m/s)."""
-        return self._velocity
-
-    @property
-    def attitude(self) -> Quat:
-        """Attitude quaternion (w, x, y, z), body FRD → NED."""
-        return self._attitude
-
-    @property
-    def angular_velocity(self) -> Vec3:
-        """Body rates FRD (rad/s)."""
-        return self._angular_velocity
-
-    @property
     def motor_states(self) -> tuple[float, ...]:
         """Motor states in [0, 1]: normalised rotor speed (quadratic model) or thrust (linear model)."""
         return tuple(self._motor_states)
-
-    @property
-    def on_ground(self) -> bool:
-        return self._on_ground
-
-    @property
-    def gravity(self) -> float:
-        """Gravitational acceleration used by the model (m/s², NED +z)."""
-        return self._gravity
-
-    @property
-    def acceleration(self) -> Vec3:
-        """Mean acceleration NED over the last step (m/s²); zero before the first step."""
-        dt = self._last_dt
-        if dt <= 0.0:
-            return ZERO3
-        v, p = self._velocity, self._previous_velocity
-        return ((v[0] - p[0]) / dt, (v[1] - p[1]) / dt, (v[2] - p[2]) / dt)
-
-    @property
-    def angular_acceleration(self) -> Vec3:
-        """Mean angular acceleration FRD over the last step (rad/s²)."""
-        dt = self._last_dt
-        if dt <= 0.0:
-            return ZERO3
-        w, p = self._angular_velocity, self._previous_angular_velocity
-        return ((w[0] - p[0]) / dt, (w[1] - p[1]) / dt, (w[2] - p[2]) / dt)
-
-    @property
-    def specific_force(self) -> Vec3:
-        """What an ideal accelerometer reads, in body FRD (m/s²): R^T·(a − g); (0, 0, −g) at rest level."""
-        ax, ay, az = self.acceleration
-        return rotate_inv(self._attitude, (ax, ay, az - self._gravity))
 
 
 def _level_about_heading(attitude: Quat) -> Quat:

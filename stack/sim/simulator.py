@@ -3,14 +3,18 @@
 :class:`Simulator` is what the simulator module wraps. One :meth:`Simulator.advance` moves time on
 by exactly one IMU period (an integer number of physics steps with the motor commands and the wind
 held) and returns the sensor samples that fell due at the new time: always an IMU sample, and a
-magnetometer, barometer or GPS sample when their own period has elapsed. This mirrors PX4 SIH's
+magnetometer, barometer or GPS sample when their own period has elapsed; for a fixed-wing, an
+airspeed sample too (PX4 SIH publishes it at 20 Hz). This mirrors PX4 SIH's
 lockstep loop, where each simulator step publishes the IMU and the slower sensors at their rates.
 
 The accelerometer reads the mean specific force over the IMU period (the velocity change over the
 period, less gravity, in the body frame at the sample time), as PX4's delta-velocity integration
 delivers it; the gyro reads the body rates at the sample time.
 
-Randomness: every noise source (wind, IMU, magnetometer, barometer, GPS) draws from its own
+The plant is :class:`MulticopterPhysics` or, for a fixed-wing model, :class:`FixedwingPhysics`; the
+commands are the model's inputs (a multicopter's motors; a plane's throttle, aileron, elevator, rudder).
+
+Randomness: every noise source (wind, IMU, magnetometer, barometer, GPS, airspeed) draws from its own
 ``random.Random`` seeded from ``f"{seed}/{name}"``, so the same seed gives the same run, sample for
 sample, and changing one sensor's configuration leaves the others' noise untouched.
 """
@@ -26,6 +30,8 @@ from stack.mathlib.geo import MapProjection
 from stack.mathlib.quaternion import IDENTITY, Quat, rotate_inv
 from stack.mathlib.vector import ZERO3, Vec3
 from stack.params import catalogue
+from stack.sim.airspeed_sensor import AirspeedModel, AirspeedParams, AirspeedSample
+from stack.sim.fixedwing_physics import FixedwingPhysics
 from stack.sim.physics import SIH_MAX_BODY_RATE, MulticopterPhysics
 from stack.sim.sensors import (
     BarometerModel,
@@ -41,7 +47,7 @@ from stack.sim.sensors import (
     MagParams,
     MagSample,
 )
-from stack.sim.vehicle import VehicleModel, load_vehicle
+from stack.sim.vehicle import FixedwingModel, VehicleModel, load_vehicle
 from stack.sim.wind import WindModel, WindParams
 
 SIH_HOME: tuple[float, float, float] = (
@@ -51,7 +57,7 @@ SIH_HOME: tuple[float, float, float] = (
 )
 """The default home: SIH_LOC_LAT0 (deg), SIH_LOC_LON0 (deg), SIH_LOC_H0 (m AMSL)."""
 
-SensorSample = ImuSample | MagSample | BaroSample | GpsSample
+SensorSample = ImuSample | MagSample | BaroSample | GpsSample | AirspeedSample
 
 
 class GroundTruth(NamedTuple):
@@ -70,7 +76,7 @@ class GroundTruth(NamedTuple):
     alt: float  # m AMSL
     on_ground: bool
     wind: Vec3  # NED, m/s
-    motors: tuple[float, ...]  # motor states in [0, 1]
+    motors: tuple[float, ...]  # motor states in [0, 1] (a plane's: its throttle state)
 
 
 def sensor_rng(seed: int, name: str) -> random.Random:
@@ -88,25 +94,33 @@ def _period_us(rate_hz: float, what: str) -> int:
 
 
 class Simulator:
-    """A seeded multicopter simulation: physics, wind, IMU, magnetometer, barometer and GPS.
+    """A seeded simulation: physics, wind, IMU, magnetometer, barometer, GPS, and a plane's airspeed.
 
     Parameters (rates in Hz; PX4 names where PX4 has one):
 
-    - ``model``: a :class:`VehicleModel` or a vehicle name/path for :func:`load_vehicle` (default the SIH quad).
+    - ``model``: a :class:`VehicleModel`, a :class:`FixedwingModel` or a vehicle name/path for
+      :func:`load_vehicle` (default the SIH quad).
     - ``seed``: run seed; the same seed and inputs give identical samples.
-    - ``physics_rate_hz`` (1000): RK4 step rate; its period must be a whole number of µs.
+    - ``physics_rate_hz`` (1000): the plant's step rate (a multicopter's RK4; a plane's semi-implicit
+      Euler, for which 500 is enough); its period must be a whole number of µs.
     - ``imu_rate_hz`` (250; PX4 SITL IMU_INTEG_RATE): the :meth:`advance` period; a whole multiple
       of the physics period.
     - ``mag_rate_hz`` (50), ``baro_rate_hz`` (20), ``gps_rate_hz`` (10): sampled at the first IMU tick
       at or after each period, starting with the first tick; at most the IMU rate.
     - ``home``: (lat deg, lon deg, alt m AMSL) of NED origin and ground (SIH_LOC_LAT0/LON0/H0).
     - ``wind``, ``imu``, ``mag``, ``baro``, ``gps``: parameter sets (defaults: calm, see ``sensors``).
+    - ``airspeed``: the airspeed sensor's noise, offset and rate (fixed-wing only; default 1 Pa, 20 Hz). It
+      reads the forward (body x) component of the air-relative velocity at the altitude AMSL.
     - ``max_body_rate``: body-rate clamp (rad/s, SIH 6π).
 
     The wind is advanced once per :meth:`advance` and held over its physics steps.
     """
 
     __slots__ = (
+        "_airspeed",
+        "_airspeed_due",
+        "_airspeed_period",
+        "_applied_wind",
         "_baro",
         "_baro_due",
         "_baro_period",
@@ -148,8 +162,9 @@ class Simulator:
         baro: BaroParams | None = None,
         gps: GpsParams | None = None,
         max_body_rate: float = SIH_MAX_BODY_RATE,
+        airspeed: AirspeedParams | None = None,
     ) -> None:
-        self.model = model if isinstance(model, VehicleModel) else load_vehicle(model)
+        self.model = model if isinstance(model, VehicleModel | FixedwingModel) else load_vehicle(model)
         self.seed = seed
         physics_period = _period_us(physics_rate_hz, "physics_rate_hz")
         if abs(1e6 / physics_rate_hz - physics_period) > 1e-6:
@@ -173,15 +188,27 @@ class Simulator:
         self.home = home
         self._projection = MapProjection(home[0], home[1])
         self._home_alt = home[2]
-        self.physics = MulticopterPhysics(self.model, max_body_rate=max_body_rate)
+        self.physics: MulticopterPhysics | FixedwingPhysics
+        self._airspeed: AirspeedModel | None = None
+        self._airspeed_period = 0
+        if isinstance(self.model, FixedwingModel):
+            self.physics = FixedwingPhysics(self.model, home_altitude=home[2], max_body_rate=max_body_rate)
+            airspeed = airspeed if airspeed is not None else AirspeedParams()
+            self._airspeed_period = _period_us(airspeed.rate_hz, "airspeed rate_hz")
+            if self._airspeed_period < self._imu_period:
+                raise ValueError("the airspeed rate must not exceed imu_rate_hz")
+            self._airspeed = AirspeedModel(airspeed, sensor_rng(seed, "airspeed"))
+        else:
+            self.physics = MulticopterPhysics(self.model, max_body_rate=max_body_rate)
         self._wind = WindModel(wind if wind is not None else WindParams(), sensor_rng(seed, "wind"))
+        self._applied_wind = self._wind.wind
         self._imu = ImuModel(imu if imu is not None else ImuParams(), imu_rate_hz, sensor_rng(seed, "imu"))
         self._mag = MagnetometerModel(mag if mag is not None else MagParams(), sensor_rng(seed, "mag"))
         self._baro = BarometerModel(baro if baro is not None else BaroParams(), sensor_rng(seed, "baro"))
         self._gps = GpsModel(gps if gps is not None else GpsParams(), gps_rate_hz, self._projection, home[2],
                              sensor_rng(seed, "gps"))
         self._time_us = 0
-        self._mag_due = self._baro_due = self._gps_due = self._imu_period
+        self._mag_due = self._baro_due = self._gps_due = self._airspeed_due = self._imu_period
 
     @property
     def time_us(self) -> int:
@@ -202,12 +229,16 @@ class Simulator:
 
     @property
     def wind(self) -> Vec3:
-        """The wind NED (m/s) acting over the current IMU period."""
-        return self._wind.wind
+        """The wind NED (m/s) acting on the vehicle over the current IMU period (at its height)."""
+        return self._applied_wind
 
     def advance(self, motor_commands: Sequence[float]) -> list[SensorSample]:
-        """Advance one IMU period with these motor commands ([0, 1] per rotor); return the samples due."""
-        wind = self._wind.update(self._imu_dt)
+        """Advance one IMU period with these commands held; return the samples due.
+
+        The commands are the model's inputs: [0, 1] per rotor, or a plane's (throttle, aileron, elevator, rudder).
+        """
+        self._wind.update(self._imu_dt)
+        wind = self._applied_wind = self._wind.at_height(-self.physics.position[2])
         physics = self.physics
         step = physics.step
         dt = self._physics_dt
@@ -235,6 +266,11 @@ class Simulator:
         while gps is not None:
             samples.append(gps)
             gps = self._gps.pop_due(t)
+        if self._airspeed is not None and t >= self._airspeed_due:
+            vx, vy, vz = physics.velocity
+            forward = rotate_inv(physics.attitude, (vx - wind[0], vy - wind[1], vz - wind[2]))[0]
+            samples.append(self._airspeed.sample(t, forward, self._home_alt - physics.position[2]))
+            self._airspeed_due = self._next_due(self._airspeed_due, self._airspeed_period, t)
         return samples
 
     @staticmethod
@@ -262,7 +298,7 @@ class Simulator:
             lon=lon,
             alt=self._home_alt - down,
             on_ground=p.on_ground,
-            wind=self._wind.wind,
+            wind=self._applied_wind,
             motors=p.motor_states,
         )
 
@@ -283,6 +319,7 @@ class Simulator:
     def set_wind_enabled(self, enabled: bool) -> None:
         """Wind on/off; off means exactly zero wind."""
         self._wind.set_enabled(enabled)
+        self._applied_wind = self._wind.at_height(-self.physics.position[2])
 
     def set_wind(self, params: WindParams) -> None:
         """New wind figures (mean, gusts, enabled), applied from the next step."""
@@ -299,7 +336,7 @@ class Simulator:
         """Put the vehicle at a pose (NED m, body → NED quaternion) without touching the clock.
 
         Motors are stopped unless ``motor_states`` is given; GPS measurements not yet published are dropped.
-        At or below z = 0 the vehicle is placed on the ground, level.
+        At or below z = 0 the vehicle is placed on the ground, at rest (a multicopter level, a plane on its gear).
         """
         self.physics.reset(position, velocity, attitude, angular_velocity, motor_states)
         self._gps.clear()

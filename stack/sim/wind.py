@@ -5,6 +5,13 @@ turbulence: exponential autocorrelation σ²·exp(−|t|/τ)), discretised exact
 g ← exp(−dt/τ)·g + σ·√(1 − exp(−2·dt/τ))·N(0, 1). The process starts from its stationary
 distribution, so its statistics do not depend on how long the simulation has run.
 
+Near the ground the wind may follow the neutral atmospheric surface layer's logarithmic profile
+(``reference_height`` > 0): u(h) = u_ref·ln(h/z₀)/ln(h_ref/z₀) below the reference height, none at or below
+the roughness length z₀ (0.03 m, open flat terrain with grass: the Davenport–Wieringa roughness class "open";
+J. Wieringa, "Updating the Davenport roughness classification", J. Wind Eng. 1992). A plane standing on its
+wheels then feels the light breeze it would on a runway, not the full wind aloft. With ``reference_height``
+0 the wind is the same at every height.
+
 ArduPilot's SITL names the same figures SIM_WIND_SPD, SIM_WIND_DIR (the direction the wind comes
 from), SIM_WIND_DIR_Z and SIM_WIND_TURB; :meth:`WindParams.from_speed_direction` takes that form.
 """
@@ -17,6 +24,18 @@ from dataclasses import dataclass
 
 from stack.mathlib.vector import ZERO3, Vec3
 
+ROUGHNESS_LENGTH = 0.03
+"""z₀ of open flat terrain with grass [m] (see the module docstring)."""
+
+
+def surface_layer_factor(height: float, reference_height: float) -> float:
+    """u(h)/u_ref of the logarithmic profile: 0 at or below z₀, 1 at and above the reference height."""
+    if reference_height <= 0.0 or height >= reference_height:
+        return 1.0
+    if not height > ROUGHNESS_LENGTH:
+        return 0.0
+    return math.log(height / ROUGHNESS_LENGTH) / math.log(reference_height / ROUGHNESS_LENGTH)
+
 
 @dataclass(frozen=True, slots=True)
 class WindParams:
@@ -26,6 +45,8 @@ class WindParams:
     ``gust_std_horizontal`` / ``gust_std_vertical``: gust standard deviation per axis (m/s, ≥ 0).
     ``gust_time_constant``: gust correlation time τ (s, > 0).
     ``enabled``: initial on/off state; off means exactly zero wind at no cost.
+    ``reference_height``: the height above ground the figures hold at, with the logarithmic profile below it
+    (m; 0: the same wind at every height).
     """
 
     mean_ned: Vec3 = ZERO3
@@ -33,6 +54,7 @@ class WindParams:
     gust_std_vertical: float = 0.0
     gust_time_constant: float = 2.0
     enabled: bool = True
+    reference_height: float = 0.0
 
     def __post_init__(self) -> None:
         if len(self.mean_ned) != 3 or not all(math.isfinite(c) for c in self.mean_ned):
@@ -42,6 +64,8 @@ class WindParams:
             raise ValueError("gust standard deviations must be >= 0")
         if not self.gust_time_constant > 0.0:
             raise ValueError("gust_time_constant must be > 0")
+        if not self.reference_height >= 0.0:
+            raise ValueError("reference_height must be >= 0")
 
     @classmethod
     def from_speed_direction(
@@ -105,8 +129,14 @@ class WindModel:
         m, g = self.params.mean_ned, self._gust
         return (m[0] + g[0], m[1] + g[1], m[2] + g[2])
 
+    def at_height(self, height: float) -> Vec3:
+        """The current wind at ``height`` above ground (m), on the surface layer's profile."""
+        k = surface_layer_factor(height, self.params.reference_height)
+        w = self._wind
+        return w if k == 1.0 else (k * w[0], k * w[1], k * w[2])
+
     def update(self, dt: float) -> Vec3:
-        """Advance the gusts by dt seconds and return the new wind NED (m/s)."""
+        """Advance the gusts by dt seconds and return the new wind NED (m/s) aloft (see :meth:`at_height`)."""
         if not self._enabled or self._calm:
             return self._wind
         p = self.params

@@ -107,5 +107,7 @@ def test_the_commander_does_not_import_the_position_controller():
 def test_launch_files_are_found_without_the_supervisor():
     assert GRAPH["stack.launch_files"] == set()
     scenarios = [m for m in MODULES if m.startswith("stack.scenario.")]
-    assert [m for m in scenarios if "stack.launch_files" in GRAPH[m]] == ["stack.scenario.mission_box"]
-    assert "stack.supervisor.profile" not in GRAPH["stack.scenario.mission_box"]
+    flying_files = ["stack.scenario.mission_box", "stack.scenario.plane_mission"]
+    assert sorted(m for m in scenarios if "stack.launch_files" in GRAPH[m]) == flying_files
+    for m in flying_files:
+        assert "stack.supervisor.profile" not in GRAPH[m]

@@ -1,7 +1,7 @@
 """Issue 13: RotorS' roll-pitch-yawrate-thrust controller flies the RotorS profiles, through the real CLI.
 
-rpyt_step flies steps of roll, pitch and yaw rate through the RotorS mode's sticks on each RotorS profile and two
-seeds, judged by the limits of its profile; RotorS' law has no integrator, so the yaw rate settles short of the
+rpyt_step flies steps of roll, pitch and yaw rate through the RotorS mode's sticks on each RotorS profile (a seed
+each), judged by the limits of its profile; RotorS' law has no integrator, so the yaw rate settles short of the
 command by the rotors' drag torque over the yaw-rate gain, which the vehicle model predicts. The default profile
 flies the same steps with PX4's loops. takeoff_land holds the default limits in PX4's auto modes, flown by RotorS'
 controller.
@@ -21,8 +21,8 @@ from tests.flight.flights import Flight, fly_scenario
 
 pytestmark = pytest.mark.flight
 
-PROFILES = ("rotors_firefly", "rotors_hummingbird", "rotors_pelican")
-SEEDS = (1, 2)
+# Each profile flies its own seed, so the suite flies three (benchmarks/sweep.py flies 20 on each).
+PROFILE_SEEDS = (("rotors_firefly", 1), ("rotors_hummingbird", 2), ("rotors_pelican", 3))
 Fly = Callable[..., Flight]
 
 
@@ -59,8 +59,7 @@ def predicted_yaw_rate_error_dps(profile: str) -> float:
     return _param(modules["rotors_joy_interface"], "RJOY_YAWRATE_MAX") * drag / (gain + drag)
 
 
-@pytest.mark.parametrize("seed", SEEDS)
-@pytest.mark.parametrize("profile", PROFILES)
+@pytest.mark.parametrize(("profile", "seed"), PROFILE_SEEDS)
 def test_every_check_passed_by_the_profile_s_limits(fly: Fly, profile: str, seed: int) -> None:
     flight = fly("rpyt_step", profile, seed)
     report = flight.report
@@ -72,8 +71,7 @@ def test_every_check_passed_by_the_profile_s_limits(fly: Fly, profile: str, seed
     assert limits == {**limits, **load_profile(profile).scenario_limits.get("rpyt_step", {})}
 
 
-@pytest.mark.parametrize("seed", SEEDS)
-@pytest.mark.parametrize("profile", PROFILES)
+@pytest.mark.parametrize(("profile", "seed"), PROFILE_SEEDS)
 def test_the_yaw_rate_falls_short_by_the_rotor_drag_over_the_rate_gain(fly: Fly, profile: str, seed: int) -> None:
     metrics = fly("rpyt_step", profile, seed).report["metrics"]
     predicted = predicted_yaw_rate_error_dps(profile)
@@ -84,7 +82,7 @@ def test_the_yaw_rate_falls_short_by_the_rotor_drag_over_the_rate_gain(fly: Fly,
 
 
 def test_takeoff_land_in_the_auto_modes_meets_the_default_limits(fly: Fly) -> None:
-    flight = fly("takeoff_land", "rotors_pelican", 1)
+    flight = fly("takeoff_land", "rotors_pelican", 3)
     assert flight.report["error"] is None, flight.output
     assert flight.report["passed"] is True and flight.returncode == 0, flight.output
     assert flight.report["metrics"]["landed_and_disarmed"] is True
@@ -93,8 +91,8 @@ def test_takeoff_land_in_the_auto_modes_meets_the_default_limits(fly: Fly) -> No
 def test_the_rotors_mode_on_px4s_attitude_loop_follows_the_sticks(fly: Fly) -> None:
     """The default profile flies the RotorS mode with PX4's attitude and rate loops: it follows roll and pitch
     faster than RotorS' law, and, holding a heading moved by the commanded rate, the yaw rate with no shortfall.
-    (The RotorS profiles above fly two seeds each; this flies a third.)"""
-    flight = fly("rpyt_step", "sitl_quad", 3)
+    (The RotorS profiles above fly seeds 1–3; this flies a fourth.)"""
+    flight = fly("rpyt_step", "sitl_quad", 4)
     metrics = flight.report["metrics"]
     assert flight.report["error"] is None, flight.output
     assert metrics["landed_and_disarmed"] is True

@@ -9,11 +9,13 @@ import pytest
 
 from stack.sim.vehicle import VEHICLES_DIR, available_vehicles, load_vehicle
 
-ALL_VEHICLES = ["sih_quad", "hummingbird", "pelican", "firefly"]
+ALL_VEHICLES = ["sih_quad", "hummingbird", "pelican", "firefly"]  # the multicopters
 
 
 def test_all_shipped_vehicles_load() -> None:
-    assert available_vehicles() == sorted(ALL_VEHICLES)
+    assert set(available_vehicles()) == {*ALL_VEHICLES, "sih_plane", "jsbsim_c172"}
+    assert load_vehicle("sih_plane").name == "sih_plane"  # tests/sim/test_fixedwing_physics.py has the rest
+    assert load_vehicle("jsbsim_c172").aircraft == "c172p"  # tests/sim/test_jsbsim_plant.py has the rest
     for name in ALL_VEHICLES:
         model = load_vehicle(name)
         assert model.name == name

@@ -1,0 +1,171 @@
+"""PX4's fixed-wing land detector: landed when slow and still for LNDFW_TRIG_TIME.
+
+Follows ``src/modules/land_detector/FixedwingLandDetector.cpp`` (PX4 main), run at the land detector's 50 Hz
+(the filter constants are per update, as there): armed, with a local position younger than 1 s, it low-pass
+filters
+
+* the horizontal ground speed (0.97/0.03, only while ``v_xy_valid``) and the vertical speed (0.99/0.01);
+* the true airspeed (0.95/0.05; zero while there is none: NaN, or ``airspeed_validated`` older than 1 s);
+* the horizontal specific force, body x and y of the accelerometer (a leaking 0.8/0.18 filter, so that a
+  bias does not build up but a short impulse counts);
+* the angular rate's magnitude (0.95/0.05),
+
+and asks for "landed" when each is below its limit: LNDFW_AIRSPD_MAX, LNDFW_VEL_XY_MAX (× 0.7 without an
+airspeed), LNDFW_VEL_Z_MAX, LNDFW_XYACC_MAX and — only when neither the ground speed nor an airspeed can be
+used — LNDFW_ROT_MAX. The request must hold LNDFW_TRIG_TIME to land; taking off is immediate. Disarmed, or
+without a local position, the vehicle is landed. A plane has no freefall, ground contact, maybe-landed or
+ground-effect stage: those stay false, as PX4's base class leaves them. PX4's hold while a catapult launch is
+awaited does not apply (the stack's planes take off from a runway). ``at_rest`` is landed with the angular
+rate below 3 °/s for 1 s, PX4's gyro part of ``LandDetector::UpdateVehicleAtRest``.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+
+from stack.commander.hysteresis import Hysteresis
+from stack.commander.land_detector import LandDetectorState
+from stack.mathlib.vector import ZERO3, Vec3
+from stack.params import catalogue
+from stack.params.param import Param
+
+PARAMS: tuple[Param, ...] = catalogue.params(
+    "LNDFW_TRIG_TIME", "LNDFW_VEL_XY_MAX", "LNDFW_VEL_Z_MAX", "LNDFW_AIRSPD_MAX", "LNDFW_XYACC_MAX", "LNDFW_ROT_MAX"
+)
+DEFAULTS: dict[str, object] = {p.name: p.default for p in PARAMS}
+
+POSITION_TIMEOUT_US = 1_000_000
+AIRSPEED_TIMEOUT_US = 1_000_000
+NO_AIRSPEED_XY_FACTOR = 0.7
+"""The ground-speed limit is tightened by this factor when there is no airspeed."""
+AT_REST_RATE = math.radians(3.0)
+"""Angular rate [rad/s] above which the vehicle moves (PX4 ``GYRO_NORM_MAX``)."""
+AT_REST_TIME_US = 1_000_000
+
+
+@dataclass(slots=True)
+class FixedwingLandDetectorInputs:
+    """The latest values of the detector's inputs; the module glue copies them from topics.
+
+    ``true_airspeed`` is ``airspeed_validated.true_airspeed_m_s`` (NaN: none) and ``airspeed_timestamp_us``
+    its time; ``acceleration`` the specific force in the body frame [m/s²], ``angular_velocity`` the body
+    rates [rad/s].
+    """
+
+    armed: bool = False
+    local_position_timestamp_us: int = 0
+    v_xy_valid: bool = False
+    vx: float = 0.0
+    vy: float = 0.0
+    vz: float = 0.0
+    airspeed_timestamp_us: int = 0
+    true_airspeed: float = math.nan
+    acceleration: Vec3 = (0.0, 0.0, -9.80665)
+    angular_velocity: Vec3 = ZERO3
+
+
+def _landed_state(landed: bool, at_rest: bool) -> LandDetectorState:
+    return LandDetectorState(
+        freefall=False,
+        ground_contact=False,
+        maybe_landed=False,
+        landed=landed,
+        in_ground_effect=False,
+        in_descend=False,
+        has_low_throttle=False,
+        vertical_movement=False,
+        horizontal_movement=False,
+        rotational_movement=False,
+        close_to_ground_or_skipped_check=False,
+        at_rest=landed and at_rest,
+    )
+
+
+class FixedwingLandDetector:
+    """Clocked by the caller: ``update(now_us, inputs)`` every 20 ms (PX4's land detector rate)."""
+
+    __slots__ = (
+        "_accel_xy_filtered",
+        "_airspeed_filtered",
+        "_airspeed_max",
+        "_landed",
+        "_rot_max",
+        "_rotation_filtered",
+        "_still",
+        "_vel_xy_filtered",
+        "_vel_xy_max",
+        "_vel_z_filtered",
+        "_vel_z_max",
+        "_xyacc_max",
+        "state",
+    )
+
+    def __init__(self, params: Mapping[str, object] | None = None) -> None:
+        self._landed = Hysteresis(True)
+        self._still = Hysteresis(True)
+        self._still.set_hysteresis_time_from(False, AT_REST_TIME_US)
+        self._vel_xy_filtered = 0.0
+        self._vel_z_filtered = 0.0
+        self._airspeed_filtered = 0.0
+        self._accel_xy_filtered = 0.0
+        self._rotation_filtered = 0.0
+        self.state = _landed_state(True, True)
+        self.set_params(params or {})
+
+    def set_params(self, params: Mapping[str, object]) -> None:
+        p = {**DEFAULTS, **params}
+        self._landed.set_hysteresis_time_from(False, round(float(p["LNDFW_TRIG_TIME"]) * 1e6))
+        self._vel_xy_max = float(p["LNDFW_VEL_XY_MAX"])
+        self._vel_z_max = float(p["LNDFW_VEL_Z_MAX"])
+        self._airspeed_max = float(p["LNDFW_AIRSPD_MAX"])
+        self._xyacc_max = float(p["LNDFW_XYACC_MAX"])
+        self._rot_max = math.radians(float(p["LNDFW_ROT_MAX"]))
+
+    def resume_in_air(self) -> None:
+        """Start from flying, not from the landed power-on state (a commander restarted in the air)."""
+        self._landed.force(False)
+        self.state = _landed_state(False, False)
+
+    def update(self, now_us: int, inp: FixedwingLandDetectorInputs) -> LandDetectorState:
+        landed = self._landed.set_state_and_update(self._landed_now(now_us, inp), now_us)
+        wx, wy, wz = inp.angular_velocity
+        rate = math.sqrt(wx * wx + wy * wy + wz * wz)
+        still = self._still.set_state_and_update(not rate > AT_REST_RATE, now_us)
+        self.state = _landed_state(landed, still)
+        return self.state
+
+    def _landed_now(self, now_us: int, inp: FixedwingLandDetectorInputs) -> bool:
+        """PX4 ``FixedwingLandDetector::_get_landed_state``: whether the conditions for "landed" hold now."""
+        if not inp.armed or now_us - inp.local_position_timestamp_us >= POSITION_TIMEOUT_US:
+            return True
+        if inp.v_xy_valid:
+            self._vel_xy_filtered = _filtered(self._vel_xy_filtered, math.hypot(inp.vx, inp.vy), 0.97, 0.03)
+        self._vel_z_filtered = _filtered(self._vel_z_filtered, abs(inp.vz), 0.99, 0.01)
+        airspeed = inp.true_airspeed
+        airspeed_valid = math.isfinite(airspeed) and now_us - inp.airspeed_timestamp_us <= AIRSPEED_TIMEOUT_US
+        if airspeed_valid:
+            self._airspeed_filtered = _filtered(self._airspeed_filtered, airspeed, 0.95, 0.05)
+        else:
+            self._airspeed_filtered = 0.0
+        ax, ay, _ = inp.acceleration
+        self._accel_xy_filtered = _filtered(self._accel_xy_filtered, math.hypot(ax, ay), 0.8, 0.18)
+        wx, wy, wz = inp.angular_velocity
+        self._rotation_filtered = _filtered(self._rotation_filtered, math.sqrt(wx * wx + wy * wy + wz * wz), 0.95, 0.05)
+
+        vel_xy_max = self._vel_xy_max if airspeed_valid else NO_AIRSPEED_XY_FACTOR * self._vel_xy_max
+        rotation_max = self._rot_max if not (inp.v_xy_valid or airspeed_valid) else math.inf
+        return (
+            self._airspeed_filtered < self._airspeed_max
+            and self._vel_xy_filtered < vel_xy_max
+            and self._vel_z_filtered < self._vel_z_max
+            and self._accel_xy_filtered < self._xyacc_max
+            and self._rotation_filtered < rotation_max
+        )
+
+
+def _filtered(previous: float, sample: float, keep: float, gain: float) -> float:
+    """One step of PX4's ``keep·previous + gain·sample``; a non-finite sample is ignored."""
+    value = keep * previous + gain * sample
+    return value if math.isfinite(value) else previous
