@@ -64,3 +64,16 @@ def test_invalid_parameters_are_rejected() -> None:
         WindParams(gust_time_constant=0.0)
     with pytest.raises(ValueError):
         WindParams(mean_ned=(math.nan, 0.0, 0.0))
+
+
+def test_the_surface_layer_slows_the_wind_logarithmically_toward_the_ground():
+    from stack.sim.wind import ROUGHNESS_LENGTH, surface_layer_factor
+
+    assert surface_layer_factor(5.0, 0.0) == 1.0  # no profile: the same wind at every height
+    assert surface_layer_factor(12.0, 10.0) == 1.0 and surface_layer_factor(0.0, 10.0) == 0.0
+    assert surface_layer_factor(1.0, 10.0) == pytest.approx(math.log(1.0 / 0.03) / math.log(10.0 / 0.03))
+    assert surface_layer_factor(ROUGHNESS_LENGTH, 10.0) == 0.0
+    model = WindModel(WindParams(mean_ned=(0.0, 8.0, 0.0), reference_height=10.0), random.Random(1))
+    model.update(0.004)
+    assert model.at_height(1.0)[1] == pytest.approx(8.0 * math.log(1.0 / 0.03) / math.log(10.0 / 0.03))
+    assert model.at_height(40.0) == model.wind
