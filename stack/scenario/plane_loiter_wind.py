@@ -17,7 +17,7 @@ from typing import Any
 from stack.msg.fixedwing import PositionSetpoint
 from stack.scenario import autonomy, plane_metrics
 from stack.scenario.catalogue import Check, Scenario
-from stack.scenario.plane_mission import RECORD, flight_samples, landing
+from stack.scenario.plane_mission import RECORD, flight_samples, landing, require_fixed_wing
 from stack.scenario.script import ScenarioError, ScriptContext, Wait
 
 ALTITUDE_M = 40.0
@@ -43,6 +43,7 @@ def _on_circle(ctx: ScriptContext) -> bool:
 
 
 def script(ctx: ScriptContext) -> Generator[Wait, None, None]:
+    yield from require_fixed_wing(ctx)
     yield from autonomy.wait_ready(ctx)
     yield from autonomy.take_off(ctx, ALTITUDE_M)
     yield ctx.until(lambda: _on_circle(ctx), CAPTURE_TIMEOUT_S, "the loiter circle")

@@ -17,6 +17,7 @@ from stack.launch_files import find_launch_file
 from stack.mathlib import quaternion as quat
 from stack.mission.items import LOITER_COMMANDS, MAV_CMD_NAV_WAYPOINT, GeoPoint, Mission
 from stack.mission.loader import load_mission
+from stack.msg.system import VehicleStatus
 from stack.scenario import autonomy, plane_metrics
 from stack.scenario.catalogue import Check, Scenario
 from stack.scenario.metrics import value_at
@@ -29,7 +30,15 @@ RUNWAY_LENGTH_M = 600.0
 RECORD = (*autonomy.RECORD, "mission_result", "tecs_status", "position_setpoint_triplet")
 
 
+def require_fixed_wing(ctx: ScriptContext) -> Generator[Wait, None, None]:
+    """Refuse, in one line, to fly a plane's scenario on another vehicle."""
+    yield ctx.until(lambda: "vehicle_status" in ctx.latest, autonomy.READY_TIMEOUT_S, "the vehicle's status")
+    if ctx.latest["vehicle_status"].vehicle_type != VehicleStatus.VEHICLE_TYPE_FIXED_WING:
+        raise ScenarioError("this scenario flies a fixed-wing profile (sitl_plane, sitl_plane_npfg, jsbsim_c172)")
+
+
 def script(ctx: ScriptContext) -> Generator[Wait, None, None]:
+    yield from require_fixed_wing(ctx)
     yield from autonomy.wait_ready(ctx)
     home_msg = ctx.latest["home_position"]
     home = GeoPoint(home_msg.lat, home_msg.lon, home_msg.alt)
