@@ -190,9 +190,8 @@ class CommanderModule(Module):
             # On the first tick of each 20 ms interval, so every second tick at 100 Hz.
             self._land_due = now - now % LAND_DETECTOR_PERIOD_US + LAND_DETECTOR_PERIOD_US
             self._detect_landing(now)
-        # Commands first: a command sent on seeing an input (MISSION_START on a mission_result) then finds it.
-        commands = self.take("vehicle_command")
         inputs = self._inputs(now)
+        commands = self.take("vehicle_command")
         if commands:
             self.commander.set_inputs(now, inputs)
             for cmd in commands:

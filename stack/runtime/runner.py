@@ -215,6 +215,12 @@ class Runtime:
     def _data_inputs(self) -> list[InputBuffer]:
         return [buf for buf in self.inputs.values() if buf is not self._trigger_buf]
 
+    def _wall_inputs(self) -> list[InputBuffer]:
+        """The data inputs in the order a real-time run pulls them: queues (commands) first. A command sent on
+        seeing an input (MISSION_START on a mission_result) arrives after it; pulled the other way round, the
+        input could land between its own pull and the command's, and the command would be judged without it."""
+        return sorted(self._data_inputs(), key=lambda buf: not buf.queue_mode)
+
     def _make_lockstep(self) -> LockstepMember | LockstepCoordinator | None:
         if not self.lockstep:
             return None
@@ -254,7 +260,7 @@ class Runtime:
     def _loop_wall_trigger(self) -> None:
         buf = self._trigger_buf
         assert buf is not None
-        data = self._data_inputs()
+        data = self._wall_inputs()
         last_sample = 0
         while True:
             item = buf.sub.recv()
@@ -265,7 +271,7 @@ class Runtime:
             last_sample = self._run(item[3], sample_time(item[3]), last_sample)
 
     def _loop_wall_timer(self, period_us: int) -> None:
-        data = self._data_inputs()
+        data = self._wall_inputs()
         next_due = wall_clock_us()
         last = 0
         while True:
