@@ -47,7 +47,7 @@ _SCALARS: dict[type, tuple[str, Any]] = {
 
 
 class UnsupportedType(TypeError):
-    """A message type with a field JSON Schema readers cannot describe (nested or mixed containers)."""
+    """A message type with a field JSON Schema readers cannot describe (mixed or nested containers)."""
 
 
 def nonfinite_name(value: float) -> str:
@@ -65,11 +65,15 @@ def _scalar(t: _inspect.Type, where: str) -> tuple[str, Any]:
 
 
 def _field_plan(f: _inspect.Field, owner: str) -> tuple[dict[str, object], Any, str]:
-    """(JSON Schema of the field, the annotation the decoder reads it with, kind: scalar|float|floats|structs).
+    """(JSON Schema of the field, the annotation the decoder reads it with, kind:
+    scalar|float|floats|struct|structs).
 
-    A list of nested Structs (a mission's items) becomes an array of objects, each with its own schema."""
+    A nested Struct (a setpoint triplet's setpoints) becomes an object with its own schema, and a list of them
+    (a mission's items) an array of such objects."""
     where = f"{owner}.{f.name}"
     t = f.type
+    if isinstance(t, _inspect.StructType):
+        return _nested_schema(t.cls), msgspec.Raw, "struct"
     if isinstance(t, _inspect.TupleType):
         kinds = {_scalar(i, where) for i in t.item_types}
         if len(kinds) != 1:
@@ -80,9 +84,7 @@ def _field_plan(f: _inspect.Field, owner: str) -> tuple[dict[str, object], Any, 
         schema = {"type": "array", "items": {"type": name}, "minItems": n, "maxItems": n}
         return schema, tuple[(item,) * n], "floats" if py is float else "scalar"
     if isinstance(t, _inspect.ListType) and isinstance(t.item_type, _inspect.StructType):
-        nested = codec_for(t.item_type.cls)
-        item_schema = {k: v for k, v in json.loads(nested.schema).items() if k != "$schema"}
-        return {"type": "array", "items": item_schema}, list[msgspec.Raw], "structs"
+        return {"type": "array", "items": _nested_schema(t.item_type.cls)}, list[msgspec.Raw], "structs"
     if isinstance(t, _inspect.VarTupleType | _inspect.ListType):
         name, py = _scalar(t.item_type, where)
         item = float | str if py is float else py
@@ -99,6 +101,10 @@ def _field_plan(f: _inspect.Field, owner: str) -> tuple[dict[str, object], Any, 
     return {"type": name}, (float | str if py is float else py), "float" if py is float else "scalar"
 
 
+def _nested_schema(cls: type[msgspec.Struct]) -> dict[str, object]:
+    return {k: v for k, v in json.loads(codec_for(cls).schema).items() if k != "$schema"}
+
+
 class JsonMessageCodec:
     """Encodes one message type to a JSON object and back, exactly; also its JSON Schema.
 
@@ -112,6 +118,7 @@ class JsonMessageCodec:
         "_float_fields",
         "_float_seq_fields",
         "_out_type",
+        "_struct_fields",
         "_struct_seq_fields",
         "field_names",
         "msg_type",
@@ -128,6 +135,7 @@ class JsonMessageCodec:
         read_fields: list[tuple[str, Any]] = []
         floats: list[int] = []
         float_seqs: list[int] = []
+        structs: list[tuple[int, JsonMessageCodec]] = []
         struct_seqs: list[tuple[int, JsonMessageCodec]] = []
         for i, f in enumerate(info.fields):
             schema, annotation, kind = _field_plan(f, owner)
@@ -137,6 +145,8 @@ class JsonMessageCodec:
                 floats.append(i)
             elif kind == "floats":
                 float_seqs.append(i)
+            elif kind == "struct":
+                structs.append((i, codec_for(f.type.cls)))
             elif kind == "structs":
                 struct_seqs.append((i, codec_for(f.type.item_type.cls)))
         self.msg_type = msg_type
@@ -156,6 +166,7 @@ class JsonMessageCodec:
         ).encode()
         self._float_fields = tuple(floats)
         self._float_seq_fields = tuple(float_seqs)
+        self._struct_fields = tuple(structs)
         self._struct_seq_fields = tuple(struct_seqs)
         # Object-form twins of the array-like message: one to write (values unchecked), one to read.
         self._out_type = msgspec.defstruct(f"{owner}Json", [(n, object) for n in self.field_names], gc=False)
@@ -174,6 +185,8 @@ class JsonMessageCodec:
             total = sum(seq)
             if total - total:
                 values[i] = [nonfinite_name(v) if v - v else v for v in seq]
+        for i, nested in self._struct_fields:
+            values[i] = msgspec.Raw(nested.encode(values[i]))
         for i, nested in self._struct_seq_fields:
             values[i] = [msgspec.Raw(nested.encode(item)) for item in values[i]]
         return self._encoder.encode(self._out_type(*values))
@@ -189,6 +202,8 @@ class JsonMessageCodec:
             seq = values[i]
             if str in map(type, seq):
                 values[i] = type(seq)(_nonfinite_value(v) if type(v) is str else v for v in seq)
+        for i, nested in self._struct_fields:
+            values[i] = nested.decode(values[i])
         for i, nested in self._struct_seq_fields:
             values[i] = [nested.decode(raw) for raw in values[i]]
         return self.msg_type(*values)
@@ -211,28 +226,43 @@ def schema_decoder(schema_json: bytes | str) -> Callable[[bytes | memoryview], d
     """A decoder for JSON messages of a type this build does not have, driven by their recorded schema.
 
     It returns the fields as a dict in recorded order, with non-finite floats restored wherever the
-    schema says "number"; arrays stay lists.
+    schema says "number", also in nested objects and arrays of them; arrays stay lists.
     """
-    properties = json.loads(schema_json).get("properties", {})
-    floats = [name for name, p in properties.items() if p.get("type") == "number"]
-    float_seqs = [
-        name
-        for name, p in properties.items()
-        if p.get("type") == "array" and p.get("items", {}).get("type") == "number"
-    ]
+    restore = _restorer(json.loads(schema_json))
 
     def decode(data: bytes | memoryview) -> dict[str, Any]:
         fields = msgspec.json.decode(data)
         if not isinstance(fields, dict):
             raise msgspec.ValidationError("expected a JSON object")
-        for name in floats:
-            v = fields.get(name)
-            if type(v) is str:
-                fields[name] = _nonfinite_value(v)
-        for name in float_seqs:
-            seq = fields.get(name)
-            if type(seq) is list and str in map(type, seq):
-                fields[name] = [_nonfinite_value(v) if type(v) is str else v for v in seq]
-        return fields
+        return restore(fields)
 
     return decode
+
+
+def _restorer(schema: dict[str, Any]) -> Callable[[Any], Any]:
+    """A function giving a JSON value of ``schema`` back with its non-finite floats as floats."""
+    kind = schema.get("type")
+    if kind == "number":
+        return lambda v: _nonfinite_value(v) if type(v) is str else v
+    if kind == "array":
+        item = _restorer(schema.get("items", {}))
+        if item is _unchanged:
+            return _unchanged
+        return lambda v: [item(i) for i in v] if type(v) is list else v
+    if kind == "object":
+        fields = {name: _restorer(p) for name, p in schema.get("properties", {}).items()}
+        fields = {name: f for name, f in fields.items() if f is not _unchanged}
+
+        def restore(v: Any) -> Any:
+            if type(v) is dict:
+                for name, f in fields.items():
+                    if name in v:
+                        v[name] = f(v[name])
+            return v
+
+        return restore
+    return _unchanged
+
+
+def _unchanged(v: Any) -> Any:
+    return v

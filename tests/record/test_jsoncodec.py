@@ -86,13 +86,16 @@ def test_schemas_use_only_what_foxglove_reads(name, msg_type):
     assert schema["type"] == "object" and schema["title"] == name
     assert list(schema["properties"]) == list(msg_type.__struct_fields__)
     info = {f.name: f for f in msgspec.inspect.type_info(msg_type).fields}
+    scalars = {"boolean", "string", "number", "integer"}
     for field, prop in schema["properties"].items():
-        assert prop["type"] in ("boolean", "string", "number", "integer", "array"), field
+        assert prop["type"] in (*scalars, "array", "object"), field
+        if prop["type"] == "object":  # a nested struct: an object of scalars and arrays of scalars
+            assert {p["type"] for p in prop["properties"].values()} <= {*scalars, "array"}
         if prop["type"] == "array":
             items = prop["items"]
-            assert items["type"] in ("boolean", "string", "number", "integer", "object"), field
+            assert items["type"] in (*scalars, "object"), field
             if items["type"] == "object":  # a list of nested structs: each item an object of scalar fields
-                assert {p["type"] for p in items["properties"].values()} <= {"boolean", "string", "number", "integer"}
+                assert {p["type"] for p in items["properties"].values()} <= scalars
         if isinstance(info[field].type, msgspec.inspect.FloatType):
             assert prop["type"] == "number"
     assert '"NaN"' in schema["description"]
@@ -107,18 +110,29 @@ def test_fixed_and_variable_arrays_in_the_schema():
 
 
 def test_types_json_schema_readers_cannot_describe_are_refused():
-    class Inner(msgspec.Struct):
-        a: int = 0
-
-    class Nested(Message):
-        inner: Inner = msgspec.field(default_factory=Inner)
-
     class Mixed(Message):
         pair: tuple[int, str] = (0, "")
 
-    for bad in (Nested, Mixed):
+    class Nested(Message):
+        pairs: list[tuple[int, int]] = msgspec.field(default_factory=list)
+
+    for bad in (Mixed, Nested):
         with pytest.raises(UnsupportedType, match=bad.__name__):
             JsonMessageCodec(bad)
+
+
+def test_a_nested_struct_is_an_object_and_its_non_finite_floats_survive():
+    from stack.msg.fixedwing import PositionSetpoint, PositionSetpointTriplet
+
+    msg = PositionSetpointTriplet(current=PositionSetpoint(valid=True, x=1.0, loiter_radius=math.inf))
+    codec = codec_for(PositionSetpointTriplet)
+    obj = strict_json(codec.encode(msg))
+    assert obj["current"]["x"] == 1.0 and obj["current"]["loiter_radius"] == "Infinity"
+    assert obj["previous"]["x"] == "NaN"
+    assert json.loads(codec.schema)["properties"]["current"]["title"] == "PositionSetpoint"
+    assert msgspec.msgpack.encode(codec.decode(codec.encode(msg))) == msgspec.msgpack.encode(msg)
+    by_schema = schema_decoder(codec.schema)(codec.encode(msg))
+    assert by_schema["current"]["loiter_radius"] == math.inf and math.isnan(by_schema["previous"]["x"])
 
 
 def test_decoding_refuses_a_string_that_is_not_a_non_finite_name():
