@@ -39,6 +39,9 @@ Corrections:
   LPE, which only computes the residual against the delayed state and applies it to the current one.
 - Barometer altitude, fused at arrival (PX4's baro delay is 0).
 - The land detector: while landed, zero horizontal velocity (LPE's land measurement).
+- Airspeed while GPS is lost (a plane's dead reckoning, as EKF2 fuses airspeed with its wind states): the
+  true airspeed along the body x axis plus the wind estimate is the horizontal velocity, so the velocity
+  error stays that of the wind estimate instead of growing with the integrated accelerometer error.
 - Gates: EKF2-style innovation tests per group (horizontal position, vertical position,
   horizontal velocity, vertical velocity, baro): a group is fused when every component satisfies
   ``r² ≤ gate²·S``. A group that has been rejected for longer than 7 s (EKF2's
@@ -74,8 +77,12 @@ Additions, with the reason:
   that noise stands for is mostly the attitude error tilting gravity into the accelerometer: g·δ
   horizontally but only g·δ²/2 vertically, so a vehicle whose accelerometer has no vibration can hold
   a far smaller vertical figure, and the height estimate then averages its barometer over longer.
-- ``EKF2_GPS_P_GATE``, ``EKF2_GPS_V_GATE``, ``EKF2_BARO_GATE`` 5 σ: LPE has no configurable gate (it
-  only flags a fault at a fixed χ² level and fuses anyway), so EKF2's gates are used.
+- ``EKF2_GPS_P_GATE``, ``EKF2_GPS_V_GATE``, ``EKF2_BARO_GATE``, ``EKF2_TAS_GATE`` 5 σ: LPE has no
+  configurable gate (it only flags a fault at a fixed χ² level and fuses anyway), so EKF2's gates are used.
+- ``LPE_AIRSPD_VXY`` 1.0 m/s: LPE fuses no airspeed. The standard deviation, per axis, of the horizontal
+  velocity that airspeed and wind give, beyond the wind estimate's own variance: the angle of attack and
+  sideslip the body axis ignores, the airspeed sensor's error. Fused only without GPS (with it, GPS
+  velocity is far better); 0 turns it off.
 - ``EKF2_ABL_LIM`` 0.4 m/s² and ``EKF2_ABIAS_INIT`` 0.2 m/s²: accelerometer bias limit and initial
   uncertainty. LPE hard-codes 0.1 m/s² and 1e-3 m/s², which all but freezes the bias.
 """
@@ -105,12 +112,12 @@ X_X, X_Y, X_Z, X_VX, X_VY, X_VZ, X_BX, X_BY, X_BZ, X_HGT_OFS = range(N_X)
 PARAMS: tuple[Param, ...] = catalogue.params(
     "EKF2_HGT_REF", "LPE_GPS_XY", "LPE_GPS_Z", "LPE_GPS_VXY", "LPE_GPS_VZ", "LPE_GPS_DELAY", "LPE_BAR_Z",
     "LPE_ACC_XY", "LPE_ACC_Z", "LPE_PN_P", "LPE_PN_V", "LPE_PN_VZ", "LPE_PN_B", "LPE_PN_BARO", "LPE_PN_GPS_Z",
-    "LPE_LAND_VXY", "LPE_EPH_MAX", "LPE_EPV_MAX", "LPE_XY_PUB", "LPE_VXY_PUB", "LPE_Z_PUB", "EKF2_GPS_P_GATE",
-    "EKF2_GPS_V_GATE", "EKF2_BARO_GATE", "EKF2_ABL_LIM", "EKF2_ABIAS_INIT",
+    "LPE_LAND_VXY", "LPE_AIRSPD_VXY", "LPE_EPH_MAX", "LPE_EPV_MAX", "LPE_XY_PUB", "LPE_VXY_PUB", "LPE_Z_PUB",
+    "EKF2_GPS_P_GATE", "EKF2_GPS_V_GATE", "EKF2_BARO_GATE", "EKF2_TAS_GATE", "EKF2_ABL_LIM", "EKF2_ABIAS_INIT",
 )
 _DEFINITIONS = {p.name: p for p in PARAMS}
 
-_LAND_ROWS = np.array((X_VX, X_VY))
+_HVEL_ROWS = np.array((X_VX, X_VY))
 GPS_DELAY_MAX_US = 500_000  # LPE: history length; older measurements are dropped
 GPS_TIMEOUT_US = 1_000_000  # LPE: no horizontal GPS fusion for this long = dead reckoning
 GPS_INIT_COUNT = 10  # LPE REQ_GPS_INIT_COUNT
@@ -121,6 +128,7 @@ P_MAX = 1e6  # LPE: a variance above this stops growing
 DT_MAX_S = 0.05
 ACCEL_MAX = 16.0 * CONSTANTS_ONE_G  # full scale of a typical flight-controller IMU
 ALT_MIN_M, ALT_MAX_M = -1000.0, 20000.0  # plausible AMSL altitudes of a multicopter sensor
+AIRSPEED_MAX = 150.0  # m/s: beyond any airframe this filter serves
 
 # Innovation groups of a GPS sample: (rows of the measurement vector, gate parameter).
 _GPS_GROUPS = (
@@ -200,10 +208,11 @@ class LocalPositionEstimate:
 
 class _Step:
     """One entry of the history: the event that moved the filter to (x, P) at time t_us — a
-    prediction (transition F, dt, NED specific force plus gravity, rotation), a baro fusion, a land
-    fusion, or neither (the start of the history)."""
+    prediction (transition F, dt, NED specific force plus gravity, rotation), a baro fusion, a
+    horizontal velocity fusion (landed, or airspeed and wind: north, east and their variances), or
+    neither (the start of the history)."""
 
-    __slots__ = ("P", "baro_alt", "landed", "prediction", "t_us", "x")
+    __slots__ = ("P", "baro_alt", "prediction", "t_us", "velocity", "x")
 
     def __init__(self, t_us: int, x: np.ndarray, P: np.ndarray) -> None:
         self.t_us = t_us
@@ -211,7 +220,7 @@ class _Step:
         self.P = P
         self.prediction: tuple[np.ndarray, float, float, float, float, quat.Mat3] | None = None
         self.baro_alt: float | None = None
-        self.landed = False
+        self.velocity: tuple[float, float, float, float] | None = None
 
 
 def _step_time(step: _Step) -> int:
@@ -863,20 +872,62 @@ class LocalPositionKF:
         default, ``LPE_FUSION`` bit 4; its height-above-ground row needs a terrain state this filter
         does not have). Without it a vehicle waiting on the ground follows the GPS velocity noise
         and its position wanders by decimetres. True when fused (after the origin is set)."""
-        t_now = self._t_us
-        if t_now is None or self._map is None:
+        if self._t_us is None or self._map is None:
             return False
-        self.x, self.P = self._land_update(self.x, self.P)
-        step = _Step(t_now, self.x, self.P)
-        step.landed = True
-        self._hist.append(step)
+        var = self.params["LPE_LAND_VXY"] ** 2
+        self._fuse_velocity((0.0, 0.0, var, var))
         return True
 
-    def _land_update(self, x: np.ndarray, P: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        pht = P[:, _LAND_ROWS]
-        s = pht[_LAND_ROWS, :] + np.eye(2) * self.params["LPE_LAND_VXY"] ** 2
+    def fuse_airspeed(
+        self, true_airspeed: float, q: Quat, wind_ne: tuple[float, float], wind_var_ne: tuple[float, float]
+    ) -> bool:
+        """Fuse, while GPS is lost, the horizontal velocity that the true airspeed [m/s] along the body x axis
+        (attitude ``q``, body → NED) and the wind estimate [m/s] with its variances give: EKF2's airspeed
+        dead reckoning, on this filter's velocity states. True when fused: the origin is set, no horizontal
+        GPS aiding for ``GPS_TIMEOUT_US``, ``LPE_AIRSPD_VXY`` positive, every input finite and plausible, and the
+        innovation within ``EKF2_TAS_GATE``."""
+        t_now = self._t_us
+        sigma = self.params["LPE_AIRSPD_VXY"]
+        if t_now is None or self._map is None or sigma <= 0.0 or not self._gps_lost(t_now):
+            return False
+        numbers = (true_airspeed, *q, *wind_ne, *wind_var_ne)
+        if not all(math.isfinite(v) for v in numbers) or not 0.0 <= true_airspeed < AIRSPEED_MAX:
+            return False
+        if min(wind_var_ne) < 0.0 or quat.norm(q) < 0.5:
+            return False
+        heading = quat.rotate(quat.normalized(q), (1.0, 0.0, 0.0))
+        measured = (
+            true_airspeed * heading[0] + wind_ne[0],
+            true_airspeed * heading[1] + wind_ne[1],
+            wind_var_ne[0] + sigma * sigma,
+            wind_var_ne[1] + sigma * sigma,
+        )
+        innovation = np.array(measured[:2]) - self.x[_HVEL_ROWS]
+        s = self.P[_HVEL_ROWS, _HVEL_ROWS] + np.array(measured[2:])
+        if np.any(innovation * innovation > self.params["EKF2_TAS_GATE"] ** 2 * s):
+            return False
+        self._fuse_velocity(measured)
+        return True
+
+    def _gps_lost(self, t_now: int) -> bool:
+        return t_now - max(self._last_fused_us[_G_HPOS], self._last_fused_us[_G_HVEL]) > GPS_TIMEOUT_US
+
+    def _fuse_velocity(self, measured: tuple[float, float, float, float]) -> None:
+        """Fuse a horizontal velocity (north, east, their variances) at the current filter time, kept in the
+        history so that a later, delayed GPS fusion replays it."""
+        self.x, self.P = self._velocity_update(self.x, self.P, measured)
+        step = _Step(self._t_us or 0, self.x, self.P)
+        step.velocity = measured
+        self._hist.append(step)
+
+    @staticmethod
+    def _velocity_update(
+        x: np.ndarray, P: np.ndarray, measured: tuple[float, float, float, float]
+    ) -> tuple[np.ndarray, np.ndarray]:
+        pht = P[:, _HVEL_ROWS]
+        s = pht[_HVEL_ROWS, :] + np.diag(measured[2:])
         gain = np.linalg.solve(s, pht.T).T
-        x = x - gain @ x[_LAND_ROWS]
+        x = x + gain @ (np.array(measured[:2]) - x[_HVEL_ROWS])
         P = P - gain @ pht.T
         return x, 0.5 * (P + P.T)
 
@@ -892,8 +943,8 @@ class LocalPositionKF:
                 x, P = self._propagate(x, P, step.prediction)
             elif step.baro_alt is not None:
                 x, P, _ = self._baro_update(x, P, step.baro_alt)
-            elif step.landed:
-                x, P = self._land_update(x, P)
+            elif step.velocity is not None:
+                x, P = self._velocity_update(x, P, step.velocity)
             step.x, step.P = x, P
         self.x, self.P = x, P
 
@@ -918,7 +969,6 @@ class LocalPositionKF:
         xy_valid = origin and eph <= p["LPE_XY_PUB"]
         v_xy_valid = origin and max(d[X_VX], d[X_VY]) <= p["LPE_VXY_PUB"] ** 2
         z_valid = self._z_initialised and epv <= p["LPE_Z_PUB"]
-        last_h_aiding = max(self._last_fused_us[_G_HPOS], self._last_fused_us[_G_HVEL])
         if self._hgt_ref == HGT_REF_GPS:
             ref_alt, baro_offset = self._ref_alt, ofs
         else:
@@ -942,7 +992,7 @@ class LocalPositionKF:
             epv=epv,
             evh=evh,
             evv=evv,
-            dead_reckoning=origin and t_now - last_h_aiding > GPS_TIMEOUT_US,
+            dead_reckoning=origin and self._gps_lost(t_now),
             xy_global=origin,
             z_global=origin,
             ref_timestamp=self._ref_timestamp,

@@ -3,12 +3,13 @@
 Like EKF2's IMU down-sampling, it runs on a timer (every 20 ms, five 250 Hz IMU periods) and
 predicts with the mean specific force of the accelerometer samples since its previous run, rotated
 by the latest attitude estimate (which carries the magnetometer's heading), then fuses the
-barometer and GPS samples that arrived. Predicting every IMU sample would cost five predictions a run
-and estimate no better: with recorded flights' sensors replayed through the filter, it gives the same
-horizontal position errors against the simulator's truth (within 1 %) and no smaller height or
-velocity errors. It publishes ``vehicle_local_position``, which runs the position chain
-(flight_mode_manager, mc_pos_control, mc_hover_thrust_estimator) at 50 Hz, and
-``vehicle_global_position``.
+barometer and GPS samples that arrived; without GPS, a plane's validated airspeed with the wind
+estimate (``airspeed_validated``, ``wind``, from airspeed_selector) bounds the velocity error.
+Predicting every IMU sample would cost five predictions a run and estimate no better: with recorded
+flights' sensors replayed through the filter, it gives the same horizontal position errors against
+the simulator's truth (within 1 %) and no smaller height or velocity errors. It publishes
+``vehicle_local_position``, which runs the position chain (flight_mode_manager, mc_pos_control,
+mc_hover_thrust_estimator) at 50 Hz, and ``vehicle_global_position``.
 """
 
 from __future__ import annotations
@@ -103,6 +104,8 @@ class LocalPositionEstimatorModule(Module):
         self.subscribe("sensor_gps", queue=True)
         self.subscribe("vehicle_attitude")
         self.subscribe("vehicle_land_detected")
+        self.subscribe("airspeed_validated")
+        self.subscribe("wind")
         self.advertise("vehicle_local_position")
         self.advertise("vehicle_global_position")
         self.kf = LocalPositionKF(**self._kf_params())
@@ -138,6 +141,7 @@ class LocalPositionEstimatorModule(Module):
                 self.kf.fuse_baro(isa_altitude_m(baro.pressure))
         for gps in self.take("sensor_gps"):
             self.kf.fuse_gps(gps)
+        self._fuse_airspeed(attitude.q)
         land = self.latest("vehicle_land_detected")
         if land is not None and land.landed:
             self.kf.fuse_land()
@@ -148,3 +152,15 @@ class LocalPositionEstimatorModule(Module):
             self.keep_state(self.kf.snapshot())
         self.publish("vehicle_local_position", local_position_message(est, yaw(attitude.q), now))
         self.publish("vehicle_global_position", global_position_message(est, now))
+
+    def _fuse_airspeed(self, q) -> None:
+        airspeed = self.update("airspeed_validated")
+        wind = self.latest("wind")
+        if airspeed is None or wind is None or not airspeed.airspeed_sensor_measurement_valid:
+            return
+        self.kf.fuse_airspeed(
+            airspeed.true_airspeed_m_s,
+            q,
+            (wind.windspeed_north, wind.windspeed_east),
+            (wind.variance_north, wind.variance_east),
+        )

@@ -2,9 +2,10 @@
 
 At 10 Hz: each new ``airspeed`` sample goes through :class:`stack.fw.airspeed_validator.AirspeedValidator`
 (its wind estimator fuses it in fixed-wing flight with ``vehicle_local_position`` and
-``vehicle_attitude``); then ``airspeed_validated`` (IAS, CAS, TAS of the sensor while valid, NaN
-otherwise, and ground speed minus wind) and ``wind`` (NaN until the estimator has started) are
-published. One sensor (PX4's ASPD_PRIMARY 1), no scale applied, no ground-minus-wind fallback.
+``vehicle_attitude``, unless that velocity comes from dead reckoning); then ``airspeed_validated`` (IAS,
+CAS, TAS of the sensor while valid, NaN otherwise, and ground speed minus wind) and ``wind`` (NaN until the
+estimator has started) are published. One sensor (PX4's ASPD_PRIMARY 1), no scale applied, no
+ground-minus-wind fallback.
 
 Fixed-wing flight, for the checks and the wind estimate: not landed, the current setpoint not a
 landing, and past the takeoff run (the airspeed once above FW_AIRSPD_STALL since the last landing).
@@ -63,6 +64,7 @@ class AirspeedSelectorModule(Module):
         if (
             lpos is not None
             and lpos.v_xy_valid
+            and not lpos.dead_reckoning  # the velocity then comes from this wind estimate: it would learn itself
             and now - lpos.timestamp_sample < LOCAL_POSITION_TIMEOUT_US
             and all(math.isfinite(v) for v in (lpos.vx, lpos.vy, lpos.vz))
         ):

@@ -19,6 +19,7 @@ PARAMS: tuple[Param, ...] = (
     Param("EKF2_GPS_P_GATE", 5.0, 1.0, 10.0, "SD", "GPS position innovation gate"),
     Param("EKF2_GPS_V_GATE", 5.0, 1.0, 10.0, "SD", "GPS velocity innovation gate"),
     Param("EKF2_BARO_GATE", 5.0, 1.0, 10.0, "SD", "Barometer innovation gate"),
+    Param("EKF2_TAS_GATE", 5.0, 1.0, 10.0, "SD", "Airspeed (dead-reckoning velocity) innovation gate"),
     Param("EKF2_ABL_LIM", 0.4, 0.0, 0.8, "m/s^2", "Accelerometer bias limit"),
     Param("EKF2_ABIAS_INIT", 0.2, 0.0, 0.5, "m/s^2", "Initial accelerometer bias standard deviation"),
 )

@@ -1,6 +1,6 @@
 """Local Position Estimator (PX4 ``src/modules/local_position_estimator/params.c``), with PX4's LPE
-defaults. LPE_PN_VZ, LPE_PN_BARO, LPE_PN_GPS_Z and LPE_XY_PUB are the stack's additions; ``stack.estimator.position_kf``
-says why."""
+defaults. LPE_PN_VZ, LPE_PN_BARO, LPE_PN_GPS_Z, LPE_AIRSPD_VXY and LPE_XY_PUB are the stack's additions;
+``stack.estimator.position_kf`` says why."""
 
 from stack.params.param import Param
 
@@ -20,6 +20,14 @@ PARAMS: tuple[Param, ...] = (
     Param("LPE_PN_BARO", 0.01, 0.0, 1.0, "m/s/sqrt(Hz)", "Baro offset random walk, GPS height reference (added)"),
     Param("LPE_PN_GPS_Z", 0.13, 0.0, 1.0, "m/s/sqrt(Hz)", "GPS altitude offset random walk, baro reference (added)"),
     Param("LPE_LAND_VXY", 0.05, 0.01, 10.0, "m/s", "Horizontal velocity standard deviation while landed"),
+    Param(
+        "LPE_AIRSPD_VXY",
+        1.0,
+        0.0,
+        10.0,
+        "m/s",
+        "Horizontal velocity standard deviation of airspeed plus wind while GPS is lost (0: not fused; added)",
+    ),
     Param("LPE_EPH_MAX", 3.0, 1.0, 5.0, "m", "Largest GPS eph to set the origin"),
     Param("LPE_EPV_MAX", 5.0, 1.0, 5.0, "m", "Largest GPS epv to set the origin"),
     Param("LPE_XY_PUB", 2.0, 0.3, 100.0, "m", "eph above which the horizontal position is invalid (added)"),
