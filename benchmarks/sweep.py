@@ -6,9 +6,9 @@
 
 Each flight is one ``stack fly SCENARIO --seed N --quiet [--wind]`` in a fresh interpreter. A flight is a
 stack of its own (its bus, ports, run directory and state), so ``--jobs`` of them run side by side in one
-``STACK_HOME``: a temporary one, or ``--home DIR`` to keep every run directory, report and output. A
-scenario that needs a profile of its own (``Scenario.profile``, e.g. link_loss on the simulated Pixhawk)
-flies on it; in wind only where its profile simulates wind.
+``STACK_HOME``: a temporary one, or ``--home DIR`` to keep every run directory, report and output. Without
+``--profile`` a scenario flies on its own profile (``Scenario.profile``: link_loss on the simulated Pixhawk,
+the plane's scenarios on sitl_plane) or the default one; in wind only where its profile simulates wind.
 
 A figure holds only if it holds on every seed, so for each scenario (and condition) and each check the
 summary gives the median and the worst value over the seeds (the highest against an upper limit, the lowest
@@ -100,12 +100,12 @@ def simulates_wind(profile: str) -> bool:
     return all(any(p.name == name for m in prof.modules for p in m.cls.PARAMS) for name in WIND_PARAMS)
 
 
-def cases(names: list[str], profile: str, conditions: tuple[bool, ...]) -> list[Case]:
+def cases(names: list[str], profile: str | None, conditions: tuple[bool, ...]) -> list[Case]:
     known = scenarios()
     out = []
     for name in names:
         scenario = known[name]
-        on = scenario.profile or profile
+        on = profile or scenario.default_profile()
         out.extend(Case(scenario, on, wind) for wind in conditions if not wind or simulates_wind(on))
     return out
 
@@ -268,7 +268,10 @@ def main() -> None:
     )
     parser.add_argument("--seeds", type=parse_seeds, default=parse_seeds("1-20"), help="e.g. 1-20 or 1,4,10-12")
     parser.add_argument("--jobs", type=int, default=os.cpu_count() or 1, help="flights at once (default: one per CPU)")
-    parser.add_argument("--profile", default=DEFAULT_PROFILE, help="launch profile (a name in launch/ or a path)")
+    parser.add_argument(
+        "--profile",
+        help=f"launch profile (a name in launch/ or a path; default: each scenario's own, or {DEFAULT_PROFILE})",
+    )
     parser.add_argument(
         "--wind", choices=sorted(CONDITIONS), default="both", help="calm, in wind (limits doubled), or both"
     )

@@ -19,7 +19,12 @@ from stack.supervisor.supervisor import Supervisor, UpOptions
 
 def fly(
     scenario: str = typer.Argument("", help="Scenario name (see --list)"),
-    profile: str = typer.Option(DEFAULT_PROFILE, "--profile", "-p", help="Launch profile: a name in launch/ or a path"),
+    profile: str | None = typer.Option(
+        None,
+        "--profile",
+        "-p",
+        help=f"Launch profile: a name in launch/ or a path (default: the scenario's own, or {DEFAULT_PROFILE})",
+    ),
     seed: int | None = typer.Option(None, "--seed", "-s", help="Override the profile's seed"),
     report: Path | None = typer.Option(None, "--report", "-r", help="Where to write the JSON report"),
     list_: bool = typer.Option(False, "--list", help="List the scenarios and exit"),
@@ -50,7 +55,8 @@ def fly(
     if scenario not in known:
         fail(f"unknown scenario '{scenario}' (known: {', '.join(sorted(known))})", code=2)
     try:
-        prof = load_profile(profile, flags={"plot": plot_ or web, "record": record is not None})
+        flags = {"plot": plot_ or web, "record": record is not None}
+        prof = load_profile(profile or known[scenario].default_profile(), flags=flags)
     except ProfileError as e:
         fail(str(e), code=2)
     choose_transport(prof, transport)

@@ -126,7 +126,14 @@ def truth_position_between(series: Series, t: float) -> Vec3 | None:
 
 
 def estimate_error_rms(ctx: ScriptContext, frames: Frames, t0: float, t1: float) -> float:
-    """RMS distance between the position estimate and the truth (both about home) over [t0, t1].
+    """RMS distance between the position estimate and the truth (both about home) over [t0, t1]."""
+    errors = estimate_errors(ctx, frames, t0, t1)
+    return math.sqrt(sum(e * e for e in errors) / len(errors))
+
+
+def estimate_errors(ctx: ScriptContext, frames: Frames, t0: float, t1: float) -> list[float]:
+    """The distance between each position estimate and the truth at its sample time (both about home), over
+    [t0, t1].
 
     In simulation the truth has a sample at each estimate's sample time; a plant on the wall clock (a
     simulated Pixhawk) samples its truth at other times, between which it is interpolated."""
@@ -134,7 +141,7 @@ def estimate_error_rms(ctx: ScriptContext, frames: Frames, t0: float, t1: float)
     if estimates is None:
         raise ScenarioError("no position estimate was received")
     by_sample = {m.timestamp_sample: m.position for m in frames.truth.values}
-    squares = []
+    errors = []
     for t, e in zip(estimates.times, estimates.values, strict=True):
         truth = by_sample.get(e.timestamp_sample)
         if truth is None:
@@ -142,11 +149,10 @@ def estimate_error_rms(ctx: ScriptContext, frames: Frames, t0: float, t1: float)
         if truth is None or not (t0 <= t <= t1):
             continue
         est = frames.local_about_home((e.x, e.y, e.z))
-        tru = frames.truth_about_home(truth)
-        squares.append(sum((a - b) ** 2 for a, b in zip(est, tru, strict=True)))
-    if not squares:
+        errors.append(math.dist(est, frames.truth_about_home(truth)))
+    if not errors:
         raise ScenarioError("no position estimate matched the ground truth samples")
-    return math.sqrt(sum(squares) / len(squares))
+    return errors
 
 
 def max_tilt_deg(frames: Frames, t0: float, t1: float) -> float:

@@ -40,7 +40,13 @@ class Scenario:
     timeout_s: float = 300.0
     params: dict[str, Any] = field(default_factory=dict)
     profile: str | None = None
-    """The launch profile the scenario needs, when it cannot fly on any (link_loss: a simulated Pixhawk)."""
+    """The launch profile the scenario flies on unless one is given, when the default one cannot fly it
+    (link_loss: a simulated Pixhawk; the plane's scenarios: sitl_plane)."""
+
+    def default_profile(self) -> str:
+        from stack.supervisor.profile import DEFAULT_PROFILE
+
+        return self.profile or DEFAULT_PROFILE
 
 
 def scenarios() -> dict[str, Scenario]:
@@ -51,6 +57,7 @@ def scenarios() -> dict[str, Scenario]:
         link_loss,
         mission_box,
         module_kill,
+        plane_gps_loss,
         plane_loiter_wind,
         plane_mission,
         rpyt_step,
@@ -59,7 +66,7 @@ def scenarios() -> dict[str, Scenario]:
 
     flights = (
         attitude_step, takeoff_land, mission_box, gps_loss, failsafes, link_loss, module_kill, rpyt_step, plane_mission,
-        plane_loiter_wind,
+        plane_loiter_wind, plane_gps_loss,
     )
     return {s.name: s for s in (f.SCENARIO for f in flights)}
 

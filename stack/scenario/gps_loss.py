@@ -32,10 +32,11 @@ def inject_gps(ctx: ScriptContext, failure_type: int) -> Generator[Wait, None, N
 
 
 def watch_modes(ctx: ScriptContext) -> None:
-    """Note the first failsafe mode the commander picks during and after the outage."""
+    """Note the first failsafe mode the commander picks during and after the outage, and when."""
     status = ctx.latest.get("vehicle_status")
     if "gps_off_at" in ctx.state and "failsafe_mode" not in ctx.state and status is not None and status.failsafe:
         ctx.state["failsafe_mode"] = mode_name(status.nav_state)
+        ctx.state["failsafe_at"] = ctx.now
         ctx.log(f"failsafe: {ctx.state['failsafe_mode']}")
 
 

@@ -33,7 +33,8 @@ def _loiter_setpoint(ctx: ScriptContext) -> PositionSetpoint | None:
     return triplet.current
 
 
-def _on_circle(ctx: ScriptContext) -> bool:
+def on_circle(ctx: ScriptContext) -> bool:
+    """The estimate puts the vehicle on the Hold circle it was given (within a fifth of its radius)."""
     sp = _loiter_setpoint(ctx)
     lpos = ctx.latest.get("vehicle_local_position")
     if sp is None or lpos is None:
@@ -42,16 +43,22 @@ def _on_circle(ctx: ScriptContext) -> bool:
     return abs(distance - sp.loiter_radius) <= plane_metrics.ON_CIRCLE_FRACTION * sp.loiter_radius
 
 
-def script(ctx: ScriptContext) -> Generator[Wait, None, None]:
-    yield from require_fixed_wing(ctx)
-    yield from autonomy.wait_ready(ctx)
-    yield from autonomy.take_off(ctx, ALTITUDE_M)
-    yield ctx.until(lambda: _on_circle(ctx), CAPTURE_TIMEOUT_S, "the loiter circle")
+def record_loiter(ctx: ScriptContext) -> PositionSetpoint:
+    """Keep the circle being flown, about home (north, east, altitude, radius), in ``ctx.state["loiter"]``."""
     sp = _loiter_setpoint(ctx)
     if sp is None:
         raise ScenarioError("no loiter setpoint")
     home = ctx.latest["home_position"]
     ctx.state["loiter"] = (sp.x - home.x, sp.y - home.y, home.z - sp.z, sp.loiter_radius)
+    return sp
+
+
+def script(ctx: ScriptContext) -> Generator[Wait, None, None]:
+    yield from require_fixed_wing(ctx)
+    yield from autonomy.wait_ready(ctx)
+    yield from autonomy.take_off(ctx, ALTITUDE_M)
+    yield ctx.until(lambda: on_circle(ctx), CAPTURE_TIMEOUT_S, "the loiter circle")
+    sp = record_loiter(ctx)
     lpos = ctx.latest["vehicle_local_position"]
     speed = max(math.hypot(lpos.vx, lpos.vy), 1.0)
     duration = CIRCLES * 2.0 * math.pi * sp.loiter_radius / speed
@@ -99,4 +106,5 @@ SCENARIO = Scenario(
     watch=("vehicle_land_detected", "position_setpoint_triplet"),
     params={"SIM_WIND_SPD": WIND_SPEED_M_S, "SIM_WIND_DIR": 0.0, "SIM_WIND_GUST": 1.0},
     timeout_s=1200.0,
+    profile="sitl_plane",
 )

@@ -165,4 +165,5 @@ SCENARIO = Scenario(
     watch=("vehicle_land_detected",),
     publish=("mission",),
     timeout_s=MISSION_TIMEOUT_S + 120.0,
+    profile="sitl_plane",
 )
