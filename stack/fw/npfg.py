@@ -200,12 +200,15 @@ class NPFG:
         """Follow the leg A→B; returns the lateral acceleration [m/s²].
 
         In front of A (behind it as seen along A→B) it flies to A until the bearing to the line is
-        shallower than the bearing to A; with A on B it flies to B.
+        shallower than the bearing to A; with A on B, or past B, it flies to B (PX4's
+        ``FixedwingPositionControl::navigateWaypoints``: a leg whose end was passed without the switch, a
+        climb-out that overflew the first waypoint below its altitude, would otherwise be followed for ever).
         """
         wind = _finite_or_zero(wind)
         ab = (b[0] - a[0], b[1] - a[1])
         a_to_p = (position[0] - a[0], position[1] - a[1])
-        if _norm(ab) < EPSILON:
+        past_b = _dot(ab, (position[0] - b[0], position[1] - b[1])) > EPSILON
+        if _norm(ab) < EPSILON or past_b:
             tangent = _unit((b[0] - position[0], b[1] - position[1]))
             self._evaluate(ground_velocity, wind, tangent, 0.0, 0.0)
             self.crosstrack_error = 0.0

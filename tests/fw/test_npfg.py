@@ -59,6 +59,17 @@ def test_before_the_first_waypoint_it_flies_to_it():
     assert npfg.nav_bearing == pytest.approx(math.atan2(-10.0, 300.0))
 
 
+def test_past_the_end_of_the_leg_it_turns_back_to_it():
+    # Overflown 200 m north of B and 30 m east of the line, still flying north: back to B, not on along the line.
+    npfg = NPFG(DEFAULTS)
+    a = npfg.navigate_waypoints(A, B, (1200.0, 30.0), (15.0, 0.0))
+    assert npfg.nav_bearing == pytest.approx(math.atan2(-30.0, -200.0))
+    assert abs(a) == pytest.approx(P_GAIN * 15.0)
+    # Short of B it follows the line.
+    npfg.navigate_waypoints(A, B, (999.0, 0.0), (15.0, 0.0))
+    assert npfg.nav_bearing == pytest.approx(0.0, abs=1e-12)
+
+
 def test_on_the_loiter_circle_the_centripetal_acceleration():
     npfg = NPFG(DEFAULTS)
     # North of the centre, flying east: clockwise.
@@ -125,7 +136,8 @@ def simulate(guidance, path, wind=(0.0, 0.0), position=(0.0, 60.0), heading=0.0,
 
 
 def line(guidance, position, ground, dt, kw):
-    guidance.navigate_waypoints(A, B, position, ground, dt, **kw)
+    """A leg long enough not to be passed within a simulation (past its end the guidance turns back)."""
+    guidance.navigate_waypoints(A, (5000.0, 0.0), position, ground, dt, **kw)
 
 
 def loiter(guidance, position, ground, dt, kw):
