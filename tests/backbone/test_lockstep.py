@@ -179,7 +179,7 @@ def test_a_member_that_is_never_triggered_never_holds_up_the_clock(tmp_path, tra
     home = tmp_path / "home"
     profile = chain_profile(
         tmp_path / "chain.toml",
-        tick_args=f"steps = {4 * CLOCK_QUEUE}",
+        tick_args=f"steps = {2 * CLOCK_QUEUE}",
         extra='[[module]]\nmodule = "tests.support.modules:Untriggered"\n',
         transport=transport,
     )

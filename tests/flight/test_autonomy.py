@@ -1,9 +1,8 @@
 """Issue 4: the autonomous scenarios as multi-process lockstep flights on the default profile.
 
-Each scenario is flown on each of SEEDS through ``stack fly`` (the real CLI, every module its own
-process) and judged by the issue's targets, which the profile must not relax, and again in the
-simulator's wind (``--wind``) by the doubled limits. A mission flown twice with the same
-seed gives the same ground truth, bit for bit.
+Each scenario is flown through ``stack fly`` (the real CLI, every module its own process) on SEED and
+judged by the issue's targets, which the profile must not relax, and on WIND_SEED in the simulator's wind
+(``--wind``) by the doubled limits: two seeds per scenario in CI, twenty in ``benchmarks/sweep.py``.
 """
 
 from __future__ import annotations
@@ -11,7 +10,6 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 
-import msgspec
 import pytest
 
 from tests.flight.flights import Flight
@@ -20,8 +18,8 @@ pytestmark = pytest.mark.flight
 Fly = Callable[..., Flight]
 
 SEED = 1
-SEEDS = (1, 2)
-"""A limit holds only if it holds on every seed (benchmarks/sweep.py flies 20); CI flies these."""
+WIND_SEED = 2
+"""A limit holds only if it holds on every seed (benchmarks/sweep.py flies 20 calm and 20 in wind)."""
 # The issue's targets under the default sensor noise and no wind.
 TARGETS: dict[str, dict[str, object]] = {
     "takeoff_land": {
@@ -45,7 +43,6 @@ TARGETS: dict[str, dict[str, object]] = {
         "landed_and_disarmed": True,
     },
 }
-_encode = msgspec.msgpack.Encoder().encode
 
 
 def _meets(value: object, target: object) -> bool:
@@ -67,18 +64,16 @@ def _assert_meets_targets(flight: Flight, scenario: str, targets: dict[str, obje
     assert report["passed"] is True and flight.returncode == 0, flight.output
 
 
-@pytest.mark.parametrize("seed", SEEDS)
 @pytest.mark.parametrize("scenario", list(TARGETS))
-def test_scenario_meets_the_issue_targets(fly: Fly, scenario: str, seed: int) -> None:
-    _assert_meets_targets(fly(seed, scenario=scenario), scenario, TARGETS[scenario])
+def test_scenario_meets_the_issue_targets(fly: Fly, scenario: str) -> None:
+    _assert_meets_targets(fly(SEED, scenario=scenario), scenario, TARGETS[scenario])
 
 
-@pytest.mark.parametrize("seed", SEEDS)
 @pytest.mark.parametrize("scenario", list(TARGETS))
-def test_scenario_meets_the_doubled_targets_in_wind(fly: Fly, scenario: str, seed: int) -> None:
+def test_scenario_meets_the_doubled_targets_in_wind(fly: Fly, scenario: str) -> None:
     # 5 m/s from the west with gusts of 1 m/s σ per axis; the issue doubles the numeric limits.
     doubled = {k: v if isinstance(v, bool | str) else 2 * v for k, v in TARGETS[scenario].items()}
-    flight = fly(seed, scenario=scenario, wind=True)
+    flight = fly(WIND_SEED, scenario=scenario, wind=True)
     assert flight.report["wind"] is True
     _assert_meets_targets(flight, scenario, doubled)
 
@@ -111,27 +106,3 @@ def test_gps_loss_triggers_a_failsafe_and_the_estimate_flags_it(fly: Fly) -> Non
     assert lost, "the estimator never reported dead reckoning during the outage"
     # It recovers once GPS returns: the last estimates are aided again.
     assert not positions[-1].msg.dead_reckoning
-
-
-def _disarm_time_us(flight: Flight) -> int:
-    """Simulated time at which the vehicle disarmed after its flight: a deterministic end point."""
-    armed = False
-    for m in flight.messages("actuator_armed"):
-        if m.msg.armed:
-            armed = True
-        elif armed:
-            return m.pub_time_us
-    raise AssertionError("the vehicle never disarmed after arming")
-
-
-def test_a_mission_with_a_fixed_seed_is_deterministic(fly: Fly) -> None:
-    a, b = fly(SEED, 0, "mission_box"), fly(SEED, 1, "mission_box")
-    end = _disarm_time_us(a)
-    assert _disarm_time_us(b) == end
-    truth_a, truth_b = (
-        [(m.pub_time_us, _encode(m.msg)) for m in f.messages("sim_groundtruth") if m.pub_time_us <= end] for f in (a, b)
-    )
-    assert len(truth_a) == len(truth_b) > 10_000
-    mismatch = next((i for i, (x, y) in enumerate(zip(truth_a, truth_b, strict=True)) if x != y), None)
-    assert mismatch is None, f"ground truth differs from t = {truth_a[mismatch][0] / 1e6:.3f} s on"
-    assert a.report["metrics"] == b.report["metrics"]

@@ -3,8 +3,8 @@
 ``stack fly`` with the pixhawk_sim profiles: the supervisor starts ``stack pixhawk-sim`` as a process of its
 own, linked to the adapter over 127.0.0.1 UDP or a 921600-baud pseudo-terminal. Every flight runs on the
 wall clock, so the issue's limits are checked with the seeds varied across the cases, each scenario on at
-least two seeds. One flight each also loses 5 % of its packets in both directions, and one has its link
-cut for 2 s in a hold (``link_loss``). A flight that fails while the machine starves the simulated Pixhawk
+least two seeds (takeoff_land also on the Pixhawk's own estimate). One takeoff_land loses 5 % of its packets
+in both directions, and one flight has its link cut for 2 s in a hold (``link_loss``). A flight that fails while the machine starves the simulated Pixhawk
 itself (it reports the physics steps it had to skip) is flown again once.
 """
 
@@ -104,7 +104,6 @@ def assert_meets(result: dict, scenario: str) -> None:
     ("scenario", "profile", "seed"),
     [
         ("takeoff_land", "pixhawk_sim", 1),
-        ("takeoff_land", "pixhawk_sim_pty", 2),
         ("mission_box", "pixhawk_sim", 2),
         ("mission_box", "pixhawk_sim_pty", 1),
     ],
@@ -115,12 +114,9 @@ def test_flights_through_the_pixhawk_meet_the_issue_limits(tmp_path: Path, scena
     assert_meets(result, scenario)
 
 
-@pytest.mark.parametrize(
-    ("scenario", "base", "seed"), [("takeoff_land", "pixhawk_sim", 3), ("mission_box", "pixhawk_sim_pty", 3)]
-)
-def test_flights_with_five_percent_of_packets_dropped(tmp_path: Path, scenario: str, base: str, seed: int):
-    result = fly(tmp_path, scenario, lossy_profile(tmp_path, base), seed)
-    assert_meets(result, scenario)
+def test_a_flight_with_five_percent_of_packets_dropped(tmp_path: Path):
+    result = fly(tmp_path, "takeoff_land", lossy_profile(tmp_path, "pixhawk_sim_pty"), 3)
+    assert_meets(result, "takeoff_land")
 
 
 def test_a_two_second_link_cut_in_a_hold(tmp_path: Path):
