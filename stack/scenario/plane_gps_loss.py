@@ -1,6 +1,6 @@
 """Scenario ``plane_gps_loss``: GPS fails for 20 s while a plane circles in Hold, then comes back.
 
-Runway takeoff to 40 m, then Hold on its NAV_LOITER_RAD circle. Once on the circle GPS is switched off the way
+Runway takeoff to 40 m, then Hold on its NAV_LOITER_RAD circle. One circle after reaching it GPS is switched off the way
 PX4's ``failure gps off`` does it (MAV_CMD_INJECT_FAILURE at an exact simulated time). Without GPS the position
 estimator dead-reckons on the airspeed and the wind estimate (a plane's airspeed bounds its velocity error);
 when its uncertainty grows past what the commander trusts, the commander's failsafe descends. GPS comes back
@@ -19,7 +19,7 @@ from stack.commander.modes import mode_name
 from stack.scenario import autonomy, plane_metrics
 from stack.scenario.catalogue import Check, Scenario
 from stack.scenario.gps_loss import inject_gps, watch_modes
-from stack.scenario.plane_loiter_wind import on_circle, record_loiter
+from stack.scenario.plane_loiter_wind import circling_time, on_circle, record_loiter
 from stack.scenario.plane_mission import RECORD, flight_samples, landing, require_fixed_wing
 from stack.scenario.script import ScenarioError, ScriptContext, Wait
 
@@ -36,7 +36,8 @@ def script(ctx: ScriptContext) -> Generator[Wait, None, None]:
     yield from autonomy.wait_ready(ctx)
     yield from autonomy.take_off(ctx, ALTITUDE_M)
     yield ctx.until(lambda: on_circle(ctx), CAPTURE_TIMEOUT_S, "the loiter circle")
-    record_loiter(ctx)
+    sp = record_loiter(ctx)
+    yield ctx.wait(circling_time(ctx, sp.loiter_radius, 1.0))  # settled on it
     yield from inject_gps(ctx, CMD.FAILURE_TYPE_OFF)
     ctx.state["gps_off_at"] = ctx.now
     yield ctx.wait(OUTAGE_S)

@@ -43,6 +43,12 @@ def on_circle(ctx: ScriptContext) -> bool:
     return abs(distance - sp.loiter_radius) <= plane_metrics.ON_CIRCLE_FRACTION * sp.loiter_radius
 
 
+def circling_time(ctx: ScriptContext, radius: float, circles: float) -> float:
+    """How long ``circles`` circles of ``radius`` take at the current ground speed [s]."""
+    lpos = ctx.latest["vehicle_local_position"]
+    return circles * 2.0 * math.pi * radius / max(math.hypot(lpos.vx, lpos.vy), 1.0)
+
+
 def record_loiter(ctx: ScriptContext) -> PositionSetpoint:
     """Keep the circle being flown, about home (north, east, altitude, radius), in ``ctx.state["loiter"]``."""
     sp = _loiter_setpoint(ctx)
@@ -59,9 +65,7 @@ def script(ctx: ScriptContext) -> Generator[Wait, None, None]:
     yield from autonomy.take_off(ctx, ALTITUDE_M)
     yield ctx.until(lambda: on_circle(ctx), CAPTURE_TIMEOUT_S, "the loiter circle")
     sp = record_loiter(ctx)
-    lpos = ctx.latest["vehicle_local_position"]
-    speed = max(math.hypot(lpos.vx, lpos.vy), 1.0)
-    duration = CIRCLES * 2.0 * math.pi * sp.loiter_radius / speed
+    duration = circling_time(ctx, sp.loiter_radius, CIRCLES)
     ctx.state["judged"] = (ctx.now, ctx.now + duration)
     ctx.log(f"on the {sp.loiter_radius:g} m circle: judging {CIRCLES} circles ({duration:.0f} s)")
     yield ctx.wait(duration)

@@ -3,7 +3,8 @@
 plane_mission (runway takeoff, a 300–400 m rectangle at 40 m, two loiter circles, return and landing) on L1, and
 plane_loiter_wind (three circles in an 8 m/s wind with gusts) on NPFG, each on its own seed, judged by the issue's
 limits (doubled in wind); and the same mission on JSBSim's Cessna 172P, which must complete it and land on the
-runway (its profile reports the track figures of a 36 m/s aircraft on legs this short). benchmarks/sweep.py flies
+runway (its profile reports the track figures of a 36 m/s aircraft on legs this short). plane_gps_loss, recorded:
+20 s without GPS while circling, the position estimate dead-reckoning on the airspeed. benchmarks/sweep.py flies
 20 seeds of each on either guidance, calm and in 8 m/s wind.
 """
 
@@ -11,6 +12,7 @@ from __future__ import annotations
 
 import pytest
 
+from stack.msg.fixedwing import PositionSetpoint
 from tests.flight.flights import fly_scenario
 
 pytestmark = pytest.mark.flight
@@ -34,3 +36,15 @@ def test_the_plane_flies_its_scenarios_within_the_issue_limits(tmp_path, scenari
     assert metrics["landed_and_disarmed"] is True
     assert abs(metrics["landing_offset_m"]) <= 10.0
 
+
+def test_without_gps_the_plane_dead_reckons_on_its_airspeed_and_its_flight_is_recorded(tmp_path):
+    flight = fly_scenario(tmp_path, "plane_gps_loss", 4, "sitl_plane")
+    report = flight.report
+    assert report["error"] is None, flight.output
+    assert report["passed"] is True and flight.returncode == 0, flight.output
+    positions = flight.messages("vehicle_local_position")
+    assert any(m.msg.dead_reckoning for m in positions) and not positions[-1].msg.dead_reckoning
+    # The plane's own topics are in the recording, nested setpoints included.
+    triplets = flight.messages("position_setpoint_triplet")
+    assert any(m.msg.current.type == PositionSetpoint.SETPOINT_TYPE_LOITER for m in triplets)
+    assert flight.messages("airspeed_validated") and flight.messages("wind")
