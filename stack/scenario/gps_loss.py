@@ -31,6 +31,16 @@ def inject_gps(ctx: ScriptContext, failure_type: int) -> Generator[Wait, None, N
     )
 
 
+def gps_outage(ctx: ScriptContext, outage_s: float, after_s: float) -> Generator[Wait, None, None]:
+    """GPS off for ``outage_s``, then on and ``after_s`` more; the times in ``gps_off_at`` and ``gps_on_at``."""
+    yield from inject_gps(ctx, CMD.FAILURE_TYPE_OFF)
+    ctx.state["gps_off_at"] = ctx.now
+    yield ctx.wait(outage_s)
+    yield from inject_gps(ctx, CMD.FAILURE_TYPE_OK)
+    ctx.state["gps_on_at"] = ctx.now
+    yield ctx.wait(after_s)
+
+
 def watch_modes(ctx: ScriptContext) -> None:
     """Note the first failsafe mode the commander picks during and after the outage, and when."""
     status = ctx.latest.get("vehicle_status")
@@ -47,12 +57,7 @@ def script(ctx: ScriptContext) -> Generator[Wait, None, None]:
     home = ctx.latest["home_position"]
     yield ctx.until(lambda: autonomy.settled(ctx, home.z - ALTITUDE_M), 30.0, "the climb to settle")
     yield ctx.wait(HOLD_BEFORE_S)
-    yield from inject_gps(ctx, CMD.FAILURE_TYPE_OFF)
-    ctx.state["gps_off_at"] = ctx.now
-    yield ctx.wait(OUTAGE_S)
-    yield from inject_gps(ctx, CMD.FAILURE_TYPE_OK)
-    ctx.state["gps_on_at"] = ctx.now
-    yield ctx.wait(AFTER_S)
+    yield from gps_outage(ctx, OUTAGE_S, AFTER_S)
     lpos = ctx.latest["vehicle_local_position"]
     ctx.state["recovered"] = (
         autonomy.armed(ctx) and lpos.xy_valid and autonomy.nav_state(ctx) == (autonomy.NS.NAVIGATION_STATE_AUTO_LOITER)

@@ -18,7 +18,7 @@ from typing import Any
 from stack.commander.modes import mode_name
 from stack.scenario import autonomy, plane_metrics
 from stack.scenario.catalogue import Check, Scenario
-from stack.scenario.gps_loss import inject_gps, watch_modes
+from stack.scenario.gps_loss import gps_outage, watch_modes
 from stack.scenario.plane_loiter_wind import circling_time, on_circle, record_loiter
 from stack.scenario.plane_mission import RECORD, flight_samples, landing, require_fixed_wing
 from stack.scenario.script import ScenarioError, ScriptContext, Wait
@@ -38,12 +38,7 @@ def script(ctx: ScriptContext) -> Generator[Wait, None, None]:
     yield ctx.until(lambda: on_circle(ctx), CAPTURE_TIMEOUT_S, "the loiter circle")
     sp = record_loiter(ctx)
     yield ctx.wait(circling_time(ctx, sp.loiter_radius, 1.0))  # settled on it
-    yield from inject_gps(ctx, CMD.FAILURE_TYPE_OFF)
-    ctx.state["gps_off_at"] = ctx.now
-    yield ctx.wait(OUTAGE_S)
-    yield from inject_gps(ctx, CMD.FAILURE_TYPE_OK)
-    ctx.state["gps_on_at"] = ctx.now
-    yield ctx.wait(AFTER_S)
+    yield from gps_outage(ctx, OUTAGE_S, AFTER_S)
     ctx.state["mode_after"] = mode_name(autonomy.nav_state(ctx))
     yield from ctx.command(CMD.VEHICLE_CMD_NAV_RETURN_TO_LAUNCH)
     yield from autonomy.wait_disarmed(ctx, 600.0)
