@@ -49,8 +49,9 @@ def fly(
     """
     known = scenarios()
     if list_ or not scenario:
+        width = max(len(name) for name in known)
         for s in known.values():
-            typer.echo(f"{s.name:16s} {s.description}")
+            typer.echo(f"{s.name:{width}s}  {s.description}")
         raise typer.Exit(0)
     if scenario not in known:
         fail(f"unknown scenario '{scenario}' (known: {', '.join(sorted(known))})", code=2)
