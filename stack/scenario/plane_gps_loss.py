@@ -70,10 +70,15 @@ SCENARIO = Scenario(
     description=f"Fixed-wing: GPS off for {OUTAGE_S:g} s while circling in Hold, then return and land",
     script=script,
     evaluate=evaluate,
+    # The budget of airspeed dead reckoning: 1 m/s of velocity error through the 20 s outage (the accelerometer
+    # alone strays 96 m on seed 1), for the estimate and so for the circle flown about it. Calm, the wind estimate
+    # is right and the worst of 20 seeds is 6.1 m; in wind (limits doubled) the gusts, 1 m/s σ per axis with a
+    # 2 s correlation time, are wind the estimate cannot know: their integral, σ·√(2τt) ≈ 9 m per axis over 20 s,
+    # is the error, up to 36 m on the worst of 20 seeds.
     checks=(
-        Check("est_pos_error_max_m", 10.0),
+        Check("est_pos_error_max_m", 20.0),
         Check("held_without_gps_s", 10.0, at_least=True),
-        Check("loiter_radius_max_m", 10.0),
+        Check("loiter_radius_max_m", 20.0),
         Check("recovered", True),
         Check("landed_on_runway", True),
     ),
