@@ -105,7 +105,7 @@ def cases(names: list[str], profile: str | None, conditions: tuple[bool, ...]) -
     out = []
     for name in names:
         scenario = known[name]
-        on = profile or scenario.default_profile()
+        on = profile or scenario.profile or DEFAULT_PROFILE
         out.extend(Case(scenario, on, wind) for wind in conditions if not wind or simulates_wind(on))
     return out
 

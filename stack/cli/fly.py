@@ -57,7 +57,7 @@ def fly(
         fail(f"unknown scenario '{scenario}' (known: {', '.join(sorted(known))})", code=2)
     try:
         flags = {"plot": plot_ or web, "record": record is not None}
-        prof = load_profile(profile or known[scenario].default_profile(), flags=flags)
+        prof = load_profile(profile or known[scenario].profile or DEFAULT_PROFILE, flags=flags)
     except ProfileError as e:
         fail(str(e), code=2)
     choose_transport(prof, transport)

@@ -43,11 +43,6 @@ class Scenario:
     """The launch profile the scenario flies on unless one is given, when the default one cannot fly it
     (link_loss: a simulated Pixhawk; the plane's scenarios: sitl_plane)."""
 
-    def default_profile(self) -> str:
-        from stack.supervisor.profile import DEFAULT_PROFILE
-
-        return self.profile or DEFAULT_PROFILE
-
 
 def scenarios() -> dict[str, Scenario]:
     from stack.scenario import (
