@@ -7,6 +7,7 @@ from typing import Any
 
 from stack.params.store import ParamStore
 from stack.runtime.module import Module
+from stack.runtime.spec import ModuleSpec, resolve_args
 
 
 class _Input:
@@ -21,6 +22,10 @@ class _Input:
     def update(self) -> Any:
         fresh, self._fresh = self._fresh, False
         return self.latest if fresh else None
+
+    def take(self) -> list[Any]:
+        fresh = self.update()
+        return [] if fresh is None else [fresh]
 
 
 class _Output:
@@ -37,13 +42,17 @@ class ModuleBench:
     """``bench = ModuleBench(MyModule, {"PARAM": 1})``; ``bench.put("topic", msg)``; ``bench.run(msg, dt)``;
     ``bench.sent("topic")`` lists what the module published there, oldest first."""
 
-    def __init__(self, cls: type[Module], params: dict[str, object] | None = None) -> None:
+    def __init__(
+        self, cls: type[Module], params: dict[str, object] | None = None, args: dict[str, Any] | None = None
+    ) -> None:
         self.name = cls.NAME
         self.params = ParamStore(cls.PARAMS, params)
-        self.args: dict[str, Any] = {}
+        self.args: dict[str, Any] = resolve_args(cls.ARGS, args or {})
+        self.spec = ModuleSpec(name=cls.NAME, module=cls.NAME)
         self.inputs: dict[tuple[str, int], _Input] = {}
         self.outputs: dict[tuple[str, int], _Output] = {}
         self.rejected = 0
+        self.behind = False
         self.now = 0
         self.module = cls(self)  # type: ignore[arg-type]
 
