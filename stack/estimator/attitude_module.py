@@ -10,6 +10,7 @@ need every 250 Hz sample.
 from __future__ import annotations
 
 import math
+from collections import deque
 
 from stack.estimator.acceleration import VelocityDerivative
 from stack.estimator.angular_velocity import AngularVelocityFilter
@@ -18,7 +19,7 @@ from stack.msg.estimation import EstimatorStatus, VehicleAngularVelocity, Vehicl
 from stack.msg.sensors import SensorAccel, SensorGyro
 from stack.params import catalogue
 from stack.params.param import Param
-from stack.runtime.module import KEEP_PERIOD_US, Module, Trigger
+from stack.runtime.module import KEEP_PERIOD_US, TRIGGER_BACKLOG, Module, Trigger
 
 ATTITUDE_PARAMS = catalogue.params(
     "ATT_W_ACC", "ATT_W_MAG", "ATT_W_GYRO_BIAS", "ATT_BIAS_MAX", "ATT_MAG_DECL", "ATT_ACC_COMP",
@@ -81,13 +82,13 @@ class ImuSummary:
 class AttitudeEstimatorModule(Module):
     NAME = "attitude_estimator_q"
     DESCRIPTION = "Quaternion complementary filter (PX4 attitude_estimator_q) and gyro filtering"
-    TRIGGER = Trigger("sensor_gyro")
+    TRIGGER = Trigger("sensor_gyro", every=True)
     DT_RANGE = (0.00001, 0.02)
     PARAMS = ATTITUDE_PARAMS + GYRO_PARAMS + COMPENSATION_PARAMS
 
     def __init__(self, rt) -> None:
         super().__init__(rt)
-        self.subscribe("sensor_accel")
+        self.subscribe("sensor_accel", queue=True)
         self.subscribe("sensor_mag")
         self.subscribe("vehicle_local_position")
         self.subscribe("sensor_gps")
@@ -100,7 +101,7 @@ class AttitudeEstimatorModule(Module):
         self.estimator = AttitudeEstimatorQ(**self._values(ATTITUDE_PARAMS))
         self.rates = AngularVelocityFilter(**self._values(GYRO_PARAMS))
         self.acceleration = VelocityDerivative(float(self.params["ATT_ACC_COMP_LP"]))
-        self._accel_time = 0
+        self._accels: deque[SensorAccel] = deque(maxlen=TRIGGER_BACKLOG)
         self._velocity_time = 0
         self._kept_at = 0
         self._resume(self.kept_state())
@@ -132,14 +133,16 @@ class AttitudeEstimatorModule(Module):
     def run(self, gyro_msg: SensorGyro, dt: float) -> None:
         t = gyro_msg.timestamp_sample
         gyro = (gyro_msg.x, gyro_msg.y, gyro_msg.z)
-        accel_msg = self.latest("sensor_accel")
+        accel_msg = self._accel_at(t)
         mag_msg = self.update("sensor_mag")
         mag = (mag_msg.x, mag_msg.y, mag_msg.z) if mag_msg is not None else None
-        if accel_msg is not None and accel_msg.timestamp_sample != self._accel_time:
-            self._accel_time = accel_msg.timestamp_sample
+        if accel_msg is not None:
             accel = (accel_msg.x, accel_msg.y, accel_msg.z)
             self.estimator.update(dt, gyro, accel, mag, self._acceleration_compensation())
         xyz, xyz_dot = self.rates.update(t, gyro, self.estimator.gyro_bias)
+        self.imu.add(t, xyz, accel_msg)
+        if self.behind():
+            return  # a busy machine left a backlog of gyro samples: integrate each, publish the newest only
         self.publish(
             "vehicle_angular_velocity", VehicleAngularVelocity(timestamp_sample=t, xyz=xyz, xyz_derivative=xyz_dot)
         )
@@ -149,9 +152,18 @@ class AttitudeEstimatorModule(Module):
             if now - self._kept_at >= KEEP_PERIOD_US:
                 self._kept_at = now
                 self.keep_state({"q": list(self.estimator.q), "gyro_bias": list(self.estimator.gyro_bias)})
-        self.imu.add(t, xyz, accel_msg)
         if t - self.imu.start_us >= STATUS_INTERVAL_US:
             self._publish_status(gyro_msg)
+
+    def _accel_at(self, t: int) -> SensorAccel | None:
+        """The accelerometer sample of gyro sample time ``t`` (the IMU samples both at once), else the newest before
+        it. Every gyro sample is integrated: a real-time run working off a backlog of gyro samples (a busy
+        machine) meets each with its own accelerometer sample, not the newest one."""
+        accels = self._accels
+        accels.extend(self.take("sensor_accel"))
+        while len(accels) > 1 and accels[1].timestamp_sample <= t:
+            accels.popleft()
+        return accels[0] if accels else None
 
     def _publish_status(self, gyro_msg: SensorGyro) -> None:
         now = self.now_us()

@@ -39,6 +39,8 @@ if TYPE_CHECKING:
     from stack.runtime.runner import Runtime
 
 
+TRIGGER_BACKLOG = 256
+"""Trigger messages a real-time ``Trigger(every=True)`` module keeps while behind: a second of a 250 Hz IMU."""
 KEEP_PERIOD_US = 200_000
 """How often a module whose state changes every run (an estimator) keeps it for an instance restarted after a
 crash: in lockstep the kept state is at most this old when it resumes (simulated time waits for the restart)."""
@@ -46,10 +48,17 @@ crash: in lockstep the kept state is at most this old when it resumes (simulated
 
 @dataclass(frozen=True)
 class Trigger:
-    """Run once per message published on this topic."""
+    """Run once per message published on this topic.
+
+    In real time a module that falls behind (a busy machine) skips to the newest messages, as a controller should;
+    with ``every`` it runs on each message of the backlog in order (up to ``TRIGGER_BACKLOG``), as an estimator
+    integrating its gyro must (a gyro sample skipped is a rotation lost), and :meth:`Module.behind` tells it to
+    leave the publishing to the newest.
+    """
 
     topic: str
     instance: int = 0
+    every: bool = False
 
 
 @dataclass(frozen=True)
@@ -138,6 +147,10 @@ class Module:
 
     def now_us(self) -> int:
         return self.rt.now_us()
+
+    def behind(self) -> bool:
+        """In real time, more trigger messages are already waiting (``Trigger(every=True)``); never in lockstep."""
+        return self.rt.behind
 
     def reject(self, what: str) -> None:
         """Count and log an input the module refused (bad setpoint, out-of-range command...)."""

@@ -28,7 +28,7 @@ from stack.runtime import startup
 from stack.runtime.fastrun import FastDriver
 from stack.runtime.inputs import InputBuffer, sample_time
 from stack.runtime.lockstep import TIMER, LockstepCoordinator, LockstepMember
-from stack.runtime.module import Module, Timer, Trigger
+from stack.runtime.module import TRIGGER_BACKLOG, Module, Timer, Trigger
 from stack.runtime.services import Heartbeat, ParamService
 from stack.runtime.spec import ModuleSpec, load_module_class, resolve_args
 
@@ -61,6 +61,7 @@ class Runtime:
         self.errors = 0
         self.rejected = 0
         self.outside_triggers = 0
+        self.behind = False
         self._now = 0
         self._loop_sum = 0.0
         self._loop_max = 0.0
@@ -208,7 +209,8 @@ class Runtime:
         if self.lockstep:
             sub = self.node.subscriber(trigger.topic, trigger.instance, capacity=LOCKSTEP_QUEUE)
         else:
-            sub = self.node.subscriber(trigger.topic, trigger.instance, capacity=4, keep_last=True)
+            backlog = TRIGGER_BACKLOG if trigger.every else 4
+            sub = self.node.subscriber(trigger.topic, trigger.instance, capacity=backlog, keep_last=True)
         self._trigger_buf = InputBuffer(sub, False)
         self.inputs[(trigger.topic, trigger.instance)] = self._trigger_buf
 
@@ -265,6 +267,7 @@ class Runtime:
         while True:
             item = buf.sub.recv()
             self._take_trigger(buf, item)
+            self.behind = bool(buf.sub.arrived)
             for d in data:
                 d.pull()
                 d.promote_all()
