@@ -4,8 +4,9 @@
 own, linked to the adapter over 127.0.0.1 UDP or a 921600-baud pseudo-terminal. Every flight runs on the
 wall clock, so the issue's limits are checked with the seeds varied across the cases, each scenario on at
 least two seeds (takeoff_land also on the Pixhawk's own estimate). One takeoff_land loses 5 % of its packets
-in both directions, and one flight has its link cut for 2 s in a hold (``link_loss``). A flight that fails while the machine starves the simulated Pixhawk
-itself (it reports the physics steps it had to skip) is flown again once.
+in both directions, and one flight has its link cut for 2 s in a hold (``link_loss``). A flight that fails
+while the machine starves the simulated Pixhawk itself (it reports the physics steps it had to skip) is flown
+again once.
 """
 
 from __future__ import annotations

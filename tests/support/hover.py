@@ -19,11 +19,16 @@ def echo(stack: RunningStack, topic: str) -> dict:
     return json.loads(out.stdout.splitlines()[0])
 
 
+POLL_S = 0.5
+"""Between two looks: each look is a CLI process, and a look every 0.2 s kept one core of two half busy, which
+starved the real-time stack it watched."""
+
+
 def wait(stack: RunningStack, ok: Callable[[], bool], timeout: float, what: str) -> None:
     deadline = time.monotonic() + timeout
     while not ok():
         assert time.monotonic() < deadline, f"no {what} within {timeout:g} s\n{stack.output}"
-        time.sleep(0.2)
+        time.sleep(POLL_S)
 
 
 def start_hovering(home: Path, altitude: float) -> RunningStack:
