@@ -12,8 +12,9 @@ the supervisor's roster is complete:
    keeps probing until every module of the roster is synced — only then does the simulator take its
    first step.
 
-A module restarted while the stack runs joins late: the others no longer probe, so it only waits
-until it sees them and gives declarations a moment to settle before joining.
+A module restarted while the stack runs joins late: the others no longer probe, so it waits until it
+sees them, gives declarations a moment to settle, and joins once its session knows a subscriber for
+each topic it publishes that others subscribe to.
 """
 
 from __future__ import annotations
@@ -103,11 +104,11 @@ def sync(
             elif not declared:
                 if late_join:
                     time.sleep(LATE_JOIN_SETTLE_S)
-                    unreached = []
+                    unreached = _unmatched(node, others)
                 else:
                     unreached = _unprobed(node, inputs, others)
                 if unreached:
-                    problem = f"no sample yet from {', '.join(unreached)}"
+                    problem = f"not connected yet: {', '.join(unreached)}"
                 elif member is not None and not _coordinator_reachable(member, late_join):
                     problem = "the simulator's clock and this module's acknowledgements do not connect yet"
                 else:
@@ -130,6 +131,19 @@ def _coordinator_reachable(member: LockstepMember, late_join: bool) -> bool:
         member.register()
     member.poll_startup()
     return (late_join or member.heard_coordinator) and member.ack_reachable()
+
+
+def _unmatched(node: Node, others: set[str]) -> list[str]:
+    """``topic → subscriber`` pairs of a late joiner's publications whose subscribers its session does not
+    know yet (a message it published now would be lost, and the lockstep would wait for its run forever)."""
+    graph = read_graph(node.session, node.vehicle)
+    missing = []
+    for pub in node.publishers:
+        entry = graph.get((pub.topic, pub.instance))
+        subscribers = [s for s in entry.subscribers if s in others] if entry is not None else []
+        if subscribers and not pub.matching():
+            missing.append(f"{pub.topic} → {', '.join(subscribers)}")
+    return missing
 
 
 def _unprobed(node: Node, inputs: list[InputBuffer], others: set[str]) -> list[str]:
