@@ -9,7 +9,6 @@ import time
 
 import pytest
 
-from stack.msg.registry import TOPICS
 from tests.cli.test_message_json import example
 from tests.support.harness import REPO, RunningStack, chain_profile, stack_env, wait_no_processes
 
@@ -77,10 +76,15 @@ def test_a_slow_reader_loses_the_oldest_messages_and_is_told(stack):
     assert dropped >= sum(int(line[1:].split()[0]) for line in drops) > 0
 
 
-def test_pub_on_every_topic_of_the_registry(stack):
+# Every topic's JSON parsing is tested in-process (tests/cli/test_message_json.py); these run the whole
+# command on a plain struct, one with fixed arrays and one with a list of structs.
+PUB_TOPICS = ("vehicle_command", "actuator_motors", "mission")
+
+
+def test_pub_runs_on_a_live_stack(stack):
     listener = background_cli(stack, "topic", "echo", "mission", "-n", "1", "--json", "--timeout", "60")
     time.sleep(3.0)  # the listener subscribed
-    for topic in sorted(TOPICS):
+    for topic in PUB_TOPICS:
         values = example(topic)
         if topic == "mission":
             values = json.dumps({**json.loads(values), "mission_id": 42, "source": "cli test"})

@@ -2,7 +2,8 @@
 
 Each scenario is flown through ``stack fly`` (the real CLI, every module its own process) on SEED and
 judged by the issue's targets, which the profile must not relax, and on WIND_SEED in the simulator's wind
-(``--wind``) by the doubled limits: two seeds per scenario in CI, twenty in ``benchmarks/sweep.py``.
+(``--wind``) by the doubled limits (failsafes calm only): two seeds per scenario in CI, twenty in
+``benchmarks/sweep.py``.
 """
 
 from __future__ import annotations
@@ -69,7 +70,8 @@ def test_scenario_meets_the_issue_targets(fly: Fly, scenario: str) -> None:
     _assert_meets_targets(fly(SEED, scenario=scenario), scenario, TARGETS[scenario])
 
 
-@pytest.mark.parametrize("scenario", list(TARGETS))
+# failsafes judges which action each trigger took, which wind does not change: the sweep flies it in wind.
+@pytest.mark.parametrize("scenario", [s for s in TARGETS if s != "failsafes"])
 def test_scenario_meets_the_doubled_targets_in_wind(fly: Fly, scenario: str) -> None:
     # 5 m/s from the west with gusts of 1 m/s σ per axis; the issue doubles the numeric limits.
     doubled = {k: v if isinstance(v, bool | str) else 2 * v for k, v in TARGETS[scenario].items()}
