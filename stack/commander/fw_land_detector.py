@@ -15,8 +15,13 @@ airspeed), LNDFW_VEL_Z_MAX, LNDFW_XYACC_MAX and — only when neither the ground
 used — LNDFW_ROT_MAX. The request must hold LNDFW_TRIG_TIME to land; taking off is immediate. Disarmed, or
 without a local position, the vehicle is landed. A plane has no freefall, ground contact, maybe-landed or
 ground-effect stage: those stay false, as PX4's base class leaves them. PX4's hold while a catapult launch is
-awaited does not apply (the stack's planes take off from a runway). ``at_rest`` is landed with the angular
-rate below 3 °/s for 1 s, PX4's gyro part of ``LandDetector::UpdateVehicleAtRest``.
+awaited does not apply (the stack's planes take off from a runway). ``at_rest`` is landed with no motion
+for 1 s: the angular rate below 3 °/s (PX4 ``GYRO_NORM_MAX``), the engine at idle and the specific force
+within 0.5 m/s² of its value at rest. PX4's ``LandDetector::UpdateVehicleAtRest`` reads motion from the IMU's
+vibration metrics, which a running engine raises; a simulated engine does not vibrate, so the throttle and a
+step of the specific force take their place. It matters: the position estimate fuses zero velocity while at
+rest, and "landed" alone lasts into the takeoff roll (until the filtered airspeed passes LNDFW_AIRSPD_MAX),
+long enough to pin the estimate metres behind a plane accelerating down the runway and have its GPS rejected.
 """
 
 from __future__ import annotations
@@ -43,6 +48,13 @@ NO_AIRSPEED_XY_FACTOR = 0.7
 AT_REST_RATE = math.radians(3.0)
 """Angular rate [rad/s] above which the vehicle moves (PX4 ``GYRO_NORM_MAX``)."""
 AT_REST_TIME_US = 1_000_000
+AT_REST_THROTTLE_MAX = 0.05
+"""Throttle [0, 1] above which the engine runs, and so the vehicle is not at rest."""
+AT_REST_ACCEL_STEP = 0.5
+"""Specific-force change [m/s²] from its value at rest that counts as motion (a throttle-up on the runway)."""
+AT_REST_ACCEL_KEEP = 0.98
+"""Per-update weight of the specific force's reference at rest: a 1 s time constant at 50 Hz, so a vehicle
+parked on a slope or after a landing settles to rest."""
 
 
 @dataclass(slots=True)
@@ -51,7 +63,7 @@ class FixedwingLandDetectorInputs:
 
     ``true_airspeed`` is ``airspeed_validated.true_airspeed_m_s`` (NaN: none) and ``airspeed_timestamp_us``
     its time; ``acceleration`` the specific force in the body frame [m/s²], ``angular_velocity`` the body
-    rates [rad/s].
+    rates [rad/s], ``throttle`` the forward thrust setpoint [0, 1].
     """
 
     armed: bool = False
@@ -64,6 +76,7 @@ class FixedwingLandDetectorInputs:
     true_airspeed: float = math.nan
     acceleration: Vec3 = (0.0, 0.0, -9.80665)
     angular_velocity: Vec3 = ZERO3
+    throttle: float = 0.0
 
 
 def _landed_state(landed: bool, at_rest: bool) -> LandDetectorState:
@@ -87,6 +100,7 @@ class FixedwingLandDetector:
     """Clocked by the caller: ``update(now_us, inputs)`` every 20 ms (PX4's land detector rate)."""
 
     __slots__ = (
+        "_accel_rest",
         "_accel_xy_filtered",
         "_airspeed_filtered",
         "_airspeed_max",
@@ -111,6 +125,7 @@ class FixedwingLandDetector:
         self._airspeed_filtered = 0.0
         self._accel_xy_filtered = 0.0
         self._rotation_filtered = 0.0
+        self._accel_rest: Vec3 | None = None
         self.state = _landed_state(True, True)
         self.set_params(params or {})
 
@@ -132,9 +147,26 @@ class FixedwingLandDetector:
         landed = self._landed.set_state_and_update(self._landed_now(now_us, inp), now_us)
         wx, wy, wz = inp.angular_velocity
         rate = math.sqrt(wx * wx + wy * wy + wz * wz)
-        still = self._still.set_state_and_update(not rate > AT_REST_RATE, now_us)
+        engine_running = not inp.throttle <= AT_REST_THROTTLE_MAX  # NaN: running
+        moving = self._accel_stepped(inp.acceleration) or rate > AT_REST_RATE or engine_running
+        still = self._still.set_state_and_update(not moving, now_us)
         self.state = _landed_state(landed, still)
         return self.state
+
+    def _accel_stepped(self, accel: Vec3) -> bool:
+        """Whether the specific force left its reference at rest by more than AT_REST_ACCEL_STEP; the reference
+        follows it slowly. A non-finite sample is motion (nothing is known) and leaves the reference alone."""
+        if not all(math.isfinite(a) for a in accel):
+            return True
+        rest = self._accel_rest if self._accel_rest is not None else accel
+        stepped = math.dist(accel, rest) > AT_REST_ACCEL_STEP
+        keep = AT_REST_ACCEL_KEEP
+        self._accel_rest = (
+            keep * rest[0] + (1 - keep) * accel[0],
+            keep * rest[1] + (1 - keep) * accel[1],
+            keep * rest[2] + (1 - keep) * accel[2],
+        )
+        return stepped
 
     def _landed_now(self, now_us: int, inp: FixedwingLandDetectorInputs) -> bool:
         """PX4 ``FixedwingLandDetector::_get_landed_state``: whether the conditions for "landed" hold now."""

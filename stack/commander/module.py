@@ -387,4 +387,7 @@ class CommanderModule(Module):
         if imu is not None:
             inp.angular_velocity = imu.mean_gyro
             inp.acceleration = imu.mean_accel
+        thrust = latest("vehicle_thrust_setpoint")
+        if thrust is not None:
+            inp.throttle = thrust.xyz[0]
         return inp

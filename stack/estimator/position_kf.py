@@ -38,7 +38,8 @@ Corrections:
   and re-runs the later predictions and baro fusions. This is the exact linear-KF answer, unlike
   LPE, which only computes the residual against the delayed state and applies it to the current one.
 - Barometer altitude, fused at arrival (PX4's baro delay is 0).
-- The land detector: while landed, zero horizontal velocity (LPE's land measurement).
+- The land detector: while landed and at rest, zero horizontal velocity (LPE's land measurement, fused
+  when EKF2 fuses zero velocity).
 - Airspeed while GPS is lost (a plane's dead reckoning, as EKF2 fuses airspeed with its wind states): the
   true airspeed along the body x axis plus the wind estimate is the horizontal velocity, so the velocity
   error stays that of the wind estimate instead of growing with the integrated accelerometer error.
@@ -867,7 +868,9 @@ class LocalPositionKF:
     # ------------------------------------------------------------------ land detector
 
     def fuse_land(self) -> bool:
-        """Fuse the land detector's "landed" at the current filter time: the vehicle stands still, so
+        """Fuse the land detector's "landed" at the current filter time (the module fuses it only while the
+        detector also finds the vehicle at rest, as EKF2 fuses zero velocity: a plane is still "landed" in its
+        takeoff roll): the vehicle stands still, so
         its horizontal velocity is zero with σ ``LPE_LAND_VXY`` (LPE's land measurement, fused by
         default, ``LPE_FUSION`` bit 4; its height-above-ground row needs a terrain state this filter
         does not have). Without it a vehicle waiting on the ground follows the GPS velocity noise

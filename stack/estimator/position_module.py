@@ -143,7 +143,7 @@ class LocalPositionEstimatorModule(Module):
             self.kf.fuse_gps(gps)
         self._fuse_airspeed(attitude.q)
         land = self.latest("vehicle_land_detected")
-        if land is not None and land.landed:
+        if land is not None and land.landed and land.at_rest:
             self.kf.fuse_land()
         est = self.kf.estimate()
         now = self.now_us()

@@ -167,3 +167,32 @@ def test_a_commander_restarted_in_the_air_starts_flying():
     assert not plane.detector.state.landed
     state, _ = plane.run(1.0, vx=15.0, true_airspeed=15.0)
     assert not state.landed
+
+
+def test_a_takeoff_roll_is_still_landed_but_never_at_rest():
+    """The position estimate fuses zero velocity only at rest: a plane rolling down the runway is landed until
+    its airspeed passes LNDFW_AIRSPD_MAX, but from the throttle-up it is moving."""
+    plane = Plane()
+    state, _ = plane.run(2.0, vx=0.0, true_airspeed=0.0)
+    assert state.landed and state.at_rest
+    state, _ = plane.run(0.02, throttle=1.0, acceleration=(3.0, 0.0, -9.80665))
+    assert state.landed and not state.at_rest
+    state, _ = plane.run(1.0, vx=2.0, true_airspeed=2.0)  # a steady acceleration: the engine still runs
+    assert state.landed and not state.at_rest
+    # Back at idle and standing: rest once the specific force's reference has come back (1.9 m/s² away after
+    # the roll, within 0.5 m/s² 67 updates later at 0.98 per update) and 1 s more has passed.
+    state, _ = plane.run(2.3, throttle=0.0, vx=0.0, true_airspeed=0.0, acceleration=GRAVITY)
+    assert state.landed and not state.at_rest
+    state, _ = plane.run(0.1)
+    assert state.landed and state.at_rest
+
+
+def test_a_push_or_an_unknown_throttle_is_motion():
+    plane = Plane()
+    state, _ = plane.run(2.0, vx=0.0, true_airspeed=0.0)
+    assert state.at_rest
+    state, _ = plane.run(0.02, acceleration=(0.6, 0.0, -9.80665))  # pushed with the engine off
+    assert state.landed and not state.at_rest
+    plane = Plane()
+    state, _ = plane.run(2.0, vx=0.0, true_airspeed=0.0, throttle=math.nan)
+    assert state.landed and not state.at_rest
