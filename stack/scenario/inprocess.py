@@ -17,7 +17,7 @@ from typing import Any
 
 from stack.runtime.inprocess import InProcessStack
 from stack.runtime.membus import PublishedMessage
-from stack.scenario.flight import prepare_flight
+from stack.scenario.flight import WIND_SPEED, prepare_flight
 from stack.supervisor.profile import DEFAULT_PROFILE, Profile, load_profile
 
 
@@ -35,14 +35,19 @@ class InProcessFlight:
 
 
 def flight_profile(
-    scenario: str, result: Path, profile: str | Path = DEFAULT_PROFILE, seed: int | None = None, wind: bool = False
+    scenario: str,
+    result: Path,
+    profile: str | Path = DEFAULT_PROFILE,
+    seed: int | None = None,
+    wind: bool = False,
+    wind_speed: float = WIND_SPEED,
 ) -> Profile:
-    """The profile ``stack fly SCENARIO [--seed] [--wind]`` runs (without its observers); the scenario
+    """The profile ``stack fly SCENARIO [--seed] [--wind-speed]`` runs (without its observers); the scenario
     writes its result to ``result``."""
     prof = load_profile(profile)
     if seed is not None:
         prof.seed = seed
-    prepare_flight(prof, scenario, result, wind)
+    prepare_flight(prof, scenario, result, wind, wind_speed)
     return prof
 
 
@@ -54,11 +59,13 @@ def fly_in_process(
     wind: bool = False,
     record: bool = False,
     wire: bool = True,
+    wind_speed: float = WIND_SPEED,
 ) -> InProcessFlight:
     """Fly a scenario in this process (``record``: keep every published message)."""
     with tempfile.TemporaryDirectory(prefix="stack-inprocess-") as tmp:
         result = Path(tmp) / "scenario_result.json"
-        stack = InProcessStack(flight_profile(scenario, result, profile, seed, wind), wire=wire, record=record)
+        prof = flight_profile(scenario, result, profile, seed, wind, wind_speed)
+        stack = InProcessStack(prof, wire=wire, record=record)
         stack.run()
         if not result.exists():
             raise RuntimeError(f"scenario {scenario} ended at t={stack.now_us / 1e6:.3f} s without a result")
