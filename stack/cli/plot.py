@@ -32,7 +32,7 @@ def _stack_is_lockstep(vehicle: str, bus: BusConfig) -> bool:
     return bool(answers and answers[0].get("lockstep"))
 
 
-def _stop_on_signals(duration: float) -> None:
+def _stop_on_signals() -> None:
     """SIGINT, SIGTERM and the --duration alarm unwind the bridge once; repeats are ignored meanwhile."""
     stopping: list[bool] = []
 
@@ -44,8 +44,6 @@ def _stop_on_signals(duration: float) -> None:
 
     for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGALRM):
         signal.signal(sig, on_signal)
-    if duration > 0:
-        signal.setitimer(signal.ITIMER_REAL, duration)
 
 
 def plot(
@@ -58,7 +56,7 @@ def plot(
         None, "--grpc-port", help=f"Viewer data port (0: any free port; default: {DEFAULT_GRPC_PORT}, any with --web)"
     ),
     web_port: int | None = typer.Option(None, "--web-port", help="Web viewer page port (default: any free port)"),
-    duration: float = typer.Option(0.0, "--duration", "-d", help="Stop after this many seconds (0: until Ctrl-C)"),
+    duration: float = typer.Option(0.0, "--duration", "-d", help="Seconds of plotting, then stop (0: until Ctrl-C)"),
     vehicle: str | None = VehicleOption,
     endpoint: str | None = EndpointOption,
 ) -> None:
@@ -84,11 +82,18 @@ def plot(
             "window_s": window,
         },
         lockstep=lockstep,
+        late_join=True,  # the stack is running (or is a replay): no start-up sync
     )
     logging.basicConfig(level=logging.INFO, format="%(message)s", stream=sys.stdout, force=True)
-    _stop_on_signals(duration)
+    _stop_on_signals()
+
+    def start_the_clock() -> None:
+        # --duration counts plotting time: on a loaded machine, setting up Rerun can take seconds.
+        if duration > 0:
+            signal.setitimer(signal.ITIMER_REAL, duration)
+
     try:
-        Runtime(spec).run()
+        Runtime(spec).run(on_ready=start_the_clock)
     except Shutdown:
         pass
     except (ValueError, RuntimeError) as e:

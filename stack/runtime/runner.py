@@ -125,7 +125,8 @@ class Runtime:
 
     # -- lifecycle ---------------------------------------------------------------------------------
 
-    def run(self) -> None:
+    def run(self, on_ready: Callable[[], None] | None = None) -> None:
+        """Run the module until it stops; ``on_ready`` is called once it is up and about to loop."""
         spec = self.spec
         run_id = spec.run_id if spec.lockstep else 0
         with Node(spec.bus, spec.vehicle, self.name, clock=self.now_us, run_id=run_id) as node:
@@ -158,14 +159,18 @@ class Runtime:
                         node.declare_token(keys.alive_token(node.vehicle, self.name, os.getpid()))
                         self.state = "running"
                         log.info("%s ready (%s, shared-memory fast path)", self.name, self.describe_trigger())
+                        if on_ready is not None:
+                            on_ready()
 
                     FastDriver(self, announce).run()
                     return
                 lockstep_part = self._lockstep = self._make_lockstep()
                 node.declare_token(keys.alive_token(node.vehicle, self.name, os.getpid()))
                 # Over Zenoh the simulator starts once every module of the roster has synced; on the fast path
-                # it waits for the participants only, which an outside module is not.
-                if self.spec.lockstep and not (outside and shm):
+                # it waits for the participants only, which an outside module is not. An observer joining a
+                # running stack (`stack plot`, or a restart) has nothing to wait for: nobody probes any more.
+                observer_joining = self.module_cls.PASSIVE and spec.late_join
+                if spec.lockstep and not (outside and shm) and not observer_joining:
                     self.state = "syncing"
                     member = lockstep_part if isinstance(lockstep_part, LockstepMember) else None
                     coordinator = lockstep_part if isinstance(lockstep_part, LockstepCoordinator) else None
@@ -173,6 +178,8 @@ class Runtime:
                     startup.sync(node, self.inputs.values(), member, self.spec.late_join, announce)
                 self.state = "running"
                 log.info("%s ready (%s)", self.name, self.describe_trigger())
+                if on_ready is not None:
+                    on_ready()
                 self._loop(lockstep_part)
             finally:
                 self.state = "stopping"

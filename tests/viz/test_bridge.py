@@ -126,6 +126,17 @@ def test_stack_plot_attaches_to_a_running_stack(tmp_path):
         )
         assert result.returncode == 0, result.stderr
         assert "saving plots to" in result.stdout and "plot stopped" in result.stdout
+        # --duration counts from when plotting starts, however long setting up Rerun takes on a loaded machine.
+        brief = tmp_path / "brief.rrd"
+        result = subprocess.run(
+            [sys.executable, "-c", cli, "--save", str(brief), "--duration", "0.01"],
+            env=stack_env(home),
+            capture_output=True,
+            text=True,
+            timeout=60,
+            cwd=REPO,
+        )
+        assert result.returncode == 0 and "saving plots to" in result.stdout and brief.exists(), result
         assert stack.proc.poll() is None
     finally:
         assert stack.stop() == 0
