@@ -17,7 +17,7 @@ from typing import Any
 from stack.msg.fixedwing import PositionSetpoint
 from stack.scenario import autonomy, plane_metrics
 from stack.scenario.catalogue import Check, Scenario
-from stack.scenario.plane_mission import RECORD, flight_samples, landing, require_fixed_wing
+from stack.scenario.plane_mission import RECORD, TOUCHDOWN_SINK_MAX, flight_samples, landing, require_fixed_wing
 from stack.scenario.script import ScenarioError, ScriptContext, Wait
 
 ALTITUDE_M = 40.0
@@ -105,6 +105,7 @@ SCENARIO = Scenario(
         Check("altitude_rms_m", 3.0),
         Check("airspeed_rms_m_s", 2.0),
         Check("landed_on_runway", True),
+        Check("touchdown_sink_m_s", TOUCHDOWN_SINK_MAX),
     ),
     record=RECORD,
     watch=("vehicle_land_detected", "position_setpoint_triplet"),

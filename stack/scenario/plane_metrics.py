@@ -8,7 +8,8 @@ Everything is measured on the simulator's ground truth about home (:class:`~stac
   while flying the first half of that leg;
 * a loiter is judged once the vehicle is on its circle (within a fifth of the radius): the radius error;
 * the landing is on the runway when the vehicle came to rest within its width of the runway's centre line
-  (through home along the takeoff heading) and between its threshold and its end.
+  (through home along the takeoff heading) and between its threshold and its end; its touchdown is judged by the
+  sink rate at the wheels' first contact (the worst of them, if it bounced).
 """
 
 from __future__ import annotations
@@ -95,6 +96,12 @@ def on_runway(rest: Vec2, heading: float, length: float) -> tuple[bool, float, f
     along, across, _ = _along_across((0.0, 0.0), (math.cos(heading), math.sin(heading)), rest)
     ok = abs(across) <= RUNWAY_HALF_WIDTH_M and -RUNWAY_THRESHOLD_M <= along <= length
     return ok, along, across
+
+
+def touchdown_sink(on_ground: Sequence[bool], down_speed: Sequence[float]) -> float:
+    """The largest sink rate [m/s] just before the wheels touched after flying (NaN: it never landed)."""
+    sinks = [down_speed[i - 1] for i in range(1, len(on_ground)) if on_ground[i] and not on_ground[i - 1]]
+    return max(sinks) if sinks else math.nan
 
 
 def summary(errors: Sequence[float]) -> tuple[float, float]:

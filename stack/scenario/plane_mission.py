@@ -27,6 +27,8 @@ from stack.scenario.script import ScenarioError, ScriptContext, Wait
 MISSION_FILE = "missions/plane_rectangle.plan"
 MISSION_TIMEOUT_S = 900.0
 RUNWAY_LENGTH_M = 600.0
+TOUCHDOWN_SINK_MAX = 2.0
+"""[m/s]: a firm landing; a stalled flare hits the runway at 3 m/s or more."""
 RECORD = (*autonomy.RECORD, "mission_result", "tecs_status", "position_setpoint_triplet")
 
 
@@ -91,7 +93,10 @@ def landing(ctx: ScriptContext, frames: autonomy.Frames) -> dict[str, Any]:
     heading = quat.yaw(autonomy.truth_at(frames.truth, t0).q)
     rest = frames.truth_about_home(frames.truth.values[-1].position)
     ok, along, across = plane_metrics.on_runway((rest[0], rest[1]), heading, RUNWAY_LENGTH_M)
+    flown = [s for t, s in zip(frames.truth.times, frames.truth.values, strict=True) if t >= t0]
+    sink = plane_metrics.touchdown_sink([s.on_ground for s in flown], [s.velocity[2] for s in flown])
     return {
+        "touchdown_sink_m_s": sink,
         "landed_on_runway": ok and autonomy.landed_and_disarmed(ctx),
         "landing_along_m": along,
         "landing_offset_m": across,
@@ -153,6 +158,7 @@ CHECKS = (
     Check("altitude_rms_m", 1.5),
     Check("airspeed_rms_m_s", 1.0),
     Check("landed_on_runway", True),
+    Check("touchdown_sink_m_s", TOUCHDOWN_SINK_MAX),
 )
 
 SCENARIO = Scenario(
