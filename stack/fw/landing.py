@@ -12,9 +12,11 @@ The landing flies the approach line from the previous waypoint through the landi
 1 km beyond, so it keeps tracking past it); it holds the line's heading with at most 10° of roll
 from FW_LND_HHDIST before the landing point or once flaring. Vertically: until the slope is captured
 it holds the previous waypoint's altitude; then the slope; below the flare height the flare curve,
-with the pitch within FW_LND_FL_PMIN…FW_LND_FL_PMAX, and below FW_LND_TLALT the idle throttle.
-The airspeed is FW_LND_AIRSPD_SC·FW_AIRSPD_MIN throughout. Flaring, the heading hold and the throttle
-limit latch until ``reset``; a flare curve that would climb again keeps the vehicle on the ground.
+with the pitch within FW_LND_FL_PMIN…FW_LND_FL_PMAX, and below FW_LND_TLALT the throttle at most
+FW_THR_LND_MAX (PX4 v1.13). The airspeed is FW_LND_AIRSPD_SC·FW_AIRSPD_MIN throughout. Flaring, the heading
+hold and the throttle limit latch until ``reset``. The flare curve goes on below the runway past the landing
+point (a vehicle still in the air there keeps sinking instead of floating along the runway) and never rises
+again; the position controller idles the motor once the wheels are down.
 """
 
 from __future__ import annotations
@@ -125,8 +127,8 @@ class LandingSetpoint(NamedTuple):
     pitch_min: float
     """Flare pitch limits [rad] while flaring; NaN: the controller's own."""
     pitch_max: float
-    throttle_idle: bool
-    """Below the throttle limit altitude in the flare: throttle at FW_THR_IDLE."""
+    throttle_limited: bool
+    """Below the throttle limit altitude in the flare, near the landing point: throttle at most FW_THR_LND_MAX."""
     on_slope: bool
     heading_hold: bool
     """Hold ``target_bearing`` (rudder and wheel) instead of tracking the line."""
@@ -157,7 +159,6 @@ class Landing:
         self.on_slope = False
         self.heading_hold = False
         self.throttle_limited = False
-        self.stay_on_ground = False
         self.target_bearing = math.nan
         self._flare_curve_last = math.inf
 
@@ -188,9 +189,9 @@ class Landing:
             land_point[0] + VIRTUAL_WAYPOINT_DISTANCE * math.cos(line_bearing),
             land_point[1] + VIRTUAL_WAYPOINT_DISTANCE * math.sin(line_bearing),
         )
-        # Past the landing point (it lies behind) the slope and the flare are at its height.
+        # Past the landing point (it lies behind) the slope is at its height; the flare curve goes on below it.
         in_front = abs(wrap_pi(bearing_to_land - line_bearing)) < 0.5 * math.pi
-        distance_in_front = distance if in_front else 0.0
+        along = to_land[0] * math.cos(line_bearing) + to_land[1] * math.sin(line_bearing)
 
         if (
             p.heading_hold_distance > 0.0
@@ -203,15 +204,11 @@ class Landing:
         height = altitude - land_altitude
         pitch_min = pitch_max = math.nan
         if height < p.flare_altitude or self.flaring:
-            if (
-                height < p.throttle_limit_altitude
-                and distance_in_front < self.slope.flare_length + THROTTLE_LIMIT_DISTANCE_MARGIN
-            ):
+            if height < p.throttle_limit_altitude and along < self.slope.flare_length + THROTTLE_LIMIT_DISTANCE_MARGIN:
                 self.throttle_limited = True
-            flare_height = self.slope.flare_altitude_at(distance_in_front) if in_front else 0.0
-            if (self.flaring and flare_height > self._flare_curve_last) or self.stay_on_ground:
-                flare_height = 0.0
-                self.stay_on_ground = True
+            # The curve sinks on past the landing point (towards −FW_LND_HVIRT), so that a flare that has not touched
+            # down there still does, and it never rises again (a vehicle that swerved away from the point).
+            flare_height = min(self.slope.flare_altitude_at(along), self._flare_curve_last)
             self._flare_curve_last = flare_height
             self.flaring = True
             altitude_sp = land_altitude + flare_height
@@ -231,7 +228,7 @@ class Landing:
             flaring=self.flaring,
             pitch_min=pitch_min,
             pitch_max=pitch_max,
-            throttle_idle=self.throttle_limited,
+            throttle_limited=self.throttle_limited,
             on_slope=self.on_slope,
             heading_hold=self.heading_hold,
             target_bearing=self.target_bearing if self.heading_hold else line_bearing,

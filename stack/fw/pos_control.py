@@ -63,7 +63,7 @@ the navigator accepts a waypoint within the larger of this distance and the item
 _OWN = (
     "FW_USE_NPFG", "FW_L1_PERIOD", "FW_L1_DAMPING", "FW_L1_R_SLEW_MAX", "FW_R_LIM", "FW_P_LIM_MIN", "FW_P_LIM_MAX",
     "FW_THR_CRUISE", "FW_THR_MIN", "FW_THR_MAX", "FW_THR_IDLE", "FW_AIRSPD_MIN", "FW_AIRSPD_TRIM", "FW_AIRSPD_MAX",
-    "FW_MAN_R_MAX", "NAV_ACC_RAD", "NAV_LOITER_RAD",
+    "FW_THR_LND_MAX", "FW_MAN_R_MAX", "NAV_ACC_RAD", "NAV_LOITER_RAD",
 )
 PARAMS: tuple[Param, ...] = catalogue.params(
     *dict.fromkeys(
@@ -424,12 +424,8 @@ class FixedwingPositionControl:
             self._airspeed_sp(sp.airspeed_sp),
             pitch_min=sp.pitch_min,
             pitch_max=sp.pitch_max,
-            throttle_max=p["FW_THR_IDLE"] if sp.flaring or sp.throttle_idle else NAN,
+            throttle_max=p["FW_THR_LND_MAX"] if sp.throttle_limited else NAN,
         )
-        if sp.flaring or sp.throttle_idle:
-            # The flare is flown at idle (PX4 v1.14's flare ramps the throttle to idle): with the pitch held at
-            # FW_LND_FL_PMIN or above, any throttle holds the aircraft off the runway.
-            throttle = p["FW_THR_IDLE"]
         return FwPosOutput(roll, pitch, sp.target_bearing, throttle, False, False)
 
     # ------------------------------------------------------------------ pilot and failsafe modes

@@ -59,22 +59,22 @@ def test_approach_holds_altitude_then_captures_the_slope():
     assert sp.on_slope and sp.altitude_sp == pytest.approx((200.0 - (L - D1)) * TAN5)
 
 
-def test_flare_pitch_limits_idle_throttle_and_heading_hold():
+def test_flare_pitch_limits_throttle_limit_and_heading_hold():
     landing = Landing(DEFAULTS)
     update(landing, -300.0, 30.0)
     sp = update(landing, -30.0, 2.9)
     assert sp.flaring and sp.altitude_sp == pytest.approx(13.0 * math.exp(-(L - 30.0) / C) - 10.0)
     assert (sp.pitch_min, sp.pitch_max) == (DEFAULTS.flare_pitch_min, DEFAULTS.flare_pitch_max)
-    assert not sp.throttle_idle  # above 2/3 of the flare altitude
+    assert not sp.throttle_limited  # above 2/3 of the flare altitude
     assert not sp.heading_hold  # from the next step on, as in PX4
     sp = update(landing, -28.0, 2.5, yaw=0.3)
     assert sp.heading_hold and sp.target_bearing == 0.0 and sp.roll_limit == pytest.approx(math.radians(10.0))
     sp = update(landing, -20.0, 1.9)
-    assert sp.throttle_idle
+    assert sp.throttle_limited
     sp = update(landing, -10.0, 3.5)  # a bounce does not end the flare
-    assert sp.flaring and sp.throttle_idle
-    sp = update(landing, 5.0, 0.5)  # past the landing point: on the ground
-    assert sp.altitude_sp == 0.0
+    assert sp.flaring and sp.throttle_limited
+    sp = update(landing, 5.0, 0.5)  # past the landing point, still flying: the curve goes on below the runway
+    assert sp.altitude_sp == pytest.approx(13.0 * math.exp(-(L + 5.0) / C) - 10.0) and sp.altitude_sp < -0.3
     landing.reset()
     assert not update(landing, -300.0, 30.0).flaring
 
@@ -85,12 +85,11 @@ def test_heading_hold_from_the_hold_distance():
     assert update(landing, -14.0, 4.0).heading_hold
 
 
-def test_a_flare_curve_that_would_climb_keeps_it_on_the_ground():
+def test_a_flare_curve_never_rises_again():
     landing = Landing(DEFAULTS)
-    update(landing, -20.0, 2.0)
-    sp = update(landing, -25.0, 1.0)  # farther: the curve would rise
-    assert sp.altitude_sp == 0.0
-    assert update(landing, -10.0, 0.5).altitude_sp == 0.0
+    low = update(landing, -20.0, 2.0).altitude_sp
+    assert update(landing, -25.0, 1.0).altitude_sp == low  # farther from the point: the curve would rise
+    assert update(landing, -10.0, 0.5).altitude_sp < low
 
 
 def test_without_a_previous_waypoint_the_line_is_the_bearing_to_the_landing_point():

@@ -73,6 +73,17 @@ def test_after_the_flare_it_rolls_out_at_idle_steering_along_the_runway() -> Non
     assert out.wheel_steering and out.throttle == 0.0 and out.roll == 0.0 and out.yaw == pytest.approx(0.0)
 
 
+@pytest.mark.parametrize("limit", [0.0, 0.3])
+def test_below_the_throttle_limit_altitude_the_flare_keeps_at_most_fw_thr_lnd_max(limit: float) -> None:
+    control = FixedwingPositionControl({"FW_THR_LND_MAX": limit, "FW_LND_FLALT": 3.0, "FW_LND_TLALT": -1.0})
+    land = line(SP.SETPOINT_TYPE_LAND, start=(-300.0, 0.0, -15.0), end=(0.0, 0.0, 0.0))
+    slow = dict(velocity=(8.0, 0.0, 0.5), airspeed=8.0)  # well below the landing airspeed: TECS asks for throttle
+    flaring = control.update(inputs(NS.NAVIGATION_STATE_AUTO_RTL, land, position=(-30.0, 0.0, -2.5), **slow))
+    assert flaring.throttle > 0.3  # above FW_LND_TLALT (2/3 of the flare altitude) the throttle is TECS'
+    limited = control.update(inputs(NS.NAVIGATION_STATE_AUTO_RTL, land, position=(-20.0, 0.0, -1.5), **slow))
+    assert 0.0 <= limited.throttle <= limit and not limited.wheel_steering
+
+
 def test_altitude_mode_banks_with_the_stick_and_descend_circles_gently() -> None:
     control = FixedwingPositionControl({"FW_MAN_R_MAX": 45.0})
     sticks = ManualControlSetpoint(valid=True, roll=0.5, pitch=0.0, throttle=0.0)
