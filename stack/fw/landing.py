@@ -14,9 +14,10 @@ from FW_LND_HHDIST before the landing point or once flaring. Vertically: until t
 it holds the previous waypoint's altitude; then the slope; below the flare height the flare curve,
 with the pitch within FW_LND_FL_PMIN…FW_LND_FL_PMAX, and below FW_LND_TLALT the throttle at most
 FW_THR_LND_MAX (PX4 v1.13). The airspeed is FW_LND_AIRSPD_SC·FW_AIRSPD_MIN throughout. Flaring, the heading
-hold and the throttle limit latch until ``reset``. The flare curve goes on below the runway past the landing
-point (a vehicle still in the air there keeps sinking instead of floating along the runway) and never rises
-again; the position controller idles the motor once the wheels are down.
+hold and the throttle limit latch until ``reset``. An idle flare (FW_THR_LND_MAX at FW_THR_IDLE) ends at the
+runway's height; a flare on throttle goes on below the runway past the landing point (a vehicle still in the air
+there keeps sinking instead of floating along the runway). The curve never rises again; the position controller
+idles the motor once the wheels are down.
 """
 
 from __future__ import annotations
@@ -84,6 +85,8 @@ class LandingParams:
     """[rad]"""
     airspeed: float
     """FW_LND_AIRSPD_SC·FW_AIRSPD_MIN [m/s]"""
+    idle_flare: bool
+    """FW_THR_LND_MAX at most FW_THR_IDLE: nothing holds the vehicle up past the landing point."""
 
     PARAM_NAMES = (
         "FW_LND_ANG",
@@ -95,6 +98,8 @@ class LandingParams:
         "FW_LND_FL_PMAX",
         "FW_LND_AIRSPD_SC",
         "FW_AIRSPD_MIN",
+        "FW_THR_LND_MAX",
+        "FW_THR_IDLE",
     )
 
     @classmethod
@@ -115,6 +120,7 @@ class LandingParams:
             flare_pitch_min=math.radians(f("FW_LND_FL_PMIN")),
             flare_pitch_max=math.radians(f("FW_LND_FL_PMAX")),
             airspeed=f("FW_LND_AIRSPD_SC") * f("FW_AIRSPD_MIN"),
+            idle_flare=f("FW_THR_LND_MAX") <= f("FW_THR_IDLE"),
         )
 
 
@@ -206,9 +212,11 @@ class Landing:
         if height < p.flare_altitude or self.flaring:
             if height < p.throttle_limit_altitude and along < self.slope.flare_length + THROTTLE_LIMIT_DISTANCE_MARGIN:
                 self.throttle_limited = True
-            # The curve sinks on past the landing point (towards −FW_LND_HVIRT), so that a flare that has not touched
-            # down there still does, and it never rises again (a vehicle that swerved away from the point).
-            flare_height = min(self.slope.flare_altitude_at(along), self._flare_curve_last)
+            # On idle the curve ends at the runway's height (PX4 v1.13); with throttle, TECS would hold the vehicle
+            # there, so the curve sinks on past the landing point (towards −FW_LND_HVIRT) until it touches down. It
+            # never rises again (a vehicle that swerved away from the point).
+            curve = self.slope.flare_altitude_at(along)
+            flare_height = min(max(curve, 0.0) if p.idle_flare else curve, self._flare_curve_last)
             self._flare_curve_last = flare_height
             self.flaring = True
             altitude_sp = land_altitude + flare_height

@@ -63,7 +63,7 @@ the navigator accepts a waypoint within the larger of this distance and the item
 _OWN = (
     "FW_USE_NPFG", "FW_L1_PERIOD", "FW_L1_DAMPING", "FW_L1_R_SLEW_MAX", "FW_R_LIM", "FW_P_LIM_MIN", "FW_P_LIM_MAX",
     "FW_THR_CRUISE", "FW_THR_MIN", "FW_THR_MAX", "FW_THR_IDLE", "FW_AIRSPD_MIN", "FW_AIRSPD_TRIM", "FW_AIRSPD_MAX",
-    "FW_THR_LND_MAX", "FW_MAN_R_MAX", "NAV_ACC_RAD", "NAV_LOITER_RAD",
+    "FW_MAN_R_MAX", "NAV_ACC_RAD", "NAV_LOITER_RAD",
 )
 PARAMS: tuple[Param, ...] = catalogue.params(
     *dict.fromkeys(

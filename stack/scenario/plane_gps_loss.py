@@ -20,7 +20,7 @@ from stack.scenario import autonomy, plane_metrics
 from stack.scenario.catalogue import Check, Scenario
 from stack.scenario.gps_loss import gps_outage, watch_modes
 from stack.scenario.plane_loiter_wind import circling_time, on_circle, record_loiter
-from stack.scenario.plane_mission import RECORD, TOUCHDOWN_SINK_MAX, flight_samples, landing, require_fixed_wing
+from stack.scenario.plane_mission import RECORD, flight_samples, landing, require_fixed_wing
 from stack.scenario.script import ScenarioError, ScriptContext, Wait
 
 ALTITUDE_M = 40.0
@@ -81,7 +81,6 @@ SCENARIO = Scenario(
         Check("loiter_radius_max_m", 20.0),
         Check("recovered", True),
         Check("landed_on_runway", True),
-        Check("touchdown_sink_m_s", TOUCHDOWN_SINK_MAX),
     ),
     record=RECORD,
     watch=("vehicle_land_detected", "position_setpoint_triplet"),

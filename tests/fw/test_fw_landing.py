@@ -79,6 +79,14 @@ def test_flare_pitch_limits_throttle_limit_and_heading_hold():
     assert not update(landing, -300.0, 30.0).flaring
 
 
+def test_an_idle_flare_ends_at_the_runway_height():
+    values = {n: catalogue.get(n).default for n in LandingParams.PARAM_NAMES} | {"FW_THR_LND_MAX": 0.0}
+    landing = Landing(LandingParams.from_params(values))
+    update(landing, -300.0, 30.0)
+    assert update(landing, -20.0, 1.9).throttle_limited
+    assert update(landing, 5.0, 0.5).altitude_sp == 0.0  # past the point: nothing holds it up, it settles
+
+
 def test_heading_hold_from_the_hold_distance():
     landing = Landing(DEFAULTS)
     assert not update(landing, -16.0, 4.0).heading_hold
