@@ -6,6 +6,7 @@ import subprocess
 import sys
 import time
 import urllib.request
+from pathlib import Path
 
 import psutil
 
@@ -116,26 +117,17 @@ def test_stack_plot_attaches_to_a_running_stack(tmp_path):
     try:
         stack.wait_up()
         cli = "import typer; from stack.cli.plot import plot; app = typer.Typer(); app.command()(plot); app()"
-        result = subprocess.run(
-            [sys.executable, "-c", cli, "--save", str(out), "--duration", "3"],
-            env=stack_env(home),
-            capture_output=True,
-            text=True,
-            timeout=60,
-            cwd=REPO,
-        )
+
+        def plot(save: Path, duration: str) -> subprocess.CompletedProcess[str]:
+            args = [sys.executable, "-c", cli, "--save", str(save), "--duration", duration]
+            return subprocess.run(args, env=stack_env(home), capture_output=True, text=True, timeout=60, cwd=REPO)
+
+        result = plot(out, "3")
         assert result.returncode == 0, result.stderr
         assert "saving plots to" in result.stdout and "plot stopped" in result.stdout
         # --duration counts from when plotting starts, however long setting up Rerun takes on a loaded machine.
         brief = tmp_path / "brief.rrd"
-        result = subprocess.run(
-            [sys.executable, "-c", cli, "--save", str(brief), "--duration", "0.01"],
-            env=stack_env(home),
-            capture_output=True,
-            text=True,
-            timeout=60,
-            cwd=REPO,
-        )
+        result = plot(brief, "0.01")
         assert result.returncode == 0 and "saving plots to" in result.stdout and brief.exists(), result
         assert stack.proc.poll() is None
     finally:
