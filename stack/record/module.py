@@ -4,7 +4,8 @@ It is passive: it never joins the lockstep and the simulation does not wait for 
 never loses a message either. On the same-host fast path (:mod:`stack.fastpath`) it reads every
 ring directly and is a lossless reader: lockstep time waits for it only when it falls far behind.
 Over Zenoh its subscription is declared before the stack starts and the bus blocks rather than drops
-(its queue is large, and once full, lockstep publishers wait). Messages from outside the run come
+(its queue is large in real time; in lockstep it is kept short, so that on stop little is left to write,
+and once full, lockstep publishers wait). Messages from outside the run come
 through one wildcard subscriber on ``stack/<vehicle>/*/*``. Both feed a writer thread: the module's
 main thread can be interrupted by a stop signal at any instruction, so the file is only ever written
 by that thread, which on stop drains what is still queued, then writes the summary.
@@ -47,12 +48,14 @@ from stack.runtime.module import Arg, Module, Timer
 from stack.supervisor import state as run_state
 
 QUEUE_CAPACITY = 1 << 16
-# Fast-path records read but not written yet: past this the module stops reading, so lockstep time
-# waits for the writer rather than memory growing.
-FAST_BACKLOG = 1 << 15
+# In lockstep the backlog is bounded tighter (Zenoh queue, and fast-path records read but not written
+# yet): past it lockstep time waits for the writer, so the backlog left to write on stop stays a
+# fraction of a second even on a loaded machine (the writer does about 75,000 messages/s on one core).
+LOCKSTEP_QUEUE_CAPACITY = 1 << 13
+FAST_BACKLOG = 1 << 12
 IDLE_SLEEP_S = 0.002
 STOP_QUIET_S = 0.2  # on stop, drain until the queue has been empty this long...
-STOP_DRAIN_S = 1.5  # ...or this long at most (the stack may still be publishing)
+STOP_DRAIN_S = 3.0  # ...or this long at most (the stack may still be publishing)
 STOP_TIMEOUT_S = 4.0  # the supervisor kills a module 5 s after asking it to stop
 STATUS_PERIOD_S = 10.0
 
@@ -232,7 +235,8 @@ class RecordingPump:
                 busy = True
                 handled += 1
                 if handled & 1023 == 0 and self._stop.is_set() and time.monotonic() >= self._stop_deadline:
-                    return  # the stack keeps publishing faster than we write: stop anyway
+                    self._cut_short()  # the stack keeps publishing faster than we write: stop anyway
+                    return
                 try:
                     handle(sample)
                 except OSError:
@@ -264,6 +268,13 @@ class RecordingPump:
                 self.errors += 1
                 if self.errors <= 10 or self.errors % 1000 == 0:
                     self._log.exception("failed to record a message on %s (%d so far)", record[0], self.errors)
+
+    def _cut_short(self) -> None:
+        for _ in range(QUEUE_CAPACITY):
+            if self._sub.try_recv() is None:
+                break
+            self.discarded += 1
+        self._log.error("recording cut short on stop: %d queued messages not written", self.discarded)
 
     def _discard(self) -> None:
         while not self._stop.is_set():
@@ -320,7 +331,8 @@ class RecorderModule(Module):
             raise ValueError(f"recorder: cannot write {path}: {e.strerror or e}") from None
         self.sink = SampleRecorder(self.writer, selection, spec.lockstep)
         self._sub = rt.node.session.declare_subscriber(
-            keys.all_topics(spec.vehicle), zenoh.handlers.FifoChannel(QUEUE_CAPACITY)
+            keys.all_topics(spec.vehicle),
+            zenoh.handlers.FifoChannel(LOCKSTEP_QUEUE_CAPACITY if spec.lockstep else QUEUE_CAPACITY),
         )
         self.pump = RecordingPump(self._sub, self.sink, self.log)
         self.fast: AllTopicsReader | None = None
