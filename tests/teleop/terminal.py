@@ -157,7 +157,7 @@ class SticksOnTheBus:
         for line in self.proc.stdout:
             self.messages.append(json.loads(line))
 
-    def wait_for(self, ok, timeout: float = 10.0) -> dict:
+    def wait_for(self, ok, timeout: float = 30.0) -> dict:
         deadline = time.monotonic() + timeout
         while time.monotonic() < deadline:
             if self.messages and ok(self.messages[-1]):

@@ -171,6 +171,7 @@ def test_ctrl_d_quits_with_the_sticks_centred_but_a_thrust_throttle_where_it_was
     t = Teleop(stack.home)
     teleop.append(t)
     t.wait_for(r"sent at \d+ Hz")
+    sticks.wait_for(lambda m: True, timeout=30.0)  # the listener is up (it starts beside teleop)
     assert t.command(lambda: t.type("5"), "mode RotorS") == "accepted"
     t.type("w", 4)
     # What the sticks mean there, scaled as RotorS' joy.cpp scales them by the stack's RJOY_* parameters.
