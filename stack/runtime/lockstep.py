@@ -383,6 +383,13 @@ class LockstepCoordinator:
             self._triggered_by[m.trigger].remove(publisher_id)
         for key in [k for k in self._pending if k[0] == publisher_id]:
             del self._pending[key]
+        # A member killed between publishing and acknowledging leaves its subscribers' runs on that last
+        # message acknowledged (pending below zero) but never announced: it never will be. (A topic with
+        # a second publisher whose announcement is late would lose that run's wait too: none has one.)
+        for suffix in {s for pub, s in self._totals if pub == publisher_id}:
+            for member in self._triggered_by.get(suffix, ()):
+                if self._pending.get((member, suffix), 0) < 0:
+                    del self._pending[(member, suffix)]
         log.warning("%s", why)
 
     # -- the step -----------------------------------------------------------------------------
