@@ -3,6 +3,11 @@
 The supervisor writes the spec (JSON) into the run directory and starts one such process per
 module. SIGTERM and SIGINT unwind the loop so the Zenoh session is always closed; the process also
 asks the kernel to send it SIGTERM if the supervisor dies, so no module is ever orphaned.
+
+The process loads its code first, then waits for the supervisor's go (a line on its standard input)
+before it opens its session: modules still start one after another, each once the one before is
+ready, but the supervisor can start the next processes early, so their imports overlap that wait.
+Standard input at its end (no supervisor pipe) is a go too.
 """
 
 from __future__ import annotations
@@ -20,7 +25,7 @@ from types import FrameType
 from stack.params.param import ParamError
 from stack.runtime.lockstep import LockstepError
 from stack.runtime.runner import Runtime, Shutdown
-from stack.runtime.spec import ModuleSpec
+from stack.runtime.spec import ModuleSpec, load_module_class
 
 PR_SET_PDEATHSIG = 1
 # Where each module writes its cProfile statistics (<module>.prof) when it stops, if set: for finding
@@ -64,6 +69,8 @@ def main(argv: list[str] | None = None) -> int:
     profiler = cProfile.Profile(time.thread_time) if profile_dir else None
     try:
         _die_with_parent(spec.supervisor_pid)
+        load_module_class(spec.module)
+        sys.stdin.buffer.readline()
         if profiler is not None:
             profiler.enable()
         Runtime(spec).run()

@@ -41,6 +41,9 @@ from stack.supervisor.profile import ModuleEntry, ProcessEntry, Profile, expand_
 log = logging.getLogger("stack.supervisor")
 
 START_TIMEOUT_S = 60.0
+# Module processes started ahead of their turn: each loads its code while the ones before it start, and
+# waits for its go (see stack.runtime.main). More would only share the two cores' start-up work thinner.
+PRESTART_AHEAD = 2
 STOP_GRACE_S = 5.0
 BACKOFF_MAX_S = 10.0
 # How often the supervisor checks its modules (and applies topic-graph changes to a fast-path run).
@@ -253,24 +256,29 @@ class Supervisor:
             self._spawn_program(p)
             if not self._wait_program_ready(p):
                 return False
-        for m in self.modules:
+        for i, m in enumerate(self.modules):
             if self._stop.is_set():
                 return False
-            self._spawn(m)
+            for ahead in self.modules[i : i + 1 + PRESTART_AHEAD]:
+                if ahead.proc is None:
+                    self._spawn(ahead, go=False)
+            self._go(m)
             if not self._wait_ready(m):
                 return False
         return True
 
-    def _module_bus(self, name: str) -> BusConfig:
-        """Each module listens on its own endpoint and connects to the router and the modules before it."""
+    def _module_bus(self, name: str, restarted: bool) -> BusConfig:
+        """Each module listens on its own endpoint and connects to the router and the modules before it; a
+        restarted one connects to all the others, so its messages go straight to every subscriber from its
+        first lockstep step rather than by whatever route exists until the later modules reconnect to it."""
         if not self.module_endpoints:
             return self.module_bus
         names = [m.entry.name for m in self.modules]
-        earlier = tuple(self.module_endpoints[n] for n in names[: names.index(name)])
+        peers = [n for n in names if n != name] if restarted else names[: names.index(name)]
         bus = self.module_bus
         return BusConfig(
             mode=bus.mode,
-            connect=(*bus.connect, *earlier),
+            connect=(*bus.connect, *(self.module_endpoints[n] for n in peers)),
             listen=(self.module_endpoints[name],),
             low_latency=bus.low_latency,
             lease_ms=bus.lease_ms,
@@ -284,7 +292,7 @@ class Supervisor:
             name=e.name,
             module=e.module,
             vehicle=self.vehicle,
-            bus=self._module_bus(e.name),
+            bus=self._module_bus(e.name, restarted=m.restarts > 0),
             params=e.params,
             args=args,
             lockstep=self.profile.lockstep,
@@ -306,27 +314,39 @@ class Supervisor:
             **{f"STACK_{k.upper()}": v for k, v in self.placeholders.items()},
         }
 
-    def _spawn(self, m: ModuleProcess) -> None:
+    def _spawn(self, m: ModuleProcess, go: bool = True) -> None:
+        """Start the module's process; it loads its code, then waits for ``_go`` (given now unless ``go`` is False)."""
         m.spec_path.write_text(self._spec(m).to_json())
         env = self._environment()
         # fork+exec via posix_spawn/vfork (no Python code runs in the child before exec); own process
         # group so a terminal Ctrl-C reaches the supervisor only and it can stop modules in order.
         m.proc = subprocess.Popen(
             [sys.executable, "-m", "stack.runtime.main", str(m.spec_path)],
-            stdin=subprocess.DEVNULL,
+            stdin=subprocess.PIPE,
             stdout=subprocess.PIPE,
             stderr=subprocess.STDOUT,
             env=env,
             process_group=0,
             pass_fds=self.fast.pass_fds() if self.fast is not None else (),
         )
-        m.state = "starting"
-        self._say(f"starting {m.entry.name} (pid {m.proc.pid})")
         m.exit_code = None
         m.restart_at = None
         log_file = m.log_path.open("a")
         m.reader = threading.Thread(target=self._pump, args=(m.entry.name, m.proc.stdout, log_file), daemon=True)
         m.reader.start()
+        if go:
+            self._go(m)
+
+    def _go(self, m: ModuleProcess) -> None:
+        """Let the module's process open its session and start (if it already died, _wait_ready says so)."""
+        assert m.proc is not None and m.proc.stdin is not None
+        m.state = "starting"
+        self._say(f"starting {m.entry.name} (pid {m.proc.pid})")
+        try:
+            m.proc.stdin.write(b"go\n")
+            m.proc.stdin.close()
+        except OSError:
+            pass
 
     def _spawn_program(self, p: ProgramProcess) -> None:
         command = [expand_placeholders(part, self.placeholders) for part in p.entry.command]
