@@ -345,6 +345,22 @@ def _type_name(t: object) -> str:
     return t.__name__ if isinstance(t, type) else str(t).replace("typing.", "")
 
 
+def _default(field: msgspec.structs.FieldInfo) -> object:
+    """A field's default as JSON: made by its factory where it has one (a list, a nested message); None if required."""
+    if field.default is not msgspec.NODEFAULT:
+        return to_jsonable(field.default)
+    if field.default_factory is not msgspec.NODEFAULT:
+        return to_jsonable(field.default_factory())
+    return None
+
+
+def schema_rows(msg_type: type[Message]) -> list[dict[str, object]]:
+    """A message's fields as JSON: name, type and default."""
+    return [
+        {"name": f.name, "type": _type_name(f.type), "default": _default(f)} for f in msgspec.structs.fields(msg_type)
+    ]
+
+
 @app.command()
 def info(
     topic: str,
@@ -354,10 +370,7 @@ def info(
 ) -> None:
     """A topic's type, schema (fields, types, defaults), fingerprint, publishers and subscribers."""
     msg_type = _topic_type(topic)
-    schema = [
-        {"name": f.name, "type": _type_name(f.type), "default": to_jsonable(f.default)}
-        for f in msgspec.structs.fields(msg_type)
-    ]
+    schema = schema_rows(msg_type)
     result: dict[str, object] = {
         "topic": topic,
         "type": msg_type.__name__,

@@ -1,16 +1,22 @@
 """`stack topic echo` and `pub` against a running stack (the test chain, in real time): --rate, several
 --field paths, a slow reader's drops counted, and a publication on every topic of the registry."""
 
+import fcntl
 import itertools
 import json
+import struct
 import subprocess
 import sys
+import termios
 import time
+from typing import IO
 
 import pytest
 
+from stack.cli.topic import schema_rows
+from stack.msg.registry import TOPICS
 from tests.cli.test_message_json import example
-from tests.support.harness import REPO, RunningStack, chain_profile, stack_env, wait_no_processes
+from tests.support.harness import REPO, RunningStack, chain_profile, eventually, stack_env, wait_no_processes
 
 GYRO_HZ = 250
 
@@ -23,6 +29,14 @@ def stack(tmp_path_factory):
     yield running
     assert running.stop() == 0
     assert not wait_no_processes(tmp / "home")
+
+
+PIPE_CAPACITY = 65536  # Linux's default
+
+
+def unread(pipe: IO[str]) -> int:
+    """Bytes written to the pipe and not read yet."""
+    return struct.unpack("i", fcntl.ioctl(pipe.fileno(), termios.FIONREAD, b"\0\0\0\0"))[0]
 
 
 def background_cli(stack: RunningStack, *args: str) -> subprocess.Popen[str]:
@@ -62,7 +76,10 @@ def test_echo_several_fields(stack):
 def test_a_slow_reader_loses_the_oldest_messages_and_is_told(stack):
     echo = background_cli(stack, "topic", "echo", "sensor_gyro", "--queue", "10", "-n", "500")
     try:
-        time.sleep(5.0)  # nobody reads: the pipe fills, the printer blocks, the queue overflows
+        # Nobody reads its output: the pipe fills and the printer blocks; then the 250 Hz gyro overflows the queue
+        # of 10 within 0.1 s.
+        eventually(lambda: unread(echo.stdout) >= PIPE_CAPACITY - 4096, what="a full pipe")
+        time.sleep(0.5)
         first = echo.stdout.readline()
         _, err = echo.communicate(timeout=60)  # then it reads on until the echo has shown its 500 and ends
     finally:
@@ -81,9 +98,18 @@ def test_a_slow_reader_loses_the_oldest_messages_and_is_told(stack):
 PUB_TOPICS = ("vehicle_command", "actuator_motors", "mission")
 
 
+@pytest.mark.parametrize("topic", sorted(TOPICS))
+def test_every_topics_schema_is_json(topic):
+    """`stack topic info --json` shows each field's default, a required field's as null."""
+    rows = schema_rows(TOPICS[topic])
+    assert json.loads(json.dumps(rows, allow_nan=False)) == rows
+    assert [row["name"] for row in rows] == list(TOPICS[topic].__struct_fields__)
+
+
 def test_pub_runs_on_a_live_stack(stack):
+    before = len(stack.subscribers("mission"))
     listener = background_cli(stack, "topic", "echo", "mission", "-n", "1", "--json", "--timeout", "60")
-    time.sleep(3.0)  # the listener subscribed
+    eventually(lambda: len(stack.subscribers("mission")) > before, what="the listener's subscription")
     for topic in PUB_TOPICS:
         values = example(topic)
         if topic == "mission":
