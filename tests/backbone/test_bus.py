@@ -1,13 +1,13 @@
 """Publish and subscribe across real processes over Zenoh on loopback; bad input is counted and dropped."""
 
+import contextlib
 import json
 import subprocess
 import sys
-import time
 
 from stack.bus.node import stable_publisher_id
 from stack.bus.ports import free_port
-from tests.support.harness import REPO, RunningStack, chain_profile, stack_env, wait_no_processes
+from tests.support.harness import REPO, RunningStack, chain_profile, eventually, stack_env, wait_no_processes
 
 
 def test_messages_cross_processes_in_order_with_header(tmp_path):
@@ -17,7 +17,6 @@ def test_messages_cross_processes_in_order_with_header(tmp_path):
     sub = subprocess.Popen(
         [sys.executable, "-m", "tests.support.peers", "sub", endpoint, "500", str(out)], env=env, cwd=REPO
     )
-    time.sleep(0.3)
     pub = subprocess.Popen([sys.executable, "-m", "tests.support.peers", "pub", endpoint, "500"], env=env, cwd=REPO)
     assert pub.wait(timeout=60) == 0
     assert sub.wait(timeout=60) == 0
@@ -42,14 +41,16 @@ def test_malformed_and_mismatched_samples_are_counted_and_dropped(tmp_path):
             [sys.executable, "-m", "tests.support.peers", "rogue"], env=stack_env(home), cwd=REPO, timeout=60
         )
         assert rogue.returncode == 0
-        time.sleep(1.5)  # a heartbeat carries the counters
-        counter = next(m for m in stack.status()["modules"] if m["module"] == "command_counter")
-        assert counter["decode_errors"] == 20
-        assert counter["schema_errors"] == 40
-        runs_before = counter["runs"]
-        time.sleep(1.2)
-        counter = next(m for m in stack.status()["modules"] if m["module"] == "command_counter")
-        assert counter["runs"] > runs_before and counter["state"] == "running"
+
+        def counter() -> dict:
+            return next(m for m in stack.status()["modules"] if m["module"] == "command_counter")
+
+        with contextlib.suppress(AssertionError):  # a heartbeat carries the counters; the assertions say what differs
+            eventually(lambda: counter()["schema_errors"] >= 40, what="the counters in a heartbeat")
+        assert (counter()["decode_errors"], counter()["schema_errors"]) == (20, 40)
+        runs_before = counter()["runs"]
+        eventually(lambda: counter()["runs"] > runs_before, what="the counter running on")
+        assert counter()["state"] == "running"
         assert "schema mismatch" in stack.output and "malformed" in stack.output
     finally:
         assert stack.stop() == 0

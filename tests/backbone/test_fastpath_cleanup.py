@@ -4,16 +4,16 @@ Its region is a memfd and its wake-ups are eventfds, inherited by the module pro
 name anywhere and vanish with the last process holding them.
 """
 
+import contextlib
 import os
 import signal
 import stat
-import time
 from pathlib import Path
 
 import psutil
 import pytest
 
-from tests.support.harness import RunningStack, chain_profile, stack_processes, wait_no_processes
+from tests.support.harness import RunningStack, chain_profile, eventually, stack_processes, wait_no_processes
 
 SHM = Path("/dev/shm")
 
@@ -70,7 +70,8 @@ def test_nothing_is_left_behind(tmp_path, ending):
         assert not wait_no_processes(home, timeout=15.0)
     finally:
         stack.kill()
-    time.sleep(0.2)
+    with contextlib.suppress(AssertionError):  # the assertions below say what is left
+        eventually(lambda: not left_in_shm(shm_before) and not stack_processes(home), what="everything gone")
     assert left_in_shm(shm_before) == []
     assert special_files(home) == []
     assert not any(holds_region(p.pid) for p in stack_processes(home))

@@ -2,11 +2,10 @@
 
 import re
 import signal
-import time
 
 import psutil
 
-from tests.support.harness import RunningStack, chain_profile, run_cli, wait_no_processes, write_profile
+from tests.support.harness import RunningStack, chain_profile, eventually, run_cli, wait_no_processes, write_profile
 
 
 def test_modules_start_in_order_each_after_the_previous_is_ready_and_stop_in_reverse(tmp_path):
@@ -128,8 +127,14 @@ def test_no_module_outlives_a_killed_supervisor(tmp_path):
     stack.proc.kill()
     stack.proc.wait()
     assert not wait_no_processes(home, timeout=15)
-    time.sleep(0.2)
-    assert not any(psutil.pid_exists(p) and psutil.Process(p).status() != psutil.STATUS_ZOMBIE for p in pids.values())
+
+    def alive(pid: int) -> bool:
+        try:
+            return psutil.Process(pid).status() != psutil.STATUS_ZOMBIE
+        except psutil.NoSuchProcess:
+            return False
+
+    eventually(lambda: not any(alive(p) for p in pids.values()), timeout=15, what="every module gone")
 
 
 def test_status_reports_each_module(tmp_path):
@@ -137,7 +142,12 @@ def test_status_reports_each_module(tmp_path):
     stack = RunningStack(home, chain_profile(tmp_path / "chain.toml", lockstep=False))
     try:
         stack.wait_up()
-        time.sleep(2.5)
+
+        def measured() -> bool:  # a heartbeat's window after start-up (the first one's holds the start-up)
+            rates = {m["module"]: m.get("trigger_rate_hz", 0.0) for m in stack.status()["modules"]}  # none before one
+            return 200 < rates.get("doubler", 0) < 300 and 40 < rates.get("pacer", 0) < 60
+
+        eventually(measured, what="the doubler's and the pacer's trigger rates")
         report = stack.status()
         rows = {m["module"]: m for m in report["modules"]}
         assert set(rows) == {"tick_source", "doubler", "summer", "pacer"}
