@@ -18,10 +18,9 @@ from typing import Any
 
 from pymavlink.dialects.v20 import common as mavlink2
 
-from stack.bus.ports import free_port
 from stack.gcs import signing
 from stack.mavlink.framing import FrameParser
-from tests.support.harness import REPO, write_profile
+from tests.support.harness import REPO, udp_port, write_profile
 
 VEHICLE = (1, 1)
 
@@ -124,10 +123,6 @@ class Link:
     def toml(self) -> str:
         args = f'device = "udp:127.0.0.1:{self.local}", remote = "127.0.0.1:{self.remote}"{self.extra}'
         return f'[[module]]\nname = "{self.name}"\nmodule = "mavlink"\nargs = {{ {args} }}\n'
-
-
-def udp_port() -> int:
-    return free_port(kind=socket.SOCK_DGRAM)
 
 
 def links_profile(path: Path, links: list[Link], stack: str = "") -> Path:

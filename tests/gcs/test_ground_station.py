@@ -29,12 +29,15 @@ from stack.mavlink import px4_modes
 from stack.mavlink.convert import StatustextAssembler
 from stack.mavlink.framing import FrameParser
 from stack.mavlink.px4_modes import Px4Mode
+from stack.params import catalogue
 from stack.supervisor.profile import DEFAULT_PROFILE, load_profile
 from tests.gcs.peer import Link, Peer, links_profile, udp_port
-from tests.support.harness import RunningStack, wait_no_processes
+from tests.support.harness import RunningStack, eventually, wait_no_processes
 
 KEY = bytes(range(32))
 NAN = math.nan
+DL_LOSS_T_S = float(catalogue.get("COM_DL_LOSS_T").default)  # the test profile keeps PX4's
+RC_LOSS_T_S = float(catalogue.get("COM_RC_LOSS_T").default)
 
 
 @dataclass
@@ -134,6 +137,12 @@ def takeoff_amsl(peer: Peer, metres: float) -> float:
     Not above the first HOME_POSITION: an earlier flight's home may sit below this one's.
     """
     return peer.wait("GLOBAL_POSITION_INT", after=peer.mark()).alt / 1000.0 + metres
+
+
+def sim_seconds_pass(peer: Peer, seconds: float) -> None:
+    """Wait until the vehicle's clock (simulated, in lockstep) has gone ``seconds`` on: ATTITUDE's time_boot_ms."""
+    start = peer.wait("ATTITUDE", after=peer.mark()).time_boot_ms
+    peer.wait("ATTITUDE", lambda m: m.time_boot_ms >= start + seconds * 1000, timeout=120.0, after=peer.mark())
 
 
 def prearm_ok(peer: Peer, timeout: float = 30.0) -> None:
@@ -268,7 +277,8 @@ def test_bad_input_is_refused_counted_and_changes_nothing(vehicle: Vehicle) -> N
     assert gcs.command(M.MAV_CMD_REQUEST_MESSAGE, M.MAVLINK_MSG_ID_HOME_POSITION).result == 0  # alive
     assert "COM_DL_LOSS_T = 10" in vehicle.param("COM_DL_LOSS_T")
     assert "MPC_XY_CRUISE = 5.0" in vehicle.param("MPC_XY_CRUISE")
-    time.sleep(1.5)  # a heartbeat period: the counters are in the module's next heartbeat
+    # The counters are in the module's next heartbeat (about once a second).
+    eventually(lambda: vehicle.extra("mavlink_gcs")["refused"] >= before["refused"] + 5, what="the link's counters")
     after = vehicle.extra("mavlink_gcs")
     assert after["parse_errors"] > before["parse_errors"] and after["crc_errors"] > before["crc_errors"]
     assert after["unknown_messages"] > before["unknown_messages"]
@@ -292,8 +302,7 @@ def test_signing_takes_the_key_and_refuses_the_rest(vehicle: Vehicle) -> None:
             assert signed(peer.wait("HEARTBEAT"))
         finally:
             peer.close()
-    time.sleep(1.5)
-    assert vehicle.extra("mavlink_signed")["signature_refusals"] >= 2
+    eventually(lambda: vehicle.extra("mavlink_signed")["signature_refusals"] >= 2, what="two refusals counted")
 
 
 def test_a_link_whose_port_is_taken_retries_until_it_is_free(vehicle: Vehicle) -> None:
@@ -305,8 +314,7 @@ def test_a_link_whose_port_is_taken_retries_until_it_is_free(vehicle: Vehicle) -
         peer.connect(10.0)
     finally:
         peer.close()
-    time.sleep(1.5)
-    assert vehicle.extra("mavlink_busy")["link_error"] == ""
+    eventually(lambda: vehicle.extra("mavlink_busy")["link_error"] == "", what="the link's error cleared")
 
 
 def test_a_telemetry_radio_on_a_serial_device(vehicle: Vehicle) -> None:
@@ -434,7 +442,8 @@ def test_qgroundcontrols_takeoff_from_the_ground_then_link_loss_returns(vehicle:
         gcs, lambda: gcs.mav.set_position_target_local_ned_send(0, 1, 1, 1, position_only, *target, *[0.0] * 8), 10.0
     )
     try:
-        time.sleep(0.5)
+        heard = vehicle.stack.cli("topic", "echo", "offboard_control_mode", "-n", "1", "--json")  # the proof of life
+        assert heard.returncode == 0, heard.stderr
         assert gcs.command(M.MAV_CMD_DO_SET_MODE, M.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, 6, 0).result == 0
         wait_mode(gcs, Px4Mode.OFFBOARD)
         mark = gcs.mark()
@@ -445,7 +454,7 @@ def test_qgroundcontrols_takeoff_from_the_ground_then_link_loss_returns(vehicle:
         stop.set()
         thread.join()
 
-    time.sleep(4.0)  # tens of simulated seconds, beyond COM_DL_LOSS_T: a ground station heard at 1 Hz is not lost
+    sim_seconds_pass(gcs, 2 * DL_LOSS_T_S)  # beyond COM_DL_LOSS_T: a ground station heard at 1 Hz is not lost
     assert px4_modes.decode(gcs.mode()) is Px4Mode.AUTO_LOITER
     mark = gcs.mark()
     gcs.heartbeats = False  # the ground station goes silent: NAV_DLL_ACT = 2 (Return) after COM_DL_LOSS_T
@@ -466,13 +475,14 @@ def test_sticks_stopping_in_flight_are_the_manual_control_loss_failsafe(vehicle:
     prearm_ok(gcs)
     stop, thread = _stream(gcs, lambda: gcs.mav.manual_control_send(1, 0, 0, 500, 0, 0), 20.0)  # centred sticks
     try:
-        time.sleep(0.5)
+        heard = vehicle.stack.cli("topic", "echo", "manual_control_setpoint", "-n", "1", "--json")
+        assert heard.returncode == 0, heard.stderr
         ack = gcs.command(M.MAV_CMD_NAV_TAKEOFF, -1, 0, 0, NAN, NAN, NAN, takeoff_amsl(gcs, 3.0))
         assert ack.result == M.MAV_RESULT_ACCEPTED
         assert gcs.command(M.MAV_CMD_COMPONENT_ARM_DISARM, 1).result == M.MAV_RESULT_ACCEPTED
         climbed_above(gcs, 2.5, start)
         wait_mode(gcs, Px4Mode.AUTO_LOITER)
-        time.sleep(3.0)  # sticks from a 20 Hz joystick are never taken as lost, however fast the simulation runs
+        sim_seconds_pass(gcs, 20 * RC_LOSS_T_S)  # 20 Hz sticks are never taken as lost, however fast time runs
         assert px4_modes.decode(gcs.mode()) is Px4Mode.AUTO_LOITER, texts(gcs, start)
         mark = gcs.mark()
     finally:

@@ -17,8 +17,16 @@ from stack.bus.node import stable_publisher_id
 from stack.bus.topics import HEADER
 from stack.msg.sensors import SensorGyro
 from stack.msg.setpoints import TrajectorySetpoint, VehicleRatesSetpoint
-from stack.record.recorder import RecordingInfo, RecordingReader, RecordingWriter
-from tests.support.harness import REPO, RunningStack, chain_profile, stack_env, wait_no_processes, write_profile
+from stack.record.recorder import RecordingError, RecordingInfo, RecordingReader, RecordingWriter
+from tests.support.harness import (
+    REPO,
+    RunningStack,
+    chain_profile,
+    eventually,
+    launch_profile,
+    stack_env,
+    wait_no_processes,
+)
 
 STEPS = 1500
 NEG_NAN = math.copysign(math.nan, -1.0)
@@ -217,12 +225,22 @@ def test_a_killed_recorder_leaves_a_readable_file_and_the_flight_goes_on(tmp_pat
     try:
         stack.wait_up()
         stack.wait_for(r"lockstep starting")
-        time.sleep(2.5)
+
+        def sim_time() -> int:
+            return max(m["sim_time_us"] for m in stack.status()["modules"])
+
+        def recorded() -> int:  # messages in the closed chunks
+            try:
+                with RecordingReader(mcap) as reader:
+                    return sum(1 for _ in reader.iter_messages())
+            except (OSError, RecordingError):  # not there yet, or not even its header
+                return 0
+
+        eventually(lambda: recorded() > 1000, what="a thousand messages recorded")
         os.kill(stack.module_pids()["recorder"], signal.SIGKILL)
         stack.wait_for(r"recorder failed with exit code -9")
-        t1 = max(m["sim_time_us"] for m in stack.status()["modules"])
-        time.sleep(1.0)
-        assert max(m["sim_time_us"] for m in stack.status()["modules"]) > t1
+        t1 = sim_time()
+        eventually(lambda: sim_time() > t1 + 500_000, what="the flight going on without its recorder")
     finally:
         stack.stop()
     assert not wait_no_processes(home)
@@ -248,9 +266,7 @@ def test_refused_files_give_one_clear_line(tmp_path):
 def test_the_flight_stack_is_recorded_without_loss_and_exports(tmp_path):
     home = tmp_path / "home"
     mcap = tmp_path / "flight.mcap"
-    profile = write_profile(
-        tmp_path / "sitl_quad.toml", (REPO / "launch" / "sitl_quad.toml").read_text() + recorder(mcap)
-    )
+    profile = launch_profile(tmp_path, "sitl_quad", recorder(mcap))
     stack = RunningStack(home, profile, "--duration", "5", "--quiet")
     try:
         assert stack.wait(timeout=180) == 0, stack.output

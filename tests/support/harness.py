@@ -6,17 +6,31 @@ import json
 import os
 import re
 import signal
+import socket
 import subprocess
 import sys
 import threading
 import time
 import tomllib
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import psutil
 
+from stack.bus.ports import free_port
+
 REPO = Path(__file__).resolve().parents[2]
+# A MAVLink link of a launch profile: bound to a loopback UDP port, sending to another.
+LINK_ARGS = re.compile(r'device = "udp:127\.0\.0\.1:\d+", remote = "127\.0\.0\.1:\d+"')
+
+
+def eventually(ok: Callable[[], object], timeout: float = 30.0, what: str = "the condition", poll: float = 0.1) -> None:
+    """Wait until ``ok()`` is true (a condition, never a fixed time); fail naming ``what`` after ``timeout``."""
+    deadline = time.monotonic() + timeout
+    while not ok():
+        if time.monotonic() > deadline:
+            raise AssertionError(f"{what}: not within {timeout:g} s")
+        time.sleep(poll)
 
 
 def stack_env(home: Path) -> dict[str, str]:
@@ -96,6 +110,13 @@ class RunningStack:
         assert out.returncode == 0, out.stderr
         return json.loads(out.stdout)
 
+    def subscribers(self, topic: str, instance: int = 0) -> list[str]:
+        """Who subscribes to the topic, as the bus's graph announces it (`stack topic info`)."""
+        out = self.cli("topic", "info", topic, "--json")
+        assert out.returncode == 0, out.stderr
+        rows = [row for row in json.loads(out.stdout)["instances"] if row["instance"] == instance]
+        return rows[0]["subscribers"] if rows else []
+
     def module_pids(self) -> dict[str, int]:
         return {m["module"]: m["pid"] for m in self.status()["modules"] if m["pid"]}
 
@@ -149,10 +170,29 @@ def wait_no_processes(home: Path, timeout: float = 10.0) -> list[psutil.Process]
     return left
 
 
+def udp_port() -> int:
+    return free_port(kind=socket.SOCK_DGRAM)
+
+
+def free_links(text: str) -> str:
+    """A profile's text with each MAVLink link bound to a free port and sending to another: the launch profiles'
+    links have PX4 SITL's fixed ports, which two stacks of the test run could not both bind."""
+    return LINK_ARGS.sub(lambda _: f'device = "udp:127.0.0.1:{udp_port()}", remote = "127.0.0.1:{udp_port()}"', text)
+
+
+def launch_profile(directory: Path, name: str = "sitl_quad", extra: str = "") -> Path:
+    """A copy of ``launch/NAME.toml`` (its name kept) in ``directory``, its links on free ports (:func:`free_links`);
+    ``extra`` is appended."""
+    text = free_links((REPO / "launch" / f"{name}.toml").read_text())
+    assert "extends" not in tomllib.loads(text), f"{name} extends another profile, whose links would stay fixed"
+    directory.mkdir(parents=True, exist_ok=True)
+    return write_profile(directory / f"{name}.toml", text + extra)
+
+
 def default_stack(home: Path) -> Iterator[RunningStack]:
     """`stack up` of the default profile for a module-scoped fixture: yields it running, then stops it
     and checks it stopped cleanly and left no process behind."""
-    running = RunningStack(home, REPO / "launch" / "sitl_quad.toml", "--quiet")
+    running = RunningStack(home, launch_profile(home.parent / "profile"), "--quiet")
     running.wait_up()
     yield running
     assert running.stop() == 0
@@ -210,10 +250,11 @@ AUTONOMY_MODULES = ("local_position_estimator", "mc_hover_thrust_estimator", "fl
 
 def attitude_only_profile(path: Path, extra: str = "") -> Path:
     """The default profile without position estimation, position control and navigation (the first-flight
-    stack), keeping only the shared parameters its modules still have; ``extra`` is appended."""
+    stack), keeping only the shared parameters its modules still have, its links on free ports; ``extra`` is
+    appended."""
     from stack.runtime.spec import load_module_class
 
-    doc = tomllib.loads((REPO / "launch" / "sitl_quad.toml").read_text())
+    doc = tomllib.loads(free_links((REPO / "launch" / "sitl_quad.toml").read_text()))
     doc["module"] = [m for m in doc["module"] if m["module"] not in AUTONOMY_MODULES]
     declared = {p.name for m in doc["module"] for p in load_module_class(m["module"]).PARAMS}
     doc["params"] = {k: v for k, v in doc["params"].items() if k in declared}

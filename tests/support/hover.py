@@ -9,7 +9,7 @@ import time
 from collections.abc import Callable
 from pathlib import Path
 
-from tests.support.harness import RunningStack
+from tests.support.harness import RunningStack, launch_profile
 
 
 def echo(stack: RunningStack, topic: str) -> dict:
@@ -33,15 +33,19 @@ def wait(stack: RunningStack, ok: Callable[[], bool], timeout: float, what: str)
 
 def start_hovering(home: Path, altitude: float) -> RunningStack:
     """``stack up sitl_quad --realtime``, taken off to ``altitude`` and settled there."""
-    stack = RunningStack(home, "sitl_quad", "--realtime", "--quiet")
+    stack = RunningStack(home, launch_profile(home.parent / "profile"), "--realtime", "--quiet")
     try:
         stack.wait_up()
         deadline = time.monotonic() + 120.0
         while stack.cli("cmd", "takeoff", "--alt", str(altitude)).returncode != 0:  # until the pre-arm checks pass
             assert time.monotonic() < deadline, stack.output
-            time.sleep(2.0)
-        wait(stack, lambda: -echo(stack, "vehicle_local_position")["z"] > altitude - 0.5, 60.0, "the climb")
-        time.sleep(2.0)
+            time.sleep(POLL_S)
+
+        def settled() -> bool:
+            here = echo(stack, "vehicle_local_position")
+            return -here["z"] > altitude - 0.5 and abs(here["vz"]) < 0.2
+
+        wait(stack, settled, 60.0, "the climb")
     except BaseException:
         stack.stop()
         raise

@@ -30,6 +30,18 @@ from stack.msg.sensors import SensorGyro
 from stack.msg.setpoints import VehicleRatesSetpoint
 from stack.msg.system import VehicleCommand
 
+# Zenoh has no flush: a session closed at once may drop what it still queues, so a peer lingers this long.
+FLUSH_S = 0.5
+
+
+def wait_matching(pub: zenoh.Publisher, timeout: float = 30.0) -> None:
+    """Until the stack's subscribers of ``pub``'s key are known to this session (routes are in place)."""
+    deadline = time.monotonic() + timeout
+    while not pub.matching_status.matching:
+        if time.monotonic() > deadline:
+            sys.exit(f"no subscriber of {pub.key_expr} within {timeout:g} s")
+        time.sleep(0.01)
+
 
 def publish(endpoint: str, n: int) -> None:
     with Node(BusConfig(listen=(endpoint,)), "t1", "test_publisher") as node:
@@ -38,7 +50,7 @@ def publish(endpoint: str, n: int) -> None:
             time.sleep(0.01)
         for i in range(n):
             pub.publish(VehicleCommand(command=400, param1=float(i)), now_us=i + 1)
-        time.sleep(0.5)
+        time.sleep(FLUSH_S)
 
 
 def subscribe(endpoint: str, n: int, out: str) -> None:
@@ -57,7 +69,7 @@ def rogue() -> None:
     with zenoh.open(bus.zenoh_config("rogue")) as session:
         key = keys.topic_key(vehicle, "vehicle_command", 0)
         pub = session.declare_publisher(key, congestion_control=zenoh.CongestionControl.BLOCK)
-        time.sleep(0.5)
+        wait_matching(pub)
         good_fp = fingerprint(VehicleCommand)
         for i in range(20):
             # The right header with a payload that is not a VehicleCommand.
@@ -67,8 +79,8 @@ def rogue() -> None:
             pub.put(msgspec.msgpack.encode(VehicleCommand()), attachment=foreign)
             # No stack header at all.
             pub.put(msgspec.msgpack.encode(VehicleCommand()))
-            time.sleep(0.01)
-        time.sleep(0.5)
+            time.sleep(0.01)  # a sender's pace, not a burst
+        time.sleep(FLUSH_S)
         pub.undeclare()
 
 
@@ -76,7 +88,7 @@ def attack(members: list[str]) -> None:
     vehicle, bus = find_stack(None, None)
     encode = msgspec.msgpack.encode
     with zenoh.open(bus.zenoh_config("attacker")) as session:
-        time.sleep(0.5)
+        wait_matching(session.declare_publisher(keys.topic_key(vehicle, "sensor_gyro", 0)))
         lockstep_keys = [keys.lockstep_ack_key(vehicle), keys.lockstep_clock_key(vehicle)]
         lockstep_keys += [keys.lockstep_tick_key(vehicle, m) for m in members]
         forged = [
@@ -102,8 +114,8 @@ def attack(members: list[str]) -> None:
         for i in range(1000):
             session.put(rates, b"\xc1garbage", attachment=HEADER.pack(rates_fp, 4242, i, i + 1, 0, 0, 0))
             if i % 100 == 0:
-                time.sleep(0.1)
-        time.sleep(0.5)
+                time.sleep(0.1)  # a flood in bursts of 100
+        time.sleep(FLUSH_S)
 
 
 if __name__ == "__main__":

@@ -18,7 +18,8 @@ from pathlib import Path
 from tests.support.harness import REPO, stack_env
 
 CONTROL = re.compile(r"\x1b\[[0-9;?]*[A-Za-z]")
-ROWS, COLUMNS = 40, 120
+ROWS, COLUMNS = 40, 200
+"""Wide enough for a device path under a test worker's temporary directory (the screen cuts longer lines)."""
 REPEAT_S = 0.033
 """A terminal's auto-repeat interval (30 Hz)."""
 

@@ -15,7 +15,7 @@ from pathlib import Path
 import pytest
 
 from stack.teleop.joystick import JS_EVENT, JS_EVENT_AXIS, JS_EVENT_BUTTON, JS_EVENT_INIT
-from tests.support.harness import RunningStack, wait_no_processes
+from tests.support.harness import RunningStack, launch_profile, wait_no_processes
 from tests.teleop.terminal import SticksOnTheBus, Teleop
 
 pytestmark = pytest.mark.flight
@@ -26,7 +26,7 @@ ALTITUDE = r"altitude (-?\d+\.\d) m above"
 @pytest.fixture(scope="module")
 def stack(tmp_path_factory: pytest.TempPathFactory) -> Iterator[RunningStack]:
     home = tmp_path_factory.mktemp("teleop")
-    running = RunningStack(home, "sitl_quad", "--realtime", "--quiet")
+    running = RunningStack(home, launch_profile(home / "profile"), "--realtime", "--quiet")
     try:
         running.wait_up()
         yield running
