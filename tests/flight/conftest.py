@@ -1,33 +1,50 @@
-"""Multi-process flights shared by this directory's tests: each (seed, run) is flown once per session.
+"""Flights shared by this directory's tests: each is flown once per test run, by whichever worker asks first.
 
-Recording does not change a lockstep flight (the recorder never joins the lockstep), so one
-recorded flight serves the report checks, the determinism checks and the in-process comparison.
+Recording does not change a lockstep flight (the recorder never joins the lockstep), so one recorded
+flight serves the report checks, the determinism checks and the in-process comparison.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
+from pathlib import Path
 
 import pytest
 
-from tests.flight.flights import Flight, fly_scenario
+from tests.flight.flights import Flight, InProcessFlight, fly_inprocess, fly_scenario
+from tests.support.once import key_dir, once
 
 
 @pytest.fixture(scope="session")
 def fly(tmp_path_factory: pytest.TempPathFactory) -> Callable[..., Flight]:
-    """``fly(seed, run=0, scenario="attitude_step", wind=False, transport="shm")``: the flight of that
-    scenario and seed on the default profile (``run`` tells repeated flights apart; ``wind`` flies
-    ``--wind``; ``transport`` carries the lockstep's messages)."""
-    flights: dict[tuple[str, int, int, bool, str], Flight] = {}
+    """``fly(seed, run=0, scenario="attitude_step", wind=False, transport="shm")``: ``stack fly`` of that
+    scenario and seed on the default profile, every module its own process (``run`` tells repeated flights
+    apart; ``wind`` flies ``--wind``; ``transport`` carries the lockstep's messages)."""
 
     def flight(
         seed: int, run: int = 0, scenario: str = "attitude_step", wind: bool = False, transport: str = "shm"
     ) -> Flight:
-        key = (scenario, seed, run, wind, transport)
-        if key not in flights:
-            windy = "-wind" if wind else ""
-            home = tmp_path_factory.mktemp(f"fly-{scenario}-seed{seed}-run{run}{windy}-{transport}")
-            flights[key] = fly_scenario(home, scenario, seed, wind=wind, transport=transport)
-        return flights[key]
+        def work(home: Path) -> dict:
+            done = fly_scenario(home, scenario, seed, wind=wind, transport=transport)
+            return {"returncode": done.returncode, "output": done.output, "report": done.report}
+
+        windy = "-wind" if wind else ""
+        key = f"fly-{scenario}-seed{seed}-run{run}{windy}-{transport}"
+        done = once(tmp_path_factory, key, work)
+        recording = key_dir(tmp_path_factory, key) / "flight.mcap"
+        return Flight(done["returncode"], done["output"], done["report"], recording)
+
+    return flight
+
+
+@pytest.fixture(scope="session")
+def fly_here(tmp_path_factory: pytest.TempPathFactory) -> Callable[..., InProcessFlight]:
+    """``fly_here(scenario, seed, profile="sitl_quad", wind=False)``: the scenario flown in one process (the
+    ``stack fly`` flight, message for message), once per test run."""
+
+    def flight(scenario: str, seed: int, profile: str = "sitl_quad", wind: bool = False) -> InProcessFlight:
+        key = f"inprocess-{scenario}-{profile}-seed{seed}{'-wind' if wind else ''}"
+        report = once(tmp_path_factory, key, lambda d: fly_inprocess(d, scenario, seed, profile, wind).report)
+        return InProcessFlight(report, key_dir(tmp_path_factory, key) / "published.msgpack")
 
     return flight

@@ -1,13 +1,20 @@
-"""Flying ``stack fly`` scenarios through the real CLI, and reading what their recordings say."""
+"""Flying scenarios, through the real CLI (``stack fly``: every module its own process) or in one process
+(:mod:`stack.scenario.inprocess`: the same flight, message for message), and reading what they published."""
 
 from __future__ import annotations
 
 import json
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
+
+import msgspec
 
 from stack.bus.node import stable_publisher_id
+from stack.msg.registry import message_type
 from stack.record.recorder import RecordedMessage, RecordingReader
+from stack.runtime.membus import PublishedMessage
+from stack.scenario.inprocess import fly_in_process
 from tests.support.harness import run_cli, wait_no_processes
 
 # Generous: a flight takes 10-30 s of wall time, several times that on a loaded machine.
@@ -71,3 +78,41 @@ def fly_scenario(
     assert report.exists(), f"no report (exit code {out.returncode}):\n{output}"
     assert recording.exists() or not record, f"no recording:\n{output}"
     return Flight(out.returncode, output, json.loads(report.read_text()), recording)
+
+
+class InProcessMessage(msgspec.Struct, frozen=True):
+    topic: str
+    instance: int
+    publisher_id: int
+    pub_time_us: int
+    msg: Any
+
+
+@dataclass(frozen=True)
+class InProcessFlight:
+    """A scenario flown in one process: the scenario's result (``report``: its metrics, checks, ``passed`` and
+    ``error``, as in ``stack fly``'s report) and every message published (``published``, a msgpack file)."""
+
+    report: dict
+    published: Path
+
+    def messages(self, *topics: str) -> list[InProcessMessage]:
+        """The published messages of ``topics`` (all when none), decoded, in publication order."""
+        raw = msgspec.msgpack.decode(self.published.read_bytes(), type=list[PublishedMessage])
+        return [
+            InProcessMessage(m.topic, m.instance, m.publisher_id, m.pub_time_us,
+                             msgspec.msgpack.decode(m.payload, type=message_type(m.topic)))
+            for m in raw
+            if not topics or m.topic in topics
+        ]
+
+
+def fly_inprocess(
+    directory: Path, scenario: str, seed: int, profile: str = "sitl_quad", wind: bool = False
+) -> InProcessFlight:
+    """The scenario flown in this process, its messages written to ``directory``."""
+    flight = fly_in_process(scenario, profile, seed, wind=wind, record=True)
+    published = directory / "published.msgpack"
+    published.write_bytes(msgspec.msgpack.encode(flight.published))
+    report = {**flight.result, "scenario": scenario, "profile": profile, "seed": seed, "wind": wind}
+    return InProcessFlight(report, published)

@@ -1,9 +1,9 @@
-"""Issue 4: the autonomous scenarios as multi-process lockstep flights on the default profile.
+"""The autonomous scenarios on the default profile, flown in one process (the ``stack fly`` flight, message for
+message; test_inprocess_stack proves it on takeoff_land).
 
-Each scenario is flown through ``stack fly`` (the real CLI, every module its own process) on SEED and
-judged by the issue's targets, which the profile must not relax, and on WIND_SEED in the simulator's wind
-(``--wind``) by the doubled limits (failsafes calm only): two seeds per scenario in CI, twenty in
-``benchmarks/sweep.py``.
+Each scenario is flown on SEED and judged by its targets, which the profile must not relax, and on WIND_SEED in
+the simulator's wind (``--wind``) by the doubled limits (failsafes calm only): two seeds per scenario in CI,
+twenty in ``benchmarks/sweep.py``.
 """
 
 from __future__ import annotations
@@ -13,10 +13,10 @@ from collections.abc import Callable
 
 import pytest
 
-from tests.flight.flights import Flight
+from tests.flight.flights import InProcessFlight
 
 pytestmark = pytest.mark.flight
-Fly = Callable[..., Flight]
+FlyHere = Callable[..., InProcessFlight]
 
 SEED = 1
 WIND_SEED = 2
@@ -53,42 +53,42 @@ def _meets(value: object, target: object) -> bool:
     return 0.0 <= value <= float(target)
 
 
-def _assert_meets_targets(flight: Flight, scenario: str, targets: dict[str, object]) -> None:
+def _assert_meets_targets(flight: InProcessFlight, scenario: str, targets: dict[str, object]) -> None:
     report = flight.report
-    assert report["error"] is None, flight.output
+    assert report["error"] is None, report
     assert report["scenario"] == scenario and report["profile"] == "sitl_quad"
     checks = {c["name"]: c for c in report["checks"]}
     assert list(checks) == list(targets)
     for name, target in targets.items():
         assert checks[name]["limit"] == target, f"{name}: the profile judges by {checks[name]['limit']}"
         assert _meets(report["metrics"][name], target), f"{name} = {report['metrics'][name]}, target {target}"
-    assert report["passed"] is True and flight.returncode == 0, flight.output
+    assert report["passed"] is True, report
 
 
 @pytest.mark.parametrize("scenario", list(TARGETS))
-def test_scenario_meets_the_issue_targets(fly: Fly, scenario: str) -> None:
-    _assert_meets_targets(fly(SEED, scenario=scenario), scenario, TARGETS[scenario])
+def test_scenario_meets_the_issue_targets(fly_here: FlyHere, scenario: str) -> None:
+    _assert_meets_targets(fly_here(scenario, SEED), scenario, TARGETS[scenario])
 
 
 # failsafes judges which action each trigger took, which wind does not change: the sweep flies it in wind.
 @pytest.mark.parametrize("scenario", [s for s in TARGETS if s != "failsafes"])
-def test_scenario_meets_the_doubled_targets_in_wind(fly: Fly, scenario: str) -> None:
+def test_scenario_meets_the_doubled_targets_in_wind(fly_here: FlyHere, scenario: str) -> None:
     # 5 m/s from the west with gusts of 1 m/s σ per axis; the issue doubles the numeric limits.
     doubled = {k: v if isinstance(v, bool | str) else 2 * v for k, v in TARGETS[scenario].items()}
-    flight = fly(WIND_SEED, scenario=scenario, wind=True)
+    flight = fly_here(scenario, WIND_SEED, wind=True)
     assert flight.report["wind"] is True
     _assert_meets_targets(flight, scenario, doubled)
 
 
-def test_takeoff_land_reports_the_flight(fly: Fly) -> None:
-    metrics = fly(SEED, scenario="takeoff_land").report["metrics"]
+def test_takeoff_land_reports_the_flight(fly_here: FlyHere) -> None:
+    metrics = fly_here("takeoff_land", SEED).report["metrics"]
     # Arm, climb 5 m, settle, hold 20 s, descend: 30 s at least, and a gentle flight.
     assert metrics["flight_time_s"] > 30.0
     assert 0.0 < metrics["max_tilt_deg"] < 15.0
 
 
-def test_mission_box_flies_its_legs_and_comes_home(fly: Fly) -> None:
-    flight = fly(SEED, scenario="mission_box")
+def test_mission_box_flies_its_legs_and_comes_home(fly_here: FlyHere) -> None:
+    flight = fly_here("mission_box", SEED)
     truth = [m.msg.position for m in flight.messages("sim_groundtruth")]
     north = max(p[0] for p in truth) - truth[0][0]
     east = max(p[1] for p in truth) - truth[0][1]
@@ -100,8 +100,8 @@ def test_mission_box_flies_its_legs_and_comes_home(fly: Fly) -> None:
     assert flight.report["metrics"]["mission_time_s"] > 40.0
 
 
-def test_gps_loss_triggers_a_failsafe_and_the_estimate_flags_it(fly: Fly) -> None:
-    flight = fly(SEED, scenario="gps_loss")
+def test_gps_loss_triggers_a_failsafe_and_the_estimate_flags_it(fly_here: FlyHere) -> None:
+    flight = fly_here("gps_loss", SEED)
     assert flight.report["metrics"]["failsafe_action"] not in (None, "", "none")
     positions = flight.messages("vehicle_local_position")
     lost = [m for m in positions if m.msg.dead_reckoning]

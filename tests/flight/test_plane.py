@@ -1,19 +1,22 @@
-"""Issue 14: the fixed-wing stack flies the SIH airplane from runway to runway, on L1 and on NPFG, through the CLI.
+"""The fixed-wing stack flies the SIH airplane from runway to runway, on L1 and on NPFG.
 
 plane_mission (runway takeoff, a 300–400 m rectangle at 40 m, two loiter circles, return and landing) on L1, and
-plane_loiter_wind (three circles in an 8 m/s wind with gusts) on NPFG, each on its own seed, judged by the issue's
-limits (doubled in wind); and the same mission on JSBSim's Cessna 172P, which must complete it and land on the
-runway (its profile reports the track figures of a 36 m/s aircraft on legs this short). plane_gps_loss, recorded:
-20 s without GPS while circling, the position estimate dead-reckoning on the airspeed. benchmarks/sweep.py flies
-20 seeds of each on either guidance, calm and in 8 m/s wind.
+plane_loiter_wind (three circles in an 8 m/s wind with gusts) on NPFG, each on its own seed, judged by the
+scenarios' limits (doubled in wind); and the same mission on JSBSim's Cessna 172P, which must complete it and land
+on the runway (its profile reports the track figures of a 36 m/s aircraft on legs this short). These fly in one
+process (the ``stack fly`` flight, message for message). plane_gps_loss flies through the real CLI, every module
+its own process, recorded: 20 s without GPS while circling, the position estimate dead-reckoning on the airspeed.
+benchmarks/sweep.py flies 20 seeds of each on either guidance, calm and in 8 m/s wind.
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import pytest
 
 from stack.msg.fixedwing import PositionSetpoint
-from tests.flight.flights import fly_scenario
+from tests.flight.flights import InProcessFlight, fly_scenario
 
 pytestmark = pytest.mark.flight
 
@@ -26,12 +29,13 @@ pytestmark = pytest.mark.flight
         ("plane_mission", "jsbsim_c172", 3),
     ],
 )
-def test_the_plane_flies_its_scenarios_within_the_issue_limits(tmp_path, scenario: str, profile: str, seed: int):
-    flight = fly_scenario(tmp_path, scenario, seed, profile, record=False)
-    report = flight.report
-    assert report["error"] is None, flight.output
+def test_the_plane_flies_its_scenarios_within_their_limits(
+    fly_here: Callable[..., InProcessFlight], scenario: str, profile: str, seed: int
+) -> None:
+    report = fly_here(scenario, seed, profile).report
+    assert report["error"] is None, report
     assert [c["name"] for c in report["checks"] if not c["passed"]] == [], report["metrics"]
-    assert report["passed"] is True and flight.returncode == 0, flight.output
+    assert report["passed"] is True, report
     metrics = report["metrics"]
     assert metrics["landed_and_disarmed"] is True
     assert abs(metrics["landing_offset_m"]) <= 10.0

@@ -1,10 +1,11 @@
-"""Issue 13: RotorS' roll-pitch-yawrate-thrust controller flies the RotorS profiles, through the real CLI.
+"""RotorS' roll-pitch-yawrate-thrust controller flies the RotorS profiles.
 
 rpyt_step flies steps of roll, pitch and yaw rate through the RotorS mode's sticks on each RotorS profile (a seed
 each), judged by the limits of its profile; RotorS' law has no integrator, so the yaw rate settles short of the
 command by the rotors' drag torque over the yaw-rate gain, which the vehicle model predicts. The default profile
-flies the same steps with PX4's loops. takeoff_land holds the default limits in PX4's auto modes, flown by RotorS'
-controller.
+flies the same steps with PX4's loops. These figures come from flights in one process (the ``stack fly`` flight,
+message for message). takeoff_land holds the default limits in PX4's auto modes, flown by RotorS' controller
+through the real CLI, every module its own process.
 """
 
 from __future__ import annotations
@@ -17,28 +18,13 @@ import pytest
 from stack.params import catalogue
 from stack.sim.vehicle import load_vehicle
 from stack.supervisor.profile import load_profile
-from tests.flight.flights import Flight, fly_scenario
+from tests.flight.flights import InProcessFlight, fly_scenario
 
 pytestmark = pytest.mark.flight
 
 # Each profile flies its own seed, so the suite flies three (benchmarks/sweep.py flies 20 on each).
 PROFILE_SEEDS = (("rotors_firefly", 1), ("rotors_hummingbird", 2), ("rotors_pelican", 3))
-Fly = Callable[..., Flight]
-
-
-@pytest.fixture(scope="module")
-def fly(tmp_path_factory: pytest.TempPathFactory) -> Fly:
-    """``fly(scenario, profile, seed)``, each flown once per module."""
-    flights: dict[tuple[str, str, int], Flight] = {}
-
-    def flight(scenario: str, profile: str, seed: int) -> Flight:
-        key = (scenario, profile, seed)
-        if key not in flights:
-            home = tmp_path_factory.mktemp(f"fly-{scenario}-{profile}-seed{seed}")
-            flights[key] = fly_scenario(home, scenario, seed, profile)
-        return flights[key]
-
-    return flight
+FlyHere = Callable[..., InProcessFlight]
 
 
 def _param(entry, name: str) -> float:
@@ -60,20 +46,20 @@ def predicted_yaw_rate_error_dps(profile: str) -> float:
 
 
 @pytest.mark.parametrize(("profile", "seed"), PROFILE_SEEDS)
-def test_every_check_passed_by_the_profile_s_limits(fly: Fly, profile: str, seed: int) -> None:
-    flight = fly("rpyt_step", profile, seed)
-    report = flight.report
-    assert report["error"] is None, flight.output
-    assert report["profile"] == profile
+def test_every_check_passed_by_the_profile_s_limits(fly_here: FlyHere, profile: str, seed: int) -> None:
+    report = fly_here("rpyt_step", seed, profile).report
+    assert report["error"] is None, report
     assert [c["name"] for c in report["checks"] if not c["passed"]] == [], report["metrics"]
-    assert report["passed"] is True and flight.returncode == 0, flight.output
+    assert report["passed"] is True, report
     limits = {c["name"]: c["limit"] for c in report["checks"]}
     assert limits == {**limits, **load_profile(profile).scenario_limits.get("rpyt_step", {})}
 
 
 @pytest.mark.parametrize(("profile", "seed"), PROFILE_SEEDS)
-def test_the_yaw_rate_falls_short_by_the_rotor_drag_over_the_rate_gain(fly: Fly, profile: str, seed: int) -> None:
-    metrics = fly("rpyt_step", profile, seed).report["metrics"]
+def test_the_yaw_rate_falls_short_by_the_rotor_drag_over_the_rate_gain(
+    fly_here: FlyHere, profile: str, seed: int
+) -> None:
+    metrics = fly_here("rpyt_step", seed, profile).report["metrics"]
     predicted = predicted_yaw_rate_error_dps(profile)
     assert metrics["yaw_rate_up_ss_error_dps"] == pytest.approx(predicted, rel=0.02)
     assert abs(metrics["yaw_rate_back_ss_error_dps"]) < 0.02 * predicted  # no drag without rotation
@@ -81,20 +67,21 @@ def test_the_yaw_rate_falls_short_by_the_rotor_drag_over_the_rate_gain(fly: Fly,
         assert metrics[f"{axis}_up_rise_time_s"] > 0.0 and math.isfinite(metrics[f"{axis}_ss_error_deg"])
 
 
-def test_takeoff_land_in_the_auto_modes_meets_the_default_limits(fly: Fly) -> None:
-    flight = fly("takeoff_land", "rotors_pelican", 3)
+def test_takeoff_land_in_the_auto_modes_meets_the_default_limits(tmp_path) -> None:
+    flight = fly_scenario(tmp_path, "takeoff_land", 3, "rotors_pelican", record=False)
     assert flight.report["error"] is None, flight.output
+    assert flight.report["profile"] == "rotors_pelican"
     assert flight.report["passed"] is True and flight.returncode == 0, flight.output
     assert flight.report["metrics"]["landed_and_disarmed"] is True
 
 
-def test_the_rotors_mode_on_px4s_attitude_loop_follows_the_sticks(fly: Fly) -> None:
+def test_the_rotors_mode_on_px4s_attitude_loop_follows_the_sticks(fly_here: FlyHere) -> None:
     """The default profile flies the RotorS mode with PX4's attitude and rate loops: it follows roll and pitch
     faster than RotorS' law, and, holding a heading moved by the commanded rate, the yaw rate with no shortfall.
     (The RotorS profiles above fly seeds 1–3; this flies a fourth.)"""
-    flight = fly("rpyt_step", "sitl_quad", 4)
-    metrics = flight.report["metrics"]
-    assert flight.report["error"] is None, flight.output
+    report = fly_here("rpyt_step", 4).report
+    metrics = report["metrics"]
+    assert report["error"] is None, report
     assert metrics["landed_and_disarmed"] is True
     for axis in ("roll", "pitch"):
         for step in ("up", "over", "back"):

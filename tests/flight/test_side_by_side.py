@@ -16,8 +16,8 @@ from pathlib import Path
 import pytest
 
 from stack.supervisor import state as run_state
-from tests.flight.flights import FLY_TIMEOUT_S, Flight
-from tests.support.harness import RunningStack, wait_no_processes
+from tests.flight.flights import FLY_TIMEOUT_S, InProcessFlight
+from tests.support.harness import RunningStack, launch_profile, wait_no_processes
 
 pytestmark = pytest.mark.flight
 
@@ -38,11 +38,11 @@ def module_pids(status: dict) -> dict[str, int]:
 
 
 def test_two_flights_and_a_stack_up_of_the_same_vehicle_run_side_by_side(
-    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, fly: Callable[..., Flight]
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, fly_here: Callable[..., InProcessFlight]
 ) -> None:
     home = tmp_path / "home"
     monkeypatch.setenv("STACK_HOME", str(home))
-    up = RunningStack(home, "sitl_quad", "--realtime", "--quiet")
+    up = RunningStack(home, launch_profile(tmp_path / "profile"), "--realtime", "--quiet")
     flights: list[RunningStack] = []
     try:
         up.wait_up()
@@ -73,7 +73,7 @@ def test_two_flights_and_a_stack_up_of_the_same_vehicle_run_side_by_side(
         results = [json.loads(r.read_text()) for r in reports]
         assert all(r["passed"] for r in results)
         assert len({r["run_dir"] for r in results}) == 2
-        alone = fly(1, scenario=SCENARIO).report
+        alone = fly_here(SCENARIO, 1).report  # the same flight as `stack fly` alone, message for message
         assert results[0]["metrics"] == alone["metrics"]
         assert results[0]["sim_time_s"] == alone["sim_time_s"]
 
