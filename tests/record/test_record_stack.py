@@ -227,7 +227,7 @@ def test_a_killed_recorder_leaves_a_readable_file_and_the_flight_goes_on(tmp_pat
         stack.wait_for(r"lockstep starting")
 
         def sim_time() -> int:
-            return max(m["sim_time_us"] for m in stack.status()["modules"])
+            return max(m.get("sim_time_us", 0) for m in stack.status()["modules"])
 
         def recorded() -> int:  # messages in the closed chunks
             try:

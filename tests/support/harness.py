@@ -34,7 +34,9 @@ def eventually(ok: Callable[[], object], timeout: float = 30.0, what: str = "the
 
 
 def stack_env(home: Path) -> dict[str, str]:
-    env = {k: v for k, v in os.environ.items() if k not in ("STACK_ENDPOINT",)}
+    """The environment of a command a test runs: its STACK_HOME, and a terminal's size asked of the terminal
+    (pytest-xdist's workers set COLUMNS and LINES to 80 by 24)."""
+    env = {k: v for k, v in os.environ.items() if k not in ("STACK_ENDPOINT", "COLUMNS", "LINES")}
     env["STACK_HOME"] = str(home)
     env["PYTHONPATH"] = str(REPO) + os.pathsep + env.get("PYTHONPATH", "")
     env["PYTHONUNBUFFERED"] = "1"
@@ -42,6 +44,7 @@ def stack_env(home: Path) -> dict[str, str]:
 
 
 def run_cli(home: Path, *args: str, timeout: float = 60.0) -> subprocess.CompletedProcess[str]:
+    """``stack ARGS``, in a session of its own (see RunningStack)."""
     return subprocess.run(
         [sys.executable, "-m", "stack", *args],
         env=stack_env(home),
@@ -49,12 +52,18 @@ def run_cli(home: Path, *args: str, timeout: float = 60.0) -> subprocess.Complet
         text=True,
         timeout=timeout,
         cwd=REPO,
+        start_new_session=True,
     )
 
 
 class RunningStack:
     """`stack up PROFILE ...` (or `stack fly SCENARIO ...` with ``command="fly"``) in the background, with its
-    output collected line by line."""
+    output collected line by line.
+
+    It runs in a session of its own, as from a terminal of its own: the kernel's autogroup scheduling shares the
+    CPU between sessions, so the busy processes of the test run (another worker's flight, a CPU burner) cannot
+    starve a real-time stack or the terminal program beside it (each ``stack teleop`` is a session: it had gaps of
+    seconds in its sticks while the stacks and burners shared the test run's session)."""
 
     def __init__(self, home: Path, profile: Path | str, *args: str, command: str = "up") -> None:
         self.home = home
@@ -67,6 +76,7 @@ class RunningStack:
             stderr=subprocess.STDOUT,
             text=True,
             cwd=REPO,
+            start_new_session=True,
         )
         self._reader = threading.Thread(target=self._read, daemon=True)
         self._reader.start()
@@ -128,6 +138,10 @@ class RunningStack:
             self.proc.send_signal(sig)
         try:
             code = self.proc.wait(timeout=timeout)
+        except subprocess.TimeoutExpired:
+            self.kill()
+            self._reader.join(timeout=5.0)
+            raise AssertionError(f"the stack did not stop within {timeout:g} s of {sig!r}:\n{self.output}") from None
         finally:
             self.kill()
         self._reader.join(timeout=5.0)
