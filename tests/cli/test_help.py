@@ -1,6 +1,5 @@
 """`stack --version`, and -h as well as --help on every command; negative numbers are values, not options."""
 
-import click
 import pytest
 import typer.main
 from typer.testing import CliRunner
@@ -11,10 +10,12 @@ from tests.cli.test_cmd import NOWHERE
 from tests.support.harness import run_cli
 
 
-def commands(group: click.Group, prefix: tuple[str, ...] = ()) -> list[tuple[str, ...]]:
+def commands(group: object, prefix: tuple[str, ...] = ()) -> list[tuple[str, ...]]:
+    """Every command path under a Click group (typer's own vendored Click or Click itself: a group is what
+    has subcommands)."""
     found = [prefix]
-    for name, command in group.commands.items():
-        if isinstance(command, click.Group):
+    for name, command in group.commands.items():  # type: ignore[attr-defined]
+        if hasattr(command, "commands"):
             found += commands(command, (*prefix, name))
         else:
             found.append((*prefix, name))
