@@ -88,11 +88,15 @@ def test_an_empty_mission_is_rejected_with_the_navigators_reason(stack, tmp_path
 
 
 def test_land_wait_follows_the_vehicle_until_disarmed(stack):
-    # Never having taken off, the vehicle would disarm COM_DISARM_PRFLT after arming, simulated time that a loaded
-    # machine can spend before the land command arrives: never, here, so only the landing disarms it.
-    assert stack.cli("param", "set", "COM_DISARM_PRFLT", "-1").returncode == 0
-    assert stack.cli("cmd", "arm").stdout.strip() == "arm: accepted"
-    out = stack.cli("cmd", "land", "--wait", timeout=180)
+    # Never having taken off, the vehicle disarms COM_DISARM_PRFLT after arming: its longest (20 s
+    # simulated), so that the land command reaches the vehicle still armed on a loaded machine.
+    # A machine loaded enough to spend those between the two commands is told so; then they are sent again.
+    assert stack.cli("param", "set", "COM_DISARM_PRFLT", "20").returncode == 0
+    for _ in range(5):
+        assert stack.cli("cmd", "arm").stdout.strip() == "arm: accepted"
+        out = stack.cli("cmd", "land", "--wait", timeout=180)
+        if "Switching to Land is currently not possible: the vehicle is disarmed" not in out.stderr:
+            break
     assert stack.cli("param", "reset", "COM_DISARM_PRFLT").returncode == 0
     assert out.returncode == 0, out.stderr
     lines = out.stdout.splitlines()

@@ -44,7 +44,6 @@ def stack_env(home: Path) -> dict[str, str]:
 
 
 def run_cli(home: Path, *args: str, timeout: float = 60.0) -> subprocess.CompletedProcess[str]:
-    """``stack ARGS``, in a session of its own (see RunningStack)."""
     return subprocess.run(
         [sys.executable, "-m", "stack", *args],
         env=stack_env(home),
@@ -52,18 +51,12 @@ def run_cli(home: Path, *args: str, timeout: float = 60.0) -> subprocess.Complet
         text=True,
         timeout=timeout,
         cwd=REPO,
-        start_new_session=True,
     )
 
 
 class RunningStack:
     """`stack up PROFILE ...` (or `stack fly SCENARIO ...` with ``command="fly"``) in the background, with its
-    output collected line by line.
-
-    It runs in a session of its own, as from a terminal of its own: the kernel's autogroup scheduling shares the
-    CPU between sessions, so the busy processes of the test run (another worker's flight, a CPU burner) cannot
-    starve a real-time stack or the terminal program beside it (each ``stack teleop`` is a session: it had gaps of
-    seconds in its sticks while the stacks and burners shared the test run's session)."""
+    output collected line by line."""
 
     def __init__(self, home: Path, profile: Path | str, *args: str, command: str = "up") -> None:
         self.home = home
@@ -76,7 +69,6 @@ class RunningStack:
             stderr=subprocess.STDOUT,
             text=True,
             cwd=REPO,
-            start_new_session=True,
         )
         self._reader = threading.Thread(target=self._read, daemon=True)
         self._reader.start()

@@ -52,7 +52,13 @@ def test_lockstep_flight_plotted_live_recorded_and_exported_with_the_same_layout
     assert re.search(r"\[plots\] INFO\s+plotted \d+ of \d+ messages .*; 0 buffer overruns", output)
 
     fifty = read_rrd(decimated)
-    assert fifty.rows(estimate) == len({4000 * k // 20000 for k in range(1, STEPS + 1)})
+    buckets = len({4000 * k // 20000 for k in range(1, STEPS + 1)})  # one row per 20 ms of the vehicle's time
+    overruns = re.search(r"\[plots_50hz\] INFO\s+plotted \d+ of \d+ messages .*; (\d+) buffer overruns", output)
+    assert overruns, output
+    if overruns.group(1) == "0":
+        assert fifty.rows(estimate) == buckets
+    else:  # a machine so loaded that the passive bridge was lapped: what it lost, it said
+        assert 0 < fifty.rows(estimate) < buckets
 
     # A bridge that cannot keep up drops its oldest samples and says so; the flight is not slowed.
     assert re.search(r"\[tiny\] WARNING vehicle_\w+: ring buffer of 16 full, oldest samples dropped", output)
