@@ -26,7 +26,15 @@ from pymavlink.dialects.v20 import common as mavlink2
 from stack.bus.ports import free_port
 from stack.mavlink import px4_modes
 from stack.mavlink.px4_modes import Px4Mode
-from tests.support.harness import REPO, RunningStack, run_cli, stack_env, wait_no_processes, write_profile
+from tests.support.harness import (
+    REPO,
+    RunningStack,
+    eventually,
+    run_cli,
+    stack_env,
+    wait_no_processes,
+    write_profile,
+)
 
 IMU_HZ = 100.0
 GYRO = (0.01, -0.02, 0.03)
@@ -111,14 +119,6 @@ class FakePixhawk:
             self.targets.append((time.monotonic(), msg.type_mask, msg.thrust, rates))
 
 
-def wait_until(condition, timeout: float, what: str) -> None:
-    deadline = time.monotonic() + timeout
-    while not condition():
-        if time.monotonic() > deadline:
-            raise AssertionError(f"timed out waiting for {what}")
-        time.sleep(0.05)
-
-
 def echo(home: Path, topic: str) -> dict:
     out = run_cli(home, "topic", "echo", topic, "-n", "1", "--json", "--vehicle", "p1", timeout=60)
     assert out.returncode == 0, out.stderr
@@ -186,15 +186,15 @@ critical = true
         assert baro["pressure"] == pytest.approx(100_000.0)
         # Streams asked for; an idle proof of life while disarmed.
         imu_interval = (mavlink2.MAV_CMD_SET_MESSAGE_INTERVAL, 105.0)
-        wait_until(lambda: any(c[:1] + c[1][:1] == imu_interval for c in fake.commands), 30, "the IMU request")
-        wait_until(lambda: len(fake.targets) >= 5, 30, "the proof of life")
+        eventually(lambda: any(c[:1] + c[1][:1] == imu_interval for c in fake.commands), 30, "the IMU request")
+        eventually(lambda: len(fake.targets) >= 5, 30, "the proof of life")
         assert all(thrust == 0.0 for _, _, thrust, _ in fake.targets)
         status = echo(tmp_path, "external_autopilot_status")
         assert status["connected"] and status["mode"] == "POSCTL" and not status["in_control"]
 
         # The stack arms: OFFBOARD, then arm; its setpoints are forwarded, a NaN one never.
         pubs.append(publisher(tmp_path, "actuator_armed", {"armed": True}, 5.0))
-        wait_until(lambda: fake.armed and fake.mode is Px4Mode.OFFBOARD, 60, "OFFBOARD and armed")
+        eventually(lambda: fake.armed and fake.mode is Px4Mode.OFFBOARD, 60, "OFFBOARD and armed")
         order = [c for c, _ in fake.commands if c != mavlink2.MAV_CMD_SET_MESSAGE_INTERVAL]
         assert order[:2] == [mavlink2.MAV_CMD_DO_SET_MODE, mavlink2.MAV_CMD_COMPONENT_ARM_DISARM]
         nan = {"roll": math.nan, "pitch": 0.0, "yaw": 0.0, "thrust_body": [0.0, 0.0, -0.5]}
@@ -207,12 +207,12 @@ critical = true
                 20.0,
             )
         )
-        wait_until(lambda: any(t[2] == pytest.approx(0.6) for t in fake.targets), 60, "a forwarded setpoint")
+        eventually(lambda: any(t[2] == pytest.approx(0.6) for t in fake.targets), 60, "a forwarded setpoint")
         time.sleep(1.0)
         sent = [t for t in fake.targets if t[2] > 0.0]
         assert sent and all(t[1] == 128 and t[3] == pytest.approx((0.1, 0.2, 0.3)) for t in sent)
         assert all(all(math.isfinite(r) for r in t[3]) for t in fake.targets)
-        wait_until(lambda: echo(tmp_path, "external_autopilot_status")["in_control"], 30, "in control")
+        eventually(lambda: echo(tmp_path, "external_autopilot_status")["in_control"], 30, "in control")
         for p in pubs:
             stop(p)
         pubs.clear()
