@@ -67,6 +67,9 @@ POLL_S = 0.01
 PROGRESS_S = 1.0
 """Wall-clock seconds between progress lines."""
 SILENT_S = 15.0
+CAUSE_WAIT_S = 2.0
+"""How long a failure waits for the commander's word on why a failsafe took over: ``mavlink_log`` and
+``vehicle_status`` are separate topics, so the cause may arrive just after the state."""
 """Wall-clock seconds without a message from the vehicle after which --wait gives up (the stack stopped)."""
 NO_COMMANDER = "no commander is running (nothing subscribes to vehicle_command)"
 NO_NAVIGATOR = "no answer from the navigator (is flight_mode_manager running?)"
@@ -183,13 +186,17 @@ class _Link:
         began = time.monotonic()
         budget: float | None = limit_s
         report = began + PROGRESS_S
+        explain_by = 0.0
         while True:
             for topic, msg in self.poll():
                 if topic == "mavlink_log" and msg.timestamp >= start.timestamp:
                     typer.echo(f"vehicle: {msg.text}")
             v = self.vehicle
             if (failure := action.failed(v)) is not None:
-                fail(failure)
+                unexplained = v.status is not None and v.status.failsafe and not v.failsafe_explained()
+                explain_by = explain_by or time.monotonic() + CAUSE_WAIT_S
+                if not unexplained or time.monotonic() >= explain_by:
+                    fail(failure)
             if (done := action.done(v)) is not None:
                 typer.echo(done)
                 return

@@ -15,6 +15,7 @@ import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 
+from stack.commander.events import CRITICAL_EVENTS
 from stack.commander.modes import mode_name
 from stack.mission.items import MAV_CMD_NAV_LAND, MAV_CMD_NAV_RETURN_TO_LAUNCH, MAV_CMD_NAV_TAKEOFF, Mission
 from stack.msg.estimation import VehicleLocalPosition
@@ -72,6 +73,10 @@ class Vehicle:
             self.mission = msg  # type: ignore[assignment]
         elif isinstance(msg, MavlinkLog) and msg.severity <= MavlinkLog.SEVERITY_WARNING:
             self.said = msg.text
+
+    def failsafe_explained(self) -> bool:
+        """Whether the commander has said which failsafe it activated."""
+        return self.said.startswith(CRITICAL_EVENTS)
 
     @property
     def armed(self) -> bool:

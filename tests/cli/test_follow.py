@@ -65,7 +65,11 @@ def test_takeoff_is_done_at_the_altitude_not_by_the_mode():
 def test_a_failsafe_fails_the_action_with_what_the_vehicle_said():
     takeoff = Takeoff("takeoff", TAKEOFF_MODES, p=P, height_m=5.0)
     held = vehicle(NS.NAVIGATION_STATE_AUTO_LOITER, 0.5, failsafe=True)
+    # The state may come before the commander's word on the cause (two topics): the follower waits for it.
+    held.said = "Failsafe warning: battery low"
+    assert not held.failsafe_explained()
     held.said = "Failsafe activated (battery_critical): Hold"
+    assert held.failsafe_explained()
     assert takeoff.failed(held) == (
         "takeoff failed: a failsafe took over (Hold): Failsafe activated (battery_critical): Hold"
     )
