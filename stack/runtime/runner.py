@@ -16,6 +16,7 @@ from typing import Any
 import zenoh
 
 from stack.bus import keys
+from stack.bus.alive import AliveTokens
 from stack.bus.node import Node, wall_clock_us
 from stack.bus.topics import FLAG_LOCKSTEP_TIME, Received, TopicPublisher
 from stack.fastpath.attach import Attachment
@@ -89,9 +90,12 @@ class Runtime:
         """Call ``on_change(module, pid, alive)`` for every module process of this vehicle that is running or comes
         or goes (their liveliness tokens; called from a Zenoh thread). The subscriber lives as long as the session."""
 
+        tokens = AliveTokens(self.spec.vehicle, log.warning)
+
         def changed(sample: zenoh.Sample) -> None:
-            module, pid = str(sample.key_expr).split("/")[-2:]
-            on_change(module, int(pid), sample.kind == zenoh.SampleKind.PUT)
+            parsed = tokens.parse(str(sample.key_expr))
+            if parsed is not None:
+                on_change(*parsed, sample.kind == zenoh.SampleKind.PUT)
 
         key = keys.alive_query(self.spec.vehicle)
         self._module_watchers.append(self.node.session.liveliness().declare_subscriber(key, changed, history=True))

@@ -27,6 +27,7 @@ from collections.abc import Callable, Iterable
 import zenoh
 
 from stack.bus import keys
+from stack.bus.alive import AliveTokens
 from stack.bus.graph import read_graph
 from stack.bus.node import Node, stable_publisher_id
 from stack.runtime.inputs import InputBuffer
@@ -49,13 +50,12 @@ def query_roster(session: zenoh.Session, vehicle: str) -> dict[str, int] | None:
     return None
 
 
-def alive_modules(session: zenoh.Session, vehicle: str) -> dict[str, int]:
+def alive_modules(session: zenoh.Session, tokens: AliveTokens) -> dict[str, int]:
     """Modules whose alive token this session sees: name → pid."""
     alive: dict[str, int] = {}
-    for reply in session.liveliness().get(keys.alive_query(vehicle), timeout=1.0):
-        if reply.ok is not None:
-            parts = str(reply.ok.key_expr).split("/")
-            alive[parts[-2]] = int(parts[-1])
+    for reply in session.liveliness().get(keys.alive_query(tokens.vehicle), timeout=1.0):
+        if reply.ok is not None and (parsed := tokens.parse(str(reply.ok.key_expr))) is not None:
+            alive[parsed[0]] = parsed[1]
     return alive
 
 
@@ -83,6 +83,7 @@ def sync(
     roster: dict[str, int] | None = None
     declared = False
     problem = "no supervisor roster"
+    tokens = AliveTokens(node.vehicle, log.warning)
     while True:
         if roster is None:
             roster = query_roster(node.session, node.vehicle)
@@ -96,7 +97,7 @@ def sync(
                 # it), so draining takes in probes only; afterwards the trigger queue is left alone.
                 for buf in inputs:
                     buf.pull()
-            alive = alive_modules(node.session, node.vehicle)
+            alive = alive_modules(node.session, tokens)
             others = {name for name in roster if name != node.name}
             waiting_for = sorted(n for n in others if alive.get(n) != roster[n])
             if waiting_for:

@@ -30,6 +30,7 @@ import msgspec
 import zenoh
 
 from stack.bus import keys
+from stack.bus.alive import AliveTokens
 from stack.bus.config import LOOPBACK_ANY_PORT, BusConfig
 from stack.bus.ports import free_port, port_taken
 from stack.fastpath.host import FastPathHost
@@ -130,6 +131,7 @@ class Supervisor:
         self._signal: int | None = None  # the signal that stopped the stack, if one did
         self._alive: dict[str, int] = {}
         self._alive_changed = threading.Condition()
+        self._alive_tokens = AliveTokens(self.vehicle, self._say)
         self._heartbeats: dict[str, ModuleHeartbeat] = {}
         self._print_lock = threading.Lock()
         self._hb_decoder = msgspec.msgpack.Decoder(ModuleHeartbeat)
@@ -425,8 +427,10 @@ class Supervisor:
         return True
 
     def _on_alive(self, sample: zenoh.Sample) -> None:
-        parts = str(sample.key_expr).split("/")
-        name, pid = parts[-2], int(parts[-1])
+        parsed = self._alive_tokens.parse(str(sample.key_expr))
+        if parsed is None:
+            return
+        name, pid = parsed
         with self._alive_changed:
             if sample.kind == zenoh.SampleKind.PUT:
                 self._alive[name] = pid

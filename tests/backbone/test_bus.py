@@ -5,8 +5,14 @@ import json
 import subprocess
 import sys
 
+import zenoh
+
+from stack.bus import keys
+from stack.bus.alive import AliveTokens, parse_alive_token
+from stack.bus.config import BusConfig
 from stack.bus.node import stable_publisher_id
 from stack.bus.ports import free_port
+from stack.runtime.startup import alive_modules
 from tests.support.harness import REPO, RunningStack, chain_profile, eventually, stack_env, wait_no_processes
 
 
@@ -55,3 +61,54 @@ def test_malformed_and_mismatched_samples_are_counted_and_dropped(tmp_path):
     finally:
         assert stack.stop() == 0
     assert not wait_no_processes(home)
+
+
+def test_malformed_alive_tokens_are_counted_and_reported_once(tmp_path):
+    home = tmp_path / "home"
+    profile = chain_profile(
+        tmp_path / "chain.toml", lockstep=False, extra='[[module]]\nmodule = "tests.support.modules:Watcher"\n'
+    )
+    stack = RunningStack(home, profile)
+    try:
+        stack.wait_up()
+        forge = subprocess.run(
+            [sys.executable, "-m", "tests.support.peers", "forge"], env=stack_env(home), cwd=REPO, timeout=60
+        )
+        assert forge.returncode == 0
+        # The well-formed token came after all the malformed ones: once it is gone they were all seen.
+        stack.wait_for(r"\[watcher\].*module forge_done gone \(pid 4242\)")
+        out = stack.output
+        assert "Traceback" not in out and "callback error" not in out
+        reports = [line for line in out.splitlines() if "malformed alive token" in line]
+        assert len(reports) == 2, reports  # the supervisor's and the watcher's, once each
+        assert {line.split()[0] for line in reports} == {"[stack]", "[watcher]"}
+        assert "module summer alive" in out
+        assert next(m for m in stack.status()["modules"] if m["module"] == "watcher")["state"] == "running"
+    finally:
+        assert stack.stop() == 0
+    assert not wait_no_processes(home)
+
+
+def test_lockstep_start_up_reads_the_alive_tokens_past_malformed_ones():
+    endpoint = f"tcp/127.0.0.1:{free_port()}"
+    warnings: list[str] = []
+    with (
+        zenoh.open(BusConfig(listen=(endpoint,)).zenoh_config("tokens")) as tokens_session,
+        zenoh.open(BusConfig(connect=(endpoint,)).zenoh_config("reader")) as reader,
+    ):
+        alive = "stack/t1/@alive"
+        declared = [  # kept: a token lives as long as its object
+            tokens_session.liveliness().declare_token(key)
+            for key in (keys.alive_token("t1", "doubler", 1234), f"{alive}/summer/notanint", f"{alive}/summer")
+        ]
+        tokens = AliveTokens("t1", warnings.append)
+        # Each reading is one query, which the malformed tokens answer again every time.
+        eventually(lambda: alive_modules(reader, tokens) == {"doubler": 1234} and tokens.malformed >= 2)
+        before = tokens.malformed
+        assert alive_modules(reader, tokens) == {"doubler": 1234}
+        assert tokens.malformed == before + 2
+        del declared
+    assert len(warnings) == 1 and "malformed alive token 'stack/t1/@alive/summer" in warnings[0], warnings
+    assert parse_alive_token(keys.alive_token("t1", "doubler", 1234), "t1") == ("doubler", 1234)
+    for key in ("stack/t1/@alive/doubler/-1", "stack/t1/@alive/doubler/0", "stack/t2/@alive/doubler/1"):
+        assert parse_alive_token(key, "t1") is None

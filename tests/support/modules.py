@@ -7,6 +7,7 @@ a message one step early or late, the recorded trace changes, so the determinism
 from __future__ import annotations
 
 import json
+import logging
 import os
 import random
 import time
@@ -18,6 +19,8 @@ from stack.msg.setpoints import VehicleRatesSetpoint, VehicleTorqueSetpoint
 from stack.msg.system import VehicleCommand, VehicleCommandAck
 from stack.params.param import Param
 from stack.runtime.module import Arg, Module, Timer, Trigger
+
+log = logging.getLogger("tests.support.modules")
 
 
 class TickSource(Module):
@@ -145,6 +148,23 @@ class CommandCounter(Module):
         for cmd in self.take("vehicle_command"):
             self.count += 1
             self.publish("vehicle_command_ack", VehicleCommandAck(command=cmd.command, result_param2=self.count))
+
+
+class Watcher(Module):
+    """Follows the module processes of its vehicle, as the commander does, logging each start and end."""
+
+    NAME = "watcher"
+    TRIGGER = Timer(20.0)
+
+    def __init__(self, rt) -> None:
+        super().__init__(rt)
+        self.watch_modules(self._on_module)
+
+    def _on_module(self, module: str, pid: int, alive: bool) -> None:
+        log.info("module %s %s (pid %d)", module, "alive" if alive else "gone", pid)
+
+    def run(self, msg: None, dt: float) -> None:
+        pass
 
 
 class Crasher(Module):

@@ -8,6 +8,9 @@
   forged messages on the lockstep's own keys (the tick keys of the named members), a sensor_gyro forged
   as the simulator's with a lockstep time 10^12 µs ahead, an outside sensor_gyro, and a flood of garbage on
   vehicle_rates_setpoint, a latest-value input of the chain.
+- ``forge``: joins the running stack and declares and withdraws malformed alive tokens, five times each,
+  then declares a well-formed one of a module ``forge_done`` (pid 4242) and leaves: the stack sees it come
+  and go after all the malformed ones.
 """
 
 from __future__ import annotations
@@ -118,6 +121,19 @@ def attack(members: list[str]) -> None:
         time.sleep(FLUSH_S)
 
 
+def forge() -> None:
+    vehicle, bus = find_stack(None, None)
+    alive = f"{keys.ROOT}/{vehicle}/@alive"
+    malformed = [f"{alive}/commander/notanint", f"{alive}/commander/-1", f"{alive}/commander", f"{alive}/a/b/1"]
+    with zenoh.open(bus.zenoh_config("forger")) as session:
+        for _ in range(5):
+            for key in malformed:
+                session.liveliness().declare_token(key).undeclare()
+        done = session.liveliness().declare_token(keys.alive_token(vehicle, "forge_done", 4242))
+        time.sleep(FLUSH_S)
+        done.undeclare()
+
+
 if __name__ == "__main__":
     mode = sys.argv[1]
     if mode == "pub":
@@ -126,6 +142,8 @@ if __name__ == "__main__":
         subscribe(sys.argv[2], int(sys.argv[3]), sys.argv[4])
     elif mode == "rogue":
         rogue()
+    elif mode == "forge":
+        forge()
     elif mode == "attack":
         attack(sys.argv[2:])
     else:
