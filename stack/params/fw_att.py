@@ -51,8 +51,9 @@ ATTITUDE: tuple[Param, ...] = (
     Param("FW_MAN_R_MAX", 45.0, 0.0, 90.0, "deg", "Roll angle at full roll stick in Stabilized"),
     Param("FW_MAN_P_MAX", 45.0, 0.0, 90.0, "deg", "Pitch angle at full pitch stick in Stabilized"),
     Param("FW_MAN_R_SC", 1.0, 0.0, 1.0, "", "Manual mode: aileron at full roll stick"),
-    Param("FW_MAN_P_SC", 1.0, 0.0, None, "", "Manual mode: elevator at full pitch stick"),
-    Param("FW_MAN_Y_SC", 1.0, 0.0, None, "", "Manual mode: rudder at full yaw stick"),
+    # PX4 bounds FW_MAN_R_SC only (0 … 1); its siblings take that bound: the surfaces' command saturates at 1.
+    Param("FW_MAN_P_SC", 1.0, 0.0, 1.0, "", "Manual mode: elevator at full pitch stick"),
+    Param("FW_MAN_Y_SC", 1.0, 0.0, 1.0, "", "Manual mode: rudder at full yaw stick"),
     Param("FW_ACRO_X_MAX", 90.0, 45.0, 720.0, "deg/s", "Acro: roll rate at full roll stick"),
     Param("FW_ACRO_Y_MAX", 90.0, 45.0, 720.0, "deg/s", "Acro: pitch rate at full pitch stick"),
     Param("FW_ACRO_Z_MAX", 45.0, 10.0, 180.0, "deg/s", "Acro: yaw rate at full yaw stick"),

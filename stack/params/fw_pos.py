@@ -99,8 +99,10 @@ TECS: tuple[Param, ...] = (
     Param("FW_T_CLMB_MAX", 5.0, 1.0, 15.0, "m/s", "Climb rate at FW_THR_MAX and the trim airspeed"),
     Param("FW_T_SINK_MIN", 2.0, 1.0, 5.0, "m/s", "Sink rate at FW_THR_MIN and the trim airspeed"),
     Param("FW_T_SINK_MAX", 5.0, 1.0, 15.0, "m/s", "Largest sink rate the controller commands"),
-    Param("FW_T_ALT_TC", 5.0, 2.0, None, "s", "Altitude error time constant"),
-    Param("FW_T_TAS_TC", 5.0, 2.0, None, "s", "True airspeed error time constant"),
+    # PX4 gives these two a minimum only; the maximum is that of the TECS time constants PX4 had before them,
+    # FW_T_TIME_CONST and FW_T_THRO_CONST (1 … 10 s, fw_pos_control_l1_params.c).
+    Param("FW_T_ALT_TC", 5.0, 2.0, 10.0, "s", "Altitude error time constant"),
+    Param("FW_T_TAS_TC", 5.0, 2.0, 10.0, "s", "True airspeed error time constant"),
     Param("FW_T_THR_DAMP", 0.1, 0.0, 2.0, "", "Throttle damping gain (on the total energy rate error)"),
     Param("FW_T_I_GAIN_THR", 0.3, 0.0, 2.0, "", "Throttle integrator gain (0 = off)"),
     Param("FW_T_I_GAIN_PIT", 0.1, 0.0, 2.0, "", "Pitch integrator gain (0 = off)"),

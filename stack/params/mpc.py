@@ -78,8 +78,10 @@ PARAMS: tuple[Param, ...] = (
     # Takeoff and landing (multicopter_takeoff_land_params.c)
     Param("MPC_TKO_SPEED", 1.5, 1.0, 5.0, "m/s", "Takeoff climb rate"),
     Param("MPC_TKO_RAMP_T", 3.0, 0.0, 5.0, "s", "Smooth takeoff ramp time constant"),
-    Param("MPC_LAND_SPEED", 0.7, 0.6, None, "m/s", "Landing descend rate (also the blind descent of Descend)"),
-    Param("MPC_LAND_CRWL", 0.3, 0.1, None, "m/s", "Land crawl descend rate"),
+    # PX4 gives the two landing rates a minimum only; their maximum is MPC_Z_VEL_MAX_DN's (4 m/s): the position
+    # controller descends no faster than that whatever the landing asks.
+    Param("MPC_LAND_SPEED", 0.7, 0.6, 4.0, "m/s", "Landing descend rate (also the blind descent of Descend)"),
+    Param("MPC_LAND_CRWL", 0.3, 0.1, 4.0, "m/s", "Land crawl descend rate"),
     Param("MPC_LAND_ALT1", 10.0, 0.0, 122.0, "m", "Height above home below which the descent slows"),
     Param("MPC_LAND_ALT2", 5.0, 0.0, 122.0, "m", "Height above home below which the descent is MPC_LAND_SPEED"),
     # Manual modes (multicopter_stabilized_mode_params.c, _altitude_mode_params.c, _position_mode_params.c)

@@ -104,10 +104,11 @@ class Param:
             allowed = ", ".join(f"{b} ({m})" for b, m in self.bits.items())
             raise ParamError(f"{self.name}: {v!r} sets a bit other than {allowed}")
         if not isinstance(v, bool):
+            allowed = f" (range {self.min:g} to {self.max:g})" if self.min is not None and self.max is not None else ""
             if self.min is not None and v < self.min:
-                raise ParamError(f"{self.name}: {v!r} is below the minimum {self.min:g}")
+                raise ParamError(f"{self.name}: {v!r} is below the minimum {self.min:g}{allowed}")
             if self.max is not None and v > self.max:
-                raise ParamError(f"{self.name}: {v!r} is above the maximum {self.max:g}")
+                raise ParamError(f"{self.name}: {v!r} is above the maximum {self.max:g}{allowed}")
         return v
 
     def meaning(self, value: object) -> str:

@@ -4,7 +4,7 @@ A profile lists the modules in start order, each with its parameters, arguments,
 and restart policy, plus the vehicle namespace and bus settings. Everything is checked before any
 process starts; a problem is reported in one line naming the file, the key and what is wrong::
 
-    launch/sitl_quad.toml: module[3].params.MC_ROLLRATE_P: 0.9 is above the maximum 0.5
+    launch/sitl_quad.toml: module[3].params.MC_ROLLRATE_P: 0.9 is above the maximum 0.5 (range 0.01 to 0.5)
 
 A profile may start from another (``extends = "sitl_quad"``, looked up beside it, then by name) and
 give only what differs: its tables are merged into the base's key by key, and each ``[[module]]`` it

@@ -146,7 +146,7 @@ def test_stack_up_refuses_a_broken_profile_before_starting_anything(tmp_path):
     out = run_cli(home, "up", str(path), "--duration", "1")
     assert out.returncode == 2
     assert out.stderr.strip().splitlines() == [
-        f"error: {path}: module[0] (tick_source).params.TEST_GAIN: 20.0 is above the maximum 10"
+        f"error: {path}: module[0] (tick_source).params.TEST_GAIN: 20.0 is above the maximum 10 (range -10 to 10)"
     ]
     assert not (home / "runs").exists()
 

@@ -7,7 +7,10 @@ import pytest
 from pymavlink.dialects.v20 import common as M
 
 from stack.gcs.params import INT32, REAL32, ListJob, ParamProtocol, SetJob, decode, encode, float32_decimal
+from stack.params import catalogue
+from stack.params.catalogue import CATALOGUE
 from stack.params.param import ParamError
+from stack.params.store import ParamStore
 
 OWN = (1, 1)
 PARAMS = [
@@ -113,6 +116,48 @@ def test_a_refused_set_answers_the_unchanged_value_and_says_why():
     assert "COM_DL_LOSS_T not set: 1000 is above the maximum 300" in reason
     (value,) = proto.take(10)
     assert decode(value.param_value, value.param_type) == 10
+
+
+class StoreSource:
+    """The parameters of one module's store (the stack's modules check a set with the same definitions)."""
+
+    def __init__(self, store: ParamStore) -> None:
+        self.store = store
+
+    def list(self):
+        return [
+            (name, value, self.store.definition(name).type is not float) for name, value in self.store.values().items()
+        ]
+
+    def set(self, name, value):
+        return self.store.set(name, value)[1]
+
+
+@pytest.mark.parametrize(
+    ("name", "value", "why"),
+    [
+        ("MC_ROLLRATE_I", 2147483600.0, "2147483600.0 is above the maximum 2 (range 0 to 2)"),
+        ("MC_PITCHRATE_D", 2147483600.0, "2147483600.0 is above the maximum 0.01 (range 0 to 0.01)"),
+        ("MPC_LAND_SPEED", 2.1e9, "2100000000.0 is above the maximum 4 (range 0.6 to 4)"),
+        ("RTL_RETURN_ALT", 3.4e38, "3.4e+38 is above the maximum 150 (range 0 to 150)"),
+    ],
+)
+def test_a_param_set_the_vehicle_could_not_fly_with_is_refused_naming_the_range(name, value, why):
+    source = StoreSource(
+        ParamStore(catalogue.params("MC_ROLLRATE_I", "MC_PITCHRATE_D", "MPC_LAND_SPEED", "RTL_RETURN_ALT"))
+    )
+    proto = _loaded(source.list())
+    single = struct.unpack("<f", struct.pack("<f", value))[0]  # what a ground station sends: REAL32
+    assert proto.on_set(_set(name, single, REAL32)) == ""
+    (job,) = proto.take_jobs()
+    try:
+        result = source.set(job.name, job.value)
+    except ParamError as e:
+        result = e
+    assert isinstance(result, ParamError) and why in proto.on_set_result(name, result)
+    (answer,) = proto.take(10)
+    assert decode(answer.param_value, answer.param_type) == CATALOGUE[name].default
+    assert source.store.set_count == 0
 
 
 def test_a_wrong_type_or_an_unknown_name_is_refused_at_once():

@@ -1,6 +1,9 @@
 """The parameter catalogue: one definition per parameter, held by every module that reads it, and nothing
 defined that no module reads; enum values, bitmasks and MAVLink types."""
 
+import math
+import re
+
 import pytest
 
 from stack.commander.failsafe import DLL_EXCEPT_AUTO_MODES, DLL_EXCEPT_MISSION
@@ -9,6 +12,7 @@ from stack.estimator import position_kf
 from stack.params import catalogue
 from stack.params.catalogue import CATALOGUE
 from stack.params.param import MAV_PARAM_TYPE_INT32, MAV_PARAM_TYPE_REAL32, Param, ParamError
+from stack.params.store import ParamStore
 from stack.pixhawk_sim import params as pixhawk_sim_params
 from stack.pixhawk_sim.params import SIMULATED_OFFBOARD_LOSS_ACTIONS
 from stack.posctl import flight_mode_manager
@@ -48,6 +52,41 @@ def test_each_definition_accepts_its_default_and_documents_itself(name):
     if p.values:
         assert p.default in p.values and all(p.values.values())
     assert p.mav_type == (MAV_PARAM_TYPE_REAL32 if p.type is float else MAV_PARAM_TYPE_INT32)
+
+
+BOUNDED = sorted({p.name: p for p in (*CATALOGUE.values(), *pixhawk_sim_params.PARAMS)}.values(), key=lambda p: p.name)
+
+
+@pytest.mark.parametrize(
+    "p", [p for p in BOUNDED if p.type is not bool and not p.values and not p.bits], ids=lambda p: p.name
+)
+def test_every_number_has_finite_bounds_around_its_default(p):
+    """A parameter without a maximum (or a minimum) takes 2.1e9 from any ground station, and the vehicle tumbles:
+    every number has both, from PX4's metadata where PX4 gives them (the group's module says where not)."""
+    assert p.min is not None and p.max is not None, f"{p.name} has no range: give it PX4's @min and @max"
+    assert math.isfinite(p.min) and math.isfinite(p.max) and p.min <= p.default <= p.max
+
+
+EXTREMES = [
+    ("MC_ROLLRATE_I", 2147483600, "above the maximum 2 (range 0 to 2)"),
+    ("MC_PITCHRATE_D", 2147483600, "above the maximum 0.01 (range 0 to 0.01)"),
+    ("MPC_LAND_SPEED", 2.1e9, "above the maximum 4 (range 0.6 to 4)"),
+    ("RTL_RETURN_ALT", 3.4e38, "above the maximum 150 (range 0 to 150)"),
+    ("RTL_RETURN_ALT", -1.0, "below the minimum 0 (range 0 to 150)"),
+]
+
+
+@pytest.mark.parametrize(("name", "value", "why"), EXTREMES)
+def test_values_that_would_tumble_the_vehicle_are_refused_naming_the_range(name, value, why):
+    with pytest.raises(ParamError) as err:
+        CATALOGUE[name].check(value)
+    assert str(err.value) == f"{name}: {float(value)!r} is {why}"
+    store = ParamStore(catalogue.params(name))
+    with pytest.raises(ParamError, match=re.escape(why)):
+        store.set(name, value)
+    assert store.values()[name] == CATALOGUE[name].default and store.set_count == 0
+    with pytest.raises(ParamError, match=re.escape(why)):
+        ParamStore(catalogue.params(name), {name: value})  # a profile's or a module's overrides
 
 
 def test_no_parameter_is_a_string_and_the_mavlink_types_follow_the_python_types():
@@ -105,7 +144,7 @@ def test_the_code_constants_are_the_catalogue_values():
 
 def test_declarations_that_disagreed_take_px4s_metadata():
     assert (CATALOGUE["MPC_THR_MIN"].min, CATALOGUE["MPC_THR_MIN"].max) == (0.05, 0.5)
-    assert (CATALOGUE["MPC_LAND_SPEED"].min, CATALOGUE["MPC_LAND_SPEED"].max) == (0.6, None)
+    assert (CATALOGUE["MPC_LAND_SPEED"].min, CATALOGUE["MPC_LAND_SPEED"].max) == (0.6, 4.0)
     assert (CATALOGUE["MPC_MAN_TILT_MAX"].min, CATALOGUE["MPC_MAN_TILT_MAX"].max) == (1.0, 70.0)
     assert CATALOGUE["MPC_USE_HTE"].type is bool
 

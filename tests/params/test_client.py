@@ -68,8 +68,29 @@ def test_a_set_reaches_every_module_that_reads_the_parameter(modules):
 def test_a_refused_value_changes_nothing_anywhere(modules):
     a = modules.serve("commander", ParamStore(SHARED))
     b = modules.serve("mc_att_control", ParamStore(SHARED[:2]))
-    with pytest.raises(ParamError, match=r"MPC_THR_HOVER: 0.9 is above the maximum 0.8 \(refused by commander"):
+    with pytest.raises(
+        ParamError, match=r"MPC_THR_HOVER: 0.9 is above the maximum 0.8 \(range 0.1 to 0.8\) \(refused by commander"
+    ):
         client.set_param(modules.session, VEHICLE, "MPC_THR_HOVER", 0.9)
+    assert a.set_count == b.set_count == 0
+
+
+def test_values_the_vehicle_could_not_fly_with_are_refused_by_set_and_by_load(modules):
+    rate = catalogue.params("MC_ROLLRATE_I", "MC_PITCHRATE_D")
+    landing = catalogue.params("MPC_LAND_SPEED", "RTL_RETURN_ALT")
+    a = modules.serve("mc_rate_control", ParamStore(rate))
+    b = modules.serve("flight_mode_manager", ParamStore(landing))
+    with pytest.raises(ParamError, match=r"MC_ROLLRATE_I: 2147483600.0 is above the maximum 2 \(range 0 to 2\)"):
+        client.set_param(modules.session, VEHICLE, "MC_ROLLRATE_I", 2147483600)
+    with pytest.raises(ParamError, match=r"RTL_RETURN_ALT: 3.4e\+38 is above the maximum 150 \(range 0 to 150\)"):
+        client.set_param(modules.session, VEHICLE, "RTL_RETURN_ALT", "3.4e38")
+    report = client.set_many(
+        modules.session, VEHICLE, [("MC_PITCHRATE_D", 2147483600.0, 9), ("MPC_LAND_SPEED", 2.1e9, 9)]
+    )
+    assert report.changed == [] and report.refused == [
+        "MC_PITCHRATE_D: 2147483600.0 is above the maximum 0.01 (range 0 to 0.01)",
+        "MPC_LAND_SPEED: 2100000000.0 is above the maximum 4 (range 0.6 to 4)",
+    ]
     assert a.set_count == b.set_count == 0
 
 
@@ -114,7 +135,7 @@ def test_many_values_each_set_or_reported(modules):
     assert [r.name for r in report.changed] == ["NAV_DLL_ACT"] and report.unchanged == ["MPC_MANTHR_MIN"]
     assert report.refused == [
         "MPC_THR_HOVER: type 6 given, the parameter's is 9",
-        "MPC_THR_HOVER: 2.0 is above the maximum 0.8",
+        "MPC_THR_HOVER: 2.0 is above the maximum 0.8 (range 0.1 to 0.8)",
     ]
     assert len(report.unknown) == 1 and "did you mean MPC_THR_HOVER?" in report.unknown[0]
     assert a.values()["NAV_DLL_ACT"] == 3 and a.values()["MPC_THR_HOVER"] == 0.5
