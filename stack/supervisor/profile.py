@@ -46,6 +46,9 @@ LOCKSTEP_TRANSPORTS = ("shm", "zenoh")
 FLAGS = ("lockstep", "realtime", "plot", "record")
 PLACEHOLDERS = ("python", "run_dir", "seed", "udp_port", "control_port")
 """What ``{name}`` in a process command or a module's string argument stands for (see the module docstring)."""
+MAX_DEPTH = 32
+"""Tables and arrays nested deeper are refused: a profile needs a few levels (the launch profiles 3), and every
+walk of a document (merging an extended profile, checking a module's arguments) recurses once per level."""
 
 
 class ProfileError(ValueError):
@@ -167,6 +170,21 @@ def _entry_name(entry: object) -> object:
         return ref  # refused with its reason when the entry itself is checked
 
 
+def _too_deep(doc: dict) -> str | None:
+    """The key of a value of ``doc`` nested more than :data:`MAX_DEPTH` levels deep, or None (walked
+    without recursion: the document may be nested deeper than Python's recursion limit)."""
+    todo: list[tuple[object, str, int]] = [(doc, "", 0)]
+    while todo:
+        value, where, depth = todo.pop()
+        if depth > MAX_DEPTH:
+            return where
+        if isinstance(value, dict):
+            todo.extend((v, f"{where}.{k}" if where else str(k), depth + 1) for k, v in value.items())
+        elif isinstance(value, list):
+            todo.extend((v, f"{where}[{i}]", depth + 1) for i, v in enumerate(value))
+    return None
+
+
 class _Loader:
     def __init__(self, path: Path) -> None:
         self.path = path
@@ -182,6 +200,14 @@ class _Loader:
             doc = tomllib.loads(path.read_text())
         except tomllib.TOMLDecodeError as e:
             raise ProfileError(f"{path}: TOML syntax error: {e}") from None
+        except RecursionError:
+            # tomllib reads nested arrays and inline tables by recursion, and gives up at Python's recursion limit.
+            raise ProfileError(
+                f"{path}: arrays or inline tables nested too deeply to read (more than {MAX_DEPTH} levels are refused)"
+            ) from None
+        deep = _too_deep(doc)
+        if deep is not None:
+            raise ProfileError(f"{path}: {deep}: nested more than {MAX_DEPTH} levels deep")
         base_name = doc.pop("extends", None)
         if base_name is None:
             return doc

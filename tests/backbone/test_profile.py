@@ -180,3 +180,35 @@ def test_parameter_store_applies_changes_between_runs():
     with pytest.raises(ParamError):
         store.set("B", 9)
     assert store.values()["B"] == 2
+
+
+@pytest.mark.parametrize(
+    ("text", "problem"),
+    [
+        ("a = " + "[" * 10_000 + "]" * 10_000, "arrays or inline tables nested too deeply to read"),
+        ("a = " + "{ b = " * 10_000 + "1" + " }" * 10_000, "arrays or inline tables nested too deeply to read"),
+        ("a = " + "[" * 40 + "]" * 40, "a" + "[0]" * 32 + ": nested more than 32 levels deep"),
+        ("[params." + ".".join(["a"] * 10_000) + "]\nb = 1", "params.a.a.a"),
+    ],
+    ids=["array", "inline_table", "array_40", "table"],
+)
+def test_a_deeply_nested_profile_is_refused_in_one_line(tmp_path, text, problem):
+    path = write_profile(tmp_path / "deep.toml", text + "\n" + GOOD)
+    with pytest.raises(ProfileError) as err:
+        load_profile(path)
+    message = str(err.value)
+    assert message.startswith(f"{path}: ") and problem in message and "\n" not in message
+
+
+def test_a_deeply_nested_extended_profile_is_refused_before_merging(tmp_path):
+    # Merging walks both documents: the same deep table in both would recurse once per level.
+    deep = "[params." + ".".join(["a"] * 10_000) + "]\nb = 1\n"
+    base = write_profile(tmp_path / "good.toml", GOOD + deep)
+    child = write_profile(tmp_path / "child.toml", 'extends = "good"\n' + deep)
+    home = tmp_path / "home"
+    out = run_cli(home, "up", str(child), "--duration", "1")
+    assert out.returncode == 2
+    lines = out.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith(f"error: {child}: params.a.a.a"), out.stderr
+    assert "nested more than 32 levels deep" in lines[0] and str(base) not in lines[0]
+    assert not (home / "runs").exists()
