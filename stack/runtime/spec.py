@@ -2,8 +2,13 @@
 
 from __future__ import annotations
 
+import ast
 import importlib
+import importlib.machinery
+import importlib.util
 import json
+import re
+import sys
 from dataclasses import asdict, dataclass, field
 from typing import TYPE_CHECKING
 
@@ -39,22 +44,100 @@ MODULES: dict[str, str] = {
 }
 
 
+_DOTTED = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*(\.[A-Za-z_][A-Za-z0-9_]*)*$")
+_IDENTIFIER = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
+
+
 def load_module_class(ref: str) -> type[Module]:
-    """A module class from a registry name or a ``package.module:Class`` path."""
-    path = MODULES.get(ref, ref)
-    if ":" not in path:
-        known = ", ".join(sorted(MODULES))
-        raise ValueError(f"unknown module '{ref}' (known: {known}; or give package.module:Class)")
-    mod_name, cls_name = path.split(":", 1)
+    """A module class from a registry name or a ``package.module:Class`` path.
+
+    A path is code the profile runs, as a ROS 2 launch file runs the nodes it names. Before importing it, what
+    can be checked without executing anything is: the path's form, that the module is installed or on the path,
+    and that its source binds the class's name; a path failing these is refused with nothing imported.
+    """
+    if ref in MODULES:
+        mod_name, cls_name = MODULES[ref].split(":")
+    else:
+        mod_name, _, cls_name = ref.partition(":")
+        if not _DOTTED.match(mod_name) or not _IDENTIFIER.match(cls_name):
+            known = ", ".join(sorted(MODULES))
+            raise ValueError(f"unknown module '{ref}' (known: {known}; or give package.module:Class)")
+        spec = _find_without_importing(mod_name)
+        if spec is None:
+            raise ValueError(f"module '{ref}' cannot be loaded: no module '{mod_name}' is installed or on the path")
+        if not _may_define(spec, cls_name):
+            raise ValueError(f"module '{ref}' cannot be loaded: {mod_name} ({spec.origin}) defines no '{cls_name}'")
+    path = f"{mod_name}:{cls_name}"
     try:
         cls = getattr(importlib.import_module(mod_name), cls_name)
-    except (ImportError, AttributeError) as e:
-        raise ValueError(f"module '{ref}' cannot be loaded from {path}: {e}") from None
+    except Exception as e:  # whatever the module raised on import: one line, not a traceback
+        raise ValueError(f"module '{ref}' cannot be loaded from {path}: {type(e).__name__}: {e}") from None
     from stack.runtime.module import Module
 
     if not (isinstance(cls, type) and issubclass(cls, Module)):
         raise ValueError(f"module '{ref}': {path} is not a stack Module class")
     return cls
+
+
+def _find_without_importing(name: str) -> importlib.machinery.ModuleSpec | None:
+    """The spec of module ``name``, or None if there is none. ``importlib.util.find_spec`` imports (runs) the
+    packages a dotted name lies in, so only the top-level name goes through it; each part below is looked for in
+    its package's directories."""
+    parts = name.split(".")
+    spec: importlib.machinery.ModuleSpec | None = None
+    for i in range(len(parts)):
+        full = ".".join(parts[: i + 1])
+        loaded = sys.modules.get(full)
+        if loaded is not None and getattr(loaded, "__spec__", None) is not None:
+            spec = loaded.__spec__
+        elif i == 0:
+            try:
+                spec = importlib.util.find_spec(full)
+            except ValueError:  # in sys.modules without a spec (__main__ run as a script)
+                return None
+        elif spec is None or spec.submodule_search_locations is None:
+            return None
+        else:
+            spec = importlib.machinery.PathFinder.find_spec(full, list(spec.submodule_search_locations))
+        if spec is None:
+            return None
+    return spec
+
+
+def _may_define(spec: importlib.machinery.ModuleSpec, name: str) -> bool:
+    """False only if the module's source surely binds no ``name`` at its top level (any assignment, import,
+    definition, ``import *`` or module ``__getattr__`` counts); a module without source is given the benefit."""
+    if not isinstance(spec.loader, importlib.machinery.SourceFileLoader) or spec.origin is None:
+        return True
+    try:
+        with open(spec.origin, "rb") as f:
+            tree = ast.parse(f.read(), spec.origin)
+    except (OSError, SyntaxError, ValueError):
+        return True  # the import says what is wrong
+    bound: set[str] = set()
+    todo: list[ast.stmt] = list(tree.body)
+    while todo:
+        node = todo.pop()
+        if isinstance(node, (ast.ClassDef, ast.FunctionDef, ast.AsyncFunctionDef)):
+            bound.add(node.name)
+        elif isinstance(node, (ast.Import, ast.ImportFrom)):
+            for alias in node.names:
+                if alias.name == "*":
+                    return True
+                bound.add(alias.asname or alias.name.split(".")[0])
+        elif isinstance(node, (ast.Assign, ast.AnnAssign, ast.AugAssign)):
+            targets = node.targets if isinstance(node, ast.Assign) else [node.target]
+            bound.update(n.id for t in targets for n in ast.walk(t) if isinstance(n, ast.Name))
+        else:
+            # Top-level blocks (if, try, with, for, match) bind names at the top level too.
+            todo.extend(child for child in ast.iter_child_nodes(node) if isinstance(child, ast.stmt))
+            for handler in getattr(node, "handlers", []):
+                todo.extend(handler.body)
+            for case in getattr(node, "cases", []):
+                todo.extend(case.body)
+        if "__getattr__" in bound or name in bound:
+            return True
+    return False
 
 
 def resolve_args(declared: tuple[Arg, ...], given: dict[str, object]) -> dict[str, ParamValue]:

@@ -1,5 +1,7 @@
 """Launch profiles: checked before anything starts; a problem names the file, the key and what is wrong."""
 
+import sys
+
 import pytest
 
 from stack.params.param import Param, ParamError
@@ -211,4 +213,57 @@ def test_a_deeply_nested_extended_profile_is_refused_before_merging(tmp_path):
     lines = out.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith(f"error: {child}: params.a.a.a"), out.stderr
     assert "nested more than 32 levels deep" in lines[0] and str(base) not in lines[0]
+    assert not (home / "runs").exists()
+
+
+def plugin_package(root, marker):
+    """A package on the path whose every file, when imported, appends its name to ``marker``."""
+    package = root / "plugins_here"
+    package.mkdir()
+    run = f"open({str(marker)!r}, 'a').write(__name__ + '\\n')\n"
+    (package / "__init__.py").write_text(run)
+    (package / "tools.py").write_text(run + "class Helper:\n    pass\n")
+    (package / "broken.py").write_text(run + "class Helper:\n    pass\n\nraise RuntimeError('no hardware here')\n")
+    return package
+
+
+@pytest.mark.parametrize(
+    ("ref", "problem", "ran"),
+    [
+        ("plugins_here.missing:Thing", "no module 'plugins_here.missing' is installed or on the path", []),
+        ("plugins_here.tools:Nope", "defines no 'Nope'", []),
+        ("plugins_here.tools.deeper:Nope", "no module 'plugins_here.tools.deeper' is installed or on the path", []),
+        ("plugins_here:Thing; import os", "unknown module", []),
+        ("plugins_here.tools:Helper", "is not a stack Module class", ["plugins_here", "plugins_here.tools"]),
+        ("plugins_here.broken:Helper", "RuntimeError: no hardware here", ["plugins_here", "plugins_here.broken"]),
+    ],
+    ids=["no_module", "no_class", "below_a_module", "not_a_path", "not_a_module_class", "raises_on_import"],
+)
+def test_a_module_path_is_checked_before_its_code_runs(tmp_path, monkeypatch, ref, problem, ran):
+    marker = tmp_path / "ran.txt"
+    plugin_package(tmp_path, marker)
+    monkeypatch.syspath_prepend(str(tmp_path))
+    for name in [m for m in sys.modules if m.startswith("plugins_here")]:
+        monkeypatch.delitem(sys.modules, name)
+    path = write_profile(tmp_path / "plugin.toml", f'[stack]\nvehicle = "t1"\n\n[[module]]\nmodule = "{ref}"\n')
+    with pytest.raises(ProfileError) as err:
+        load_profile(path)
+    message = str(err.value)
+    assert message.startswith(f"{path}: module[0].module: ") and problem in message and "\n" not in message
+    assert (marker.read_text().split() if marker.exists() else []) == ran
+
+
+def test_stack_up_refuses_a_module_that_fails_on_import_in_one_line(tmp_path, monkeypatch):
+    plugin_package(tmp_path, tmp_path / "ran.txt")
+    monkeypatch.setenv("PYTHONPATH", str(tmp_path))
+    text = '[stack]\nvehicle = "t1"\n\n[[module]]\nmodule = "plugins_here.broken:Helper"\n'
+    path = write_profile(tmp_path / "plugin.toml", text)
+    home = tmp_path / "home"
+    out = run_cli(home, "up", str(path), "--duration", "1")
+    assert out.returncode == 2
+    assert out.stderr.strip().splitlines() == [
+        f"error: {path}: module[0].module: module 'plugins_here.broken:Helper' cannot be loaded from "
+        "plugins_here.broken:Helper: "
+        "RuntimeError: no hardware here"
+    ]
     assert not (home / "runs").exists()
