@@ -38,6 +38,15 @@ FLAG_LOCKSTEP_TIME = 1
 # A probe carries no message: a publisher sends probes at start-up so each subscriber can tell that
 # the publisher's samples reach it (see stack.runtime.runner: the lockstep start-up sync).
 FLAG_PROBE = 2
+MAX_SAMPLE_BYTES = 48_000
+"""The largest sample (message and header) the bus carries. Zenoh's low-latency transport, which the sessions
+of a stack use (stack.bus.config), sends a message in one batch, never in fragments, and a larger one is lost
+without a word (on 127.0.0.1 just over 49 kB arrived, between peers and through the router; the rest is margin).
+A publisher refuses a larger message (:class:`MessageTooLarge`) rather than lose it."""
+
+
+class MessageTooLarge(ValueError):
+    """A message larger than the bus carries (:data:`MAX_SAMPLE_BYTES`); nothing was published."""
 
 
 log = logging.getLogger("stack.bus")
@@ -98,19 +107,21 @@ class TopicPublisher:
             now_us = node.now_us()
         if msg.timestamp == 0:
             msg.timestamp = now_us
+        fast = self.fast
+        outside = fast is None or bool(fast.words[fast.zenoh_word])
+        data = self.encoder.encode(msg) if outside or self.fast_read else b""
+        if outside and len(data) + HEADER.size > MAX_SAMPLE_BYTES:
+            # Refused before it is counted: a subscriber never sees a gap in a publisher's sequence.
+            raise MessageTooLarge(
+                f"{self.topic}: a message of {len(data) + HEADER.size} bytes, more than the {MAX_SAMPLE_BYTES} "
+                "one message on the bus may have"
+            )
         node.seq += 1
         self.count += 1
-        fast = self.fast
-        if fast is None:
-            self._put(self.encoder.encode(msg), now_us)
-        else:
-            outside = fast.words[fast.zenoh_word]
-            if self.fast_read or outside:
-                data = self.encoder.encode(msg)
-                if self.fast_read:
-                    fast.write(data, self.count, now_us, node.seq)
-                if outside:
-                    self._put(data, now_us)
+        if fast is not None and self.fast_read:
+            fast.write(data, self.count, now_us, node.seq)
+        if outside:
+            self._put(data, now_us)
         node.on_published(self)
 
     def _put(self, data: bytes, now_us: int) -> None:

@@ -21,7 +21,7 @@ import typer
 from stack.bus import keys
 from stack.bus.node import Node
 from stack.bus.query import query_json
-from stack.bus.topics import TopicPublisher
+from stack.bus.topics import MessageTooLarge, TopicPublisher
 from stack.cli.common import EndpointOption, VehicleOption, connect, fail, wait_until_sent
 from stack.cli.follow import (
     GOTO_MODES,
@@ -44,7 +44,7 @@ from stack.commander.modes import MODES, nav_state_from_name
 from stack.mathlib.geo import MapProjection
 from stack.mission.items import GLOBAL_AMSL_FRAMES, GeoPoint, Mission, MissionError
 from stack.mission.loader import load_mission
-from stack.mission.transfer import mission_id_for, mission_message
+from stack.mission.transfer import mission_id_for, mission_message, too_many_items
 from stack.msg.base import Message
 from stack.msg.estimation import VehicleLocalPosition
 from stack.msg.navigation import MissionResult
@@ -426,7 +426,10 @@ def _upload(link: _Link, mission: Mission, home: GeoPoint | None) -> MissionResu
     """Publish the mission and wait for the navigator's verdict (returned when valid)."""
     ident = mission_id_for(mission)
     publisher = link.publisher("mission", f"{NO_NAVIGATOR}: nothing subscribes to mission")
-    publisher.publish(mission_message(mission, home, ident))
+    try:
+        publisher.publish(mission_message(mission, home, ident))
+    except MessageTooLarge as e:
+        fail(f"mission refused: {e}; nothing sent", code=2)
     deadline = time.monotonic() + link.timeout
     while True:
         for topic, msg in link.poll():
@@ -473,6 +476,9 @@ def mission_(
             mission = load_mission(file, home)
         except MissionError as e:
             fail(str(e), code=2)
+        too_many = too_many_items(len(mission))
+        if too_many:
+            fail(f"{file}: mission refused: {too_many}; nothing sent", code=2)
         if home is None and _needs_home(mission):
             fail(
                 f"{file}: the vehicle has no home position yet (no home_position or vehicle_local_position), "

@@ -14,6 +14,7 @@ from typing import Annotated, Any, Union, get_args, get_origin
 
 import msgspec
 
+from stack.bus.topics import HEADER, MAX_SAMPLE_BYTES
 from stack.msg.base import Message
 from stack.msg.registry import message_type
 
@@ -73,7 +74,13 @@ def parse_message(topic: str, text: str) -> Message:
         checked = msgspec.convert(data, _by_name(msg_type))
     except msgspec.ValidationError as e:
         raise ValueError(f"{msg_type.__name__}: {e}".replace("$.", "")) from None
-    return _real(checked)
+    msg = _real(checked)
+    size = len(msgspec.msgpack.encode(msg)) + HEADER.size
+    if size > MAX_SAMPLE_BYTES:
+        raise ValueError(
+            f"{msg_type.__name__}: {size} bytes, more than the {MAX_SAMPLE_BYTES} one message on the bus may have"
+        )
+    return msg
 
 
 def as_dict(value: Any) -> Any:

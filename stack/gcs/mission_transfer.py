@@ -21,13 +21,14 @@ from typing import Any, ClassVar
 
 from pymavlink.dialects.v20 import common as mavlink2
 
+from stack.mission.transfer import too_many_items
+
 RETRY_US = 250_000
 """PX4's MAVLINK_MISSION_RETRY_TIMEOUT_DEFAULT (``src/modules/mavlink/mavlink_mission.h``)."""
 PROTOCOL_TIMEOUT_US = 5_000_000
 """PX4's MAVLINK_MISSION_PROTOCOL_TIMEOUT_DEFAULT."""
 VERDICT_TIMEOUT_US = 5_000_000
 """How long the navigator has to judge an uploaded mission."""
-MAX_ITEMS = 2000
 MISSION = mavlink2.MAV_MISSION_TYPE_MISSION
 
 
@@ -49,7 +50,14 @@ class SetCurrent:
     source: tuple[int, int]
 
 
-Action = Upload | Clear | SetCurrent
+@dataclass(frozen=True)
+class Refused:
+    """An upload refused before its items came, and why (the ground station was answered already)."""
+
+    reason: str
+
+
+Action = Upload | Clear | SetCurrent | Refused
 
 
 @dataclass
@@ -115,8 +123,11 @@ class MissionTransfer:
             self._actions.append(Clear())
             self._ack(source, mavlink2.MAV_MISSION_ACCEPTED)
             return
-        if msg.count > MAX_ITEMS:
+        too_many = too_many_items(msg.count)
+        if too_many:
+            # PX4's answer to more items than it has room for (mavlink_mission.cpp, handle_mission_count).
             self._ack(source, mavlink2.MAV_MISSION_NO_SPACE)
+            self._actions.append(Refused(too_many))
             return
         self._upload = _Upload(source, msg.count, started_us=now_us)
         self._request(self._upload, now_us)

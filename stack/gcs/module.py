@@ -36,7 +36,7 @@ from stack.gcs import commands, identity, mission_items, offboard, params, signi
 from stack.gcs.clock import StampClock
 from stack.gcs.manual import ManualInput, manual_control
 from stack.gcs.mission_progress import MissionProgress
-from stack.gcs.mission_transfer import Clear, MissionTransfer, SetCurrent, Upload
+from stack.gcs.mission_transfer import Clear, MissionTransfer, Refused, SetCurrent, Upload
 from stack.gcs.param_source import BusParamSource
 from stack.gcs.presence import Presence
 from stack.gcs.statustext import StatustextSender
@@ -625,6 +625,8 @@ class MavlinkModule(Module):
             elif isinstance(action, Clear):
                 self._verdict_id = None
                 self._publish("mission", mission_message(Mission(()), None, mission_id_for(Mission(()))))
+            elif isinstance(action, Refused):
+                self._say(M.MAV_SEVERITY_CRITICAL, f"Mission rejected: {action.reason}")
             elif isinstance(action, SetCurrent):
                 cmd = VehicleCommand(
                     command=VehicleCommand.VEHICLE_CMD_DO_SET_MISSION_CURRENT,

@@ -1,10 +1,10 @@
 """Checks a mission must pass before the navigator accepts it (PX4 navigator ``MissionFeasibilityChecker``).
 
-A mission is refused, with the item and the reason, when it is empty, when an item that flies to a
-position has no usable position, when a waypoint lies outside the geofence cylinder about home
-(GF_MAX_HOR_DIST, GF_MAX_VER_DIST; 0 disables a limit), when an item follows a landing, or when a
-position lies further than MIS_DIST_1WP from home (the first waypoint) or MIS_DIST_WPS from the
-previous one (PX4's sanity limits against a mistyped coordinate).
+A mission is refused, with the item and the reason, when it is empty or has more items than a mission may
+have (``stack.mission.transfer.MAX_ITEMS``), when an item that flies to a position has no usable position, when
+a waypoint lies outside the geofence cylinder about home (GF_MAX_HOR_DIST, GF_MAX_VER_DIST; 0 disables a limit),
+when an item follows a landing, or when a position lies further than MIS_DIST_1WP from home (the first waypoint)
+or MIS_DIST_WPS from the previous one (PX4's sanity limits against a mistyped coordinate).
 """
 
 from __future__ import annotations
@@ -13,6 +13,7 @@ import math
 from collections.abc import Mapping
 
 from stack.mission.items import MAV_CMD_NAV_LAND, MAV_CMD_NAV_TAKEOFF, Mission
+from stack.mission.transfer import too_many_items
 from stack.params import catalogue
 from stack.params.param import Param
 
@@ -25,6 +26,9 @@ def mission_problem(mission: Mission, params: Mapping[str, object]) -> str:
     p = {**DEFAULTS, **params}
     if len(mission) == 0:
         return "the mission has no items"
+    too_many = too_many_items(len(mission))
+    if too_many:
+        return too_many
     max_hor, max_ver = float(p["GF_MAX_HOR_DIST"]), float(p["GF_MAX_VER_DIST"])
     first_limit, leg_limit = float(p["MIS_DIST_1WP"]), float(p["MIS_DIST_WPS"])
     previous: tuple[float, float] | None = None

@@ -17,6 +17,18 @@ from stack.msg import navigation
 _ENTRY_FIELDS = navigation.MissionItemEntry.__struct_fields__
 _encoder = msgspec.msgpack.Encoder()
 
+MAX_ITEMS = 400
+"""The most items a mission may have: its ``mission`` message must be one sample of the bus
+(``stack.bus.topics.MAX_SAMPLE_BYTES``), and 400 items in their largest encoding (twelve 8-byte floats each) are
+46 kB. PX4 takes 2000 on a flight controller (``NUM_MISSIONS_SUPPORTED``, ``src/modules/navigator/navigation.h``)."""
+MAX_SOURCE_CHARS = 200
+"""The end of a longer ``source`` (a file's path) is what the message carries."""
+
+
+def too_many_items(count: int) -> str:
+    """Why a mission of ``count`` items is refused, or "" when it is not too long."""
+    return f"{count} items, more than the {MAX_ITEMS} a mission may have" if count > MAX_ITEMS else ""
+
 
 def _entries(mission: Mission) -> list[navigation.MissionItemEntry]:
     return [navigation.MissionItemEntry(**{f: getattr(item, f) for f in _ENTRY_FIELDS}) for item in mission]
@@ -36,7 +48,7 @@ def mission_message(mission: Mission, home: GeoPoint | None, mission_id: int) ->
         home_lat=lat,
         home_lon=lon,
         home_alt=alt,
-        source=mission.source,
+        source=mission.source[-MAX_SOURCE_CHARS:],
     )
 
 

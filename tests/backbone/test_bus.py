@@ -5,13 +5,17 @@ import json
 import subprocess
 import sys
 
+import msgspec
+import pytest
 import zenoh
 
 from stack.bus import keys
 from stack.bus.alive import AliveTokens, parse_alive_token
 from stack.bus.config import BusConfig
-from stack.bus.node import stable_publisher_id
+from stack.bus.node import Node, stable_publisher_id
 from stack.bus.ports import free_port
+from stack.bus.topics import HEADER, MAX_SAMPLE_BYTES, MessageTooLarge
+from stack.msg.navigation import Mission
 from stack.runtime.startup import alive_modules
 from tests.support.harness import REPO, RunningStack, chain_profile, eventually, stack_env, wait_no_processes
 
@@ -112,3 +116,29 @@ def test_lockstep_start_up_reads_the_alive_tokens_past_malformed_ones():
     assert parse_alive_token(keys.alive_token("t1", "doubler", 1234), "t1") == ("doubler", 1234)
     for key in ("stack/t1/@alive/doubler/-1", "stack/t1/@alive/doubler/0", "stack/t2/@alive/doubler/1"):
         assert parse_alive_token(key, "t1") is None
+
+
+def test_a_message_larger_than_the_bus_carries_is_refused_not_lost():
+    endpoint = f"tcp/127.0.0.1:{free_port()}"
+    with (
+        Node(BusConfig(listen=(endpoint,)), "t1", "big_publisher") as sender,
+        Node(BusConfig(connect=(endpoint,)), "t1", "big_subscriber") as receiver,
+    ):
+        sub = receiver.subscriber("mission", capacity=16)
+        pub = sender.publisher("mission")
+        eventually(pub.matching, what="the subscriber known to the publisher")
+
+        def mission(size: int) -> Mission:
+            """A mission message of ``size`` bytes with the stack's header."""
+            msg = Mission(mission_id=1, source="")
+            msg.source = "x" * (size - HEADER.size - len(msgspec.msgpack.encode(msg)) - 2)  # str16 prefix
+            assert len(msgspec.msgpack.encode(msg)) + HEADER.size == size
+            return msg
+
+        with pytest.raises(MessageTooLarge, match="mission: a message of 48001 bytes, more than the 48000"):
+            pub.publish(mission(MAX_SAMPLE_BYTES + 1), now_us=1)
+        pub.publish(mission(MAX_SAMPLE_BYTES), now_us=2)
+        got: list = []
+        eventually(lambda: got.append(sub.poll()) or any(got), what="the largest message the bus carries")
+        _, _, _, msg, index = next(r for r in got if r is not None)
+        assert len(msg.source) > 47_000 and index == 1  # the refused one was not counted: no gap

@@ -9,7 +9,7 @@ import pytest
 
 from stack.mathlib.geo import MapProjection
 from stack.mission.items import Mission
-from stack.mission.transfer import mission_from_message
+from stack.mission.transfer import MAX_ITEMS, mission_from_message
 from stack.msg import navigation
 from tests.support.harness import REPO, RunningStack, attitude_only_profile, wait_no_processes
 
@@ -85,6 +85,26 @@ def test_an_empty_mission_is_rejected_with_the_navigators_reason(stack, tmp_path
     assert out.returncode == 1 and "accepted" not in out.stdout
     assert out.stderr.strip() == "error: mission rejected: the mission has no items"
     assert len(last_received(stack)) == 0
+
+
+def test_a_mission_longer_than_a_mission_may_be_is_refused_saying_so(stack, tmp_path):
+    # The longest mission crosses the bus (one message, each float field 8 bytes wide); one more item is refused
+    # before anything is sent, where a mission too large for the bus used to be lost on the way.
+    longest = tmp_path / "longest.txt"
+    longest.write_text("".join(f"{i % 20} {i // 20} -{1 + i % 7}.123456789 33.3 1.5 0.75\n" for i in range(MAX_ITEMS)))
+    out = stack.cli("cmd", "mission", str(longest), "--no-start")
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.splitlines()[-1] == f"mission accepted: {MAX_ITEMS} items"
+    assert len(last_received(stack)) == MAX_ITEMS
+    for count in (MAX_ITEMS + 1, 100_000):
+        huge = tmp_path / f"huge_{count}.txt"
+        huge.write_text("".join(f"{i % 20} {i // 20 % 20} -5\n" for i in range(count)))
+        out = stack.cli("cmd", "mission", str(huge), "--no-start")
+        assert out.returncode == 2 and "accepted" not in out.stdout
+        assert out.stderr.strip() == (
+            f"error: {huge}: mission refused: {count} items, more than the {MAX_ITEMS} a mission may have; nothing sent"
+        )
+    assert len(last_received(stack)) == MAX_ITEMS
 
 
 def test_land_wait_follows_the_vehicle_until_disarmed(stack):

@@ -29,6 +29,7 @@ from stack.mavlink import px4_modes
 from stack.mavlink.convert import StatustextAssembler
 from stack.mavlink.framing import FrameParser
 from stack.mavlink.px4_modes import Px4Mode
+from stack.mission.transfer import MAX_ITEMS
 from stack.params import catalogue
 from stack.supervisor.profile import DEFAULT_PROFILE, load_profile
 from tests.gcs.peer import Link, Peer, links_profile, udp_port
@@ -384,6 +385,17 @@ def test_missions_upload_download_refusal_and_clear(vehicle: Vehicle) -> None:
     mark = gcs.mark()
     gcs.mav.mission_request_list_send(1, 1, 0)
     assert gcs.wait("MISSION_COUNT", after=mark).count == 0
+
+
+def test_a_mission_longer_than_a_mission_may_be_is_refused_at_its_count_saying_why(vehicle: Vehicle) -> None:
+    gcs = vehicle.gcs
+    for count in (MAX_ITEMS + 1, 65535):  # 65535: the most MISSION_COUNT can say
+        mark = gcs.mark()
+        gcs.mav.mission_count_send(1, 1, count, 0)
+        assert gcs.wait("MISSION_ACK", after=mark).type == M.MAV_MISSION_NO_SPACE
+        text = wait_text(gcs, "Mission rejected", mark)
+        assert text == f"Mission rejected: {count} items, more than the {MAX_ITEMS} a mission may have"
+        assert gcs.all("MISSION_REQUEST_INT", mark) == []
 
 
 def test_a_parameter_set_from_a_terminal_is_broadcast(vehicle: Vehicle) -> None:

@@ -7,10 +7,10 @@ from pymavlink.dialects.v20 import common as M
 
 from stack.gcs.mission_items import ItemRefused, item_from_mission_item_int, mission_item_int
 from stack.gcs.mission_progress import MissionProgress, mission_state
-from stack.gcs.mission_transfer import RETRY_US, Clear, MissionTransfer, SetCurrent, Upload
+from stack.gcs.mission_transfer import RETRY_US, Clear, MissionTransfer, Refused, SetCurrent, Upload
 from stack.mathlib.geo import MapProjection
 from stack.mission.items import GeoPoint, Mission
-from stack.mission.transfer import mission_from_message, mission_message
+from stack.mission.transfer import MAX_ITEMS, mission_from_message, mission_message
 from stack.msg.navigation import MissionResult
 from stack.msg.system import VehicleStatus as NS
 
@@ -166,6 +166,17 @@ def test_items_out_of_order_a_second_uploader_and_a_refused_verdict():
     transfer.on_message(items[0], GCS, 5)
     transfer.verdict(False, M.MAV_MISSION_INVALID)
     assert transfer.take()[0][-1].type == M.MAV_MISSION_INVALID
+
+
+def test_more_items_than_a_mission_may_have_are_refused_at_the_count_saying_why():
+    transfer = MissionTransfer(OWN)
+    transfer.on_message(M.MAVLink_mission_count_message(1, 1, MAX_ITEMS + 1, 0), GCS, 0)
+    (ack,), actions = transfer.take()
+    assert (ack.get_type(), ack.type) == ("MISSION_ACK", M.MAV_MISSION_NO_SPACE) and not transfer.judging
+    assert actions == [Refused(f"{MAX_ITEMS + 1} items, more than the {MAX_ITEMS} a mission may have")]
+    transfer.on_message(M.MAVLink_mission_count_message(1, 1, MAX_ITEMS, 0), GCS, 1)
+    out, actions = transfer.take()
+    assert [(m.get_type(), m.seq) for m in out] == [("MISSION_REQUEST_INT", 0)] and actions == []
 
 
 def test_count_zero_and_clear_all_clear_the_mission():

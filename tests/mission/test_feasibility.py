@@ -15,6 +15,7 @@ from stack.mission.items import (
     Mission,
     MissionItem,
 )
+from stack.mission.transfer import MAX_ITEMS
 from stack.mission.waypoints import parse_waypoint_list
 
 NAN = math.nan
@@ -43,6 +44,13 @@ def test_a_waypoint_without_a_usable_position_is_refused(position):
         )
     )
     assert mission_problem(mission, {}) == "item 1 (loiter_time) has no position"
+
+
+def test_more_items_than_a_mission_may_have_are_refused():
+    longest = waypoints("".join(f"{i % 10} 0 -5\n" for i in range(MAX_ITEMS)))
+    assert mission_problem(longest, FENCE) == ""
+    longer = waypoints("".join(f"{i % 10} 0 -5\n" for i in range(MAX_ITEMS + 1)))
+    assert mission_problem(longer, FENCE) == f"{MAX_ITEMS + 1} items, more than the {MAX_ITEMS} a mission may have"
 
 
 def test_takeoff_and_land_here_need_no_position():
