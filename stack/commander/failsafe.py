@@ -29,8 +29,10 @@ The worst active action wins (None < Warn < fallbacks < Hold < Return < Land < D
 Terminate). An action that allows it is first delayed by COM_FAIL_ACT_T seconds in Hold (PX4's "Failsafe
 activated: entering Hold for 5 seconds"). The user takes over by switching mode where the action allows it
 (Hold, Return, Land, Descend; never Terminate or Disarm); the action is then reduced to a warning until a
-new failure arrives. Link-loss, geofence and Hold/Return/Land actions stay until the user changes mode or
-disarms; battery and fallback actions clear with their condition. Terminate never clears.
+new failure arrives. Link-loss, geofence and Hold/Return/Land actions, once in force, stay until the user
+changes mode or disarms; one still waiting out COM_FAIL_ACT_T in Hold goes when its condition clears (a link
+regained within the delay returns nothing, and the Hold ends). Battery and fallback actions clear with their
+condition. Terminate never clears.
 """
 
 from __future__ import annotations
@@ -138,6 +140,8 @@ class _Active:
     takeover: Takeover
     failing: bool = True
     checked: bool = True
+    in_force: bool = False
+    """Taken effect: selected once with no COM_FAIL_ACT_T delay in the way (or overridden by the user)."""
 
 
 @dataclass(slots=True)
@@ -414,7 +418,9 @@ class Failsafe:
 
     def _condition_cleared(self, cause: str) -> None:
         active = self._actions[cause]
-        if active.clear == Clear.WHEN_CONDITION_CLEARS:
+        # An action still waiting out COM_FAIL_ACT_T in Hold goes with its condition (a link regained in time
+        # returns nothing); one in force stays as its clear condition says.
+        if active.clear == Clear.WHEN_CONDITION_CLEARS or (active.clear != Clear.NEVER and not active.in_force):
             del self._actions[cause]
         else:
             active.failing = False
@@ -442,9 +448,13 @@ class Failsafe:
             self._delay_us > 0
             and not self._takeover_active
             and takeover <= Takeover.MODE_SWITCH_ONLY
+            and selected > FailsafeAction.WARN
             and selected not in (FailsafeAction.DISARM, FailsafeAction.TERMINATE)
         ):
             delayed, selected, takeover = selected, FailsafeAction.HOLD, Takeover.MODE_SWITCH_ONLY
+        else:
+            for active in self._actions.values():
+                active.in_force = True
 
         wants_takeover = intended_updated and self._selected == selected
         user_takeover = False

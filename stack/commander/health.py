@@ -57,8 +57,8 @@ class CommanderInputs:
 
     Timestamps are the receive/publication times of the last message (0 = never). ``landed`` and
     ``maybe_landed`` come from ``vehicle_land_detected``; ``battery_warning`` from ``battery_status``;
-    ``last_gcs_heartbeat_us`` is the time of the last message from a ground station or companion (the
-    command link); ``last_manual_control_us`` the time of the last valid manual control input (sticks from a
+    ``last_gcs_heartbeat_us`` is the time of the last report of a ground station's HEARTBEAT (MAV_TYPE_GCS;
+    the command link); ``last_manual_control_us`` the time of the last valid manual control input (sticks from a
     radio, a joystick or a ground station) and ``manual_control_valid`` whether the latest one is valid;
     ``mission_count`` is the number of items of the loaded, valid mission (0: none) and
     ``mission_finished`` whether its last item has been reached; ``airspeed_timestamp_us`` is the last

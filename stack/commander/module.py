@@ -302,7 +302,9 @@ class CommanderModule(Module):
         telemetry = latest("telemetry_status")
         mission = latest("mission_result")
         land = self.land_detector.state
-        if telemetry is not None and (telemetry.heartbeat_type_gcs or telemetry.heartbeat_type_onboard_controller):
+        if telemetry is not None and telemetry.heartbeat_type_gcs:
+            # Only a ground station's heartbeat is the data link (PX4 Commander::dataLinkCheck); an onboard
+            # controller's is not, and its going never calls for NAV_DLL_ACT.
             self._last_gcs = max(self._last_gcs, telemetry.timestamp)
         fresh_sticks = self.update("manual_control_setpoint")
         if fresh_sticks is not None and fresh_sticks.valid:

@@ -1,13 +1,14 @@
 """Who is on the other end of a link, judged on the wall clock, and the ``telemetry_status`` the commander reads.
 
 PX4's ``telemetry_status`` says whether a ground station (MAV_TYPE_GCS) or an onboard controller has sent a
-HEARTBEAT within ``HEARTBEAT_TIMEOUT_US`` (PX4 ``msg/TelemetryStatus.msg``); the commander declares the data
-link lost COM_DL_LOSS_T after the last such report. Here liveness is judged on the wall clock, where the
-peers live, and the report is republished every ``TELEMETRY_PERIOD_US`` of wall time while a peer is alive,
-each stamped with the stack's time: in lockstep the simulation runs ~10× faster than the wall, so a peer's
-1 Hz heartbeat is ~10 s of simulated time apart, and reporting only on heartbeats would make COM_DL_LOSS_T
-(simulated seconds) expire between two of them. When the peer falls silent the reports stop (one last
-report says so), and the commander's timeout runs on its own clock from the last one.
+HEARTBEAT within ``HEARTBEAT_TIMEOUT_US`` (PX4 ``msg/TelemetryStatus.msg``); the commander declares the data link
+lost COM_DL_LOSS_T after the last report of a ground station (an onboard controller is not the data link). Here
+liveness is judged on the wall clock, where the peers live, and the report is republished every
+``TELEMETRY_PERIOD_US`` of wall time while a peer is alive, each stamped with the stack's time: in lockstep the
+simulation runs ~10× faster than the wall, so a peer's 1 Hz heartbeat is ~10 s of simulated time apart, and
+reporting only on heartbeats would make COM_DL_LOSS_T (simulated seconds) expire between two of them. When the peer
+falls silent the reports stop (one last report says so), and the commander's timeout runs on its own clock from the
+last one.
 """
 
 from __future__ import annotations

@@ -3,11 +3,13 @@ import pytest
 from stack.commander import commands as C
 from stack.commander.failsafe import FailsafeAction, mode_fallback, runnable_action
 from stack.commander.modes import Requirement
+from stack.commander.module import CommanderModule
 from stack.commander.state_machine import ArmDisarmReason
-from stack.msg.system import BatteryWarning
+from stack.msg.system import BatteryWarning, TelemetryStatus
 from stack.msg.system import VehicleCommandAck as ACK
 from stack.msg.system import VehicleStatus as NS
 from tests.commander.helpers import local_position, make_clock
+from tests.support.bench import ModuleBench
 
 POSITION_LOST = Requirement.LOCAL_POSITION | Requirement.LOCAL_POSITION_RELAXED | Requirement.LOCAL_ALT
 
@@ -91,6 +93,60 @@ def test_command_link_loss_waits_com_fail_act_t_in_hold_first():
     out = clock.step(0.3)
     assert out.vehicle_status.nav_state == NS.NAVIGATION_STATE_AUTO_RTL
     assert out.failsafe_delayed_action == "none"
+
+
+def test_a_link_regained_while_holding_before_the_return_returns_nothing():
+    clock = _in_mission(NAV_DLL_ACT=2, COM_FAIL_ACT_T=5.0)
+    clock.overrides["last_gcs_heartbeat_us"] = clock.t
+    out = clock.step(10.1)
+    assert (out.vehicle_status.nav_state, out.failsafe_delayed_action) == (NS.NAVIGATION_STATE_AUTO_LOITER, "rtl")
+    clock.step(2.0)
+    clock.events.clear()
+    clock.overrides["last_gcs_heartbeat_us"] = clock.t + clock.period  # the ground station is back
+    out = clock.step()
+    assert "Data link regained" in clock.events and not out.vehicle_status.gcs_connection_lost
+    assert out.vehicle_status.nav_state == NS.NAVIGATION_STATE_AUTO_MISSION  # the Hold ends with the loss
+    assert (out.failsafe_action, out.failsafe_delayed_action) == ("none", "none")
+    for _ in range(60):  # past the end of the delay, and beyond: no Return follows
+        clock.overrides["last_gcs_heartbeat_us"] = clock.t + clock.period
+        assert clock.step(0.1).vehicle_status.nav_state == NS.NAVIGATION_STATE_AUTO_MISSION
+    assert not clock.step().vehicle_status.failsafe
+
+
+def test_a_link_that_comes_and_goes_cannot_put_off_the_return_for_ever():
+    # The delay runs on while the link is back: lost again, the vehicle waits out only what is left of it.
+    clock = _in_mission(NAV_DLL_ACT=2, COM_FAIL_ACT_T=20.0, COM_DL_LOSS_T=5)
+    clock.overrides["last_gcs_heartbeat_us"] = clock.t
+    assert clock.step(5.1).failsafe_delayed_action == "rtl"
+    lost_at = clock.t
+    clock.overrides["last_gcs_heartbeat_us"] = clock.t + clock.period  # one heartbeat, then lost again
+    assert clock.step().vehicle_status.nav_state == NS.NAVIGATION_STATE_AUTO_MISSION
+    out = clock.step(5.1)
+    assert out.vehicle_status.gcs_connection_lost and out.failsafe_delayed_action == "rtl"
+    out = clock.step(lost_at * 1e-6 + 19.9 - clock.t * 1e-6)
+    assert out.vehicle_status.nav_state == NS.NAVIGATION_STATE_AUTO_LOITER
+    out = clock.step(0.2)  # 20 s after the first loss, not after the second
+    assert out.vehicle_status.nav_state == NS.NAVIGATION_STATE_AUTO_RTL and out.failsafe_delayed_action == "none"
+
+
+def test_a_return_in_force_stays_when_the_link_comes_back():
+    clock = _in_mission(NAV_DLL_ACT=2)
+    clock.overrides["last_gcs_heartbeat_us"] = clock.t
+    assert clock.step(10.1).vehicle_status.nav_state == NS.NAVIGATION_STATE_AUTO_RTL
+    clock.overrides["last_gcs_heartbeat_us"] = clock.t + 5_000_000
+    out = clock.step(1.0)
+    assert not out.vehicle_status.gcs_connection_lost
+    assert out.vehicle_status.nav_state == NS.NAVIGATION_STATE_AUTO_RTL  # until the user changes mode (PX4)
+
+
+def test_only_a_ground_stations_heartbeat_is_the_data_link():
+    bench = ModuleBench(CommanderModule)
+    bench.now = 5_000_000
+    bench.put("telemetry_status", TelemetryStatus(heartbeat_type_onboard_controller=True))
+    assert bench.module._inputs(bench.now).last_gcs_heartbeat_us == 0
+    bench.now = 6_000_000
+    bench.put("telemetry_status", TelemetryStatus(heartbeat_type_gcs=True))
+    assert bench.module._inputs(bench.now).last_gcs_heartbeat_us == 6_000_000
 
 
 def test_link_loss_is_ignored_by_default_and_when_exempt():

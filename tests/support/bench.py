@@ -65,6 +65,9 @@ class ModuleBench:
     def now_us(self) -> int:
         return self.now
 
+    def watch_modules(self, on_change: Any) -> None:
+        """No other module processes on a bench."""
+
     def put(self, topic: str, msg: Any, instance: int = 0) -> None:
         """Deliver ``msg`` on ``topic`` (stamped now when its timestamp is 0)."""
         if msg.timestamp == 0:
