@@ -3,6 +3,7 @@
 
 import json
 import math
+import re
 
 import msgspec
 import pytest
@@ -42,6 +43,13 @@ def test_a_mission_with_items_by_field_name():
     takeoff, waypoint = msg.items
     assert (msg.mission_id, takeoff.command, takeoff.down, waypoint.command, waypoint.north) == (7, 22, -5.0, 16, -10.5)
     assert math.isnan(takeoff.north) and msg.source == "x"
+
+
+def test_a_message_larger_than_the_bus_carries_is_one_line():
+    items = json.dumps([{"north": float(i)} for i in range(1000)])
+    with pytest.raises(ValueError) as e:
+        parse_message("mission", f'{{"items": {items}}}')
+    assert re.fullmatch(r"Mission: \d+ bytes, more than the 48000 one message on the bus may have", str(e.value))
 
 
 @pytest.mark.parametrize(
