@@ -1,8 +1,8 @@
 """Process entry point of a module: ``python -m stack.runtime.main SPEC_FILE``.
 
 The supervisor writes the spec (JSON) into the run directory and starts one such process per
-module. SIGTERM and SIGINT unwind the loop so the Zenoh session is always closed; the process also
-asks the kernel to send it SIGTERM if the supervisor dies, so no module is ever orphaned.
+module. SIGTERM and SIGINT unwind the loop so the Zenoh session is always closed; when the supervisor
+dies the process stops too, within a second (:mod:`stack.runtime.orphan`).
 
 The process loads its code first, then waits for the supervisor's go (a line on its standard input)
 before it opens its session: modules still start one after another, each once the one before is
@@ -13,7 +13,6 @@ Standard input at its end (no supervisor pipe) is a go too.
 from __future__ import annotations
 
 import cProfile
-import ctypes
 import logging
 import os
 import signal
@@ -24,10 +23,10 @@ from types import FrameType
 
 from stack.params.param import ParamError
 from stack.runtime.lockstep import LockstepError
+from stack.runtime.orphan import watch_supervisor
 from stack.runtime.runner import Runtime, Shutdown
 from stack.runtime.spec import ModuleSpec, load_module_class
 
-PR_SET_PDEATHSIG = 1
 # Where each module writes its cProfile statistics (<module>.prof) when it stops, if set: for finding
 # where a module's main thread spends its CPU time (`python -m pstats DIR/simulator.prof`).
 PROFILE_ENV = "STACK_PROFILE_DIR"
@@ -40,15 +39,6 @@ def _on_signal(signum: int, frame: FrameType | None) -> None:
         return  # already unwinding; the supervisor escalates to SIGKILL if needed
     _stopping = True
     raise Shutdown(signal.Signals(signum).name)
-
-
-def _die_with_parent(parent_pid: int) -> None:
-    if parent_pid <= 0 or not sys.platform.startswith("linux"):
-        return
-    libc = ctypes.CDLL(None, use_errno=True)
-    libc.prctl(PR_SET_PDEATHSIG, signal.SIGTERM, 0, 0, 0)
-    if os.getppid() != parent_pid:
-        raise Shutdown("supervisor already gone")
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -68,7 +58,8 @@ def main(argv: list[str] | None = None) -> int:
     profile_dir = os.environ.get(PROFILE_ENV)
     profiler = cProfile.Profile(time.thread_time) if profile_dir else None
     try:
-        _die_with_parent(spec.supervisor_pid)
+        if spec.supervisor_pid > 0 and not watch_supervisor(spec.supervisor_pid):
+            raise Shutdown("supervisor already gone")
         load_module_class(spec.module)
         sys.stdin.buffer.readline()
         if profiler is not None:

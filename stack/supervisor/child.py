@@ -6,12 +6,10 @@ supervisor is still there, and becomes the program, so no ``[[process]]`` outliv
 
 from __future__ import annotations
 
-import ctypes
 import os
-import signal
 import sys
 
-PR_SET_PDEATHSIG = 1
+from stack.runtime.orphan import ask_kernel_for_sigterm
 
 
 def main(argv: list[str]) -> int:
@@ -19,8 +17,7 @@ def main(argv: list[str]) -> int:
         print("usage: python -m stack.supervisor.child SUPERVISOR_PID PROGRAM [ARGS...]", file=sys.stderr)
         return 2
     supervisor = int(argv[0])
-    if sys.platform.startswith("linux"):
-        ctypes.CDLL(None, use_errno=True).prctl(PR_SET_PDEATHSIG, signal.SIGTERM, 0, 0, 0)
+    ask_kernel_for_sigterm()
     if os.getppid() != supervisor:
         return 1  # the supervisor is already gone
     try:
