@@ -158,6 +158,17 @@ def _wait_exit(pid: int, timeout: float) -> bool:
     return False
 
 
+DROP_COUNTERS = {
+    "decode_errors": "malformed",
+    "schema_errors": "of another schema",
+    "foreign": "of another lockstep run",
+    "unauthorized": "from a publisher outside the vehicle",
+    "invalid": "holding NaN or infinity where not allowed",
+    "rejected": "refused by the module",
+}
+"""A module's counters of messages it did not act on, in the ERR column, and what each counts."""
+
+
 @app.command()
 def status(
     vehicle: str | None = VehicleOption,
@@ -196,13 +207,17 @@ def status(
                 m.get("runs", 0),
                 m.get("msgs_in", 0),
                 m.get("msgs_out", 0),
-                sum(m.get(k, 0) for k in ("decode_errors", "schema_errors", "foreign", "rejected")),
+                sum(m.get(k, 0) for k in DROP_COUNTERS),
                 f"{m.get('loop_avg_us', 0.0):.0f}/{m.get('loop_max_us', 0.0):.0f}",
             )
         )
     print_table(
         ("MODULE", "STATE", "PID", "CPU%", "MEM", "RESTARTS", "RATE", "RUNS", "IN", "OUT", "ERR", "LOOP us"), rows
     )
+    for m in report["modules"]:
+        drops = [f"{DROP_COUNTERS[k]} {m[k]}" for k in DROP_COUNTERS if m.get(k)]
+        if drops:
+            typer.echo(f"{m['module']}: refused or dropped: {', '.join(drops)}")
     for m in report["modules"]:
         if m.get("extra"):  # a module's own figures (e.g. pixhawk: its MAVLink link and time sync)
             figures = (f"{k} {v:.4g}" if isinstance(v, float) else f"{k} {v}" for k, v in m["extra"].items())

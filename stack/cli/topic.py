@@ -14,8 +14,10 @@ import typer
 import zenoh
 
 from stack.bus import keys
+from stack.bus.access import OPEN_TO_TOOLS, tool_may_publish
 from stack.bus.graph import read_graph
 from stack.bus.node import Node
+from stack.bus.query import query_json
 from stack.bus.topics import HEADER, Received
 from stack.cli.common import (
     EndpointOption,
@@ -321,6 +323,16 @@ def pub(
     except ValueError as e:
         fail(str(e), code=2)
     with connect(vehicle, endpoint) as node:
+        status = query_json(node.session, keys.supervisor_key(node.vehicle, "status"))
+        if not tool_may_publish(topic, status[0].get("open_topics", ()) if status else ()):
+            owners = read_graph(node.session, node.vehicle).get((topic, instance))
+            by = f" (published by {', '.join(owners.publishers)})" if owners and owners.publishers else ""
+            fail(
+                f"{topic} is a topic of the vehicle's modules{by}: a tool may publish only commands, sticks, "
+                f"missions and Offboard setpoints ({', '.join(sorted(OPEN_TO_TOOLS))}), or what the profile "
+                "opens with [stack] open_topics",
+                code=2,
+            )
         publisher = node.publisher(topic, instance)
         deadline = time.monotonic() + wait
         while not publisher.matching() and time.monotonic() < deadline:

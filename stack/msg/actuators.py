@@ -8,6 +8,8 @@ from stack.msg.base import F3, F12, F16, I16, NAN12, ZERO3, ZERO16, ZERO16_INT, 
 class ActuatorMotors(Message):
     """Motor commands in [−1, 1] (non-reversible motors use [0, 1]); NaN means stopped/disarmed."""
 
+    NAN_MEANS_NOT_CONTROLLED = True
+
     timestamp_sample: int = 0
     reversible_flags: int = 0
     control: F12 = NAN12
@@ -15,6 +17,8 @@ class ActuatorMotors(Message):
 
 class ActuatorOutputs(Message):
     """Output values in natural units: PWM µs on ``actuator_outputs``, [0, 1] on ``actuator_outputs_sim``."""
+
+    NAN_MEANS_NOT_CONTROLLED = True
 
     noutputs: int = 0
     output: F16 = ZERO16

@@ -8,7 +8,7 @@ schema, so fields may only ever be appended, with defaults. Every message starts
 from __future__ import annotations
 
 import math
-from typing import Annotated
+from typing import Annotated, ClassVar
 
 import msgspec
 
@@ -34,3 +34,11 @@ class Message(msgspec.Struct, array_like=True, gc=False):
     """Base of all messages. ``timestamp`` is the publication time in microseconds."""
 
     timestamp: int = 0
+
+    NAN_MEANS_NOT_CONTROLLED: ClassVar[bool] = False
+    """A setpoint, command or output: NaN in any float field is PX4's "not controlled" (stack.msg.validity)."""
+    NAN_MEANS_UNKNOWN: ClassVar[frozenset[str]] = frozenset()
+    """Fields besides those that start NaN where NaN is "not reported" (a source that does not measure it)."""
+    RECEIVER_CHECKS_VALUES: ClassVar[bool] = False
+    """A request its receiver judges value by value and answers (a command and its acknowledgement): any float
+    reaches it, so that a refusal says why (stack.msg.validity)."""

@@ -29,6 +29,10 @@ class VehicleAttitude(Message):
 class VehicleLocalPosition(Message):
     """Local position and velocity in NED about the reference point ``ref_lat``/``ref_lon``/``ref_alt``."""
 
+    # Accuracies a source does not report (MAVLink's LOCAL_POSITION_NED carries none): NaN, as well as PX4's
+    # infinite "unknown".
+    NAN_MEANS_UNKNOWN = frozenset({"eph", "epv", "evh", "evv"})
+
     timestamp_sample: int = 0
     xy_valid: bool = False
     z_valid: bool = False

@@ -70,12 +70,16 @@ class ActuatorServos(Message):
     Servo order here: 0 aileron (+: roll right), 1 elevator (+: nose up), 2 rudder (+: nose right).
     """
 
+    NAN_MEANS_NOT_CONTROLLED = True
+
     timestamp_sample: int = 0
     control: F8 = NAN8
 
 
 class PositionSetpoint(msgspec.Struct, array_like=True, gc=False):
     """One position setpoint of the triplet (PX4 ``position_setpoint``), local NED about home."""
+
+    NAN_MEANS_NOT_CONTROLLED = True
 
     valid: bool = False
     type: int = 0

@@ -34,6 +34,10 @@ class ModuleHeartbeat(Message):
     sim_time_us: int = 0
     extra: dict[str, float | int | str | bool] = msgspec.field(default_factory=dict)
     """The module's own figures (``Module.status``), e.g. a MAVLink link's counters."""
+    invalid: int = 0
+    """Messages refused for a value their type does not allow (stack.msg.validity)."""
+    unauthorized: int = 0
+    """Messages ignored for coming from a publisher the module does not hear (stack.bus.access)."""
 
 
 class LockstepClock(Message):

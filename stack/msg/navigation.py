@@ -63,6 +63,8 @@ class NavigationRequest(Message):
     """What the commander asks the navigator to fly beyond the mode itself: the takeoff altitude, the
     latest go-to target and the latest mission start (counters say when a new one was accepted)."""
 
+    NAN_MEANS_NOT_CONTROLLED = True
+
     takeoff_altitude: float = NAN
     takeoff_yaw: float = NAN
     reposition: F3 = NAN3

@@ -59,6 +59,23 @@ class SensorBaro(Message):
 class SensorGps(Message):
     """GNSS receiver output (PX4 ``SensorGps``, also published as ``vehicle_gps_position``)."""
 
+    # Without a fix (fix_type below 2) a receiver reports no position or velocity; MAVLink's GPS_RAW_INT has no
+    # vertical velocity, and may lack speed, course and their accuracy.
+    NAN_MEANS_UNKNOWN = frozenset(
+        {
+            "latitude_deg",
+            "longitude_deg",
+            "altitude_msl_m",
+            "altitude_ellipsoid_m",
+            "s_variance_m_s",
+            "vel_m_s",
+            "vel_n_m_s",
+            "vel_e_m_s",
+            "vel_d_m_s",
+            "cog_rad",
+        }
+    )
+
     FIX_TYPE_NONE = 1
     FIX_TYPE_2D = 2
     FIX_TYPE_3D = 3

@@ -10,6 +10,8 @@ from stack.msg.base import F3, F4, NAN, NAN3, Q_IDENTITY, ZERO3, Message
 class TrajectorySetpoint(Message):
     """Position/velocity/acceleration setpoint in NED; NaN components are not controlled."""
 
+    NAN_MEANS_NOT_CONTROLLED = True
+
     position: F3 = NAN3
     velocity: F3 = NAN3
     acceleration: F3 = NAN3
@@ -20,6 +22,8 @@ class TrajectorySetpoint(Message):
 
 class VehicleLocalPositionSetpoint(Message):
     """What the position controller is tracking and commanding (telemetry)."""
+
+    NAN_MEANS_NOT_CONTROLLED = True
 
     x: float = NAN
     y: float = NAN
@@ -41,6 +45,8 @@ class VehicleAttitudeSetpoint(Message):
     controller (runway takeoff and landing, auto modes; PX4's ``fw_control_yaw``), ``reset_integral`` to restart
     its roll, pitch and yaw integrators (PX4's ``roll/pitch/yaw_reset_integral``)."""
 
+    NAN_MEANS_NOT_CONTROLLED = True
+
     yaw_sp_move_rate: float = NAN
     q_d: F4 = Q_IDENTITY
     thrust_body: F3 = ZERO3
@@ -57,6 +63,8 @@ class RollPitchYawrateThrustSetpoint(Message):
     so RotorS' pitch and yaw rate are the negatives of these. Every field must be finite.
     """
 
+    NAN_MEANS_NOT_CONTROLLED = True
+
     timestamp_sample: int = 0
     roll: float = 0.0
     pitch: float = 0.0
@@ -66,6 +74,8 @@ class RollPitchYawrateThrustSetpoint(Message):
 
 class VehicleRatesSetpoint(Message):
     """Desired body rates [rad/s]; NaN on an axis holds the current rate."""
+
+    NAN_MEANS_NOT_CONTROLLED = True
 
     roll: float = 0.0
     pitch: float = 0.0
@@ -77,12 +87,16 @@ class VehicleRatesSetpoint(Message):
 class VehicleTorqueSetpoint(Message):
     """Normalised torque about body x, y, z."""
 
+    NAN_MEANS_NOT_CONTROLLED = True
+
     timestamp_sample: int = 0
     xyz: F3 = ZERO3
 
 
 class VehicleThrustSetpoint(Message):
     """Normalised thrust in body frame, each in [−1, 1]; multicopter thrust is negative z."""
+
+    NAN_MEANS_NOT_CONTROLLED = True
 
     timestamp_sample: int = 0
     xyz: F3 = ZERO3

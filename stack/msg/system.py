@@ -108,6 +108,8 @@ class ActuatorArmed(Message):
 class VehicleCommand(Message):
     """A MAVLink-style command (MAV_CMD ids); params 5 and 6 are float64 for latitude/longitude."""
 
+    RECEIVER_CHECKS_VALUES = True
+
     VEHICLE_CMD_NAV_WAYPOINT = 16
     VEHICLE_CMD_NAV_LOITER_UNLIM = 17
     VEHICLE_CMD_NAV_RETURN_TO_LAUNCH = 20

@@ -187,12 +187,15 @@ class FastDriver:
                     reader.lost += 1
                     w[finished] += 1
                     continue
-                trigger.latest = msg
+                admitted = trigger.admits(msg, reader.publisher_id)
+                if admitted:
+                    trigger.latest = msg
                 rt._now = t
                 for buf in data:
                     buf.refresh(t, reader.slot, seq)
                 try:
-                    last = rt._run(msg, sample_time(msg), last)
+                    if admitted:
+                        last = rt._run(msg, sample_time(msg), last)
                 finally:
                     if wakes:
                         wake_all(wakes)

@@ -65,7 +65,9 @@ class InProcessRuntime(Runtime):
         """Nothing to watch: every module runs in this one process."""
 
     def add_input(self, topic: str, instance: int, queue: bool, capacity: int) -> None:
-        self.inputs[(topic, instance)] = InputBuffer(self.bus.subscribe(self, topic, instance), queue)
+        if (topic, instance) not in self.inputs:
+            buf = InputBuffer(self.bus.subscribe(self, topic, instance), queue)
+            self.inputs[(topic, instance)] = self.guard(buf, topic)
 
     def add_output(self, topic: str, instance: int, reliable: bool | None) -> None:
         self.outputs[(topic, instance)] = self.bus.publisher(self, topic, instance)
@@ -74,7 +76,7 @@ class InProcessRuntime(Runtime):
         trigger = self.module_cls.TRIGGER
         if isinstance(trigger, Trigger) and not self.module_cls.LOCKSTEP_COORDINATOR:
             self.trigger_sub = self.bus.subscribe(self, trigger.topic, trigger.instance)
-            self._trigger_buf = InputBuffer(self.trigger_sub, False)
+            self._trigger_buf = self.guard(InputBuffer(self.trigger_sub, False), trigger.topic)
             self.inputs[(trigger.topic, trigger.instance)] = self._trigger_buf
 
     def run_at(self, t: int, trigger: Received | None, members: frozenset[int]) -> None:
@@ -87,12 +89,13 @@ class InProcessRuntime(Runtime):
             self.last_sample_us = self._run(None, t, self.last_sample_us)
             return
         assert self._trigger_buf is not None
-        self._take_trigger(self._trigger_buf, trigger)
+        admitted = self._take_trigger(self._trigger_buf, trigger)
         for buf in self.data:
             buf.pull()
             buf.promote_visible(t, trigger[1], trigger[2], members)
-        msg = trigger[3]
-        self.last_sample_us = self._run(msg, sample_time(msg), self.last_sample_us)
+        if admitted:
+            msg = trigger[3]
+            self.last_sample_us = self._run(msg, sample_time(msg), self.last_sample_us)
 
 
 def module_spec(profile: Profile, entry: ModuleEntry) -> ModuleSpec:
@@ -107,6 +110,8 @@ def module_spec(profile: Profile, entry: ModuleEntry) -> ModuleSpec:
         lockstep=True,
         seed=profile.seed,
         stall_timeout_s=profile.stall_timeout_s,
+        peers=[m.name for m in profile.modules],
+        open_topics=list(profile.open_topics),
     )
 
 
@@ -150,6 +155,15 @@ class InProcessStack:
     @property
     def published(self) -> list[PublishedMessage]:
         return self.bus.published
+
+    def refused(self) -> dict[str, int]:
+        """Messages each module input refused (``module:topic``: invalid or unauthorized), those that did."""
+        counts = {
+            f"{rt.name}:{topic}": buf.invalid + buf.unauthorized
+            for rt in self.runtimes.values()
+            for (topic, _), buf in rt.inputs.items()
+        }
+        return {key: n for key, n in counts.items() if n}
 
     def _queue_trigger(self, rt: InProcessRuntime, item: Received) -> None:
         self._triggers.append((rt, item))

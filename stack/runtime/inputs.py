@@ -9,17 +9,40 @@ message from publisher ``P`` sees:
 
 Messages other members publish at ``t`` wait for the next run. Which of them a module sees thus
 never depends on which process the scheduler ran first. In real time, everything received is seen.
+
+Whatever the transport and the clock, two kinds of message are never seen, and the last good message stays
+the latest: one from a publisher the module does not hear (:mod:`stack.bus.access`), counted in
+``unauthorized``, and one holding a value its type does not allow (NaN in a state, infinity:
+:mod:`stack.msg.validity`), counted in ``invalid``.
 """
 
 from __future__ import annotations
 
+import logging
+from collections.abc import Callable
 from typing import Any
 
 from stack.bus.topics import Received, TopicSubscriber
+from stack.msg.validity import refusal
+
+log = logging.getLogger("stack.runtime")
 
 
 class InputBuffer:
-    __slots__ = ("_latest_key", "_new", "_pending", "_queue", "last_index", "latest", "queue_mode", "sub")
+    __slots__ = (
+        "_latest_key",
+        "_new",
+        "_pending",
+        "_queue",
+        "invalid",
+        "last_index",
+        "latest",
+        "members",
+        "open_while",
+        "queue_mode",
+        "sub",
+        "unauthorized",
+    )
 
     def __init__(self, sub: TopicSubscriber, queue_mode: bool) -> None:
         self.sub = sub
@@ -32,6 +55,12 @@ class InputBuffer:
         # Highest topic index received per publisher id, for the lockstep barrier. A latest-value input
         # may sit on a ring buffer that drops old messages: the barrier only needs the newest to be in.
         self.last_index: dict[int, int] = {}
+        self.invalid = 0
+        self.unauthorized = 0
+        # Whom the input hears (stack.bus.access): None, anyone; else these publisher ids, and anyone while
+        # ``open_while()`` says so.
+        self.members: frozenset[int] | None = None
+        self.open_while: Callable[[], bool] | None = None
 
     @property
     def received(self) -> int:
@@ -54,6 +83,27 @@ class InputBuffer:
         """Malformed messages read from elsewhere than the subscriber (the fast path's rings)."""
         return 0
 
+    def admits(self, msg: Any, publisher: int) -> bool:
+        """Whether the module may see ``msg`` from ``publisher``; counts and logs the ones refused."""
+        members = self.members
+        if members is not None and publisher not in members and not (self.open_while and self.open_while()):
+            self.unauthorized += 1
+            if self.unauthorized == 1 or self.unauthorized % 1000 == 0:
+                log.warning(
+                    "%s: ignored a message from publisher %08x, not a module of this vehicle (%d so far)",
+                    self.sub.suffix,
+                    publisher,
+                    self.unauthorized,
+                )
+            return False
+        why = refusal(msg)
+        if why is None:
+            return True
+        self.invalid += 1
+        if self.invalid == 1 or self.invalid % 1000 == 0:
+            log.warning("%s: dropped a message holding %s (%d so far)", self.sub.suffix, why, self.invalid)
+        return False
+
     def pull(self) -> None:
         """Move everything Zenoh has delivered into the pending list."""
         poll = self.sub.poll
@@ -69,12 +119,15 @@ class InputBuffer:
         """Real time: every received message becomes visible, in arrival order."""
         if not self._pending:
             return
+        admitted = [item[3] for item in self._pending if self.admits(item[3], item[1])]
+        self._pending.clear()
+        if not admitted:
+            return
         if self.queue_mode:
             # One shared key: the stable sort in take() then keeps arrival order.
-            self._queue.extend(((0, 0, 0), item[3]) for item in self._pending)
-        self.latest = self._pending[-1][3]
+            self._queue.extend(((0, 0, 0), msg) for msg in admitted)
+        self.latest = admitted[-1]
         self._new = True
-        self._pending.clear()
 
     def take_in_everything(self) -> None:
         """Make every message received so far visible (a passive module's last look before it stops)."""
@@ -97,6 +150,8 @@ class InputBuffer:
         self._pending = waiting
 
     def _accept(self, key: tuple[int, int, int], msg: Any) -> None:
+        if not self.admits(msg, key[1]):
+            return
         if self.queue_mode:
             self._queue.append((key, msg))
         if key >= self._latest_key:

@@ -168,6 +168,10 @@ class ModuleSpec:
     # inherited file descriptor of its shared-memory region (stack.fastpath); -1 when over Zenoh.
     run_id: int = 0
     fastpath_fd: int = -1
+    # Whom the module hears (stack.bus.access): the profile's modules by name, and the topics it opens to
+    # anyone beyond those open to tools. No names: a module outside any profile hears everyone.
+    peers: list[str] = field(default_factory=list)
+    open_topics: list[str] = field(default_factory=list)
 
     def to_json(self) -> str:
         d = asdict(self)

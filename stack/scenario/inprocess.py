@@ -28,6 +28,7 @@ class InProcessFlight:
     steps: int
     step_cpu_s: float
     published: list[PublishedMessage]  # empty unless recorded
+    refused: dict[str, int]  # messages the modules' inputs refused (stack.runtime.inputs), by module:topic
 
     @property
     def cpu_us_per_step(self) -> float:
@@ -70,7 +71,12 @@ def fly_in_process(
         if not result.exists():
             raise RuntimeError(f"scenario {scenario} ended at t={stack.now_us / 1e6:.3f} s without a result")
         return InProcessFlight(
-            json.loads(result.read_text()), stack.now_us, stack.steps, stack.step_cpu_s, stack.published
+            json.loads(result.read_text()),
+            stack.now_us,
+            stack.steps,
+            stack.step_cpu_s,
+            stack.published,
+            stack.refused(),
         )
 
 

@@ -24,6 +24,7 @@ them in its environment as ``STACK_<NAME>`` (``STACK_CONTROL_PORT``...).
 from __future__ import annotations
 
 import ast
+import difflib
 import string
 import tomllib
 from dataclasses import dataclass, field
@@ -32,6 +33,7 @@ from pathlib import Path
 from stack.bus import keys
 from stack.bus.config import BusConfig
 from stack.launch_files import launch_dirs
+from stack.msg.registry import TOPICS
 from stack.params.param import ParamError, ParamValue
 from stack.runtime.module import Module
 from stack.runtime.spec import load_module_class, resolve_args
@@ -100,6 +102,8 @@ class Profile:
     port: int
     stall_timeout_s: float = 10.0
     lockstep_transport: str = "shm"
+    open_topics: tuple[str, ...] = ()
+    """Topics any program on the bus may publish, beyond those open to tools (stack.bus.access)."""
     modules: list[ModuleEntry] = field(default_factory=list)
     processes: list[ProcessEntry] = field(default_factory=list)
     scenario_limits: dict[str, dict[str, float | bool]] = field(default_factory=dict)
@@ -234,7 +238,16 @@ class _Loader:
         self._only(
             stack,
             "stack",
-            {"vehicle", "description", "lockstep", "lockstep_transport", "seed", "airframe", "stall_timeout_s"},
+            {
+                "vehicle",
+                "description",
+                "lockstep",
+                "lockstep_transport",
+                "seed",
+                "airframe",
+                "stall_timeout_s",
+                "open_topics",
+            },
         )
         vehicle = self._get(stack, "stack", "vehicle", str, "v1")
         try:
@@ -258,6 +271,7 @@ class _Loader:
             port=port,
             stall_timeout_s=float(self._get(stack, "stack", "stall_timeout_s", float, 10.0)),
             lockstep_transport=transport,
+            open_topics=self._open_topics(stack),
         )
         shared = self._airframe_params(airframe)
         given_shared = self._table(doc, "params")
@@ -522,6 +536,15 @@ class _Loader:
         if not isinstance(value, dict):
             raise self.fail(f"{where}.{key}" if where else key, "expected a table")
         return value
+
+    def _open_topics(self, stack: dict) -> tuple[str, ...]:
+        topics = self._get(stack, "stack", "open_topics", list, [])
+        for i, topic in enumerate(topics):
+            if topic not in TOPICS:
+                known = difflib.get_close_matches(str(topic), TOPICS, 1)
+                hint = f" (did you mean '{known[0]}'?)" if known else ""
+                raise self.fail(f"stack.open_topics[{i}]", f"'{topic}' is not a topic{hint}")
+        return tuple(topics)
 
     def _get(self, table: dict, where: str, key: str, typ: type, default: object) -> object:
         if key not in table:

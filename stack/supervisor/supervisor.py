@@ -306,6 +306,8 @@ class Supervisor:
             late_join=m.restarts > 0,
             run_id=self.run_id,
             fastpath_fd=self.fast.region.fd if self.fast is not None else -1,
+            peers=[r.entry.name for r in self.modules],
+            open_topics=list(self.profile.open_topics),
         )
 
     def _environment(self) -> dict[str, str]:
@@ -608,6 +610,7 @@ class Supervisor:
             "vehicle": self.vehicle,
             "profile": self.profile.name,
             "lockstep": self.profile.lockstep,
+            "open_topics": list(self.profile.open_topics),
             "modules": rows,
         }
 

@@ -65,6 +65,10 @@ def test_topic_pub_checks_the_schema_and_publishes(stack):
     assert wrong.returncode == 2 and "Expected `int`, got `str`" in wrong.stderr
     ok = stack.cli("topic", "pub", "vehicle_rates_setpoint", '{"roll": 100.0, "pitch": 0.0}', "-r", "50", "-n", "10")
     assert ok.returncode == 0 and "published 10 messages" in ok.stdout
+    # A module's own output is not a tool's to publish (stack.bus.access): refused, naming who publishes it.
+    owned = stack.cli("topic", "pub", "sensor_gyro", '{"x": 1.0}')
+    assert owned.returncode == 2 and "published" not in owned.stdout
+    assert owned.stderr.startswith("error: sensor_gyro is a topic of the vehicle's modules (published by tick_source)")
 
 
 def test_topic_info_gives_the_schema(stack):

@@ -44,6 +44,9 @@ def test_a_good_profile_loads_in_order_with_parameters(tmp_path):
     with_plot = load_profile(tmp_path / "good.toml", flags={"plot": True, "realtime": True})
     assert [m.name for m in with_plot.modules] == ["tick_source", "doubler", "pacer_when_plotting"]
     assert not with_plot.lockstep
+    assert p.open_topics == ()
+    opened = load_profile(write_profile(tmp_path / "open.toml", GOOD.replace("seed = 3", 'open_topics = ["wind"]')))
+    assert opened.open_topics == ("wind",)
 
 
 @pytest.mark.parametrize(
@@ -64,6 +67,8 @@ def test_a_good_profile_loads_in_order_with_parameters(tmp_path):
         (("critical = true", "critical = 1"), "module[0] (tick_source).critical", "expected bool"),
         (('"plot and TEST_OFFSET > 1"', '"plot and WHATEVER"'), "module[2] (pacer_when_plotting).condition", "unknown"),
         (('"plot and TEST_OFFSET > 1"', '"import os"'), "module[2] (pacer_when_plotting).condition", "cannot parse"),
+        (("seed = 3", 'seed = 3\nopen_topics = ["vehicle_atitude"]'), "stack.open_topics[0]", "'vehicle_attitude'?"),
+        (("seed = 3", 'seed = 3\nopen_topics = "vehicle_attitude"'), "stack.open_topics", "expected list"),
     ],
 )
 def test_a_broken_profile_is_refused_naming_file_key_and_problem(tmp_path, change, key, problem):

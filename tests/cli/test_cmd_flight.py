@@ -3,35 +3,24 @@ fly a mission, return, land, with --wait and its default timeouts (sized to each
 `stack status`'s vehicle summary; and --wait failing when a failsafe takes over."""
 
 import json
-import time
 
 import pytest
 
-from tests.support.harness import REPO, default_stack
+from tests.support.harness import REPO, default_stack, takeoff_when_ready
 
 pytestmark = pytest.mark.flight
 
 
 @pytest.fixture(scope="module")
 def stack(tmp_path_factory):
-    yield from default_stack(tmp_path_factory.mktemp("cmd_flight") / "home")
+    # The link-loss test stands in for a ground station's heartbeat on telemetry_status, the MAVLink link's topic.
+    yield from default_stack(tmp_path_factory.mktemp("cmd_flight") / "home", open_topics=("telemetry_status",))
 
 
 def local_position(stack) -> dict:
     out = stack.cli("topic", "echo", "vehicle_local_position", "-n", "1", "--json")
     assert out.returncode == 0, out.stderr
     return json.loads(out.stdout)
-
-
-def takeoff_when_ready(stack, *args: str):
-    """Take off, once arming is allowed: it waits for the position estimate; the commander says so until then."""
-    deadline = time.monotonic() + 120.0
-    while True:
-        takeoff = stack.cli("cmd", "takeoff", *args, "--wait", timeout=300)
-        if takeoff.returncode == 0 or time.monotonic() > deadline:
-            return takeoff
-        assert "local position" in takeoff.stderr or "GPS" in takeoff.stderr, takeoff.stderr
-        time.sleep(1.0)
 
 
 def test_takeoff_goto_land_from_the_command_line(stack):

@@ -15,7 +15,7 @@ from stack.msg.registry import message_type
 from stack.record.recorder import RecordedMessage, RecordingReader
 from stack.runtime.membus import PublishedMessage
 from stack.scenario.inprocess import fly_in_process
-from tests.support.harness import run_cli, wait_no_processes
+from tests.support.harness import refused_in_logs, run_cli, wait_no_processes
 
 # Generous: a flight takes 10-30 s of wall time, several times that on a loaded machine.
 FLY_TIMEOUT_S = 600.0
@@ -75,6 +75,7 @@ def fly_scenario(
     )
     output = out.stdout + out.stderr
     assert wait_no_processes(home) == [], f"module processes outlived the flight:\n{output}"
+    assert not refused_in_logs(home), refused_in_logs(home)
     assert report.exists(), f"no report (exit code {out.returncode}):\n{output}"
     assert recording.exists() or not record, f"no recording:\n{output}"
     return Flight(out.returncode, output, json.loads(report.read_text()), recording)
@@ -112,6 +113,7 @@ def fly_inprocess(
 ) -> InProcessFlight:
     """The scenario flown in this process, its messages written to ``directory``."""
     flight = fly_in_process(scenario, profile, seed, wind=wind, record=True)
+    assert not flight.refused, f"the stack's own messages were refused: {flight.refused}"
     published = directory / "published.msgpack"
     published.write_bytes(msgspec.msgpack.encode(flight.published))
     report = {**flight.result, "scenario": scenario, "profile": profile, "seed": seed, "wind": wind}

@@ -17,7 +17,7 @@ from pathlib import Path
 
 import pytest
 
-from tests.support.harness import run_cli, wait_no_processes, write_profile
+from tests.support.harness import refused_in_logs, run_cli, wait_no_processes, write_profile
 
 pytestmark = pytest.mark.flight
 
@@ -87,6 +87,7 @@ def fly_once(home: Path, scenario: str, profile: str | Path, seed: int) -> dict:
     result["output"] = out.stdout + out.stderr
     result["returncode"] = out.returncode
     assert not wait_no_processes(home, timeout=30)
+    assert not refused_in_logs(home), refused_in_logs(home)
     return result
 
 

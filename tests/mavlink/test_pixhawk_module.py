@@ -165,6 +165,8 @@ def test_the_module_against_a_fake_pixhawk(tmp_path: Path) -> None:
 [stack]
 vehicle = "p1"
 lockstep = false
+# The test stands in for the modules that would publish these.
+open_topics = ["actuator_armed", "vehicle_rates_setpoint"]
 
 [[module]]
 module = "pixhawk"

@@ -176,6 +176,20 @@ def wait_no_processes(home: Path, timeout: float = 10.0) -> list[psutil.Process]
     return left
 
 
+REFUSED = ("dropped a message holding", "ignored a message from publisher")
+"""What a module logs when its input refuses a message (stack.runtime.inputs): never the stack's own."""
+
+
+def refused_in_logs(home: Path) -> list[str]:
+    """The log lines of every run under ``home`` where a module refused a message."""
+    return [
+        f"{log.name}: {line}"
+        for log in sorted((home / "runs").glob("*/*.log"))
+        for line in log.read_text(errors="replace").splitlines()
+        if any(r in line for r in REFUSED)
+    ]
+
+
 def udp_port() -> int:
     return free_port(kind=socket.SOCK_DGRAM)
 
@@ -195,10 +209,27 @@ def launch_profile(directory: Path, name: str = "sitl_quad", extra: str = "") ->
     return write_profile(directory / f"{name}.toml", text + extra)
 
 
-def default_stack(home: Path) -> Iterator[RunningStack]:
+def takeoff_when_ready(stack: RunningStack, *args: str) -> subprocess.CompletedProcess[str]:
+    """``stack cmd takeoff ARGS --wait`` once arming is allowed: until the estimates have converged the
+    commander refuses it for now (TEMPORARILY_REJECTED, saying which)."""
+    deadline = time.monotonic() + 120.0
+    while True:
+        takeoff = stack.cli("cmd", "takeoff", *args, "--wait", timeout=300)
+        if takeoff.returncode == 0 or time.monotonic() > deadline:
+            return takeoff
+        assert "TEMPORARILY_REJECTED" in takeoff.stderr, takeoff.stderr
+        time.sleep(1.0)
+
+
+def default_stack(home: Path, open_topics: tuple[str, ...] = ()) -> Iterator[RunningStack]:
     """`stack up` of the default profile for a module-scoped fixture: yields it running, then stops it
-    and checks it stopped cleanly and left no process behind."""
-    running = RunningStack(home, launch_profile(home.parent / "profile"), "--quiet")
+    and checks it stopped cleanly and left no process behind. ``open_topics``: topics the test publishes
+    by hand although a module owns them (the profile's ``[stack] open_topics``)."""
+    profile = launch_profile(home.parent / "profile")
+    if open_topics:
+        text = profile.read_text().replace("[stack]\n", f"[stack]\nopen_topics = {json.dumps(list(open_topics))}\n", 1)
+        profile.write_text(text)
+    running = RunningStack(home, profile, "--quiet")
     running.wait_up()
     yield running
     assert running.stop() == 0

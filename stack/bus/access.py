@@ -1,0 +1,67 @@
+"""Who a module hears: the profile's own modules on every topic; anyone else only on the topics open to tools.
+
+A vehicle's topics are published by the modules its profile starts. Programs that are not modules of the
+profile (``stack cmd``, ``stack teleop``, ``stack topic pub``, a user's script on the bus) may publish what
+PX4 lets a ground station or an offboard computer send: commands, sticks, missions, and the Offboard
+setpoints (PX4's ROS 2 offboard topics, ``docs/en/ros2/offboard_control.md``), the last heard from them only
+while the vehicle is in Offboard, so a stray publisher cannot displace the setpoint the flight modes publish.
+A profile may open more topics (``[stack] open_topics``: a test that feeds a module by hand).
+
+A sample from anyone else is counted as ``unauthorized`` by the module that receives it and never seen. The
+publisher is told by the id in the stack's message header (:mod:`stack.bus.topics`), which a process that
+wants to lie can forge: this guards against mistakes and stray processes on the vehicle's own bus, not a
+hostile host, which Zenoh's certificates and access control keep off the bus.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from dataclasses import dataclass
+
+from stack.bus.node import stable_publisher_id
+
+COMMAND_TOPICS = frozenset({"vehicle_command", "manual_control_setpoint", "mission"})
+"""What any program on the bus may send, in any mode: as a ground station sends COMMAND_LONG, sticks and
+missions."""
+
+OFFBOARD_TOPICS = frozenset(
+    {
+        "offboard_control_mode",
+        "trajectory_setpoint",
+        "vehicle_attitude_setpoint",
+        "vehicle_rates_setpoint",
+        "vehicle_torque_setpoint",
+        "vehicle_thrust_setpoint",
+        "actuator_motors",
+    }
+)
+"""What an offboard program may send; heard from it only in Offboard (``offboard_control_mode`` always: the
+commander needs it before switching to Offboard)."""
+
+OPEN_TO_TOOLS = COMMAND_TOPICS | OFFBOARD_TOPICS
+
+
+@dataclass(frozen=True)
+class Access:
+    """The publishers a module of ``vehicle`` hears: ``members`` (its profile's modules, by name) and, on
+    ``open_topics`` (beyond :data:`OPEN_TO_TOOLS`), anyone."""
+
+    members: frozenset[int]
+    open_topics: frozenset[str] = frozenset()
+
+    @staticmethod
+    def of(vehicle: str, modules: Iterable[str], open_topics: Iterable[str] = ()) -> Access:
+        return Access(frozenset(stable_publisher_id(vehicle, m) for m in modules), frozenset(open_topics))
+
+    def rule(self, topic: str) -> str:
+        """How a topic is heard: ``members`` only, ``anyone``, or ``offboard`` (anyone while in Offboard)."""
+        if topic in self.open_topics or topic in COMMAND_TOPICS or topic == "offboard_control_mode":
+            return "anyone"
+        if topic in OFFBOARD_TOPICS:
+            return "offboard"
+        return "members"
+
+
+def tool_may_publish(topic: str, open_topics: Iterable[str] = ()) -> bool:
+    """Whether a program that is not a module of the profile may publish ``topic``."""
+    return topic in OPEN_TO_TOOLS or topic in set(open_topics)
