@@ -30,6 +30,7 @@ from stack.msg.system import VehicleControlMode
 from stack.params import ca, catalogue
 from stack.params.param import Param
 from stack.runtime.module import Module, Trigger
+from stack.runtime.priority import NAV_AND_CONTROLLERS
 
 _NO_MODE = VehicleControlMode()
 
@@ -44,6 +45,7 @@ def _unique(*groups: tuple[Param, ...]) -> tuple[Param, ...]:
 
 class MulticopterAttitudeControl(Module):
     NAME = "mc_att_control"
+    WORK_QUEUE = NAV_AND_CONTROLLERS
     DESCRIPTION = "Attitude controller (PX4 mc_att_control): attitude setpoint → body-rate setpoint"
     TRIGGER = Trigger("vehicle_attitude")
     DT_RANGE = (0.0002, 0.02)

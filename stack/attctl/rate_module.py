@@ -14,10 +14,12 @@ from stack.attctl.rate_control import RateControl, YawTorqueLowPass, saturation_
 from stack.msg.estimation import VehicleAngularVelocity
 from stack.msg.setpoints import RateCtrlStatus, VehicleThrustSetpoint, VehicleTorqueSetpoint
 from stack.runtime.module import Module, Trigger
+from stack.runtime.priority import RATE_CTRL
 
 
 class MulticopterRateControl(Module):
     NAME = "mc_rate_control"
+    WORK_QUEUE = RATE_CTRL
     DESCRIPTION = "Body-rate controller (PX4 mc_rate_control): rate setpoint → torque and thrust setpoints"
     TRIGGER = Trigger("vehicle_angular_velocity")
     DT_RANGE = (0.000125, 0.02)

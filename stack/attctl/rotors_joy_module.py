@@ -15,12 +15,14 @@ from stack.attctl import rotors_joy
 from stack.attctl.rotors_joy import JoyMapping
 from stack.msg.setpoints import RollPitchYawrateThrustSetpoint
 from stack.runtime.module import Module, Timer
+from stack.runtime.priority import HP_DEFAULT
 
 RATE_HZ = 100.0
 
 
 class RotorsJoyInterface(Module):
     NAME = "rotors_joy_interface"
+    WORK_QUEUE = HP_DEFAULT
     DESCRIPTION = "RotorS joystick interface: sticks → roll, pitch, yaw rate and thrust setpoint (RotorS mode)"
     TRIGGER = Timer(RATE_HZ)
     DT_RANGE = (0.001, 0.1)

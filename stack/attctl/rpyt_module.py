@@ -44,6 +44,7 @@ from stack.msg.setpoints import VehicleThrustSetpoint
 from stack.msg.system import VehicleControlMode
 from stack.params import catalogue
 from stack.runtime.module import Arg, Module, Trigger
+from stack.runtime.priority import RATE_CTRL
 from stack.sim.vehicle import load_vehicle
 
 _NO_MODE = VehicleControlMode()
@@ -58,6 +59,7 @@ def _pad(values: tuple[float, ...], size: int, fill: float) -> tuple[float, ...]
 
 class RollPitchYawrateThrustController(Module):
     NAME = "roll_pitch_yawrate_thrust_controller"
+    WORK_QUEUE = RATE_CTRL
     DESCRIPTION = "RotorS roll-pitch-yawrate-thrust controller: attitude law and rotor allocation → motor commands"
     TRIGGER = Trigger("vehicle_attitude")
     DT_RANGE = (0.0002, 0.02)

@@ -9,7 +9,12 @@ from __future__ import annotations
 
 from stack.msg.system import MavlinkLog
 
-WARNING_EVENTS = ("Failsafe warning", "Connection to ground station lost", "Link to the Pixhawk lost")
+WARNING_EVENTS = (
+    "Failsafe warning",
+    "Connection to ground station lost",
+    "Link to the Pixhawk lost",
+    "Commander stalled",
+)
 CRITICAL_EVENTS = ("Failsafe activated",)
 
 

@@ -32,7 +32,7 @@ activated: entering Hold for 5 seconds"). The user takes over by switching mode 
 new failure arrives. Link-loss, geofence and Hold/Return/Land actions, once in force, stay until the user
 changes mode or disarms; one still waiting out COM_FAIL_ACT_T in Hold goes when its condition clears (a link
 regained within the delay returns nothing, and the Hold ends). Battery and fallback actions clear with their
-condition. Terminate never clears.
+condition. Terminate clears only once the vehicle is disarmed on the ground, where PX4 needs a reboot.
 """
 
 from __future__ import annotations
@@ -371,6 +371,11 @@ class Failsafe:
     def latch_termination(self) -> None:
         """Terminated already (a restarted commander taking over a terminated vehicle): it stays so."""
         self._selected = FailsafeAction.TERMINATE
+
+    def clear_termination(self) -> None:
+        """The terminated vehicle was disarmed on the ground: it may fly again (PX4 asks for a reboot)."""
+        self._selected = FailsafeAction.NONE
+        self._actions.clear()
 
     def _dll_exempt(self, intended: int) -> bool:
         mask = int(self._p["COM_DLL_EXCEPT"])

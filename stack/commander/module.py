@@ -48,6 +48,7 @@ from stack.msg.system import (
 )
 from stack.params import catalogue
 from stack.runtime.module import Module, Timer
+from stack.runtime.priority import COMMANDER
 
 NS = VehicleStatus
 RATE_HZ = 100.0
@@ -91,6 +92,7 @@ def home_position_message(home: Home, update_count: int, now: int) -> HomePositi
 
 class CommanderModule(Module):
     NAME = "commander"
+    WORK_QUEUE = COMMANDER
     DESCRIPTION = "Arming, flight modes, commands and failsafes (PX4 commander)"
     TRIGGER = Timer(RATE_HZ)
     DT_RANGE = (0.001, 0.1)
@@ -357,12 +359,15 @@ class CommanderModule(Module):
         if thrust is not None:
             inp.throttle = -thrust.xyz[2]
         mode = self.commander.nav_state
+        if mode == NS.NAVIGATION_STATE_TERMINATION:
+            inp.throttle = 0.0  # the motors are stopped, whatever the controllers still ask
         inp.climb_rate_control = mode not in (
             NS.NAVIGATION_STATE_MANUAL,
             NS.NAVIGATION_STATE_STAB,
             NS.NAVIGATION_STATE_ACRO,
             NS.NAVIGATION_STATE_RATTITUDE,
             NS.NAVIGATION_STATE_OFFBOARD,
+            NS.NAVIGATION_STATE_TERMINATION,  # no loop runs, nothing commands a descent
         )
         trajectory = latest("trajectory_setpoint")
         inp.velocity_setpoint_z = trajectory.velocity[2] if trajectory is not None else math.nan
@@ -392,4 +397,6 @@ class CommanderModule(Module):
         thrust = latest("vehicle_thrust_setpoint")
         if thrust is not None:
             inp.throttle = thrust.xyz[0]
+        if self.commander.nav_state == NS.NAVIGATION_STATE_TERMINATION:
+            inp.throttle = 0.0  # the motors are stopped, whatever the controllers still ask
         return inp

@@ -151,6 +151,12 @@ PARAMS: tuple[Param, ...] = OWN_PARAMS + FAILSAFE_PARAMS + GEOFENCE_PARAMS
 DEFAULTS: dict[str, object] = {p.name: p.default for p in PARAMS}
 
 
+OWN_STALL_US = 250_000
+"""A commander that did not run for this long (its process stopped, or starved on a loaded machine) has not
+been reading its inputs either: what they tell is not judged until it has caught up."""
+CATCH_UP_US = 300_000
+"""How long after such a stall the commander takes its inputs' age and the chain's silence as its own."""
+
 class ArmDisarmReason(IntEnum):
     """``vehicle_status.latest_arming_reason`` / ``latest_disarming_reason`` (PX4 ``arm_disarm_reason_t``)."""
 
@@ -267,6 +273,8 @@ class Commander:
         self._latest_disarming_reason = 0
         self._home: HomePosition | None = None
         self._failing = Requirement.NONE
+        self._last_step_us = 0
+        self._catching_up_until_us = 0
         self._preflight_ok = False
         self._preflight_checked: tuple[int, int, int, int] | None = None
         self._preflight_checked_us = 0
@@ -438,7 +446,14 @@ class Commander:
         inp = self._inputs
         p = self._p
         lpos = inp.local_position
-        self._failing = failing_requirements(now_us, inp, self._health, self._home is not None)
+        if self._last_step_us and now_us - self._last_step_us > OWN_STALL_US:
+            self._catching_up_until_us = now_us + CATCH_UP_US
+            self._events.append(f"Commander stalled for {(now_us - self._last_step_us) / 1e6:.1f} s: catching up")
+        self._last_step_us = now_us
+        failing = failing_requirements(now_us, inp, self._health, self._home is not None)
+        catching_up = now_us < self._catching_up_until_us
+        # Inputs older than the stall are not the modules' fault: only what failed before it still fails.
+        self._failing = failing & self._failing if catching_up else failing
         position_known = not int(self._failing) & _POSITION_KNOWN
         armed = self.armed
 
@@ -471,7 +486,8 @@ class Commander:
             self._events.append(f"Takeoff complete, switching to {mode_name(follow)}")
             self._set_intention(follow)
 
-        self._update_control_chain(now_us, armed)
+        if not catching_up:
+            self._update_control_chain(now_us, armed)
         failing = self._failing
         if self._external_link_down(now_us):
             failing &= ~_ESTIMATES  # without the Pixhawk's sensors the estimates go; its own failsafe flies
@@ -730,9 +746,13 @@ class Commander:
     def _disarm(self, now_us: int, reason: ArmDisarmReason, forced: bool) -> str:
         if not self.armed:
             return ""
-        if not forced and not (self._inputs.landed or self._inputs.maybe_landed):
+        on_ground = self._inputs.landed or self._inputs.maybe_landed
+        if not forced and not on_ground:
             return "Disarming denied: not landed"
         self.arming_state = NS.ARMING_STATE_DISARMED
+        if on_ground and self._failsafe.selected_action == FailsafeAction.TERMINATE:
+            self._failsafe.clear_termination()
+            self._events.append("Flight termination cleared: disarmed on the ground")
         self._armed_time_us = 0
         self._takeoff_time_us = 0
         self._have_taken_off = False

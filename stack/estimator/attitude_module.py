@@ -20,6 +20,7 @@ from stack.msg.sensors import SensorAccel, SensorGyro
 from stack.params import catalogue
 from stack.params.param import Param
 from stack.runtime.module import KEEP_PERIOD_US, TRIGGER_BACKLOG, Module, Trigger
+from stack.runtime.priority import INS
 
 ATTITUDE_PARAMS = catalogue.params(
     "ATT_W_ACC", "ATT_W_MAG", "ATT_W_GYRO_BIAS", "ATT_BIAS_MAX", "ATT_MAG_DECL", "ATT_ACC_COMP",
@@ -81,6 +82,7 @@ class ImuSummary:
 
 class AttitudeEstimatorModule(Module):
     NAME = "attitude_estimator_q"
+    WORK_QUEUE = INS
     DESCRIPTION = "Quaternion complementary filter (PX4 attitude_estimator_q) and gyro filtering"
     TRIGGER = Trigger("sensor_gyro", every=True)
     DT_RANGE = (0.00001, 0.02)

@@ -22,6 +22,7 @@ from stack.mathlib.atmosphere import isa_altitude_m
 from stack.mathlib.quaternion import yaw
 from stack.msg.estimation import VehicleGlobalPosition, VehicleLocalPosition
 from stack.runtime.module import KEEP_PERIOD_US, Module, Timer
+from stack.runtime.priority import INS
 
 PERIOD_US = 20_000
 
@@ -92,6 +93,7 @@ def global_position_message(est: LocalPositionEstimate, now_us: int) -> VehicleG
 
 class LocalPositionEstimatorModule(Module):
     NAME = "local_position_estimator"
+    WORK_QUEUE = INS
     DESCRIPTION = "Position and velocity Kalman filter fusing IMU, GPS and barometer (PX4 LPE)"
     TRIGGER = Timer(1e6 / PERIOD_US)
     DT_RANGE = (0.002, 0.05)

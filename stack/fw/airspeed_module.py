@@ -21,6 +21,7 @@ from stack.mathlib.scalar import CONSTANTS_ONE_G
 from stack.msg.fixedwing import AirspeedValidated, PositionSetpoint, Wind
 from stack.params import catalogue
 from stack.runtime.module import Module, Timer
+from stack.runtime.priority import NAV_AND_CONTROLLERS
 
 RATE_HZ = 10.0
 LOCAL_POSITION_TIMEOUT_US = 1_000_000
@@ -32,6 +33,7 @@ WIND_SOURCE_SENSOR_1 = 1
 
 class AirspeedSelectorModule(Module):
     NAME = "airspeed_selector"
+    WORK_QUEUE = NAV_AND_CONTROLLERS
     DESCRIPTION = "Airspeed checks and wind estimation (PX4 airspeed_selector)"
     TRIGGER = Timer(RATE_HZ)
     DT_RANGE = (0.01, 1.0)

@@ -35,6 +35,7 @@ from stack.msg.setpoints import (
 )
 from stack.msg.system import VehicleControlMode
 from stack.runtime.module import Module, Trigger
+from stack.runtime.priority import NAV_AND_CONTROLLERS
 
 AIRSPEED_TIMEOUT_US = 1_000_000
 """An airspeed older than this is not valid (FixedwingAttitudeControl ``get_airspeed_and_update_scaling``)."""
@@ -53,6 +54,7 @@ def _throttle(value: float) -> float:
 
 class FixedwingAttitudeControl(Module):
     NAME = "fw_att_control"
+    WORK_QUEUE = NAV_AND_CONTROLLERS
     DESCRIPTION = "Fixed-wing attitude controller (PX4 fw_att_control): attitude → body rates → surfaces, throttle"
     TRIGGER = Trigger("vehicle_attitude")
     DT_RANGE = (0.002, 0.04)

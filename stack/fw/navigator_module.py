@@ -18,12 +18,14 @@ from stack.fw.navigator import PARAMS, FixedwingNavigator, FwNavigatorInputs
 from stack.mission.store import MissionResultPublisher
 from stack.msg.estimation import VehicleLocalPosition
 from stack.runtime.module import Module, Trigger
+from stack.runtime.priority import HP_DEFAULT
 
 NAN = math.nan
 
 
 class NavigatorModule(Module):
     NAME = "navigator"
+    WORK_QUEUE = HP_DEFAULT
     DESCRIPTION = "Fixed-wing navigator: takeoff, hold, mission, return and land as a position-setpoint triplet"
     TRIGGER = Trigger("vehicle_local_position")
     DT_RANGE = (0.002, 0.05)

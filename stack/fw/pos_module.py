@@ -20,6 +20,7 @@ from stack.msg.estimation import VehicleLocalPosition
 from stack.msg.fixedwing import PositionControllerStatus
 from stack.msg.setpoints import VehicleAttitudeSetpoint
 from stack.runtime.module import Module, Trigger
+from stack.runtime.priority import NAV_AND_CONTROLLERS
 
 NAN = math.nan
 AIRSPEED_TIMEOUT_US = 1_000_000
@@ -28,6 +29,7 @@ AIRSPEED_TIMEOUT_US = 1_000_000
 
 class FixedwingPositionControl(Module):
     NAME = "fw_pos_control"
+    WORK_QUEUE = NAV_AND_CONTROLLERS
     DESCRIPTION = "Fixed-wing position control (PX4 fw_pos_control_l1): L1 or NPFG, TECS, runway takeoff, landing"
     TRIGGER = Trigger("vehicle_local_position")
     DT_RANGE = (0.002, 0.1)

@@ -25,6 +25,7 @@ from stack.msg.fixedwing import ActuatorServos
 from stack.msg.setpoints import VehicleTorqueSetpoint
 from stack.params import ca
 from stack.runtime.module import Module, Trigger
+from stack.runtime.priority import RATE_CTRL
 
 OUTPUTS = 16
 MOTOR_SLOTS = 12
@@ -37,6 +38,7 @@ def _pad(values: tuple[float, ...], size: int, fill: float) -> tuple[float, ...]
 
 class ControlAllocatorModule(Module):
     NAME = "control_allocator"
+    WORK_QUEUE = RATE_CTRL
     DESCRIPTION = "Control allocation (PX4 control_allocator) and motor and servo outputs"
     TRIGGER = Trigger("vehicle_torque_setpoint")
     DT_RANGE = (0.0002, 0.02)

@@ -18,6 +18,7 @@ from stack.msg.setpoints import TakeoffStatus, TrajectorySetpoint
 from stack.posctl.flight_mode_manager import PARAMS, FlightModeManager, NavigatorInputs
 from stack.posctl.flight_task import VehicleState
 from stack.runtime.module import Module, Trigger
+from stack.runtime.priority import NAV_AND_CONTROLLERS
 
 NAN = math.nan
 
@@ -39,6 +40,7 @@ def vehicle_state(lpos: VehicleLocalPosition, landed: bool, flying: bool) -> Veh
 
 class FlightModeManagerModule(Module):
     NAME = "flight_mode_manager"
+    WORK_QUEUE = NAV_AND_CONTROLLERS
     DESCRIPTION = "Takeoff, hold, go-to, mission, return and land as smooth trajectories (PX4 navigator + FMM)"
     TRIGGER = Trigger("vehicle_local_position")
     DT_RANGE = (0.002, 0.05)

@@ -12,6 +12,7 @@ from stack.msg.setpoints import HoverThrustEstimate
 from stack.params import catalogue
 from stack.posctl.hover_thrust_estimator import HoverThrustEstimator, HoverThrustEstimatorParams
 from stack.runtime.module import Module, Trigger
+from stack.runtime.priority import NAV_AND_CONTROLLERS
 
 PARAMS = catalogue.params(
     "MPC_THR_HOVER", "HTE_HT_NOISE", "HTE_ACC_GATE", "HTE_HT_ERR_INIT", "HTE_VXY_THR", "HTE_VZ_THR",
@@ -21,6 +22,7 @@ PARAMS = catalogue.params(
 
 class HoverThrustEstimatorModule(Module):
     NAME = "mc_hover_thrust_estimator"
+    WORK_QUEUE = NAV_AND_CONTROLLERS
     DESCRIPTION = "Hover thrust estimation from vertical acceleration and thrust (PX4 mc_hover_thrust_estimator)"
     TRIGGER = Trigger("vehicle_local_position")
     DT_RANGE = (0.002, 0.1)

@@ -21,6 +21,7 @@ from stack.params import catalogue
 from stack.posctl.position_control import PositionControl, PositionControlParams, failsafe_setpoint
 from stack.posctl.takeoff import Takeoff, TakeoffParams, wants_takeoff
 from stack.runtime.module import KEEP_PERIOD_US, Module, Trigger
+from stack.runtime.priority import NAV_AND_CONTROLLERS
 
 NAN = math.nan
 SETPOINT_WAIT_US = 200_000
@@ -73,6 +74,7 @@ def takeoff_params(p) -> TakeoffParams:
 
 class MulticopterPositionControl(Module):
     NAME = "mc_pos_control"
+    WORK_QUEUE = NAV_AND_CONTROLLERS
     DESCRIPTION = "Multicopter position and velocity control with smooth takeoff (PX4 mc_pos_control)"
     TRIGGER = Trigger("vehicle_local_position")
     DT_RANGE = (0.002, 0.04)

@@ -34,6 +34,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, ClassVar
 
 from stack.params.param import Param, ParamError, ParamValue, convert
+from stack.runtime.priority import WorkQueue
 
 if TYPE_CHECKING:
     from stack.runtime.runner import Runtime
@@ -111,6 +112,9 @@ class Module:
     # same-host fast path), and stamps what it publishes with the simulated time it has seen. It links the
     # stack to the world outside (fixed ports), so the scripted flights of `stack fly` do not start it.
     OUTSIDE_LOCKSTEP: ClassVar[bool] = False
+    # The PX4 work queue whose priority the module's process takes on the wall clock (stack.runtime.priority);
+    # None: normal priority.
+    WORK_QUEUE: ClassVar[WorkQueue | None] = None
 
     def __init__(self, rt: Runtime) -> None:
         self.rt = rt

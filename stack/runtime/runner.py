@@ -16,6 +16,7 @@ from typing import Any
 import zenoh
 
 from stack.bus import keys
+from stack.bus.access import Access
 from stack.bus.alive import AliveTokens
 from stack.bus.node import Node, wall_clock_us
 from stack.bus.topics import FLAG_LOCKSTEP_TIME, Received, TopicPublisher
@@ -30,6 +31,7 @@ from stack.runtime.fastrun import FastDriver
 from stack.runtime.inputs import InputBuffer, sample_time
 from stack.runtime.lockstep import TIMER, LockstepCoordinator, LockstepMember
 from stack.runtime.module import TRIGGER_BACKLOG, Module, Timer, Trigger
+from stack.runtime.priority import raise_priority
 from stack.runtime.services import Heartbeat, ParamService
 from stack.runtime.spec import ModuleSpec, load_module_class, resolve_args
 
@@ -78,6 +80,7 @@ class Runtime:
         self.node: Node
         self.module: Module
         self._module_watchers: list[zenoh.Subscriber] = []
+        self.access = Access.of(spec.vehicle, spec.peers, spec.open_topics) if spec.peers else None
 
     # -- clock -------------------------------------------------------------------------------------
 
@@ -101,11 +104,13 @@ class Runtime:
         self._module_watchers.append(self.node.session.liveliness().declare_subscriber(key, changed, history=True))
 
     def add_input(self, topic: str, instance: int, queue: bool, capacity: int) -> None:
+        if (topic, instance) in self.inputs:
+            return
         if self.fast is not None:
             sub = self.node.subscriber(topic, instance, capacity=OUTSIDE_QUEUE, callback=True)
             self.fast.subscription(sub.suffix, SUB_QUEUE if queue else 0)
             keep = capacity if self.module_cls.PASSIVE and not self.module_cls.LOSSLESS else 0
-            self.inputs[(topic, instance)] = FastInput(self.fast.region, sub, queue, keep)
+            self.inputs[(topic, instance)] = self.guard(FastInput(self.fast.region, sub, queue, keep), topic)
             return
         if queue or self.lockstep:
             # In lockstep a latest-value input is a FIFO too, drained every run: a ring would let
@@ -114,7 +119,18 @@ class Runtime:
         else:
             # Real time: the last few messages only; the newest is all a latest-value input needs.
             sub = self.node.subscriber(topic, instance, capacity=LATEST_RING, keep_last=True)
-        self.inputs[(topic, instance)] = InputBuffer(sub, queue)
+        self.inputs[(topic, instance)] = self.guard(InputBuffer(sub, queue), topic)
+
+    def guard(self, buf: InputBuffer, topic: str) -> InputBuffer:
+        """Tell ``buf`` whom it hears (:mod:`stack.bus.access`); an Offboard topic reads the control mode too."""
+        if self.access is None or (rule := self.access.rule(topic)) == "anyone":
+            return buf
+        buf.members = self.access.members
+        if rule == "offboard":
+            self.add_input("vehicle_control_mode", 0, False, 1)
+            mode = self.inputs[("vehicle_control_mode", 0)]
+            buf.open_while = lambda: mode.latest is not None and mode.latest.flag_control_offboard_enabled
+        return buf
 
     def add_output(self, topic: str, instance: int, reliable: bool | None) -> None:
         pub = self.node.publisher(topic, instance, reliable=True if self.lockstep else reliable)
@@ -133,6 +149,9 @@ class Runtime:
         """Run the module until it stops; ``on_ready`` is called once it is up and about to loop."""
         spec = self.spec
         run_id = spec.run_id if spec.lockstep else 0
+        if not spec.lockstep and self.module_cls.WORK_QUEUE is not None:
+            # Before the session opens, so that its threads (which deliver the inputs) inherit the priority.
+            raise_priority(self.name, self.module_cls.WORK_QUEUE)
         with Node(spec.bus, spec.vehicle, self.name, clock=self.now_us, run_id=run_id) as node:
             self.node = node
             if self.lockstep:
@@ -215,14 +234,14 @@ class Runtime:
             sub = self.node.subscriber(trigger.topic, trigger.instance, capacity=OUTSIDE_QUEUE, callback=True)
             self.fast.subscription(sub.suffix, SUB_TRIGGER)
             self.trigger_input = FastInput(self.fast.region, sub, False)
-            self.inputs[(trigger.topic, trigger.instance)] = self.trigger_input
+            self.inputs[(trigger.topic, trigger.instance)] = self.guard(self.trigger_input, trigger.topic)
             return
         if self.lockstep:
             sub = self.node.subscriber(trigger.topic, trigger.instance, capacity=LOCKSTEP_QUEUE)
         else:
             backlog = TRIGGER_BACKLOG if trigger.every else 4
             sub = self.node.subscriber(trigger.topic, trigger.instance, capacity=backlog, keep_last=True)
-        self._trigger_buf = InputBuffer(sub, False)
+        self._trigger_buf = self.guard(InputBuffer(sub, False), trigger.topic)
         self.inputs[(trigger.topic, trigger.instance)] = self._trigger_buf
 
     def _data_inputs(self) -> list[InputBuffer]:
@@ -277,7 +296,8 @@ class Runtime:
         last_sample = 0
         while True:
             item = buf.sub.recv()
-            self._take_trigger(buf, item)
+            if not self._take_trigger(buf, item):
+                continue
             self.behind = bool(buf.sub.arrived)
             for d in data:
                 d.pull()
@@ -314,7 +334,7 @@ class Runtime:
             if t < 0:
                 self._ignore_outside_trigger(suffix)
                 continue
-            self._take_trigger(buf, item)
+            admitted = self._take_trigger(buf, item)
             member.advance_to(t)
             self._now = t
             member.barrier.wait()
@@ -324,7 +344,8 @@ class Runtime:
             for d in data:
                 d.pull()
                 d.promote_visible(now, trigger_pub, seq, members)
-            last_sample = self._run(msg, sample_time(msg), last_sample)
+            if admitted:
+                last_sample = self._run(msg, sample_time(msg), last_sample)
             member.ack(pub, suffix, touched)
             touched.clear()
 
@@ -405,9 +426,13 @@ class Runtime:
 
     # -- one run ---------------------------------------------------------------------------------------
 
-    def _take_trigger(self, buf: InputBuffer, item: Received) -> None:
+    def _take_trigger(self, buf: InputBuffer, item: Received) -> bool:
+        """Take a trigger message in; False if it is refused (the module does not run on it)."""
         buf.last_index[item[1]] = item[4]
+        if not buf.admits(item[3], item[1]):
+            return False
         buf.latest = item[3]
+        return True
 
     def _run(self, msg: Any, sample_us: int, last_sample_us: int) -> int:
         changed = self.params.take_changes()
@@ -461,6 +486,8 @@ class Runtime:
             "decode_errors": decode + sum(buf.ring_decode_errors for buf in self.inputs.values()),
             "schema_errors": schema,
             "foreign": foreign,
+            "invalid": sum(buf.invalid for buf in self.inputs.values()),
+            "unauthorized": sum(buf.unauthorized for buf in self.inputs.values()),
             "rejected": self.rejected + self.errors + (self._lockstep.rejected if self._lockstep else 0),
             "loop_avg_us": avg,
             "loop_max_us": self._loop_max * 1e6,

@@ -23,6 +23,7 @@ from stack.msg.simulation import SimGroundtruth
 from stack.msg.system import BatteryStatus, VehicleCommand
 from stack.params import catalogue
 from stack.runtime.module import Arg, Module
+from stack.runtime.priority import PLANT
 from stack.sim import battery
 from stack.sim.airspeed_sensor import AirspeedSample
 from stack.sim.battery import BatteryModel
@@ -44,6 +45,7 @@ AIRSPEED_DEVICE_ID = 1377548  # DRV_DIFF_PRESS_DEVTYPE_SIM, bus 1, address 5, si
 
 class SimulatorModule(Module):
     NAME = "simulator"
+    WORK_QUEUE = PLANT
     DESCRIPTION = "Rigid-body simulator (PX4 SIH-like), multicopter or airplane: physics, sensors, ground truth"
     LOCKSTEP_COORDINATOR = True
     ARGS = (

@@ -8,7 +8,7 @@ from stack.commander.land_detector import MulticopterLandDetector
 from stack.commander.modes import control_mode
 from stack.commander.state_machine import Commander
 from stack.msg.system import VehicleStatus as NS
-from tests.commander.helpers import Clock, make_clock
+from tests.commander.helpers import Clock, healthy, make_clock
 
 HOLD = control_mode(NS.NAVIGATION_STATE_AUTO_LOITER, True)
 
@@ -200,6 +200,37 @@ def test_a_commander_restarted_after_a_termination_keeps_the_vehicle_terminated(
     clock.commander = restarted
     clock.step(1.0)
     assert clock.status.nav_state == NS.NAVIGATION_STATE_TERMINATION and clock.last.actuator_armed.termination
+
+
+def test_a_terminated_vehicle_on_the_ground_disarms_and_may_fly_again():
+    clock = _hovering()
+    _keep_alive(clock, 0.1, but="mc_rate_control")
+    assert clock.status.nav_state == NS.NAVIGATION_STATE_TERMINATION
+    assert clock.send(C.disarm_command()).result != 0  # still in the air: not landed
+    clock.position, clock.landed = (0.0, 0.0, 0.0), True  # fallen, at rest
+    _keep_alive(clock, 0.5, but="")
+    assert clock.send(C.disarm_command()).result == 0
+    clock.step()
+    assert "Flight termination cleared: disarmed on the ground" in clock.events
+    assert clock.status.nav_state != NS.NAVIGATION_STATE_TERMINATION and not clock.last.actuator_armed.termination
+    assert clock.send(C.arm_command()).result == 0
+    clock.step()
+    assert clock.status.arming_state == NS.ARMING_STATE_ARMED
+
+
+def test_a_stalled_commander_catches_up_before_it_judges_its_inputs():
+    clock = _hovering()
+    stopped_at = clock.t
+    clock.t += 3_000_000  # the commander's process stopped 3 s (SIGSTOP, a starved machine)
+    stale = healthy(stopped_at, clock.position, False)  # what it read before the stop, delivered first
+    clock.last = clock.commander.update(clock.t, stale)
+    clock.events.extend(clock.last.events)
+    assert "Commander stalled for 3.0 s: catching up" in clock.events
+    assert clock.status.nav_state == NS.NAVIGATION_STATE_AUTO_LOITER and not clock.status.failsafe
+    _keep_alive(clock, 0.5, but="")
+    assert clock.status.nav_state == NS.NAVIGATION_STATE_AUTO_LOITER and not clock.status.failsafe
+    _keep_alive(clock, 0.2, but="flight_mode_manager")  # caught up: a module silent now is named
+    assert clock.status.control_lost_modules == ["flight_mode_manager"]
 
 
 def test_with_an_external_autopilot_the_chain_is_not_the_stacks_to_watch():

@@ -4,12 +4,15 @@ In real time the vehicle flies on without the dead module until the supervisor r
 the commander acts: a dead rate controller is a loss of attitude control (flight termination: the motors stop and
 the vehicle falls where it was), a dead position controller a loss of position control (the vehicle lands once the
 restarted controller flies again). Both are named in ``vehicle_status``. The clock is the wall clock, so the
-margins are wide.
+margins are wide. A vehicle terminated on the ground can be disarmed and flown again; a commander stopped for
+3 s (SIGSTOP) catches up with its inputs before it judges them, and the hover goes on.
 """
 
 from __future__ import annotations
 
 import math
+import os
+import signal
 import time
 from collections.abc import Iterator
 from pathlib import Path
@@ -17,7 +20,7 @@ from pathlib import Path
 import pytest
 
 from stack.msg.system import VehicleStatus as NS
-from tests.support.harness import RunningStack, wait_no_processes
+from tests.support.harness import RunningStack, takeoff_when_ready, wait_no_processes
 from tests.support.hover import echo, kill, restarted, start_hovering, truth, wait
 
 pytestmark = pytest.mark.flight
@@ -37,8 +40,23 @@ def hovering(tmp_path: Path) -> Iterator[RunningStack]:
     assert not wait_no_processes(tmp_path)
 
 
-def test_a_dead_rate_controller_terminates_the_flight_where_it_was(hovering: RunningStack) -> None:
+def test_a_stopped_commander_then_a_dead_rate_controller(hovering: RunningStack) -> None:
+    """SIGSTOP of the commander for 3 s: its inputs are 3 s old when it runs again, yet nothing has failed and
+    the hover goes on. Then a dead rate controller terminates the flight where it was; on the ground the vehicle
+    is disarmed and flies again."""
     stack = hovering
+    north, east, down = truth(stack)
+    pid = stack.module_pids()["commander"]
+    os.kill(pid, signal.SIGSTOP)
+    time.sleep(3.0)
+    os.kill(pid, signal.SIGCONT)
+    time.sleep(3.0)
+    status = echo(stack, "vehicle_status")
+    assert (status["nav_state"], status["failsafe"]) == (NS.NAVIGATION_STATE_AUTO_LOITER, False), status
+    assert "catching up" in (stack.run_dir() / "commander.log").read_text()
+    here = truth(stack)
+    assert math.hypot(here[0] - north, here[1] - east) < 1.0 and abs(here[2] - down) < 1.0
+
     north, east, _, _ = kill(stack, "mc_rate_control")
     wait(
         stack,
@@ -50,11 +68,16 @@ def test_a_dead_rate_controller_terminates_the_flight_where_it_was(hovering: Run
     assert echo(stack, "actuator_armed")["termination"]
     wait(stack, lambda: -truth(stack)[2] < 0.5, 20.0, "the fall")
     wait(stack, lambda: restarted(stack, "mc_rate_control"), 30.0, "restart")
-    time.sleep(2.0)
     down = truth(stack)
     assert math.hypot(down[0] - north, down[1] - east) < 5.0  # fell where it was: no flyaway
     assert -down[2] < 0.5
-    assert echo(stack, "vehicle_status")["nav_state"] == NS.NAVIGATION_STATE_TERMINATION  # latched
+    # On the ground, its motors stopped, it is landed: disarmed (COM_DISARM_LAND), which clears the termination,
+    # and it flies again.
+    wait(stack, lambda: echo(stack, "vehicle_status")["arming_state"] == NS.ARMING_STATE_DISARMED, 30.0, "disarm")
+    assert echo(stack, "vehicle_status")["nav_state"] != NS.NAVIGATION_STATE_TERMINATION
+    assert "Flight termination cleared" in (stack.run_dir() / "commander.log").read_text()
+    again = takeoff_when_ready(stack, "--alt", "3")
+    assert again.returncode == 0, again.stderr
 
 
 def test_a_dead_position_controller_lands_the_vehicle_where_it_was(hovering: RunningStack) -> None:
