@@ -18,7 +18,7 @@ from tests.support.harness import REPO, RunningStack, launch_profile, stack_env,
 
 pytestmark = pytest.mark.flight
 
-ATTACK_S = 3.0
+ATTACK_S = 2.0
 HOVER_M = 0.5
 """What the hover itself moves, with margin (the default profile holds a hover within ~0.1 m)."""
 

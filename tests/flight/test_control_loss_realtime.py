@@ -1,4 +1,4 @@
-"""Issue 12: in real time a control module killed in flight is a failsafe, and never a flyaway.
+"""Issue 12: in real time a control module killed in flight is a failsafe, and never a flyaway (one flight).
 
 In real time the vehicle flies on without the dead module until the supervisor restarts it (0.5 s and more), so
 the commander acts: a dead rate controller is a loss of attitude control (flight termination: the motors stop and
@@ -40,10 +40,11 @@ def hovering(tmp_path: Path) -> Iterator[RunningStack]:
     assert not wait_no_processes(tmp_path)
 
 
-def test_a_stopped_commander_then_a_dead_rate_controller(hovering: RunningStack) -> None:
-    """SIGSTOP of the commander for 3 s: its inputs are 3 s old when it runs again, yet nothing has failed and
-    the hover goes on. Then a dead rate controller terminates the flight where it was; on the ground the vehicle
-    is disarmed and flies again."""
+def test_a_stopped_commander_a_dead_rate_controller_then_a_dead_position_controller(hovering: RunningStack) -> None:
+    """One real-time flight, three faults in turn. SIGSTOP of the commander for 3 s: its inputs are 3 s old when
+    it runs again, yet nothing has failed and the hover goes on. A dead rate controller terminates the flight
+    where it was; on the ground the vehicle is disarmed and flies again. A dead position controller then lands
+    it where it was."""
     stack = hovering
     north, east, down = truth(stack)
     pid = stack.module_pids()["commander"]
@@ -79,9 +80,6 @@ def test_a_stopped_commander_then_a_dead_rate_controller(hovering: RunningStack)
     again = takeoff_when_ready(stack, "--alt", "3")
     assert again.returncode == 0, again.stderr
 
-
-def test_a_dead_position_controller_lands_the_vehicle_where_it_was(hovering: RunningStack) -> None:
-    stack = hovering
     north, east, _, _ = kill(stack, "mc_pos_control")
     wait(stack, lambda: echo(stack, "vehicle_status")["nav_state"] == NS.NAVIGATION_STATE_AUTO_LAND, 10.0, "Land")
     wait(stack, lambda: restarted(stack, "mc_pos_control"), 30.0, "restart")
