@@ -92,7 +92,11 @@ def fly_again(stack: RunningStack) -> bool:
         if disarm.returncode != 0:
             print(f"  cannot disarm: {disarm.stderr.strip()}", flush=True)
             return False
-    return takeoff_when_ready(stack, "--alt", str(ALTITUDE_M)).returncode == 0
+    try:
+        return takeoff_when_ready(stack, "--alt", str(ALTITUDE_M)).returncode == 0
+    except AssertionError as refused:  # refused for good, not just until the estimates converge
+        print(f"  cannot take off: {refused}", flush=True)
+        return False
 
 
 def main() -> int:
