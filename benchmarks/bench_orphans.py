@@ -46,10 +46,10 @@ def one_round(work: Path, profile: str, wait_s: float, grace_s: float) -> tuple[
     )
     began = time.monotonic()
     moment = "starting"
-    ready = False
     while time.monotonic() - began < wait_s:
-        if not ready and (home / "state").exists() and any((home / "state").glob("*.json")):
-            ready = True
+        up_now = (home / "state").exists() and any((home / "state").glob("*.json"))
+        if up_now and moment != "flying":
+            # Until the estimates converge the takeoff is refused for now: asked again until it flies.
             moment = "up"
             takeoff = subprocess.run(
                 [sys.executable, "-m", "stack", "cmd", "takeoff", "--alt", "5"], env=env, capture_output=True
