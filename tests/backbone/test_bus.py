@@ -39,6 +39,12 @@ def test_messages_cross_processes_in_order_with_header(tmp_path):
     assert all(m["t"] == -1 for m in got)  # wall-clock publisher: not lockstep time
 
 
+def run_peer(home, role: str) -> None:
+    """``python -m tests.support.peers ROLE`` against the stack in ``home``, to its end."""
+    out = subprocess.run([sys.executable, "-m", "tests.support.peers", role], env=stack_env(home), cwd=REPO, timeout=60)
+    assert out.returncode == 0, role
+
+
 def test_malformed_and_mismatched_samples_are_counted_and_dropped(tmp_path):
     home = tmp_path / "home"
     profile = chain_profile(
@@ -47,10 +53,7 @@ def test_malformed_and_mismatched_samples_are_counted_and_dropped(tmp_path):
     stack = RunningStack(home, profile)
     try:
         stack.wait_up()
-        rogue = subprocess.run(
-            [sys.executable, "-m", "tests.support.peers", "rogue"], env=stack_env(home), cwd=REPO, timeout=60
-        )
-        assert rogue.returncode == 0
+        run_peer(home, "rogue")
 
         def counter() -> dict:
             return next(m for m in stack.status()["modules"] if m["module"] == "command_counter")
@@ -75,10 +78,7 @@ def test_malformed_alive_tokens_are_counted_and_reported_once(tmp_path):
     stack = RunningStack(home, profile)
     try:
         stack.wait_up()
-        forge = subprocess.run(
-            [sys.executable, "-m", "tests.support.peers", "forge"], env=stack_env(home), cwd=REPO, timeout=60
-        )
-        assert forge.returncode == 0
+        run_peer(home, "forge")
         # The well-formed token came after all the malformed ones: once it is gone they were all seen.
         stack.wait_for(r"\[watcher\].*module forge_done gone \(pid 4242\)")
         out = stack.output
