@@ -20,7 +20,7 @@ from stack.bus import keys
 from stack.bus.config import BusConfig
 from stack.bus.node import Node
 from stack.cli.common import EndpointOption, VehicleOption, fail, find_stack, query_json
-from stack.runtime.runner import Runtime, Shutdown
+from stack.runtime.runner import Runtime, Shutdown, shutdown_behind
 from stack.runtime.spec import ModuleSpec
 from stack.viz.display import DEFAULT_GRPC_PORT, has_display
 
@@ -97,7 +97,8 @@ def plot(
     except Shutdown:
         pass
     except (ValueError, RuntimeError) as e:
-        fail(str(e))
+        if shutdown_behind(e) is None:
+            fail(str(e))
     finally:
         signal.setitimer(signal.ITIMER_REAL, 0)
     typer.echo("plot stopped")

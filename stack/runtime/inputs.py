@@ -83,6 +83,11 @@ class InputBuffer:
         """Malformed messages read from elsewhere than the subscriber (the fast path's rings)."""
         return 0
 
+    @property
+    def lost(self) -> int:
+        """Messages overwritten before this input read them (a fast-path ring lapped a slow reader)."""
+        return 0
+
     def admits(self, msg: Any, publisher: int) -> bool:
         """Whether the module may see ``msg`` from ``publisher``; counts and logs the ones refused."""
         members = self.members

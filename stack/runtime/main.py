@@ -24,7 +24,7 @@ from types import FrameType
 from stack.params.param import ParamError
 from stack.runtime.lockstep import LockstepError
 from stack.runtime.orphan import watch_supervisor
-from stack.runtime.runner import Runtime, Shutdown
+from stack.runtime.runner import Runtime, Shutdown, shutdown_behind
 from stack.runtime.spec import ModuleSpec, load_module_class
 
 # Where each module writes its cProfile statistics (<module>.prof) when it stops, if set: for finding
@@ -68,11 +68,15 @@ def main(argv: list[str] | None = None) -> int:
     except Shutdown as stop:
         log.info("stopped (%s)", stop)
         return 0
-    except (LockstepError, ParamError, ValueError) as e:
-        log.error("%s", e)
-        return 1
-    except Exception:
-        log.exception("crashed")
+    except Exception as e:
+        stop = shutdown_behind(e)
+        if stop is not None:
+            log.info("stopped (%s)", stop)
+            return 0
+        if isinstance(e, (LockstepError, ParamError, ValueError)):
+            log.error("%s", e)
+        else:
+            log.exception("crashed")
         return 1
     finally:
         if profiler is not None:

@@ -49,6 +49,21 @@ class Shutdown(BaseException):
     """Raised by the SIGTERM/SIGINT handler to unwind the loop and close the session."""
 
 
+def shutdown_behind(error: BaseException) -> Shutdown | None:
+    """The Shutdown that ``error`` was raised while handling, if any.
+
+    A signal handler's exception can land inside threading's own lock code (a ``Condition.wait``
+    re-acquiring its lock), which then fails with an error of its own (``release unlocked lock``)
+    raised while the Shutdown unwinds: that is still a stop, not a crash.
+    """
+    seen: BaseException | None = error
+    while seen is not None:
+        if isinstance(seen, Shutdown):
+            return seen
+        seen = seen.__context__
+    return None
+
+
 class Runtime:
     def __init__(self, spec: ModuleSpec) -> None:
         self.spec = spec

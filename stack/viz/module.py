@@ -118,6 +118,7 @@ class RerunBridgeModule(Module):
         self.topics = TOPICS
         self.logger: Any = None
         self.overruns = 0
+        self.lost = 0  # samples overwritten in the fast path's rings before the bridge read them
         self._rotors: tuple[tuple[float, float, float], ...] | None = None
         self._asking: threading.Thread | None = None
         if not self.sinks.active:
@@ -168,6 +169,10 @@ class RerunBridgeModule(Module):
     def _feed(self) -> None:
         """Log everything taken from the buffers since the last tick, oldest first."""
         pending: list[tuple[int, str, Any]] = []
+        lost = sum(self.rt.inputs[(topic, 0)].lost for topic in self.topics)
+        if lost > self.lost:
+            self.log.warning("fell behind the flight: %d samples lost before they were read", lost - self.lost)
+            self.lost = lost
         for topic in self.topics:
             msgs = self.take(topic)
             if not msgs:
@@ -196,11 +201,12 @@ class RerunBridgeModule(Module):
             self.logger.flush()
             lg = self.logger
             self.log.info(
-                "plotted %d of %d messages in %d flushes (%d entity chunks); %d buffer overruns",
+                "plotted %d of %d messages in %d flushes (%d entity chunks); %d buffer overruns, %d samples lost",
                 lg.kept,
                 lg.messages,
                 lg.flushes,
                 lg.chunks_sent,
                 self.overruns,
+                self.lost,
             )
         self.sinks.close()
