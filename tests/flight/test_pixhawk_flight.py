@@ -2,9 +2,9 @@
 
 ``stack fly`` with the pixhawk_sim profiles: the supervisor starts ``stack pixhawk-sim`` as a process of its
 own, linked to the adapter over 127.0.0.1 UDP or a 921600-baud pseudo-terminal. Every flight runs on the
-wall clock, so the issue's limits are checked with the seeds varied across the cases: takeoff_land on two,
-one over the pseudo-terminal losing 5 % of its packets in both directions and one over UDP on the Pixhawk's
-own estimate; mission_box over the pseudo-terminal (the lockstep flight tests fly it on more seeds); and a
+wall clock, so the issue's limits are checked with the seeds varied across the cases: takeoff_land on the
+Pixhawk's own estimate over the pseudo-terminal losing 5 % of its packets in both directions; mission_box over
+the pseudo-terminal (the lockstep flight tests fly it on more seeds); and a
 hold with its link cut for 2 s (``link_loss``, over UDP). A flight that fails
 while the machine starves the simulated Pixhawk itself (it reports the physics steps it had to skip) is flown
 again once.
@@ -36,6 +36,7 @@ TARGETS: dict[str, dict[str, object]] = {
 }
 LOSSY = """
 extends = "{base}"
+{params}
 
 [[process]]
 name = "pixhawk_sim"
@@ -50,9 +51,10 @@ LINKS = {
 }
 
 
-def lossy_profile(directory: Path, base: str) -> Path:
-    """``base`` with the simulated Pixhawk dropping 5 % of the packets each way."""
-    return write_profile(directory / f"{base}_drop5.toml", LOSSY.format(base=base, link=LINKS[base]))
+def lossy_profile(directory: Path, base: str, params: str = "") -> Path:
+    """``base`` with the simulated Pixhawk dropping 5 % of the packets each way (and ``params``, TOML lines)."""
+    text = LOSSY.format(base=base, link=LINKS[base], params=f"[params]\n{params}" if params else "")
+    return write_profile(directory / f"{base}_drop5.toml", text)
 
 
 def fly(home: Path, scenario: str, profile: str | Path, seed: int) -> dict:
@@ -109,11 +111,6 @@ def test_a_mission_through_the_pixhawk_meets_the_issue_limits(tmp_path: Path):
     assert_meets(result, "mission_box")
 
 
-def test_a_flight_with_five_percent_of_packets_dropped(tmp_path: Path):
-    result = fly(tmp_path, "takeoff_land", lossy_profile(tmp_path, "pixhawk_sim_pty"), 3)
-    assert_meets(result, "takeoff_land")
-
-
 def test_a_two_second_link_cut_in_a_hold(tmp_path: Path):
     result = fly(tmp_path, "link_loss", "pixhawk_sim", 1)
     assert_meets(result, "link_loss")
@@ -123,12 +120,11 @@ def test_a_two_second_link_cut_in_a_hold(tmp_path: Path):
     assert "the stack reports the link lost" in result["output"]
 
 
-def test_on_the_pixhawks_own_estimate_with_attitude_setpoints(tmp_path: Path):
+def test_on_the_pixhawks_own_estimate_with_attitude_setpoints_and_five_percent_of_packets_dropped(tmp_path: Path):
     # The profile options: no estimator and no mc_att_control in the stack; EKF2's estimate (here the
-    # simulated Pixhawk's) flies, and the Pixhawk gets attitude + thrust.
-    profile = write_profile(
-        tmp_path / "own_estimate.toml", 'extends = "pixhawk_sim"\n[params]\nPXH_EST_SRC = 1\nPXH_SP_TYPE = 1\n'
-    )
+    # simulated Pixhawk's) flies, and the Pixhawk gets attitude + thrust, over a pseudo-terminal that loses
+    # 5 % of the packets each way.
+    profile = lossy_profile(tmp_path, "pixhawk_sim_pty", params="PXH_EST_SRC = 1\nPXH_SP_TYPE = 1\n")
     result = fly(tmp_path, "takeoff_land", profile, 2)
     assert_meets(result, "takeoff_land")
     modules = result["output"]
