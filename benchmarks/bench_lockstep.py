@@ -9,7 +9,9 @@ interleaved, ``--runs`` times:
 - ``zenoh``: the same flight with ``--lockstep-transport zenoh``;
 - ``observed``: the fast flight with the recorder (``--record``) and the plot bridge writing a Rerun
   file (``--save``; no viewer is needed);
-- ``up``: ``stack up`` for ``--duration`` seconds, disarmed;
+- ``up``: ``stack up --speed max`` for ``--duration`` seconds, disarmed;
+- ``paced``: ``stack up`` as a user starts it (``--speed 1``: paced to the wall clock), disarmed, for as
+  long: its real-time factor (1 when it keeps up) and the CPU it costs, in cores;
 - ``ceiling``: the same scenario and seed flown by :class:`stack.runtime.inprocess.InProcessStack`, the
   same modules chained in this one process with no bus (what the algorithms cost by themselves).
 
@@ -49,6 +51,10 @@ from stack.supervisor import state as run_state
 from stack.supervisor.profile import load_profile
 
 REPO = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(REPO))
+
+from tests.support.harness import stack_env  # noqa: E402
+
 STEP_US = 4000
 # The targets on the idle 2-core machine: real-time factor by kind, and the fast path's ratio to its ceiling.
 TARGETS = {"fast": 8.0, "up": 12.0, "observed": 6.0}
@@ -102,13 +108,6 @@ class Run:
         busy = sum(hb.loop_avg_us * 1e-6 * (hb.runs - prev.runs) for prev, hb in itertools.pairwise(beats))
         span = (beats[-1].sim_time_us - beats[0].sim_time_us) if len(beats) > 1 else 0
         return busy * (t1_us - t0_us) / span if span else 0.0  # a module's beats cover a slightly different span
-
-
-def stack_env(home: Path) -> dict[str, str]:
-    env = {k: v for k, v in os.environ.items() if k != "STACK_ENDPOINT"}
-    env["STACK_HOME"] = str(home)
-    env["PYTHONPATH"] = str(REPO) + os.pathsep + env.get("PYTHONPATH", "")
-    return env
 
 
 def module_processes(supervisor_pid: int) -> dict[str, psutil.Process]:
@@ -254,7 +253,7 @@ def main() -> None:
     print(f"load average {load[0]:.2f} {load[1]:.2f} {load[2]:.2f} on {os.cpu_count()} CPUs; profile {args.profile}")
     ceiling = fly_in_process(args.scenario, args.profile, args.seed)
     ceiling_rtf = STEP_US / ceiling.cpu_us_per_step
-    runs: dict[str, list[Run]] = {"fast": [], "zenoh": [], "observed": [], "up": []}
+    runs: dict[str, list[Run]] = {"fast": [], "zenoh": [], "observed": [], "up": [], "paced": []}
     with tempfile.TemporaryDirectory(prefix="bench_lockstep") as tmp:
         home = Path(tmp)
         os.environ["STACK_HOME"] = str(home)  # connect() finds the stack through it
@@ -264,9 +263,13 @@ def main() -> None:
             observers = ["--record", str(home / "flight.mcap"), "--save", str(home / "flight.rrd")]
             runs["observed"].append(fly("observed", args, home, observers))
             up_args = ["up", args.profile, "--duration", str(args.duration), "-q"]
-            runs["up"].append(run_stack("up", up_args, home, timeout=600.0))
+            runs["up"].append(run_stack("up", [*up_args, "--speed", "max"], home, timeout=600.0))
+            runs["paced"].append(run_stack("paced", [*up_args, "--speed", "1"], home, timeout=600.0))
             print(f"run {i + 1}/{args.runs} done", flush=True)
     means = print_kinds(runs, ceiling_rtf)
+    paced = [r.figures() for r in runs["paced"]]
+    cores = sum(f["cpu"] for f in paced) / sum(f["wall"] for f in paced)
+    print(f"\nidle `stack up` at --speed 1: real-time factor {means['paced']:.2f}, {cores:.2f} cores of CPU")
     print_modules("fast path, flying", runs["fast"])
     print_modules("Zenoh, flying", runs["zenoh"])
     print(

@@ -78,7 +78,7 @@ def idle(args: argparse.Namespace, home: Path) -> int:
     print(f"`stack up {args.profile}` idle for {args.idle_minutes:g} min", flush=True)
     with log.open("w") as out:
         proc = subprocess.Popen(
-            [sys.executable, "-m", "stack", "up", args.profile, "--duration", str(duration)],
+            [sys.executable, "-m", "stack", "up", args.profile, "--speed", "max", "--duration", str(duration)],
             env=env,
             stdout=out,
             stderr=subprocess.STDOUT,

@@ -29,6 +29,7 @@ from stack.cli.common import (
     wait_until_sent,
 )
 from stack.cli.observers import add_observers
+from stack.runtime.pacing import SPEED_ENV, describe_speed, parse_speed
 from stack.supervisor import state as run_state
 from stack.supervisor.profile import DEFAULT_PROFILE, Profile, ProfileError, load_profile
 from stack.supervisor.supervisor import Supervisor, UpOptions
@@ -73,7 +74,15 @@ def _root(
 def up(
     profile: str = typer.Argument(DEFAULT_PROFILE, help="Launch profile: a name in launch/ or a path"),
     duration: float | None = typer.Option(None, "--duration", "-d", help="Stop after this many seconds"),
-    realtime: bool = typer.Option(False, "--realtime", help="Pace the simulator to the wall clock (no lockstep)"),
+    speed: str | None = typer.Option(
+        None,
+        "--speed",
+        help="Lockstep pace: simulated seconds per wall-clock second (default 1: real speed; 2: twice as fast), "
+        f"or max: as fast as the machine goes (default: ${SPEED_ENV}, else 1)",
+    ),
+    realtime: bool = typer.Option(
+        False, "--realtime", help="No lockstep: every module on the wall clock (as on a real vehicle)"
+    ),
     log_level: str = typer.Option("INFO", help="Log level of the modules"),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="Do not echo module logs (they are still written)"),
     plot_: bool = typer.Option(False, "--plot", help="Live Rerun plots (a viewer where a display exists)"),
@@ -94,6 +103,7 @@ def up(
     except ProfileError as e:
         fail(str(e), code=2)
     choose_transport(prof, transport)
+    pace = _speed(prof, speed, realtime)
     extra_args = _device_args(prof, device) if device is not None else {}
     add_observers(prof, plot=plot_, web=web, save=save, record=record)
     running = run_state.addressed_stacks(prof.vehicle)
@@ -103,12 +113,36 @@ def up(
     # The web viewer's URL is shown even with --quiet: the bridge's few lines are echoed.
     shown = ("rerun_bridge",) if web else ()
     options = UpOptions(
-        duration=duration, log_level=log_level, echo_logs=not quiet, echo_only=shown, extra_args=extra_args
+        duration=duration,
+        log_level=log_level,
+        echo_logs=not quiet,
+        echo_only=shown,
+        extra_args=extra_args,
+        speed=pace,
     )
     supervisor = Supervisor(prof, options, run_dir)
     if record is not None:
         typer.echo(f"[stack] recording to {record.resolve()}")
     raise typer.Exit(supervisor.run())
+
+
+def _speed(prof: Profile, text: str | None, realtime: bool) -> float:
+    """``--speed``: the lockstep's pace, refused where there is no lockstep to pace; without it, SPEED_ENV's
+    (as PX4 SITL reads PX4_SIM_SPEED_FACTOR), else real speed."""
+    if text is None:
+        default = os.environ.get(SPEED_ENV, "").strip()
+        try:
+            return parse_speed(default) if default else 1.0
+        except ValueError as e:
+            fail(f"{SPEED_ENV}: {e}", code=2)
+    if realtime:
+        fail("--speed paces the lockstep and --realtime runs without one: choose one of them", code=2)
+    if not prof.lockstep:
+        fail(f"--speed: profile {prof.name} runs without lockstep, on the wall clock: there is nothing to pace", code=2)
+    try:
+        return parse_speed(text)
+    except ValueError as e:
+        fail(f"--speed: {e}", code=2)
 
 
 def _device_args(prof: Profile, device: str) -> dict[str, dict[str, object]]:
@@ -189,6 +223,8 @@ def status(
         typer.echo(json.dumps(to_jsonable(report)))
         return
     mode = "lockstep" if report["lockstep"] else "real time"
+    if report["lockstep"] and "speed" in report:
+        mode += f", {describe_speed(report['speed'])}"
     typer.echo(f"vehicle '{report['vehicle']}', profile {report['profile']} ({mode})")
     if "vehicle_summary" in report:
         for line in vehicle_summary.lines(report["vehicle_summary"]):

@@ -50,6 +50,7 @@ from stack.msg.estimation import VehicleLocalPosition
 from stack.msg.navigation import MissionResult
 from stack.msg.system import RESULT_NAMES, VehicleCommand, VehicleCommandAck, VehicleStatus
 from stack.params import catalogue, client
+from stack.runtime.pacing import MAX_SPEED, describe_speed
 
 app = typer.Typer(
     help="Command the vehicle (arm, takeoff, goto, modes, missions...) and print the acknowledgement.",
@@ -219,6 +220,17 @@ def is_lockstep(node: Node) -> bool:
     """Whether the stack runs in lockstep (its supervisor says; a stack reached by endpoint alone may not)."""
     status = query_json(node.session, keys.supervisor_key(node.vehicle, "status"))
     return bool(status and status[0].get("lockstep"))
+
+
+def clock_of(node: Node) -> str:
+    """How the stack's clock runs, for a person flying it: real time, or lockstep and its pace."""
+    status = query_json(node.session, keys.supervisor_key(node.vehicle, "status"))
+    if not (status and status[0].get("lockstep")):
+        return "real time"
+    speed = float(status[0].get("speed", MAX_SPEED))
+    if speed == 1.0:
+        return "lockstep at real speed"
+    return f"lockstep {describe_speed(speed)}: simulated time does not run at the wall clock's pace"
 
 
 def vehicle_params(node: Node, names: tuple[str, ...] = FOLLOW_PARAMS) -> dict[str, float]:

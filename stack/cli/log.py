@@ -21,8 +21,9 @@ from stack.cli.replay_stack import ReplayStack
 from stack.record.csvexport import export_csv
 from stack.record.overview import overview
 from stack.record.recorder import RecordingError, RecordingReader
-from stack.record.replay import BusReplayer, ReplayClock, replay_pass
+from stack.record.replay import BusReplayer, replay_pass
 from stack.record.selection import TopicSelection
+from stack.runtime.pacing import Pacer, describe_speed, parse_speed
 
 app = typer.Typer(help="Inspect and convert flight recordings (MCAP files written by --record).", no_args_is_help=True)
 
@@ -163,7 +164,9 @@ def _interrupt(signum: int, frame: FrameType | None) -> None:
 
 def replay(
     file: Path = FileArgument,
-    speed: float = typer.Option(1.0, "--speed", "-s", help="Time scale: 2 = twice as fast; 0 = as fast as possible"),
+    speed_text: str = typer.Option(
+        "1", "--speed", "-s", help="Time scale: 2 = twice as fast; max (or 0) = as fast as possible"
+    ),
     loop: bool = typer.Option(False, "--loop", help="Start over at the end, until Ctrl-C"),
     topics: list[str] = TopicsOption,
     wait_subscribers: float = typer.Option(
@@ -172,8 +175,10 @@ def replay(
 ) -> None:
     """Republish a recording on a bus of its own, the stack <vehicle>-replay-<pid>, which `stack topic`,
     `stack plot` and scripts attach to with --vehicle and see as live. It never touches a running stack."""
-    if speed < 0.0:
-        fail("--speed must be >= 0 (0: as fast as possible)", code=2)
+    try:
+        speed = parse_speed(speed_text)
+    except ValueError as e:
+        fail(f"--speed: {e}", code=2)
     selection = _selection(topics)
     with _open(file) as reader:
         _check_selection(reader, selection)
@@ -191,10 +196,10 @@ def replay(
                 replayer.declare(channels)
                 if not replayer.wait_for_subscribers(wait_subscribers):
                     typer.echo("warning: nobody subscribes to the recorded topics yet; replaying anyway", err=True)
-                pace = "as fast as possible" if speed == 0.0 else f"at {speed:g}x"
+                pace = describe_speed(speed)
                 looping = " (looping; Ctrl-C stops)" if loop else ""
                 typer.echo(f"replaying {total} messages of vehicle '{vehicle}' {pace}{looping}")
-                clock = ReplayClock(speed)
+                clock = Pacer(speed)
                 passes = 0
                 while True:
                     passes += 1

@@ -33,7 +33,7 @@ import zenoh
 from stack.attctl import rotors_joy
 from stack.bus.node import Node
 from stack.cli import vehicle_summary
-from stack.cli.cmd import NO_COMMANDER, answers, from_ground_station, is_lockstep, outcome, vehicle_params
+from stack.cli.cmd import NO_COMMANDER, answers, clock_of, from_ground_station, outcome, vehicle_params
 from stack.cli.common import EndpointOption, VehicleOption, connect, fail, wait_until_sent
 from stack.msg.system import VehicleStatus
 from stack.teleop import actions
@@ -219,7 +219,7 @@ class _Link:
         watched = (*vehicle_summary.TOPICS, "vehicle_command_ack", "mavlink_log")
         self._subs = {topic: node.subscriber(topic, keep_last=True) for topic in watched}
         wait_until_sent(node, [(topic, 0) for topic in watched])
-        self.clock = "lockstep: simulated time runs faster than the wall" if is_lockstep(node) else "real time"
+        self.clock = clock_of(node)
         self.rotors = rotors_joy.JoyMapping(vehicle_params(node, tuple(p.name for p in rotors_joy.PARAMS)))
         self.latest: dict[str, Any] = {}
         self.heard = time.monotonic()

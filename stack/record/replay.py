@@ -12,9 +12,9 @@ stack's: modules there would mix the replayed messages with their own, and locks
 the recording's simulated times beside their run's.
 
 Pacing follows the recording clock (each message's log time: the simulated time of a lockstep
-recording, the receive time of a real-time one), scaled by the speed factor; speed 0 sends as fast
-as the bus accepts. Publishers block rather than drop, so a slow subscriber slows the replay
-instead of losing messages.
+recording, the receive time of a real-time one), scaled by the speed factor
+(:mod:`stack.runtime.pacing`); speed 0 sends as fast as the bus accepts. Publishers block rather than
+drop, so a slow subscriber slows the replay instead of losing messages.
 """
 
 from __future__ import annotations
@@ -29,45 +29,9 @@ from stack.bus.node import Node
 from stack.bus.topics import HEADER
 from stack.record.recorder import ChannelInfo, RecordedMessage, RecordingReader
 from stack.record.selection import TopicSelection
+from stack.runtime.pacing import MIN_SLEEP_S, Pacer
 
 SETTLE_TIMEOUT_S = 1.0
-MIN_SLEEP_S = 0.0005
-
-
-class ReplayClock:
-    """When each message is due: recording time since the first message, divided by the speed.
-
-    Times never go backwards (a message stamped earlier than its predecessor is due at once);
-    ``restart`` starts a new pass (``--loop``).
-    """
-
-    __slots__ = ("_clock", "_first_us", "_last_us", "_start_s", "speed")
-
-    def __init__(self, speed: float, clock: Callable[[], float] = time.monotonic) -> None:
-        if speed < 0.0:
-            raise ValueError(f"speed must be >= 0 (0: as fast as possible), not {speed}")
-        self.speed = speed
-        self._clock = clock
-        self._first_us: int | None = None
-        self._last_us = 0
-        self._start_s = 0.0
-
-    def restart(self) -> None:
-        self._first_us = None
-
-    def delay_s(self, t_us: int) -> float:
-        """Seconds to wait before sending a message of recording time ``t_us`` (0 if due)."""
-        if self.speed == 0.0:
-            return 0.0
-        now = self._clock()
-        if self._first_us is None:
-            self._first_us = self._last_us = t_us
-            self._start_s = now
-            return 0.0
-        if t_us > self._last_us:
-            self._last_us = t_us
-        due = self._start_s + (self._last_us - self._first_us) / 1e6 / self.speed
-        return max(0.0, due - now)
 
 
 class BusReplayer:
@@ -131,7 +95,7 @@ class BusReplayer:
 def replay_pass(
     reader: RecordingReader,
     replayer: BusReplayer,
-    clock: ReplayClock,
+    clock: Pacer,
     *,
     topics: TopicSelection | None = None,
     progress: Callable[[int], None] | None = None,

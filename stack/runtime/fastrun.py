@@ -26,10 +26,10 @@ from stack.fastpath.ring import RingReader, wake_all
 from stack.fastpath.topology import Topology
 from stack.runtime.inputs import sample_time
 from stack.runtime.module import Timer, Trigger
+from stack.runtime.pacing import Pacer
 
 if TYPE_CHECKING:
     from stack.runtime.runner import Runtime
-
 
 
 class FastDriver:
@@ -113,7 +113,9 @@ class FastDriver:
             data = self.data
             wakes = self.att.wakes
             last = 0
+            pacer = Pacer(rt.spec.speed)
             while True:
+                pacer.wait(coordinator.now + coordinator.period_us)
                 t = coordinator.begin_step()
                 self.refresh_topology()
                 rt._now = t

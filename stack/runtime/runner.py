@@ -31,6 +31,7 @@ from stack.runtime.fastrun import FastDriver
 from stack.runtime.inputs import InputBuffer, sample_time
 from stack.runtime.lockstep import TIMER, LockstepCoordinator, LockstepMember
 from stack.runtime.module import TRIGGER_BACKLOG, Module, Timer, Trigger
+from stack.runtime.pacing import Pacer
 from stack.runtime.priority import raise_priority
 from stack.runtime.services import Heartbeat, ParamService
 from stack.runtime.spec import ModuleSpec, load_module_class, resolve_args
@@ -388,9 +389,11 @@ class Runtime:
         data = self._data_inputs()
         touched = self.node.touched
         last = 0
+        pacer = Pacer(self.spec.speed)
         while True:
             coordinator.finish_step()
             t = coordinator.now + period
+            pacer.wait(t)
             coordinator.begin_step(t)
             members = frozenset((*coordinator.members, self.node.publisher_id))
             for d in data:

@@ -157,6 +157,8 @@ class ModuleSpec:
     params: dict[str, ParamValue] = field(default_factory=dict)
     args: dict[str, ParamValue] = field(default_factory=dict)
     lockstep: bool = False
+    # The lockstep's pace (stack.runtime.pacing): simulated seconds per wall-clock second; 0 as fast as possible.
+    speed: float = 0.0
     seed: int = 1
     log_level: str = "INFO"
     supervisor_pid: int = 0

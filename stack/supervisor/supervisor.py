@@ -35,6 +35,7 @@ from stack.bus.config import LOOPBACK_ANY_PORT, BusConfig
 from stack.bus.ports import free_port, port_taken
 from stack.fastpath.host import FastPathHost
 from stack.msg.internal import ModuleHeartbeat
+from stack.runtime.pacing import MAX_SPEED
 from stack.runtime.spec import ModuleSpec
 from stack.supervisor import state as run_state
 from stack.supervisor.profile import ModuleEntry, ProcessEntry, Profile, expand_placeholders
@@ -62,6 +63,7 @@ class UpOptions:
     echo_only: tuple[str, ...] = ()
     kind: str = run_state.UP  # the command that started the stack, registered in its state
     extra_args: dict[str, dict[str, object]] = field(default_factory=dict)
+    speed: float = MAX_SPEED  # the lockstep's pace (stack.runtime.pacing)
 
 
 @dataclass
@@ -298,6 +300,7 @@ class Supervisor:
             params=e.params,
             args=args,
             lockstep=self.profile.lockstep,
+            speed=self.options.speed,
             seed=self.profile.seed,
             log_level=self.options.log_level,
             supervisor_pid=os.getpid(),
@@ -610,6 +613,7 @@ class Supervisor:
             "vehicle": self.vehicle,
             "profile": self.profile.name,
             "lockstep": self.profile.lockstep,
+            "speed": self.options.speed,
             "open_topics": list(self.profile.open_topics),
             "modules": rows,
         }

@@ -25,7 +25,7 @@ SILENT_S = 2.0
 class Frame:
     vehicle: str
     clock: str
-    """How the stack runs: "real time", or lockstep (with a warning)."""
+    """How the stack runs: "real time", or lockstep and its pace (with a warning unless at real speed)."""
     summary: dict[str, Any]
     """:func:`stack.cli.vehicle_summary.summary` of the vehicle's latest messages."""
     velocity: tuple[float, float, float] | None

@@ -13,8 +13,8 @@ from stack.msg.sensors import SensorGyro
 from stack.record.module import RecordingPump, SampleRecorder, profile_name
 from stack.record.provenance import git_commit
 from stack.record.recorder import RecordingInfo, RecordingReader, RecordingWriter
-from stack.record.replay import ReplayClock
 from stack.record.selection import TopicSelection
+from stack.runtime.pacing import Pacer, parse_speed
 from stack.supervisor.state import write_state
 
 
@@ -118,22 +118,50 @@ def test_topic_selection_parsing():
         TopicSelection(["a/b"])
 
 
-def test_replay_clock_paces_by_recording_time_over_speed():
+def test_time_is_paced_by_its_stamps_over_the_speed_and_a_late_run_carries_on_from_where_it_is():
     now = [100.0]
-    clock = ReplayClock(2.0, clock=lambda: now[0])
-    assert clock.delay_s(5_000_000) == 0.0  # the first message goes at once
+    clock = Pacer(2.0, clock=lambda: now[0])
+    assert clock.delay_s(5_000_000) == 0.0  # the first step or message goes at once
     assert clock.delay_s(6_000_000) == pytest.approx(0.5)
     now[0] += 0.2
     assert clock.delay_s(7_000_000) == pytest.approx(0.8)
     assert clock.delay_s(6_500_000) == pytest.approx(0.8)  # never earlier than its predecessor
+    now[0] += 1.6  # 0.3 s late for 8 s (due at 101.5): within MAX_LAG_S, due at once
+    assert clock.delay_s(8_000_000) == 0.0 and clock.behind == 0
     now[0] += 5.0
-    assert clock.delay_s(8_000_000) == 0.0  # late: no wait, no catching up by bursts of waits
+    assert clock.delay_s(8_100_000) == 0.0 and clock.behind == 1  # far behind: from here on at the same speed,
+    assert clock.delay_s(9_100_000) == pytest.approx(0.5)  # not a burst of catching up
     clock.restart()
     assert clock.delay_s(1_000) == 0.0 and clock.delay_s(501_000) == pytest.approx(0.25)
-    fast = ReplayClock(0.0, clock=lambda: now[0])
+    fast = Pacer(0.0, clock=lambda: now[0])
     assert fast.delay_s(0) == fast.delay_s(10**9) == 0.0
-    with pytest.raises(ValueError):
-        ReplayClock(-1.0)
+    slept: list[float] = []
+
+    def sleep(seconds: float) -> None:
+        slept.append(seconds)
+        now[0] += seconds
+
+    paced = Pacer(1.0, clock=lambda: now[0], sleep=sleep)
+    paced.wait(0)
+    paced.wait(4_000)
+    paced.wait(4_100)  # due within MIN_SLEEP_S of the last: no sleep
+    assert slept == [pytest.approx(0.004)]
+    for bad in (-1.0, math.nan, math.inf):
+        with pytest.raises(ValueError):
+            Pacer(bad)
+
+
+@pytest.mark.parametrize(
+    ("text", "speed"), [("1", 1.0), ("2.5", 2.5), ("0.5", 0.5), ("max", 0.0), ("MAX", 0.0), ("0", 0.0)]
+)
+def test_a_speed_is_a_factor_or_max(text, speed):
+    assert parse_speed(text) == speed
+
+
+@pytest.mark.parametrize("text", ["-1", "nan", "inf", "fast", "", "1e400"])
+def test_a_speed_that_is_not_a_factor_is_refused(text):
+    with pytest.raises(ValueError, match="factor > 0"):
+        parse_speed(text)
 
 
 def test_git_commit_is_read_from_the_work_tree(tmp_path):

@@ -18,6 +18,7 @@ from pathlib import Path
 import psutil
 
 from stack.bus.ports import free_port
+from stack.runtime.pacing import SPEED_ENV
 
 REPO = Path(__file__).resolve().parents[2]
 # A MAVLink link of a launch profile: bound to a loopback UDP port, sending to another.
@@ -34,12 +35,13 @@ def eventually(ok: Callable[[], object], timeout: float = 30.0, what: str = "the
 
 
 def stack_env(home: Path) -> dict[str, str]:
-    """The environment of a command a test runs: its STACK_HOME, and a terminal's size asked of the terminal
-    (pytest-xdist's workers set COLUMNS and LINES to 80 by 24)."""
+    """The environment of a command a test runs: its STACK_HOME, a terminal's size asked of the terminal
+    (pytest-xdist's workers set COLUMNS and LINES to 80 by 24), and lockstep stacks as fast as they go."""
     env = {k: v for k, v in os.environ.items() if k not in ("STACK_ENDPOINT", "COLUMNS", "LINES")}
     env["STACK_HOME"] = str(home)
     env["PYTHONPATH"] = str(REPO) + os.pathsep + env.get("PYTHONPATH", "")
     env["PYTHONUNBUFFERED"] = "1"
+    env[SPEED_ENV] = "max"
     return env
 
 
