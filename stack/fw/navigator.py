@@ -128,7 +128,7 @@ class FixedwingNavigator:
 
     def __init__(self, params: Mapping[str, object] | None = None) -> None:
         self._p: dict[str, float] = {}
-        self.missions = MissionStore(fixed_wing=True)
+        self.missions = MissionStore(fixed_wing=True, on_replaced=self._mission_replaced)
         self.runway: Runway | None = None
         self._active: int | None = None
         self._reposition_counter = 0
@@ -245,6 +245,11 @@ class FixedwingNavigator:
         return PositionSetpointTriplet(previous=previous or PositionSetpoint(), current=current)
 
     # ------------------------------------------------------------------ mission
+
+    def _mission_replaced(self) -> None:
+        self._mission_returning = False
+        if self._active == NS.NAVIGATION_STATE_AUTO_MISSION:
+            self._active = None  # start the new mission on the next update
 
     def _start_mission(self, inp: FwNavigatorInputs) -> None:
         tracker = self.missions.tracker

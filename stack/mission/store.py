@@ -36,10 +36,16 @@ class MissionStatus(NamedTuple):
 
 
 class MissionStore:
-    """The loaded mission and its tracker; ``load`` checks an upload, ``status`` reports it."""
+    """The loaded mission and its tracker; ``load`` checks an upload, ``status`` reports it.
 
-    def __init__(self, fixed_wing: bool = False) -> None:
+    ``on_replaced`` is called after every upload, accepted or refused: a navigator flying the mission it
+    replaced starts over with the new one from its first item, as PX4's navigator does (``Mission::
+    onMissionUpdate``), and one flying none holds.
+    """
+
+    def __init__(self, fixed_wing: bool = False, on_replaced: Callable[[], None] = lambda: None) -> None:
         self.fixed_wing = fixed_wing
+        self._on_replaced = on_replaced
         self.mission: Mission | None = None
         self.tracker: MissionTracker | None = None
         self.mission_id = 0
@@ -54,11 +60,13 @@ class MissionStore:
             return problem
         self.mission_id, self.reason, self.mission = mission_id, "", mission
         self.tracker = MissionTracker(mission, params, fixed_wing=self.fixed_wing)
+        self._on_replaced()
         return ""
 
     def refuse(self, mission_id: int, reason: str) -> None:
         """An upload that could not even be read, or failed the checks: no mission, and the reason."""
         self.mission_id, self.reason, self.mission, self.tracker = mission_id, reason, None, None
+        self._on_replaced()
 
     def set_params(self, params: Mapping[str, object]) -> None:
         if self.tracker is not None:

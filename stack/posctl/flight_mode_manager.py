@@ -90,7 +90,7 @@ class FlightModeManager:
         self.yaw = YawSlew()
         self.manual_position = ManualPositionTask(DEFAULTS)
         self.manual_altitude = ManualAltitudeTask(DEFAULTS)
-        self.missions = MissionStore()
+        self.missions = MissionStore(on_replaced=self._mission_replaced)
         self._active: tuple[int, bool] | None = None
         self._reposition_counter = 0
         self._mission_start_counter = 0
@@ -149,14 +149,11 @@ class FlightModeManager:
 
     def load_mission(self, mission: Mission, mission_id: int) -> str:
         """Take an uploaded mission; returns why it was refused ("" when accepted)."""
-        problem = self.missions.load(mission, mission_id, self._p)
-        self._mission_replaced()
-        return problem
+        return self.missions.load(mission, mission_id, self._p)
 
     def load_mission_refused(self, mission_id: int, reason: str) -> None:
         """An upload that could not even be read: no mission, and the reason for ``mission_result``."""
         self.missions.refuse(mission_id, reason)
-        self._mission_replaced()
 
     def _mission_replaced(self) -> None:
         self._mission_returning = False

@@ -106,6 +106,29 @@ def test_a_mission_flies_legs_with_the_next_waypoint_then_loiters_then_returns()
     assert nav.missions.status().finished
 
 
+def test_a_mission_uploaded_while_flying_one_starts_over_with_the_new_one() -> None:
+    nav = FixedwingNavigator(PARAMS)
+    assert nav.missions.load(MISSION, 7, PARAMS) == ""
+    start = NavigationRequest(mission_start_counter=1)
+    nav.update(inputs(NS.NAVIGATION_STATE_AUTO_MISSION, (0.0, 0.0, 0.0), landed=True, request=start))
+    t = nav.update(inputs(NS.NAVIGATION_STATE_AUTO_MISSION, (120.0, 0.0, -22.0), request=start))
+    assert (t.current.x, t.current.y) == (500.0, 0.0) and nav.missions.status().seq_current == 1
+    legs = Mission(
+        (_item(0, MAV_CMD_NAV_WAYPOINT, -200.0, 100.0, -50.0), _item(1, MAV_CMD_NAV_WAYPOINT, 0.0, 0.0, -50.0))
+    )
+    for mission_id in (8, 9):  # another mission, then the same one again
+        assert nav.missions.load(legs, mission_id, PARAMS) == ""
+        t = nav.update(inputs(NS.NAVIGATION_STATE_AUTO_MISSION, (300.0, 0.0, -40.0), request=start))
+        assert nav.missions.status().seq_current == 0 and nav.missions.status().mission_id == mission_id
+        assert (t.current.x, t.current.y) == (-200.0, 100.0) and (t.previous.x, t.previous.y) == (300.0, 0.0)
+        t = nav.update(inputs(NS.NAVIGATION_STATE_AUTO_MISSION, (-195.0, 100.0, -50.0), request=start))
+        assert (t.current.x, t.current.y) == (0.0, 0.0)  # and it flies on
+    # A refused upload leaves no mission: the plane circles where it is.
+    nav.missions.refuse(10, "unreadable")
+    t = nav.update(inputs(NS.NAVIGATION_STATE_AUTO_MISSION, (310.0, 5.0, -40.0), request=start))
+    assert t.current.type == SP.SETPOINT_TYPE_LOITER and (t.current.x, t.current.y) == (310.0, 5.0)
+
+
 def test_return_flies_home_circles_down_then_lands_along_the_takeoff_runway() -> None:
     nav = FixedwingNavigator(PARAMS)
     nav.update(inputs(NS.NAVIGATION_STATE_AUTO_TAKEOFF, (0.0, 0.0, 0.0), 0.0, landed=True))
