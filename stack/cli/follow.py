@@ -17,6 +17,7 @@ from dataclasses import dataclass, field
 
 from stack.commander.events import CRITICAL_EVENTS
 from stack.commander.modes import mode_name
+from stack.fw.runway import on_runway
 from stack.mission.items import MAV_CMD_NAV_LAND, MAV_CMD_NAV_RETURN_TO_LAUNCH, MAV_CMD_NAV_TAKEOFF, Mission
 from stack.msg.estimation import VehicleLocalPosition
 from stack.msg.navigation import MissionResult
@@ -244,21 +245,31 @@ class Return(Action):
         return travel_s(distance, top - height, p) + descend + delay + landing_s(min(top, p["RTL_DESCEND_ALT"]), p)
 
     def done(self, v: Vehicle) -> str | None:
+        landed = self._landed(v)
+        return None if landed is None or not landed[0] else f"{self.name}: {landed[1]} and disarmed"
+
+    def failed(self, v: Vehicle) -> str | None:
+        landed = self._landed(v)
+        if landed is not None and not landed[0]:
+            return f"{self.name} failed: disarmed {landed[1]}"
+        return super().failed(v)
+
+    def _landed(self, v: Vehicle) -> tuple[bool, str] | None:
+        """Once disarmed: whether where the vehicle rests is where a return lands, and where that is. A
+        multicopter lands at home; a plane lands along the runway it took off from (home, on the heading it
+        armed with), and rolls out along it."""
         if not v.disarmed or v.position is None:
             return None
         home = v.home_ned()
+        if v.status is not None and v.status.vehicle_type == NS.VEHICLE_TYPE_FIXED_WING:
+            heading = v.home.yaw if v.home is not None else 0.0
+            ok, along, across = on_runway((v.position.x, v.position.y), (home[0], home[1]), heading)
+            where = f"{along:.0f} m along the runway, {abs(across):.1f} m off its centre line"
+            return ok, f"landed on the runway ({where})" if ok else f"off the runway ({where})"
         off = math.hypot(v.position.x - home[0], v.position.y - home[1])
         if off > max(self.p["NAV_ACC_RAD"], REACHED_M):
-            return None  # failed() says so: disarmed away from home
-        return f"{self.name}: landed at home ({off:.1f} m off) and disarmed"
-
-    def failed(self, v: Vehicle) -> str | None:
-        if v.disarmed and v.position is not None:
-            home = v.home_ned()
-            off = math.hypot(v.position.x - home[0], v.position.y - home[1])
-            if off > max(self.p["NAV_ACC_RAD"], REACHED_M):
-                return f"{self.name} failed: disarmed {off:.1f} m from home"
-        return super().failed(v)
+            return False, f"{off:.1f} m from home"
+        return True, f"landed at home ({off:.1f} m off)"
 
 
 @dataclass

@@ -33,6 +33,7 @@ from enum import IntEnum
 from typing import NamedTuple
 
 from stack.commander.home import HomePosition
+from stack.fw.runway import Runway
 from stack.mathlib.vector import Vec3
 from stack.mission import feasibility, tracker
 from stack.mission.items import LOITER_COMMANDS, MAV_CMD_NAV_LAND, MAV_CMD_NAV_TAKEOFF, MAV_CMD_NAV_WAYPOINT
@@ -67,13 +68,6 @@ class LandPhase(IntEnum):
     LOITER_DOWN = 1
     APPROACH = 2
     LAND = 3
-
-
-class Runway(NamedTuple):
-    """Where the vehicle took off: the start point (local NED) and the heading [rad]."""
-
-    start: Vec3
-    heading: float
 
 
 class FwNavigatorInputs(NamedTuple):

@@ -22,9 +22,6 @@ from stack.scenario.metrics import rms
 
 Vec2 = tuple[float, float]
 
-RUNWAY_HALF_WIDTH_M = 10.0
-RUNWAY_THRESHOLD_M = 50.0
-"""The runway starts this far before home (along the landing direction)."""
 ON_CIRCLE_FRACTION = 0.2
 
 
@@ -89,13 +86,6 @@ def loiter_radius_errors(samples: Sequence[Sample], center: Vec2, radius: float)
         if errors or abs(error) <= ON_CIRCLE_FRACTION * radius:
             errors.append(error)
     return errors
-
-
-def on_runway(rest: Vec2, heading: float, length: float) -> tuple[bool, float, float]:
-    """(on the runway, distance along it from home, distance off its centre line) of the resting point."""
-    along, across, _ = _along_across((0.0, 0.0), (math.cos(heading), math.sin(heading)), rest)
-    ok = abs(across) <= RUNWAY_HALF_WIDTH_M and -RUNWAY_THRESHOLD_M <= along <= length
-    return ok, along, across
 
 
 def touchdown_sink(on_ground: Sequence[bool], down_speed: Sequence[float]) -> float:

@@ -13,6 +13,7 @@ import math
 from collections.abc import Generator
 from typing import Any
 
+from stack.fw.runway import on_runway
 from stack.launch_files import find_launch_file
 from stack.mathlib import quaternion as quat
 from stack.mission.items import LOITER_COMMANDS, MAV_CMD_NAV_WAYPOINT, GeoPoint, Mission
@@ -26,7 +27,6 @@ from stack.scenario.script import ScenarioError, ScriptContext, Wait
 
 MISSION_FILE = "missions/plane_rectangle.plan"
 MISSION_TIMEOUT_S = 900.0
-RUNWAY_LENGTH_M = 600.0
 TOUCHDOWN_SINK_MAX = 2.0
 """[m/s]: a firm landing; a stalled flare hits the runway at 3 m/s or more."""
 RECORD = (*autonomy.RECORD, "mission_result", "tecs_status", "position_setpoint_triplet")
@@ -92,7 +92,7 @@ def landing(ctx: ScriptContext, frames: autonomy.Frames) -> dict[str, Any]:
     t0 = ctx.state["armed_at"]
     heading = quat.yaw(autonomy.truth_at(frames.truth, t0).q)
     rest = frames.truth_about_home(frames.truth.values[-1].position)
-    ok, along, across = plane_metrics.on_runway((rest[0], rest[1]), heading, RUNWAY_LENGTH_M)
+    ok, along, across = on_runway((rest[0], rest[1]), (0.0, 0.0), heading)
     flown = [s for t, s in zip(frames.truth.times, frames.truth.values, strict=True) if t >= t0]
     sink = plane_metrics.touchdown_sink([s.on_ground for s in flown], [s.velocity[2] for s in flown])
     return {

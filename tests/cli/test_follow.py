@@ -100,6 +100,30 @@ def test_land_and_return_end_disarmed_and_a_return_at_home():
     assert rtl.failed(away) == "rtl failed: disarmed 20.0 m from home" and rtl.done(away) is None
 
 
+def test_a_planes_return_ends_on_the_runway_it_took_off_from_not_at_home():
+    rtl = Return("rtl", RETURN_MODES, ends_disarmed=True, p=P)
+
+    def plane_at(north: float, east: float) -> Vehicle:
+        v = Vehicle()
+        v.update("home_position", HomePosition(timestamp=1, valid_lpos=True, x=10.0, y=20.0, yaw=0.5 * math.pi))
+        v.update("vehicle_local_position", VehicleLocalPosition(timestamp=2_000_000, x=north, y=east))
+        status = NS(timestamp=2_000_000, arming_state=DISARMED, vehicle_type=NS.VEHICLE_TYPE_FIXED_WING)
+        v.update("vehicle_status", status)
+        return v
+
+    rolled_out = plane_at(12.0, 208.7)  # 188.7 m along the eastbound runway from home, 2 m left of its centre
+    assert rtl.failed(rolled_out) is None
+    assert (
+        rtl.done(rolled_out)
+        == "rtl: landed on the runway (189 m along the runway, 2.0 m off its centre line) and disarmed"
+    )
+    beside = plane_at(40.0, 120.0)
+    assert rtl.done(beside) is None
+    assert (
+        rtl.failed(beside) == "rtl failed: disarmed off the runway (100 m along the runway, 30.0 m off its centre line)"
+    )
+
+
 def test_budgets_follow_the_distances_and_the_speed_parameters():
     assert budget_s(0.0) == BUDGET_FLOOR_S and budget_s(-5.0) == BUDGET_FLOOR_S
     high = vehicle(NS.NAVIGATION_STATE_AUTO_LAND, -28.5)  # 29 m above home

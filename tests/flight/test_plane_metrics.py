@@ -10,7 +10,6 @@ from stack.scenario.plane_metrics import (
     Sample,
     leg_errors,
     loiter_radius_errors,
-    on_runway,
     summary,
     touchdown_sink,
     turn_overshoot,
@@ -42,14 +41,6 @@ def test_the_overshoot_of_a_turn_is_measured_on_its_outside() -> None:
 def test_the_loiter_counts_from_the_first_time_on_the_circle() -> None:
     flown = [at(0.0, 100.0), at(0.0, 62.0), at(0.0, 20.0), at(-58.0, 0.0)]
     assert loiter_radius_errors(flown, (0.0, 0.0), 60.0) == pytest.approx([2.0, -40.0, -2.0])
-
-
-def test_the_runway_runs_from_its_threshold_behind_home_along_the_takeoff_heading() -> None:
-    east = 0.5 * math.pi
-    assert on_runway((1.0, 300.0), east, 600.0) == pytest.approx((True, 300.0, -1.0))  # north: left of it
-    assert not on_runway((10.5, 300.0), east, 600.0)[0]  # off to the left of an eastbound runway
-    assert on_runway((0.0, -49.0), east, 600.0)[0] and not on_runway((0.0, -51.0), east, 600.0)[0]
-    assert not on_runway((0.0, 601.0), east, 600.0)[0]
 
 
 def test_the_touchdown_is_the_hardest_first_contact_after_flying() -> None:
