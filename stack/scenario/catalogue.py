@@ -41,7 +41,8 @@ class Scenario:
     params: dict[str, Any] = field(default_factory=dict)
     profile: str | None = None
     """The launch profile the scenario flies on unless one is given, when the default one cannot fly it
-    (link_loss: a simulated Pixhawk; the plane's scenarios: sitl_plane)."""
+    (link_loss: a simulated Pixhawk; the plane's scenarios: sitl_plane) or is not what its checks are sized for
+    (rpyt_step: RotorS' controller on its default vehicle, the Firefly)."""
 
 
 def scenarios() -> dict[str, Scenario]:

@@ -181,6 +181,7 @@ SCENARIO = Scenario(
     description="Take off, then roll, pitch and yaw-rate steps through the RotorS mode's sticks; land",
     script=script,
     evaluate=evaluate,
+    profile="rotors_firefly",
     # The Firefly's, RotorS' default vehicle (rotors_firefly.toml); the others' profiles set their own. RotorS' law
     # alone on the plant rises in 0.22 s in roll and pitch (ω_n 9.3 and 8.1 rad/s, damping 0.81 and 0.70); the
     # estimator and the gyro filter add about 0.04 s. The yaw rate rises as a first-order lag, 2.2·Izz/(K_ω,z + c)

@@ -16,6 +16,7 @@ from collections.abc import Callable
 import pytest
 
 from stack.params import catalogue
+from stack.scenario.catalogue import scenarios
 from stack.sim.vehicle import load_vehicle
 from stack.supervisor.profile import load_profile
 from tests.flight.flights import InProcessFlight, fly_scenario
@@ -53,6 +54,11 @@ def test_every_check_passed_by_the_profile_s_limits(fly_here: FlyHere, profile: 
     assert report["passed"] is True, report
     limits = {c["name"]: c["limit"] for c in report["checks"]}
     assert limits == {**limits, **load_profile(profile).scenario_limits.get("rpyt_step", {})}
+
+
+def test_without_a_profile_rpyt_step_flies_the_vehicle_its_checks_are_sized_for() -> None:
+    # `stack fly rpyt_step`, as the README shows it: RotorS' controller on the Firefly, flown above on seed 1.
+    assert scenarios()["rpyt_step"].profile == PROFILE_SEEDS[0][0] == "rotors_firefly"
 
 
 @pytest.mark.parametrize(("profile", "seed"), PROFILE_SEEDS)
