@@ -41,6 +41,7 @@ from stack.cli.follow import (
 from stack.cli.follow import PARAMS as FOLLOW_PARAMS
 from stack.commander import commands
 from stack.commander.modes import MODES, nav_state_from_name
+from stack.launch_files import find_mission
 from stack.mathlib.geo import MapProjection
 from stack.mission.items import GLOBAL_AMSL_FRAMES, GeoPoint, Mission, MissionError
 from stack.mission.loader import load_mission
@@ -469,7 +470,11 @@ def _until_commander_knows(link: _Link, result: MissionResult) -> None:
 
 @app.command("mission")
 def mission_(
-    file: Path = typer.Argument(..., help="QGroundControl .plan, QGC WPL 110 or a simple waypoint list"),
+    file: Path = typer.Argument(
+        ...,
+        help="QGroundControl .plan, QGC WPL 110 or a simple waypoint list: a path, or the name of a shipped mission "
+        "(box, plane_rectangle)",
+    ),
     no_start: bool = typer.Option(False, "--no-start", help="Upload only; do not start the mission"),
     first: int = typer.Option(0, "--first", help="Item to start at (−1: the current one)"),
     wait: bool = WaitOption,
@@ -481,6 +486,10 @@ def mission_(
     """Upload a mission (global positions placed about the vehicle's home) and start it."""
     if wait_timeout is not None:
         _positive("--wait-timeout", wait_timeout)
+    try:
+        file = find_mission(file)
+    except FileNotFoundError as e:
+        fail(str(e), code=2)
     with connect(vehicle, endpoint) as node:
         link = _Link(node, timeout, ("mission_result", *WATCHED))
         home, origin = _vehicle_home(link)

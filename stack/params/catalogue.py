@@ -14,6 +14,7 @@ from __future__ import annotations
 
 from collections.abc import Iterable
 
+from stack.names import suggestion
 from stack.params import (
     airspeed,
     atc,
@@ -41,7 +42,7 @@ from stack.params import (
     sim,
     system,
 )
-from stack.params.param import Param, ParamError, suggestion
+from stack.params.param import Param, ParamError
 
 GROUPS = (
     mc_rate,

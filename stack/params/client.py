@@ -21,7 +21,8 @@ import zenoh
 
 from stack.bus import keys
 from stack.bus.query import query_json
-from stack.params.param import Param, ParamError, ParamValue, suggestion
+from stack.names import suggestion
+from stack.params.param import Param, ParamError, ParamValue
 
 TIMEOUT_S = 2.0
 

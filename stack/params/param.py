@@ -8,9 +8,8 @@ cannot carry one, so a definition with any other type is refused.
 
 from __future__ import annotations
 
-import difflib
 import math
-from collections.abc import Iterable, Mapping
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any, cast
 
@@ -153,10 +152,3 @@ class Param:
             values={int(v): str(m) for v, m in d.get("values") or ()},
             bits={int(b): str(m) for b, m in d.get("bits") or ()},
         )
-
-
-def suggestion(name: str, known: Iterable[str]) -> str:
-    """" (did you mean X?)" with the closest of ``known`` to ``name`` (case-insensitive), or ""."""
-    by_upper = {k.upper(): k for k in known}
-    close = difflib.get_close_matches(name.upper(), list(by_upper), n=1, cutoff=0.6)
-    return f" (did you mean {by_upper[close[0]]}?)" if close else ""

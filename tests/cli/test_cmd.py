@@ -120,7 +120,10 @@ def test_a_broken_mission_file_is_one_line_naming_it(stack, tmp_path):
     line = refused(stack.cli("cmd", "mission", str(broken)), code=2)
     assert line == f"error: {broken}: line 3 (item 2): east must be a number, got 'ten'"
     missing = refused(stack.cli("cmd", "mission", str(tmp_path / "nope.plan")), code=2)
-    assert missing.startswith(f"error: {tmp_path / 'nope.plan'}: cannot read")
+    assert missing.startswith(f"error: {tmp_path / 'nope.plan'}: no such mission file; the shipped missions are ")
+    assert refused(stack.cli("cmd", "mission", "boxx"), code=2).startswith(
+        "error: boxx: no such mission file (did you mean box?); the shipped missions are box.plan, box.txt,"
+    )
 
 
 def test_a_global_mission_needs_the_vehicle_home(stack):

@@ -53,7 +53,7 @@ def test_takeoff_goto_land_from_the_command_line(stack):
 
 
 def test_the_readme_mission_and_a_return_from_high_up(stack):
-    mission = stack.cli("cmd", "mission", str(REPO / "launch" / "missions" / "box.plan"), "--wait", timeout=600)
+    mission = stack.cli("cmd", "mission", "box", "--wait", timeout=600)  # as the README shows it
     assert mission.returncode == 0, mission.stderr
     lines = mission.stdout.splitlines()
     assert lines[-1] == "mission finished, landed and disarmed"

@@ -4,7 +4,8 @@ import math
 
 import pytest
 
-from stack.params.param import Param, ParamError, suggestion
+from stack.names import suggestion
+from stack.params.param import Param, ParamError
 
 
 def test_values_are_converted_to_the_parameters_type():
