@@ -6,7 +6,7 @@ import json
 
 import pytest
 
-from tests.support.harness import REPO, default_stack, takeoff_when_ready
+from tests.support.harness import default_stack, takeoff_when_ready
 
 pytestmark = pytest.mark.flight
 
