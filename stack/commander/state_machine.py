@@ -488,6 +488,10 @@ class Commander:
 
         if not catching_up:
             self._update_control_chain(now_us, armed)
+        if not armed and inp.landed and self._failsafe.selected_action == FailsafeAction.TERMINATE:
+            # Disarmed by force while still falling, or before the land detector agreed: once it is on the
+            # ground the vehicle may fly again, as after a disarm on the ground.
+            self._clear_termination()
         failing = self._failing
         if self._external_link_down(now_us):
             failing &= ~_ESTIMATES  # without the Pixhawk's sensors the estimates go; its own failsafe flies
@@ -751,8 +755,7 @@ class Commander:
             return "Disarming denied: not landed"
         self.arming_state = NS.ARMING_STATE_DISARMED
         if on_ground and self._failsafe.selected_action == FailsafeAction.TERMINATE:
-            self._failsafe.clear_termination()
-            self._events.append("Flight termination cleared: disarmed on the ground")
+            self._clear_termination()
         self._armed_time_us = 0
         self._takeoff_time_us = 0
         self._have_taken_off = False
@@ -761,6 +764,10 @@ class Commander:
         self._events.append(f"Disarmed ({reason.name.lower()})")
         self._take_vehicle_type()
         return ""
+
+    def _clear_termination(self) -> None:
+        self._failsafe.clear_termination()
+        self._events.append("Flight termination cleared: disarmed on the ground")
 
     def _set_intention(self, nav_state: int) -> None:
         self.user_intended_nav_state = nav_state

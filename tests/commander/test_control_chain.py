@@ -218,6 +218,22 @@ def test_a_terminated_vehicle_on_the_ground_disarms_and_may_fly_again():
     assert clock.status.arming_state == NS.ARMING_STATE_ARMED
 
 
+def test_a_terminated_vehicle_disarmed_by_force_in_the_air_may_fly_again_once_on_the_ground():
+    clock = _hovering()
+    _keep_alive(clock, 0.1, but="mc_att_control")
+    assert clock.send(C.disarm_command(force=True)).result == 0  # still falling: the operator's word
+    clock.step()
+    assert clock.status.arming_state == NS.ARMING_STATE_DISARMED
+    assert clock.send(C.arm_command()).result != 0
+    clock.step()
+    assert "Arming denied: flight termination is latched" in clock.events
+    clock.position, clock.landed = (0.0, 0.0, 0.0), True  # at rest on the ground
+    _keep_alive(clock, 0.2, but="")
+    assert "Flight termination cleared: disarmed on the ground" in clock.events
+    assert clock.status.nav_state != NS.NAVIGATION_STATE_TERMINATION
+    assert clock.send(C.arm_command()).result == 0
+
+
 def test_a_stalled_commander_catches_up_before_it_judges_its_inputs():
     clock = _hovering()
     stopped_at = clock.t
