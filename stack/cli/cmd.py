@@ -33,6 +33,7 @@ from stack.cli.follow import (
     Goto,
     Land,
     MissionRun,
+    Progress,
     Return,
     Takeoff,
     Vehicle,
@@ -67,12 +68,12 @@ CLI_COMPONENT = 190
 HOME_WAIT_S = 1.5
 POLL_S = 0.01
 PROGRESS_S = 1.0
-"""Wall-clock seconds between progress lines."""
+"""Wall-clock seconds between looks at the progress: a line is printed when it changed."""
 SILENT_S = 15.0
+"""Wall-clock seconds without a message from the vehicle after which --wait gives up (the stack stopped)."""
 CAUSE_WAIT_S = 2.0
 """How long a failure waits for the commander's word on why a failsafe took over: ``mavlink_log`` and
 ``vehicle_status`` are separate topics, so the cause may arrive just after the state."""
-"""Wall-clock seconds without a message from the vehicle after which --wait gives up (the stack stopped)."""
 NO_COMMANDER = "no commander is running (nothing subscribes to vehicle_command)"
 NO_NAVIGATOR = "no answer from the navigator (is flight_mode_manager running?)"
 WATCHED = ("vehicle_status", "vehicle_local_position", "home_position", "mavlink_log")
@@ -188,6 +189,7 @@ class _Link:
         began = time.monotonic()
         budget: float | None = limit_s
         report = began + PROGRESS_S
+        progress = Progress()
         explain_by = 0.0
         while True:
             for topic, msg in self.poll():
@@ -213,7 +215,8 @@ class _Link:
                 fail(f"{action.name}: nothing heard from the vehicle for {SILENT_S:g} s (did the stack stop?)")
             if now >= report:
                 report += PROGRESS_S
-                typer.echo(action.progress(v))
+                if progress.due(action.progress(v), now):
+                    typer.echo(progress.line)
             time.sleep(POLL_S)
 
 

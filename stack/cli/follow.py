@@ -45,6 +45,9 @@ PARAMS = (
 )
 """The parameters the budgets and checks read (from the running stack, else their defaults)."""
 
+PROGRESS_HEARTBEAT_S = 10.0
+"""An unchanged progress line is printed again after this many wall-clock seconds (the wait is alive)."""
+
 Params = Mapping[str, float]
 NED = tuple[float, float, float]
 
@@ -348,3 +351,19 @@ GOTO_MODES = frozenset((NS.NAVIGATION_STATE_AUTO_LOITER,))
 LAND_MODES = frozenset((NS.NAVIGATION_STATE_AUTO_LAND,))
 RETURN_MODES = frozenset((NS.NAVIGATION_STATE_AUTO_RTL, NS.NAVIGATION_STATE_AUTO_LAND))
 MISSION_MODES = frozenset((NS.NAVIGATION_STATE_AUTO_MISSION,))
+
+
+class Progress:
+    """Which progress lines ``--wait`` prints: a changed one at once, an unchanged one every PROGRESS_HEARTBEAT_S."""
+
+    def __init__(self, heartbeat_s: float = PROGRESS_HEARTBEAT_S) -> None:
+        self.heartbeat_s = heartbeat_s
+        self.line = ""
+        self._printed_at = -math.inf
+
+    def due(self, line: str, now_s: float) -> bool:
+        """Whether ``line`` (the progress at wall time ``now_s``) is to be printed; it is ``line`` then."""
+        if line == self.line and now_s - self._printed_at < self.heartbeat_s:
+            return False
+        self.line, self._printed_at = line, now_s
+        return True

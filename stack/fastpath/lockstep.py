@@ -238,7 +238,9 @@ class FastCoordinator:
         os.close(watched.pidfd)
         self.w[self.region.slot_word(slot, S_ADMITTED)] = 0
         self._awaited[slot] = _Awaited(watched.name, watched.exits, time.monotonic())
-        log.warning("lockstep member %s %s at t=%.3f s", watched.name, why, self.now / 1e6)
+        # Information, not a warning: the supervisor says whether the process failed (a scenario that
+        # finished its flight ends as planned).
+        log.info("lockstep member %s %s at t=%.3f s", watched.name, why, self.now / 1e6)
         self._rebuild(set())
 
     def _rebuild(self, new: set[int]) -> None:
@@ -346,7 +348,7 @@ class FastCoordinator:
                 continue
             slot = self._pidfd_slot.get(fd)
             if slot is not None:
-                self._drop(slot, "died")
+                self._drop(slot, "left")
         return bool(events)
 
     def close(self) -> None:

@@ -390,7 +390,7 @@ class LockstepCoordinator:
             for member in self._triggered_by.get(suffix, ()):
                 if self._pending.get((member, suffix), 0) < 0:
                     del self._pending[(member, suffix)]
-        log.warning("%s", why)
+        log.info("%s", why)  # the supervisor says whether the process failed
 
     # -- the step -----------------------------------------------------------------------------
 

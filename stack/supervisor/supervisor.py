@@ -475,8 +475,11 @@ class Supervisor:
                         self._plan_restart_or_give_up(m)
             self._watch_programs(now)
             for m in self.modules:
-                if m.entry.critical and m.state in ("failed", "exited"):
-                    self._say(f"critical module {m.entry.name} {m.state}: stopping the stack")
+                if m.entry.critical and m.state == "exited":
+                    self._say(f"{m.entry.name} has finished: stopping the stack")
+                    return
+                if m.entry.critical and m.state == "failed":
+                    self._say(f"critical module {m.entry.name} failed: stopping the stack")
                     return
             for p in self.programs:
                 if p.entry.critical and p.state in ("failed", "exited"):
