@@ -36,6 +36,9 @@ from typing import TYPE_CHECKING, Any, ClassVar
 from stack.params.param import Param, ParamError, ParamValue, convert
 from stack.runtime.priority import WorkQueue
 
+LINK_SUFFIX = ".link"
+"""A module's link for the user (see :meth:`Module.show_link`) is the file ``<run dir>/<module><LINK_SUFFIX>``."""
+
 if TYPE_CHECKING:
     from stack.runtime.runner import Runtime
 
@@ -182,6 +185,13 @@ class Module:
         """``on_change(module, pid, alive)`` for each module process of this vehicle as it runs, starts or dies
         (called from another thread)."""
         self.rt.watch_modules(on_change)
+
+    def show_link(self, what: str, url: str) -> None:
+        """Give the user a link (a web viewer's page): logged now, and said again by the supervisor once the
+        whole stack is up, as its last start-up line, where it is seen."""
+        self.log.info("%s: %s", what, url)
+        if self.rt.spec.run_dir:
+            (Path(self.rt.spec.run_dir) / f"{self.rt.spec.name}{LINK_SUFFIX}").write_text(f"{what}: {url}")
 
     def keep_state(self, state: dict[str, Any]) -> None:
         """Keep what an instance restarted after a crash resumes from (JSON, in the run directory; written

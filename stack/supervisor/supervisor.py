@@ -35,6 +35,7 @@ from stack.bus.config import LOOPBACK_ANY_PORT, BusConfig
 from stack.bus.ports import free_port, port_taken
 from stack.fastpath.host import FastPathHost
 from stack.msg.internal import ModuleHeartbeat
+from stack.runtime.module import LINK_SUFFIX
 from stack.runtime.pacing import MAX_SPEED
 from stack.runtime.spec import ModuleSpec
 from stack.supervisor import state as run_state
@@ -200,6 +201,7 @@ class Supervisor:
                 if self.fast is not None:
                     self.fast.roster_complete()
                 self._say(f"all {len(self.modules)} modules up" + (" (lockstep)" if self.profile.lockstep else ""))
+                self._say_links()
                 self._monitor()
             elif self._signal is not None:
                 self._say_interrupted(self._signal)
@@ -230,6 +232,13 @@ class Supervisor:
         done = f"{len(started)} of {total} started" + (f" ({', '.join(started)})" if started else "")
         doing = f", {starting[0]} starting" if starting else ""
         self._say(f"start-up interrupted by {signal.Signals(signum).name}: {done}{doing}; stopping them")
+
+    def _say_links(self) -> None:
+        """The links modules gave the user (Module.show_link), last, where they are seen: even with --quiet."""
+        for m in self.modules:
+            link = self.run_dir / f"{m.entry.name}{LINK_SUFFIX}"
+            if link.is_file():
+                self._say(f"{m.entry.name} {link.read_text().strip()}  <- open it in a browser")
 
     def state_record(self) -> dict[str, object]:
         return {

@@ -125,7 +125,7 @@ class RerunBridgeModule(Module):
             self.log.warning("nothing to plot to: no viewer, no web viewer, no file; the bridge stays idle")
             return
         if self.sinks.web_url:
-            self.log.info("web viewer: %s", self.sinks.web_url)
+            self.show_link("web viewer", self.sinks.web_url)
         elif self.sinks.viewer_url:
             self.log.info("streaming to the viewer at %s", self.sinks.viewer_url)
         if args["save"]:

@@ -145,7 +145,9 @@ class PlotSinks:
 
     @staticmethod
     def _start(args: list[str], detach: bool) -> subprocess.Popen[bytes]:
-        """A detached viewer outlives this process; the web server dies with it, even if it is killed."""
+        """A detached viewer outlives this process; the web server dies with it, even if it is killed. Either
+        runs in a session of its own, so that a Ctrl-C in the terminal reaches this process only: it flushes
+        what it still holds to the server before it stops it (else Rerun reports the severed connection)."""
         own = [] if detach else [sys.executable, "-m", "stack.supervisor.child", str(os.getpid())]
         return subprocess.Popen(
             [*own, *rerun_command(), *args],
@@ -153,7 +155,7 @@ class PlotSinks:
             stdin=subprocess.DEVNULL,
             stdout=subprocess.DEVNULL,
             stderr=subprocess.DEVNULL,
-            start_new_session=detach,
+            start_new_session=True,
         )
 
     def _wait_listening(

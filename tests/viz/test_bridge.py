@@ -144,6 +144,11 @@ def test_web_viewer_listens_on_loopback_only_and_stops_with_the_bridge(tmp_path,
         url = stack.wait_for(r"\[web_plots\] INFO\s+web viewer: (http://127\.0\.0\.1:\d+/\?url=\S+)").group(1)
         stack.wait_up()
         assert "rerun%2Bhttp%3A%2F%2F127.0.0.1%3A" in url
+        # Said again once the stack is up, as the supervisor's last start-up line, where it is seen.
+        said = stack.wait_for(r"\[stack\] web_plots web viewer: (\S+)  <- open it in a browser")
+        assert said.group(1) == url
+        up = next(i for i, line in enumerate(stack.lines) if re.search(r"\[stack\] all \d+ modules up", line))
+        assert stack.lines.index(said.string) > up
         pid = stack.module_pids()["web_plots"]
         bridge_proc = psutil.Process(pid)
         servers = bridge_proc.children(recursive=True)
@@ -194,6 +199,40 @@ def test_stack_plot_attaches_to_a_running_stack(tmp_path):
     # lockstep: sim_time is the simulated clock (4 ms steps), decimated to 50 Hz buckets
     assert all(t % 4000 == 0 for t in times)
     assert len({t // 20000 for t in times}) == len(times)
+
+
+def test_ctrl_c_on_stack_plot_web_stops_it_quietly_with_its_server(tmp_path, monkeypatch):
+    monkeypatch.setenv("XDG_CONFIG_HOME", str(tmp_path / "config"))
+    monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path / "data"))
+    home = tmp_path / "home"
+    stack = RunningStack(home, chain_profile(tmp_path / "chain.toml", lockstep=False))
+    try:
+        stack.wait_up()
+        # In a session of its own, as a terminal runs it: Ctrl-C signals the whole foreground process group.
+        plot = subprocess.Popen(
+            [sys.executable, "-m", "stack", "plot", "--web"],
+            env=stack_env(home),
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+            cwd=REPO,
+            start_new_session=True,
+        )
+        assert plot.stdout is not None
+        for line in plot.stdout:
+            if " ready " in line:
+                break
+        server = psutil.Process(plot.pid).children(recursive=True)
+        assert server, "no web viewer server"
+        os.killpg(plot.pid, signal.SIGINT)
+        out, err = plot.communicate(timeout=30)
+        assert plot.returncode == 0, err
+        assert "plot stopped" in out
+        assert "ERROR" not in err and "\x1b[" not in err, err  # nothing from Rerun about a severed connection
+        assert not [p for p in server if p.is_running() and p.status() != psutil.STATUS_ZOMBIE]
+    finally:
+        assert stack.stop() == 0
+    assert not wait_no_processes(home)
 
 
 def test_stack_plot_without_a_display_says_to_use_web_or_save(tmp_path, monkeypatch):
