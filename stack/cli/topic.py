@@ -341,14 +341,20 @@ def pub(
             typer.echo(f"warning: no subscriber for {topic} (instance {instance})", err=True)
         sent = 0
         period = 1.0 / rate if rate > 0 else 0.0
+        if rate > 0:
+            until = f"{count} message{'s' if count != 1 else ''}" if count else "until Ctrl-C"
+            typer.echo(f"publishing {type(template).__name__} on {topic} (instance {instance}) at {rate:g} Hz, {until}")
         next_time = time.monotonic()
-        while True:
-            publisher.publish(msgspec.structs.replace(template))
-            sent += 1
-            if rate <= 0 or (count and sent >= count):
-                break
-            next_time += period
-            time.sleep(max(0.0, next_time - time.monotonic()))
+        try:
+            while True:
+                publisher.publish(msgspec.structs.replace(template))
+                sent += 1
+                if rate <= 0 or (count and sent >= count):
+                    break
+                next_time += period
+                time.sleep(max(0.0, next_time - time.monotonic()))
+        except KeyboardInterrupt:
+            pass  # Ctrl-C ends a --rate stream: what was sent is said below
         time.sleep(0.1)  # let Zenoh flush before the session closes
     typer.echo(f"published {sent} message{'s' if sent != 1 else ''} on {topic}")
 

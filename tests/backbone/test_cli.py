@@ -1,11 +1,16 @@
 """The CLI against a running stack from another process: topics, parameters, status."""
 
 import json
+import os
+import re
+import signal
+import subprocess
+import sys
 
 import pytest
 
 from stack.bus.ports import free_port
-from tests.support.harness import RunningStack, chain_profile, run_cli, wait_no_processes
+from tests.support.harness import REPO, RunningStack, chain_profile, run_cli, stack_env, wait_no_processes
 
 
 @pytest.fixture(scope="module")
@@ -64,11 +69,33 @@ def test_topic_pub_checks_the_schema_and_publishes(stack):
     wrong = stack.cli("topic", "pub", "vehicle_command", '{"command": "arm"}')
     assert wrong.returncode == 2 and "Expected `int`, got `str`" in wrong.stderr
     ok = stack.cli("topic", "pub", "vehicle_rates_setpoint", '{"roll": 100.0, "pitch": 0.0}', "-r", "50", "-n", "10")
-    assert ok.returncode == 0 and "published 10 messages" in ok.stdout
+    assert ok.returncode == 0 and ok.stdout.splitlines() == [
+        "publishing VehicleRatesSetpoint on vehicle_rates_setpoint (instance 0) at 50 Hz, 10 messages",
+        "published 10 messages on vehicle_rates_setpoint",
+    ]
     # A module's own output is not a tool's to publish (stack.bus.access): refused, naming who publishes it.
     owned = stack.cli("topic", "pub", "sensor_gyro", '{"x": 1.0}')
     assert owned.returncode == 2 and "published" not in owned.stdout
     assert owned.stderr.startswith("error: sensor_gyro is a topic of the vehicle's modules (published by tick_source)")
+
+
+def test_ctrl_c_ends_a_publishing_stream_saying_what_was_sent(stack):
+    stream = subprocess.Popen(
+        [sys.executable, "-m", "stack", "topic", "pub", "vehicle_rates_setpoint", '{"roll": 0.1}', "-r", "20"],
+        env=stack_env(stack.home),
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        cwd=REPO,
+        start_new_session=True,
+    )
+    assert stream.stdout is not None
+    first = stream.stdout.readline()
+    assert first == "publishing VehicleRatesSetpoint on vehicle_rates_setpoint (instance 0) at 20 Hz, until Ctrl-C\n"
+    os.killpg(stream.pid, signal.SIGINT)
+    out, err = stream.communicate(timeout=30)
+    assert stream.returncode == 0 and "Traceback" not in err, err
+    assert re.fullmatch(r"published \d+ messages? on vehicle_rates_setpoint\n", out), out
 
 
 def test_topic_info_gives_the_schema(stack):
