@@ -93,7 +93,9 @@ def autopilot_version(vehicle: str, system_id: int) -> mavlink2.MAVLink_autopilo
     """AUTOPILOT_VERSION: capabilities, the stack's version, the first 8 bytes of its git commit, a uid that
     stays the same for the vehicle and system id."""
     commit = git_commit()
-    custom = list(bytes.fromhex(commit[:16])) if commit else [0] * 8
+    # PX4 (mavlink_messages.cpp) copies px4_firmware_version_binary(), the first 16 hex digits of its git hash as
+    # a 64-bit integer, into flight_custom_version on a little-endian machine: the bytes come last digit first.
+    custom = list(bytes.fromhex(commit[:16])[::-1]) if commit else [0] * 8
     uid = int.from_bytes(hashlib.sha256(f"{vehicle}/{system_id}".encode()).digest()[:8], "little")
     try:
         version = importlib.metadata.version("stack")

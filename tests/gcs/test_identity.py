@@ -6,7 +6,9 @@ from pymavlink.dialects.v20 import common as M
 from stack.commander.modes import MODES
 from stack.gcs.identity import CAPABILITIES, autopilot_version, heartbeat, software_version
 from stack.mavlink import px4_modes
+from stack.mavlink.inspect import firmware
 from stack.msg.system import VehicleStatus as NS
+from stack.record.provenance import git_commit
 
 STATUS = NS(arming_state=NS.ARMING_STATE_DISARMED, nav_state=NS.NAVIGATION_STATE_POSCTL)
 
@@ -60,6 +62,9 @@ def test_capabilities_say_what_is_implemented_and_nothing_more():
     assert version.uid == autopilot_version("v1", 1).uid != autopilot_version("v1", 2).uid
     mav = M.MAVLink(None, 1, 1)
     assert mav.decode(bytearray(version.pack(mav))).capabilities == CAPABILITIES
+    # The git hash in PX4's byte order, which `stack mavlink inspect` (and QGroundControl) read back as written.
+    commit = git_commit()
+    assert commit and firmware(version)["git_hash"] == commit[:16]
 
 
 def test_software_version_packs_major_minor_patch_and_type():
