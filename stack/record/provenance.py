@@ -1,4 +1,5 @@
-"""Where a recording came from: the git commit of the stack's source tree, read without running git."""
+"""Where a recording came from: the git commit of the stack's source tree, read without running git, or, for an
+installed copy, the commit its build wrote beside the package (``COMMIT``, see setup.py)."""
 
 from __future__ import annotations
 
@@ -8,11 +9,25 @@ from pathlib import Path
 import stack
 
 SOURCE_ROOT = Path(stack.__file__).resolve().parents[1]
+BUILT_COMMIT = Path(stack.__file__).resolve().parent / "COMMIT"
 _SHA = re.compile(r"^[0-9a-f]{40}([0-9a-f]{24})?$")
 
 
-def git_commit(root: Path = SOURCE_ROOT) -> str:
-    """The commit checked out in ``root`` (a 40-hex sha), or "" when it is not a git work tree."""
+def git_commit(root: Path = SOURCE_ROOT, built: Path = BUILT_COMMIT) -> str:
+    """The commit checked out in ``root`` (a 40-hex sha); else the one an installed copy was ``built`` from;
+    else ""."""
+    return _checked_out(root) or _built_from(built)
+
+
+def _built_from(built: Path) -> str:
+    try:
+        sha = built.read_text().strip()
+    except OSError:
+        return ""
+    return sha if _SHA.match(sha) else ""
+
+
+def _checked_out(root: Path) -> str:
     git = root / ".git"
     try:
         if git.is_file():  # a worktree or submodule: "gitdir: <path>"

@@ -164,11 +164,17 @@ def test_a_speed_that_is_not_a_factor_is_refused(text):
         parse_speed(text)
 
 
-def test_git_commit_is_read_from_the_work_tree(tmp_path):
+def test_git_commit_is_read_from_the_work_tree_else_from_the_build(tmp_path):
     sha = "0123456789abcdef0123456789abcdef01234567"
+    built = tmp_path / "COMMIT"
+    assert git_commit(tmp_path, built) == ""
+    built.write_text("89abcdef" * 5 + "\n")  # an installed copy: what its build wrote
+    assert git_commit(tmp_path, built) == "89abcdef" * 5
+    built.write_text("not a sha\n")
+    assert git_commit(tmp_path, built) == ""
     (tmp_path / ".git" / "refs" / "heads").mkdir(parents=True)
     (tmp_path / ".git" / "HEAD").write_text("ref: refs/heads/main\n")
-    assert git_commit(tmp_path) == ""
+    assert git_commit(tmp_path, built) == ""
     (tmp_path / ".git" / "packed-refs").write_text(f"# pack-refs\n{sha} refs/heads/main\n")
     assert git_commit(tmp_path) == sha
     (tmp_path / ".git" / "refs" / "heads" / "main").write_text(sha.replace("0", "f") + "\n")
