@@ -37,7 +37,7 @@ import msgspec
 import zenoh
 
 from stack.bus import keys
-from stack.bus.node import wall_clock_us
+from stack.bus.node import stable_publisher_id, wall_clock_us
 from stack.bus.topics import FLAG_LOCKSTEP_TIME, FLAG_PROBE, HEADER
 from stack.fastpath.alltopics import AllTopicsReader
 from stack.msg.registry import TOPICS, fingerprint
@@ -322,7 +322,12 @@ class RecorderModule(Module):
         spec = rt.spec
         path = Path(path_arg).expanduser().resolve()
         info = new_recording_info(
-            spec.vehicle, profile_name(spec.vehicle, spec.supervisor_pid), spec.seed, spec.lockstep, git_commit()
+            spec.vehicle,
+            profile_name(spec.vehicle, spec.supervisor_pid),
+            spec.seed,
+            spec.lockstep,
+            git_commit(),
+            publishers={stable_publisher_id(spec.vehicle, name): name for name in spec.peers},
         )
         try:
             path.parent.mkdir(parents=True, exist_ok=True)

@@ -14,7 +14,7 @@ class TopicOverview:
     type: str
     count: int
     rate_hz: float  # mean over the whole recording
-    publishers: list[str]  # 8-hex-digit publisher ids
+    publishers: list[str]  # module names (8-hex-digit ids of publishers not of the run: tools)
     undecoded: int  # messages kept as raw payloads or of a schema this build lacks
     notes: list[str]
 
@@ -55,7 +55,7 @@ def overview(reader: RecordingReader) -> RecordingOverview:
             row = TopicOverview(c.topic, c.instance, c.type_name, 0, 0.0, [], 0, [])
             rows[(c.topic, c.instance)] = row
         row.count += c.message_count
-        publisher = f"{c.publisher_id:08x}"
+        publisher = reader.info.publisher_name(c.publisher_id)
         if publisher not in row.publishers:
             row.publishers.append(publisher)
         if not c.decodable:

@@ -16,6 +16,7 @@ copy cut short) is read up to the damage: every complete message before it is yi
 
 from __future__ import annotations
 
+import json
 import os
 import socket
 import time
@@ -73,7 +74,13 @@ class RecordingInfo:
     git_commit: str = ""
     stack_version: str = stack.__version__
     format_version: str = fmt.FORMAT_VERSION
+    publishers: dict[int, str] = field(default_factory=dict)
+    """The run's modules by publisher id (a tool publishing on the bus has an id of its own, not named here)."""
     extra: dict[str, str] = field(default_factory=dict)
+
+    def publisher_name(self, publisher_id: int) -> str:
+        """A publisher's module name, else its id in hex."""
+        return self.publishers.get(publisher_id, f"{publisher_id:08x}")
 
     # start_clock_us is the recording clock (see ``clock``) when start_unix_ns was taken: a real-time
     # recording's log time t happened at UNIX time start_unix_ns / 1000 + (t - start_clock_us) µs.
@@ -105,6 +112,7 @@ class RecordingInfo:
             "host": self.host,
             "stack_version": self.stack_version,
             "git_commit": self.git_commit,
+            "publishers": json.dumps({f"{k:08x}": v for k, v in sorted(self.publishers.items())}),
             "nonfinite_floats": '"NaN", "-NaN", "Infinity", "-Infinity" (JSON strings)',
         }
 
@@ -123,6 +131,7 @@ class RecordingInfo:
             "host",
             "stack_version",
             "git_commit",
+            "publishers",
             "nonfinite_floats",
         }
         seed = data.get("seed", "")
@@ -137,11 +146,36 @@ class RecordingInfo:
             git_commit=data.get("git_commit", ""),
             stack_version=data.get("stack_version", ""),
             format_version=data.get("format_version", ""),
+            publishers=_publishers(data.get("publishers", "")),
             extra={k: v for k, v in data.items() if k not in known},
         )
 
 
-def new_recording_info(vehicle: str, profile: str, seed: int | None, lockstep: bool, git_commit: str) -> RecordingInfo:
+def _publishers(text: str) -> dict[int, str]:
+    """The ``publishers`` metadata (JSON: hex id → module name); what is not that is left out."""
+    try:
+        data = json.loads(text) if text else {}
+    except ValueError:
+        return {}
+    if not isinstance(data, dict):
+        return {}
+    out = {}
+    for key, name in data.items():
+        try:
+            out[int(key, 16)] = str(name)
+        except ValueError:
+            continue
+    return out
+
+
+def new_recording_info(
+    vehicle: str,
+    profile: str,
+    seed: int | None,
+    lockstep: bool,
+    git_commit: str,
+    publishers: dict[int, str] | None = None,
+) -> RecordingInfo:
     """The info of a recording starting now on this host (simulated time starts at 0 in lockstep)."""
     return RecordingInfo(
         vehicle=vehicle,
@@ -152,6 +186,7 @@ def new_recording_info(vehicle: str, profile: str, seed: int | None, lockstep: b
         start_clock_us=0 if lockstep else wall_clock_us(),
         host=socket.gethostname(),
         git_commit=git_commit,
+        publishers=dict(publishers or {}),
     )
 
 

@@ -122,8 +122,12 @@ def test_a_lockstep_run_is_recorded_completely_and_exactly(tmp_path):
     line = next(ln for ln in out.stdout.splitlines() if ln.startswith("vehicle_rates_setpoint"))
     assert line.split()[1:4] == ["0", "VehicleRatesSetpoint", str(STEPS // 5 + 1)]
     assert abs(float(line.split()[4]) - 50.0) < 0.5
+    assert line.split()[5] == "pacer"  # the publisher by its module name
+    assert "commit unknown" not in out.stdout
     as_json = json.loads(log_cli(home, "log", "info", str(mcap), "--json").stdout)
     assert as_json["message_count"] == len(messages) and as_json["complete"]
+    by_topic = {t["topic"]: t["publishers"] for t in as_json["topics"]}
+    assert by_topic["sensor_gyro"] == ["tick_source"] and by_topic["vehicle_torque_setpoint"] == ["summer"]
 
     out = log_cli(home, "log", "export", str(mcap), "--csv", str(tmp_path / "csv"), "--topics", "sensor_gyro")
     assert out.returncode == 0, out.stderr

@@ -237,3 +237,12 @@ def test_a_failing_disk_stops_the_recording_but_never_the_bus(tmp_path):
     assert pump.failed == f"cannot write {path}: No space left on device" and pump.discarded == 89
     with RecordingReader(path) as reader:
         assert reader.complete and len(list(reader.iter_messages())) == 10
+
+
+def test_publishers_are_named_by_module_and_a_garbled_table_names_none():
+    info = RecordingInfo(vehicle="v1", publishers={0x1234ABCD: "commander", 7: "simulator"})
+    back = RecordingInfo.from_metadata(info.to_metadata())
+    assert back.publishers == info.publishers and "publishers" not in back.extra
+    assert back.publisher_name(0x1234ABCD) == "commander" and back.publisher_name(0xFF) == "000000ff"
+    for garbled in ("not json", "[1, 2]", '{"zz": "x", "0a": "ok"}'):
+        assert RecordingInfo.from_metadata({**info.to_metadata(), "publishers": garbled}).publishers in ({}, {10: "ok"})
