@@ -10,7 +10,7 @@ import typer
 
 from stack.cli.common import TransportOption, choose_transport, fail, print_table
 from stack.cli.observers import add_observers
-from stack.scenario.catalogue import scenarios
+from stack.scenario.catalogue import scenarios, unknown_scenario
 from stack.scenario.flight import WIND_SPEED, prepare_flight
 from stack.supervisor import state as run_state
 from stack.supervisor.profile import DEFAULT_PROFILE, ProfileError, load_profile
@@ -54,7 +54,7 @@ def fly(
             typer.echo(f"{s.name:{width}s}  {s.description}")
         raise typer.Exit(0)
     if scenario not in known:
-        fail(f"unknown scenario '{scenario}' (known: {', '.join(sorted(known))})", code=2)
+        fail(unknown_scenario(scenario), code=2)
     try:
         flags = {"plot": plot_ or web, "record": record is not None}
         prof = load_profile(profile or known[scenario].profile or DEFAULT_PROFILE, flags=flags)

@@ -57,6 +57,7 @@ from stack.msg.system import (
     VehicleLandDetected,
     VehicleStatus,
 )
+from stack.names import suggestion
 
 # Like PX4's "# TOPICS" lines, one type may serve several topics.
 TOPICS: dict[str, type[Message]] = {
@@ -116,7 +117,8 @@ TOPICS: dict[str, type[Message]] = {
 
 class UnknownTopic(KeyError):
     def __str__(self) -> str:
-        return f"unknown topic '{self.args[0]}' (see `stack topic list --all` for the catalogue)"
+        name = str(self.args[0])
+        return f"unknown topic '{name}'{suggestion(name, TOPICS)} (see `stack topic list --all` for the catalogue)"
 
 
 def message_type(topic: str) -> type[Message]:

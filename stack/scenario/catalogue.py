@@ -6,6 +6,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
+from stack.names import suggestion
 from stack.scenario.script import Script, ScriptContext
 
 Evaluate = Callable[[ScriptContext], dict[str, Any]]
@@ -70,5 +71,10 @@ def scenarios() -> dict[str, Scenario]:
 def get_scenario(name: str) -> Scenario:
     known = scenarios()
     if name not in known:
-        raise KeyError(f"unknown scenario '{name}' (known: {', '.join(sorted(known))})")
+        raise KeyError(unknown_scenario(name))
     return known[name]
+
+
+def unknown_scenario(name: str) -> str:
+    known = sorted(scenarios())
+    return f"unknown scenario '{name}'{suggestion(name, known)} (known: {', '.join(known)})"

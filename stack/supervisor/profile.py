@@ -24,7 +24,6 @@ them in its environment as ``STACK_<NAME>`` (``STACK_CONTROL_PORT``...).
 from __future__ import annotations
 
 import ast
-import difflib
 import string
 import tomllib
 from dataclasses import dataclass, field
@@ -34,6 +33,7 @@ from stack.bus import keys
 from stack.bus.config import BusConfig
 from stack.launch_files import launch_dirs
 from stack.msg.registry import TOPICS
+from stack.names import suggestion
 from stack.params.param import ParamError, ParamValue
 from stack.runtime.module import Module
 from stack.runtime.spec import load_module_class, resolve_args
@@ -220,8 +220,9 @@ class _Loader:
         beside = path.parent / (base_name if base_name.endswith(".toml") else f"{base_name}.toml")
         base = beside if beside.exists() else resolve_path(base_name)
         if not base.exists():
+            hint = suggestion(Path(base_name).stem, available_profiles())
             known = ", ".join(available_profiles())
-            raise ProfileError(f"{path}: extends: no such profile '{base_name}' (available: {known})")
+            raise ProfileError(f"{path}: extends: no such profile '{base_name}'{hint} (available: {known})")
         chain = (*extended_by, path.resolve())
         if base.resolve() in chain:
             raise ProfileError(f"{path}: extends: '{base_name}' leads back to this profile")
@@ -230,8 +231,9 @@ class _Loader:
 
     def load(self, flags: dict[str, bool]) -> Profile:
         if not self.path.exists():
+            hint = suggestion(self.path.stem, available_profiles())
             known = ", ".join(available_profiles())
-            raise ProfileError(f"{self.path}: no such profile (available: {known})")
+            raise ProfileError(f"{self.path}: no such profile{hint} (available: {known})")
         doc = self._document(self.path, ())
         self._only(doc, "", {"stack", "bus", "params", "module", "process", "scenario"})
         stack = self._table(doc, "stack")
@@ -316,13 +318,13 @@ class _Loader:
 
     def _scenario_limits(self, table: dict) -> dict[str, dict[str, float | bool]]:
         """Per-scenario check limits for this vehicle (``[scenario.attitude_step] yaw_rise_time_s = 0.3``)."""
-        from stack.scenario.catalogue import scenarios
+        from stack.scenario.catalogue import scenarios, unknown_scenario
 
         known = scenarios()
         limits: dict[str, dict[str, float | bool]] = {}
         for name, overrides in table.items():
             if name not in known:
-                raise self.fail(f"scenario.{name}", f"unknown scenario (known: {', '.join(sorted(known))})")
+                raise self.fail(f"scenario.{name}", unknown_scenario(name))
             if not isinstance(overrides, dict):
                 raise self.fail(f"scenario.{name}", "expected a table of check limits")
             checks = {c.metric: c for c in known[name].checks}
@@ -541,9 +543,7 @@ class _Loader:
         topics = self._get(stack, "stack", "open_topics", list, [])
         for i, topic in enumerate(topics):
             if topic not in TOPICS:
-                known = difflib.get_close_matches(str(topic), TOPICS, 1)
-                hint = f" (did you mean '{known[0]}'?)" if known else ""
-                raise self.fail(f"stack.open_topics[{i}]", f"'{topic}' is not a topic{hint}")
+                raise self.fail(f"stack.open_topics[{i}]", f"'{topic}' is not a topic{suggestion(str(topic), TOPICS)}")
         return tuple(topics)
 
     def _get(self, table: dict, where: str, key: str, typ: type, default: object) -> object:

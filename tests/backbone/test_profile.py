@@ -163,6 +163,17 @@ def test_unknown_profile_lists_the_available_ones(tmp_path):
     assert out.returncode == 2 and "no such profile" in out.stderr
 
 
+def test_a_misspelled_profile_scenario_or_topic_gets_the_closest_name(tmp_path):
+    home = tmp_path / "home"
+    for args, said in (
+        (("up", "sitl_quadd"), "launch/sitl_quadd.toml: no such profile (did you mean sitl_quad?) (available: "),
+        (("fly", "takeof_land"), "unknown scenario 'takeof_land' (did you mean takeoff_land?) (known: "),
+        (("topic", "info", "vehicle_attitud"), "unknown topic 'vehicle_attitud' (did you mean vehicle_attitude?)"),
+    ):
+        out = run_cli(home, *args)
+        assert out.returncode != 0 and out.stderr.startswith(f"error: {said}"), (args, out.stderr)
+
+
 def test_parameter_checks():
     p = Param("MC_ROLLRATE_P", 0.15, 0.01, 0.5)
     assert p.check("0.2") == 0.2 and p.check(0.3) == 0.3
