@@ -21,6 +21,7 @@ from stack.cli.common import (
     TransportOption,
     VehicleOption,
     choose_transport,
+    command_group,
     connect,
     fail,
     print_table,
@@ -37,7 +38,7 @@ from stack.supervisor.supervisor import Supervisor, UpOptions
 SUMMARY_WAIT_S = 2.0
 """Wall-clock seconds `stack status` waits for the vehicle's messages (vehicle_status comes at 2 Hz at least)."""
 
-app = typer.Typer(
+app = command_group(
     help="stack: a PX4-shaped multicopter autopilot, one process per module, uORB topics over Zenoh.",
     no_args_is_help=True,
     add_completion=False,

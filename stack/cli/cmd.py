@@ -22,7 +22,7 @@ from stack.bus import keys
 from stack.bus.node import Node
 from stack.bus.query import query_json
 from stack.bus.topics import MessageTooLarge, TopicPublisher
-from stack.cli.common import EndpointOption, VehicleOption, connect, fail, wait_until_sent
+from stack.cli.common import EndpointOption, VehicleOption, command_group, connect, fail, wait_until_sent
 from stack.cli.follow import (
     GOTO_MODES,
     LAND_MODES,
@@ -54,7 +54,7 @@ from stack.msg.system import RESULT_NAMES, VehicleCommand, VehicleCommandAck, Ve
 from stack.params import catalogue, client
 from stack.runtime.pacing import MAX_SPEED, describe_speed
 
-app = typer.Typer(
+app = command_group(
     help="Command the vehicle (arm, takeoff, goto, modes, missions...) and print the acknowledgement.",
     no_args_is_help=True,
 )

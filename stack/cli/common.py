@@ -22,6 +22,13 @@ from stack.bus.query import query_json
 from stack.supervisor import state as run_state
 from stack.supervisor.profile import LOCKSTEP_TRANSPORTS, Profile
 
+
+def command_group(**settings: object) -> typer.Typer:
+    """A command group with plain help screens, as Click prints them: an option's value placeholder only where
+    it takes a value (no ``<bool>`` beside a flag), no boxes."""
+    return typer.Typer(rich_markup_mode=None, **settings)  # type: ignore[arg-type]
+
+
 VehicleOption = typer.Option(
     None,
     "--vehicle",

@@ -16,7 +16,7 @@ from types import FrameType
 
 import typer
 
-from stack.cli.common import JsonOption, fail, print_table, to_jsonable
+from stack.cli.common import JsonOption, command_group, fail, print_table, to_jsonable
 from stack.cli.replay_stack import ReplayStack
 from stack.record.csvexport import export_csv
 from stack.record.overview import overview
@@ -25,7 +25,9 @@ from stack.record.replay import BusReplayer, replay_pass
 from stack.record.selection import TopicSelection
 from stack.runtime.pacing import Pacer, describe_speed, parse_speed
 
-app = typer.Typer(help="Inspect and convert flight recordings (MCAP files written by --record).", no_args_is_help=True)
+app = command_group(
+    help="Inspect and convert flight recordings (MCAP files written by --record).", no_args_is_help=True
+)
 
 FileArgument = typer.Argument(..., help="A recording (.mcap) written by `stack up --record` or `stack fly --record`")
 # The vehicle a recording without one is replayed as (the default profile's).

@@ -6,10 +6,10 @@ import json
 
 import typer
 
-from stack.cli.common import JsonOption, fail
+from stack.cli.common import JsonOption, command_group, fail
 from stack.mavlink.inspect import NoHeartbeat, format_summary, inspect_endpoint
 
-app = typer.Typer(help="Tools for a MAVLink autopilot (a Pixhawk, a simulated one, any MAVLink system).")
+app = command_group(help="Tools for a MAVLink autopilot (a Pixhawk, a simulated one, any MAVLink system).")
 
 
 @app.command()

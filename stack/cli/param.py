@@ -9,11 +9,11 @@ from pathlib import Path
 
 import typer
 
-from stack.cli.common import EndpointOption, JsonOption, VehicleOption, connect, fail, print_table
+from stack.cli.common import EndpointOption, JsonOption, VehicleOption, command_group, connect, fail, print_table
 from stack.params import client, qgc_file
 from stack.params.param import Param, ParamError, ParamValue
 
-app = typer.Typer(
+app = command_group(
     help="Parameters of the running modules: each is defined once (stack/params) and read by one or more modules; "
     "a set reaches every module that reads it, or none.",
     no_args_is_help=True,

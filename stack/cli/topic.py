@@ -23,6 +23,7 @@ from stack.cli.common import (
     EndpointOption,
     JsonOption,
     VehicleOption,
+    command_group,
     connect,
     fail,
     format_value,
@@ -35,7 +36,7 @@ from stack.cli.message_json import as_dict, parse_field_paths, parse_message, pi
 from stack.msg.base import Message
 from stack.msg.registry import TOPICS, UnknownTopic, fingerprint, message_type, schema_text
 
-app = typer.Typer(help="Inspect and publish topics (like PX4's listener and uorb top).", no_args_is_help=True)
+app = command_group(help="Inspect and publish topics (like PX4's listener and uorb top).", no_args_is_help=True)
 
 
 def _topic_type(topic: str) -> type[Message]:

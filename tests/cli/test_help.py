@@ -33,6 +33,8 @@ def test_every_command_takes_dash_h(path):
     long = CliRunner().invoke(app, [*path, "--help"], terminal_width=120)
     assert short.exit_code == 0 and "Usage:" in short.output, short.output
     assert short.output == long.output
+    # Plain help: a flag takes no value, so nothing stands beside it; no boxes.
+    assert "<bool>" not in short.output and "╭" not in short.output, short.output
 
 
 @pytest.mark.parametrize(
