@@ -102,11 +102,10 @@ class AttitudeControl:
         w = self._yaw_weight
         q_yaw = (math.cos(w * math.acos(dw)), 0.0, 0.0, math.sin(w * math.asin(dz)))
         qd_weighted = quat.mul(q_red, q_yaw)
-        # Error quaternion q⁻¹ ⊗ qd; 2·sign(w)·imag is 2·sin(α/2)·axis on the short way round.
-        ew, ex, ey, ez = quat.mul((qw, -qx, -qy, -qz), qd_weighted)
-        s = 2.0 if ew >= 0.0 else -2.0
+        # Error quaternion q⁻¹ ⊗ qd; 2·imag of its canonical form is 2·sin(α/2)·axis on the short way round.
+        _, ex, ey, ez = quat.canonical(quat.mul((qw, -qx, -qy, -qz), qd_weighted))
         kx, ky, kz = self._gain
-        rx, ry, rz = s * ex * kx, s * ey * ky, s * ez * kz
+        rx, ry, rz = 2.0 * ex * kx, 2.0 * ey * ky, 2.0 * ez * kz
         yawspeed = self._yawspeed_sp
         if math.isfinite(yawspeed):
             # World z expressed in the body frame (third column of Rᵀ).

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import math
 
+from stack.mathlib.scalar import FLT_EPSILON
 from stack.mathlib.vector import Vec3
 
 Quat = tuple[float, float, float, float]
@@ -59,11 +60,12 @@ def normalized(q: Quat) -> Quat:
 
 
 def canonical(q: Quat) -> Quat:
-    """The representative with a non-negative scalar part (the first non-zero element positive)."""
+    """The representative whose first element beyond FLT_EPSILON is positive (PX4 ``Quaternion::canonical``):
+    a scalar part that is rounding noise (a rotation by 180°) does not decide the sign."""
     for c in q:
-        if c > 0.0:
+        if c > FLT_EPSILON:
             return q
-        if c < 0.0:
+        if c < -FLT_EPSILON:
             return (-q[0], -q[1], -q[2], -q[3])
     return q
 
@@ -180,19 +182,30 @@ def to_rotation_vector(q: Quat) -> Vec3:
     return (x / n * angle, y / n * angle, z / n * angle)
 
 
-def from_two_vectors(src: Vec3, dst: Vec3) -> Quat:
-    """Shortest rotation taking the direction of src onto the direction of dst."""
-    cr = (src[1] * dst[2] - src[2] * dst[1], src[2] * dst[0] - src[0] * dst[2], src[0] * dst[1] - src[1] * dst[0])
+def from_two_vectors(src: Vec3, dst: Vec3, eps: float = 1e-5) -> Quat:
+    """Shortest rotation taking the direction of src onto the direction of dst (PX4 ``Quaternion(src, dst)``).
+
+    Opposite directions have no shortest rotation: as PX4, a half turn about src × the basis axis along which
+    src is smallest (the first such axis on a tie), so that controllers agree with upstream there too."""
+    cr = _cross(src, dst)
     dt = src[0] * dst[0] + src[1] * dst[1] + src[2] * dst[2]
-    ns = math.sqrt(src[0] * src[0] + src[1] * src[1] + src[2] * src[2])
-    nd = math.sqrt(dst[0] * dst[0] + dst[1] * dst[1] + dst[2] * dst[2])
-    w = dt + ns * nd
-    if w < 1e-9 * ns * nd:
-        # Opposite directions: rotate by pi about any axis orthogonal to src.
-        if abs(src[0]) > abs(src[2]):
-            return normalized((0.0, -src[1], src[0], 0.0))
-        return normalized((0.0, 0.0, -src[2], src[1]))
+    if math.sqrt(cr[0] * cr[0] + cr[1] * cr[1] + cr[2] * cr[2]) < eps and dt < 0.0:
+        ax, ay, az = abs(src[0]), abs(src[1]), abs(src[2])
+        if ax < ay:
+            axis = (1.0, 0.0, 0.0) if ax < az else (0.0, 0.0, 1.0)
+        else:
+            axis = (0.0, 1.0, 0.0) if ay < az else (0.0, 0.0, 1.0)
+        cr = _cross(src, axis)
+        w = 0.0
+    else:
+        ns2 = src[0] * src[0] + src[1] * src[1] + src[2] * src[2]
+        nd2 = dst[0] * dst[0] + dst[1] * dst[1] + dst[2] * dst[2]
+        w = dt + math.sqrt(ns2 * nd2)
     return normalized((w, cr[0], cr[1], cr[2]))
+
+
+def _cross(a: Vec3, b: Vec3) -> Vec3:
+    return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
 
 
 def integrate(q: Quat, omega_body: Vec3, dt: float) -> Quat:

@@ -173,3 +173,34 @@ def test_dcm_form_blends_in_the_direct_rotation_beyond_ninety_degrees():
     assert all(math.isfinite(x) for x in e)
     # cos(170°)² · yaw_w ≈ 0.94 of the result is the direct rotation.
     assert vec.norm(vec.sub(e, direct)) < 0.1 * vec.norm(direct)
+
+
+# Inputs where the answer hangs on a half turn; PX4's AttitudeControl (float32) gives these rate setpoints.
+ROLL_RATE_MAX = math.radians(220.0)
+
+
+@pytest.mark.parametrize("q_sp", [(0.0, -1.0, 0.0, 0.0), (0.0, 1.0, 0.0, 0.0)])
+def test_a_half_turn_in_roll_from_level_is_the_same_whichever_sign_names_it(q_sp):
+    c = AttitudeControl()
+    c.set_attitude_setpoint(q_sp)  # q_sp and -q_sp: one attitude, one answer (upstream +3.84 rad/s)
+    assert c.update(quat.IDENTITY) == pytest.approx((ROLL_RATE_MAX, 0.0, 0.0), abs=1e-6)
+
+
+def test_a_thrust_axis_exactly_reversed_turns_about_upstreams_axis():
+    c = AttitudeControl()
+    q = quat.from_euler(0.0, 0.5, 0.0)
+    c.set_attitude_setpoint(quat.mul(q, (0.0, 0.0, 1.0, 0.0)))
+    assert c.update(q) == pytest.approx((ROLL_RATE_MAX, -ROLL_RATE_MAX, 0.0), abs=1e-6)
+
+
+def test_canonical_looks_past_rounding_noise_as_px4_does():
+    assert quat.canonical((1e-9, -1.0, 0.0, 0.0)) == (-1e-9, 1.0, -0.0, -0.0)
+    assert quat.canonical((-1e-9, 0.0, 0.0, 1.0)) == (-1e-9, 0.0, 0.0, 1.0)
+    assert quat.canonical((-0.5, 0.5, 0.5, 0.5)) == (0.5, -0.5, -0.5, -0.5)
+
+
+def test_opposite_vectors_turn_about_src_cross_its_smallest_axis():
+    assert quat.from_two_vectors((0.0, 0.0, 1.0), (0.0, 0.0, -1.0)) == pytest.approx((0.0, -1.0, 0.0, 0.0))
+    assert quat.from_two_vectors((1.0, 0.0, 0.0), (-1.0, 0.0, 0.0)) == pytest.approx((0.0, 0.0, -1.0, 0.0))
+    half = quat.from_two_vectors((1.0, 0.0, 0.0), (0.0, 1.0, 0.0))
+    assert half == pytest.approx((math.sqrt(0.5), 0.0, 0.0, math.sqrt(0.5)))
