@@ -176,7 +176,9 @@ class L1Guidance:
         distance_a = math.hypot(a_to_p[0], a_to_p[1])
         along_track = _dot(a_to_p, ab)
         b_to_p_unit = _unit((position[0] - b[0], position[1] - b[1]))
-        ab_to_bp_angle = math.atan2(_cross(b_to_p_unit, ab), _dot(b_to_p_unit, ab))
+        # Exactly on B the direction from B is undefined (NaN upstream, so not "past B"): track the line.
+        on_b = b_to_p_unit == (0.0, 0.0)
+        ab_to_bp_angle = math.nan if on_b else math.atan2(_cross(b_to_p_unit, ab), _dot(b_to_p_unit, ab))
 
         if distance_a > self.l1_distance and along_track / max(distance_a, 1.0) < _BEHIND_A_COS:
             to_a = _unit((-a_to_p[0], -a_to_p[1]))
@@ -225,7 +227,8 @@ class L1Guidance:
         c_to_p = (position[0] - center[0], position[1] - center[1])
         distance = math.hypot(c_to_p[0], c_to_p[1])
         c_to_p_unit = (c_to_p[0] / distance, c_to_p[1] / distance) if distance > FLT_EPSILON else c_to_p
-        self.target_bearing = math.atan2(-c_to_p_unit[1], -c_to_p_unit[0])
+        # The bearing from the vehicle to the centre (0 at the centre itself, as upstream's geodetic bearing).
+        self.target_bearing = math.atan2(center[1] - position[1], center[0] - position[0])
 
         xtrack_vel_center = _cross(c_to_p_unit, ground_velocity)
         ltrack_vel_center = -_dot(ground_velocity, c_to_p_unit)

@@ -155,3 +155,20 @@ def test_line_crossing_point():
     assert line_crossing_point(a, b, (3.0, 4.0, 0.0), 5.0) == pytest.approx((6.0, 0.0, 0.0))
     assert line_crossing_point(a, b, (3.0, 4.0, 0.0), 3.0) == pytest.approx((3.0, 0.0, 0.0))
     assert line_crossing_point(a, a, (3.0, 4.0, 0.0), 5.0) == a
+
+
+# Inputs where the direction from a point to itself is asked for: ECL L1 (PX4 v1.13) answers these.
+def test_exactly_on_b_the_line_is_tracked_as_upstream_does():
+    l1 = L1Guidance(period=20.0, damping=0.75)
+    accel = l1.navigate_waypoints(A, B, B, (0.0, 10.0))  # on B, flying east, across the northbound leg
+    # Upstream: B→vehicle normalizes to NaN, so "past B" is false and the line logic turns left onto the leg.
+    assert accel == pytest.approx(-4.71, abs=0.01)
+    assert l1.target_bearing == 0.0
+
+
+def test_at_the_loiter_centre_the_bearing_to_it_is_zero():
+    l1 = L1Guidance()
+    l1.navigate_loiter((5.0, 5.0), (5.0, 5.0), 60.0, 1, (0.0, 10.0))
+    assert l1.target_bearing == 0.0
+    l1.navigate_loiter((5.0, 5.0), (5.0, -95.0), 60.0, 1, (0.0, 10.0))
+    assert l1.target_bearing == pytest.approx(math.pi / 2)  # the centre lies east
