@@ -24,7 +24,7 @@ from typing import NamedTuple
 from stack.attctl.attitude_control import AttitudeControl
 from stack.mathlib import quaternion as quat
 from stack.mathlib.quaternion import Quat
-from stack.mathlib.scalar import wrap_pi
+from stack.mathlib.scalar import is_negative, is_positive, is_zero, wrap_pi
 from stack.mathlib.vector import Vec3
 from stack.params import catalogue
 from stack.params.param import Param
@@ -42,12 +42,12 @@ THRUST_ERROR_ANGLE = math.radians(30.0)
 def sqrt_controller(error: float, p: float, second_ord_lim: float, dt: float) -> float:
     """ArduPilot's sqrt_controller: P near zero error, constant-deceleration square root beyond
     ``second_ord_lim / p²``, never more than ``|error| / dt`` (no overshoot in one step)."""
-    if second_ord_lim <= 0.0:
+    if is_negative(second_ord_lim) or is_zero(second_ord_lim):
         rate = error * p
-    elif p == 0.0:
-        if error > 0.0:
+    elif is_zero(p):
+        if is_positive(error):
             rate = math.sqrt(2.0 * second_ord_lim * error)
-        elif error < 0.0:
+        elif is_negative(error):
             rate = -math.sqrt(-2.0 * second_ord_lim * error)
         else:
             rate = 0.0
@@ -59,7 +59,7 @@ def sqrt_controller(error: float, p: float, second_ord_lim: float, dt: float) ->
             rate = -math.sqrt(2.0 * second_ord_lim * (-error - 0.5 * linear_dist))
         else:
             rate = error * p
-    if dt > 0.0:
+    if is_positive(dt):
         max_rate = abs(error) / dt
         rate = max(-max_rate, min(max_rate, rate))
     return rate
@@ -70,14 +70,14 @@ def inv_sqrt_controller(output: float, p: float, d_max: float) -> float:
 
     As upstream, the pure square-root case (p = 0) returns an unsigned distance.
     """
-    if d_max > 0.0 and p == 0.0:
+    if is_positive(d_max) and is_zero(p):
         return output * output / (2.0 * d_max)
-    if d_max <= 0.0:
-        return output / p if p != 0.0 else 0.0
+    if not is_positive(d_max):
+        return 0.0 if is_zero(p) else output / p
     if abs(output) < d_max / p:
         return output / p
     stopping = 0.5 * d_max / (p * p) + output * output / (2.0 * d_max)
-    return stopping if output > 0.0 else -stopping
+    return stopping if is_positive(output) else -stopping
 
 
 def input_shaping_ang_vel(target_rate: float, desired_rate: float, accel_max: float, dt: float,
@@ -129,10 +129,11 @@ def euler_rate_to_ang_vel(euler: Vec3, euler_rate: Vec3) -> Vec3:
 
 
 def ang_vel_to_euler_rate(euler: Vec3, ang_vel: Vec3) -> Vec3 | None:
-    """Body angular velocity → 3-2-1 Euler-angle rates; None at exactly ±90° pitch (singular)."""
+    """Body angular velocity → 3-2-1 Euler-angle rates; None within FLT_EPSILON of cos(pitch) = 0 (±90°, where
+    the Euler angles are singular), as ArduPilot's AC_AttitudeControl::ang_vel_to_euler_rate refuses."""
     sp, cp = math.sin(euler[0]), math.cos(euler[0])
     st, ct = math.sin(euler[1]), math.cos(euler[1])
-    if ct == 0.0:
+    if is_zero(ct):
         return None
     p, q, r = ang_vel
     tt = st / ct

@@ -9,6 +9,21 @@ FLT_EPSILON = 2.0**-23
 """C's ``FLT_EPSILON`` (single-precision machine epsilon), the threshold PX4 uses for its degenerate checks."""
 
 
+def is_zero(x: float) -> bool:
+    """ArduPilot's ``is_zero`` (AP_Math): within FLT_EPSILON of zero."""
+    return abs(x) < FLT_EPSILON
+
+
+def is_positive(x: float) -> bool:
+    """ArduPilot's ``is_positive``: at least FLT_EPSILON."""
+    return x >= FLT_EPSILON
+
+
+def is_negative(x: float) -> bool:
+    """ArduPilot's ``is_negative``: at most -FLT_EPSILON."""
+    return x <= -FLT_EPSILON
+
+
 def constrain(x: float, lo: float, hi: float) -> float:
     return lo if x < lo else hi if x > hi else x
 

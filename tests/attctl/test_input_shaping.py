@@ -285,3 +285,22 @@ def test_a_parameter_change_releases_the_shaper_and_can_turn_it_off():
     shaping.set_params({}, enabled=False)
     shaping.rates(AttitudeControl(), quat.IDENTITY, math.nan, quat.IDENTITY, (0.0, 0.0, 0.0), DT)
     assert not shaping.engaged and not shaping.enabled
+
+
+# Inputs within FLT_EPSILON of a limit, where ArduPilot's AP_Math (is_zero, is_positive) decides the branch.
+def test_an_acceleration_limit_below_flt_epsilon_is_no_limit_as_upstream():
+    assert sqrt_controller(1.0, 2.0, 1e-9, 0.0) == 2.0  # the linear branch, not sqrt(2·1e-9·…)
+    assert sqrt_controller(-1.0, 2.0, -1e-9, 0.0) == -2.0
+    assert sqrt_controller(1e-9, 0.0, 1.0, 0.0) == 0.0  # an error below FLT_EPSILON with p = 0: none
+    assert inv_sqrt_controller(2.0, 1e-9, 1.0) == pytest.approx(2.0)  # p below FLT_EPSILON: the sqrt branch
+
+
+def test_within_flt_epsilon_of_a_vertical_pitch_no_euler_rates_are_made_up():
+    almost_vertical = (0.0, math.pi / 2 - 1e-10, 0.0)
+    assert ang_vel_to_euler_rate(almost_vertical, (0.1, 0.2, 0.3)) is None
+    shaper = AttitudeInputShaper()
+    q = quat.from_euler(*almost_vertical)
+    shaper.reset(q)
+    for _ in range(5):
+        out = shaper.input_euler_angle_roll_pitch_yaw(0.0, almost_vertical[1], 0.2, False, q, DT)
+    assert all(abs(r) < 100.0 for r in shaper.target_rate) and quat.is_finite(out.q_target)
