@@ -151,6 +151,7 @@ class CommanderModule(Module):
         self._lockstep = rt.spec.lockstep
         self._failsafe = {"failsafe_action": "none", "failsafe_cause": ""}
         self._republish_now = False
+        self._module_pids: dict[str, int] = {}
         if not self._lockstep:
             self.commander.chain.silence_us = control_chain.REALTIME_SILENCE_US
         self.watch_modules(self._on_module)
@@ -167,8 +168,13 @@ class CommanderModule(Module):
     def _on_module(self, module: str, pid: int, alive: bool) -> None:
         if alive:
             self.commander.chain.module_alive(module)
-            self._republish_now = True  # a restarted module learns the vehicle's state at once
-            self._land_published = None
+            restarted = self._module_pids.get(module, pid) != pid
+            self._module_pids[module] = pid
+            if restarted:
+                # A restarted module learns the vehicle's state at once. (Only a restart: modules first seen
+                # arrive on Zenoh's thread whenever it delivers them, and a lockstep flight must not depend on it.)
+                self._republish_now = True
+                self._land_published = None
         elif not self._lockstep:
             # In lockstep a dead module's silence is measured in simulated time, which stands still while the
             # supervisor restarts it; in real time its liveliness token says at once that it is gone.

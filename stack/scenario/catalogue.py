@@ -44,6 +44,9 @@ class Scenario:
     """The launch profile the scenario flies on unless one is given, when the default one cannot fly it
     (link_loss: a simulated Pixhawk; the plane's scenarios: sitl_plane) or is not what its checks are sized for
     (rpyt_step: RotorS' controller on its default vehicle, the Firefly)."""
+    options: dict[str, str] = field(default_factory=dict)
+    """What a vehicle's profile may choose for the flight, with the defaults (``[scenario.plane_mission]
+    mission = "c172_rectangle"``: a mission sized for that aircraft)."""
 
 
 def scenarios() -> dict[str, Scenario]:

@@ -35,7 +35,7 @@ def prepare_flight(
     limits = dict(prof.scenario_limits.get(scenario, {}))
     if wind:
         limits = windy_limits(chosen.checks, limits)
-    add_scenario(prof, scenario, result_path, limits)
+    add_scenario(prof, scenario, result_path, limits, prof.scenario_options.get(scenario, {}))
 
 
 def set_params(prof: Profile, params: dict[str, object]) -> None:
@@ -58,7 +58,9 @@ def windy_limits(checks: tuple[Check, ...], limits: dict[str, object]) -> dict[s
     return out
 
 
-def add_scenario(prof: Profile, scenario: str, result_path: Path, limits: dict[str, object]) -> None:
+def add_scenario(
+    prof: Profile, scenario: str, result_path: Path, limits: dict[str, object], options: dict[str, str] | None = None
+) -> None:
     """Append the scenario module to a profile (critical: the stack stops when the scenario ends)."""
     cls = load_module_class("scenario")
     prof.modules.append(
@@ -67,7 +69,12 @@ def add_scenario(prof: Profile, scenario: str, result_path: Path, limits: dict[s
             module="scenario",
             cls=cls,
             params={},
-            args={"name": scenario, "result": str(result_path), "limits": json.dumps(limits)},
+            args={
+                "name": scenario,
+                "result": str(result_path),
+                "limits": json.dumps(limits),
+                "options": json.dumps(options or {}),
+            },
             condition="",
             restart="no",
             max_restarts=0,

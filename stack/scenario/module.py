@@ -25,6 +25,7 @@ class ScenarioModule(Module):
         Arg("name", "", "Scenario to fly (see `stack fly --list`)"),
         Arg("result", "", "Where to write the result JSON"),
         Arg("limits", "{}", 'JSON object overriding check limits, e.g. {"yaw_rise_time_s": 0.3}'),
+        Arg("options", "{}", 'JSON object choosing the scenario\'s options, e.g. {"mission": "c172_rectangle"}'),
     )
 
     def __init__(self, rt) -> None:
@@ -39,6 +40,7 @@ class ScenarioModule(Module):
         self._pids: dict[str, int] = {}
         self.watch_modules(self._on_module)
         self.ctx = ScriptContext(self.publish, lambda: self.now_us() * 1e-6, lambda: dict(self._pids))
+        self.ctx.options = {**self.scenario.options, **json.loads(str(self.args["options"]))}
         self.script = self.scenario.script(self.ctx)
         self.waiting = None
         self.started_wall: float | None = None

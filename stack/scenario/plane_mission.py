@@ -1,7 +1,10 @@
-"""Scenario ``plane_mission``: a fixed-wing mission from runway to runway (``launch/missions/plane_rectangle.plan``).
+"""Scenario ``plane_mission``: a fixed-wing mission from runway to runway.
 
-Runway takeoff to 30 m, a rectangle of four straight legs of 300–400 m at 40 m, a loiter of two circles, then
-Return: home at RTL_RETURN_ALT, a descending loiter, the approach on the runway's centre line and the landing.
+The mission is the profile's choice (option ``mission``), sized for the aircraft: by default
+``launch/missions/plane_rectangle.plan`` for the SIH airplane, a runway takeoff to 30 m, a rectangle of four
+straight legs of 300–400 m at 40 m and a loiter of two circles; ``c172_rectangle`` for a Cessna 172, whose turns
+at cruise are 150–300 m across, the same at 100 m over legs of 1.0–1.2 km. Then Return: home at RTL_RETURN_ALT,
+a descending loiter, the approach on the runway's centre line and the landing.
 Judged on the ground truth about home (:mod:`stack.scenario.plane_metrics`): the cross-track error on the second
 half of each leg (RMS and max), the altitude and true-airspeed errors there, the turns' overshoot past the next
 leg, the loiter's radius error, and where the aircraft came to rest.
@@ -14,7 +17,7 @@ from collections.abc import Generator
 from typing import Any
 
 from stack.fw.runway import on_runway
-from stack.launch_files import find_launch_file
+from stack.launch_files import find_mission
 from stack.mathlib import quaternion as quat
 from stack.mission.items import LOITER_COMMANDS, MAV_CMD_NAV_WAYPOINT, GeoPoint, Mission
 from stack.mission.loader import load_mission
@@ -25,7 +28,7 @@ from stack.scenario.metrics import value_at
 from stack.scenario.mission_box import upload
 from stack.scenario.script import ScenarioError, ScriptContext, Wait
 
-MISSION_FILE = "missions/plane_rectangle.plan"
+MISSION = "plane_rectangle"
 MISSION_TIMEOUT_S = 900.0
 TOUCHDOWN_SINK_MAX = 2.0
 """[m/s]: a firm landing; a stalled flare hits the runway at 3 m/s or more."""
@@ -44,7 +47,11 @@ def script(ctx: ScriptContext) -> Generator[Wait, None, None]:
     yield from autonomy.wait_ready(ctx)
     home_msg = ctx.latest["home_position"]
     home = GeoPoint(home_msg.lat, home_msg.lon, home_msg.alt)
-    mission = load_mission(find_launch_file(MISSION_FILE), home)
+    try:
+        path = find_mission(ctx.options["mission"])
+    except FileNotFoundError as e:
+        raise ScenarioError(f"option mission: {e}") from None
+    mission = load_mission(path, home)
     ctx.state["mission"] = mission
     yield from upload(ctx, mission, home)
     yield from ctx.command(autonomy.CMD.VEHICLE_CMD_MISSION_START, param1=0.0)
@@ -163,7 +170,7 @@ CHECKS = (
 
 SCENARIO = Scenario(
     name="plane_mission",
-    description="Fixed-wing: runway takeoff, a 300–400 m rectangle at 40 m, two loiter circles, return and landing",
+    description="Fixed-wing: runway takeoff, a rectangle sized for the aircraft, two loiter circles, return, landing",
     script=script,
     evaluate=evaluate,
     checks=CHECKS,
@@ -172,4 +179,5 @@ SCENARIO = Scenario(
     publish=("mission",),
     timeout_s=MISSION_TIMEOUT_S + 120.0,
     profile="sitl_plane",
+    options={"mission": MISSION},
 )

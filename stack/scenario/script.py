@@ -56,6 +56,8 @@ class ScriptContext:
         self.events: list[tuple[float, str]] = []
         self.tick_hooks: list[Callable[[], None]] = []
         self.state: dict[str, Any] = {}
+        self.options: dict[str, str] = {}
+        """The scenario's options as the profile chose them (see Scenario.options)."""
         self._acks: list[VehicleCommandAck] = []
 
     # -- time and waiting ------------------------------------------------------------------------------
@@ -115,7 +117,9 @@ class ScriptContext:
     def command(self, command: int, timeout: float = 2.0, **params: float) -> Generator[Wait, None, VehicleCommandAck]:
         """Send a vehicle_command and wait for its acknowledgement; a refusal raises ScenarioError."""
         self._acks.clear()
-        self.publish("vehicle_command", VehicleCommand(command=command, from_external=True, **params))
+        # Floats as the fields say (an int in a float field would go on the wire as a MessagePack int).
+        floats = {name: float(value) for name, value in params.items()}
+        self.publish("vehicle_command", VehicleCommand(command=command, from_external=True, **floats))
         label = command_label(command)
         yield self.until(lambda: any(a.command == command for a in self._acks), timeout, f"the ack of command {label}")
         ack = next(a for a in self._acks if a.command == command)

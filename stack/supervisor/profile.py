@@ -31,7 +31,7 @@ from pathlib import Path
 
 from stack.bus import keys
 from stack.bus.config import BusConfig
-from stack.launch_files import launch_dirs
+from stack.launch_files import find_mission, launch_dirs
 from stack.msg.registry import TOPICS
 from stack.names import suggestion
 from stack.params.param import ParamError, ParamValue
@@ -107,6 +107,7 @@ class Profile:
     modules: list[ModuleEntry] = field(default_factory=list)
     processes: list[ProcessEntry] = field(default_factory=list)
     scenario_limits: dict[str, dict[str, float | bool]] = field(default_factory=dict)
+    scenario_options: dict[str, dict[str, str]] = field(default_factory=dict)
 
     @property
     def name(self) -> str:
@@ -313,30 +314,46 @@ class _Loader:
             for aname, value in module.args.items():
                 if isinstance(value, str):
                     self._check_placeholders(f"module ({module.name}).args.{aname}", value, allow_json=True)
-        profile.scenario_limits = self._scenario_limits(self._table(doc, "scenario"))
+        profile.scenario_limits, profile.scenario_options = self._scenario_settings(self._table(doc, "scenario"))
         return profile
 
-    def _scenario_limits(self, table: dict) -> dict[str, dict[str, float | bool]]:
-        """Per-scenario check limits for this vehicle (``[scenario.attitude_step] yaw_rise_time_s = 0.3``)."""
+    def _scenario_settings(
+        self, table: dict
+    ) -> tuple[dict[str, dict[str, float | bool]], dict[str, dict[str, str]]]:
+        """Per-scenario check limits and options for this vehicle (``[scenario.attitude_step] yaw_rise_time_s =
+        0.3``, ``[scenario.plane_mission] mission = "c172_rectangle"``)."""
         from stack.scenario.catalogue import scenarios, unknown_scenario
 
         known = scenarios()
         limits: dict[str, dict[str, float | bool]] = {}
+        options: dict[str, dict[str, str]] = {}
         for name, overrides in table.items():
             if name not in known:
                 raise self.fail(f"scenario.{name}", unknown_scenario(name))
             if not isinstance(overrides, dict):
-                raise self.fail(f"scenario.{name}", "expected a table of check limits")
+                raise self.fail(f"scenario.{name}", "expected a table of check limits and options")
             checks = {c.metric: c for c in known[name].checks}
-            for metric, value in overrides.items():
-                if metric not in checks:
-                    raise self.fail(f"scenario.{name}.{metric}", f"not a check of {name} ({', '.join(checks)})")
-                if type(value) is not type(checks[metric].limit) and not (
-                    isinstance(value, int | float) and isinstance(checks[metric].limit, float)
+            choices = known[name].options
+            for key, value in overrides.items():
+                where = f"scenario.{name}.{key}"
+                if key in choices:
+                    if not isinstance(value, str):
+                        raise self.fail(where, "expected a string")
+                    if key == "mission":  # found now, not once the stack is up
+                        try:
+                            find_mission(value)
+                        except FileNotFoundError as e:
+                            raise self.fail(where, str(e)) from None
+                    options.setdefault(name, {})[key] = value
+                    continue
+                if key not in checks:
+                    raise self.fail(where, f"not a check or option of {name} ({', '.join([*checks, *choices])})")
+                if type(value) is not type(checks[key].limit) and not (
+                    isinstance(value, int | float) and isinstance(checks[key].limit, float)
                 ):
-                    raise self.fail(f"scenario.{name}.{metric}", f"expected {type(checks[metric].limit).__name__}")
-            limits[name] = dict(overrides)
-        return limits
+                    raise self.fail(where, f"expected {type(checks[key].limit).__name__}")
+                limits.setdefault(name, {})[key] = value
+        return limits, options
 
     def _bus(self, table: dict) -> tuple[BusConfig, int]:
         self._only(table, "bus", {"port", "connect", "listen", "mode", "low_latency", "lease_ms"})

@@ -118,9 +118,10 @@ def test_the_vehicle_profiles_extend_sitl_quad_changing_only_airframe_and_tuning
         commander = next(m for m in vehicle.modules if m.name == "commander")
         assert commander.params["NAV_DLL_ACT"] == 2  # inherited failsafe setting
         rate = next(m for m in vehicle.modules if m.name == "mc_rate_control")
-        assert rate.params["MC_ROLLRATE_K"] != next(m for m in quad.modules if m.name == "mc_rate_control").params[
-            "MC_ROLLRATE_K"
-        ]
+        assert (
+            rate.params["MC_ROLLRATE_K"]
+            != next(m for m in quad.modules if m.name == "mc_rate_control").params["MC_ROLLRATE_K"]
+        )
 
 
 @pytest.mark.parametrize(
@@ -283,3 +284,21 @@ def test_stack_up_refuses_a_module_that_fails_on_import_in_one_line(tmp_path, mo
         "RuntimeError: no hardware here"
     ]
     assert not (home / "runs").exists()
+
+
+def test_a_profile_chooses_a_scenarios_options_and_a_wrong_one_is_refused_before_anything_starts(tmp_path):
+    c172 = load_profile("jsbsim_c172")
+    assert c172.scenario_options == {"plane_mission": {"mission": "c172_rectangle"}}
+    assert load_profile("sitl_plane").scenario_options == {}
+    for table, problem in (
+        (
+            'mission = "c172_rectangel"',
+            "scenario.plane_mission.mission: c172_rectangel: no such mission file (did you mean c172_rectangle?)",
+        ),
+        ("mission = 3", "scenario.plane_mission.mission: expected a string"),
+        ("missions = 'box'", "scenario.plane_mission.missions: not a check or option of plane_mission ("),
+    ):
+        path = write_profile(tmp_path / "plane.toml", f'extends = "sitl_plane"\n[scenario.plane_mission]\n{table}\n')
+        with pytest.raises(ProfileError) as err:
+            load_profile(path)
+        assert problem in str(err.value), str(err.value)
