@@ -3,7 +3,7 @@
 The mission is the profile's choice (option ``mission``), sized for the aircraft: by default
 ``launch/missions/plane_rectangle.plan`` for the SIH airplane, a runway takeoff to 30 m, a rectangle of four
 straight legs of 300–400 m at 40 m and a loiter of two circles; ``c172_rectangle`` for a Cessna 172, whose turns
-at cruise are 150–300 m across, the same at 100 m over legs of 1.0–1.2 km. Then Return: home at RTL_RETURN_ALT,
+at cruise are 150–300 m across, the same at 120 m over legs of 1.5–1.8 km. Then Return: home at RTL_RETURN_ALT,
 a descending loiter, the approach on the runway's centre line and the landing.
 Judged on the ground truth about home (:mod:`stack.scenario.plane_metrics`): the cross-track error on the second
 half of each leg (RMS and max), the altitude and true-airspeed errors there, the turns' overshoot past the next

@@ -2,8 +2,8 @@
 
 plane_mission (runway takeoff, a 300–400 m rectangle at 40 m, two loiter circles, return and landing) on L1, and
 plane_loiter_wind (three circles in an 8 m/s wind with gusts) on NPFG, each on its own seed, judged by the
-scenarios' limits (doubled in wind); and the same mission on JSBSim's Cessna 172P, which must complete it and land
-on the runway (its profile reports the track figures of a 36 m/s aircraft on legs this short). These fly in one
+scenarios' limits (doubled in wind); and plane_mission on JSBSim's Cessna 172P with the mission its profile
+chooses (legs of 1.5–1.8 km), judged as the SIH airplane's but for its loiter and touchdown. These fly in one
 process (the ``stack fly`` flight, message for message). plane_gps_loss flies through the real CLI, every module
 its own process, recorded: 20 s without GPS while circling, the position estimate dead-reckoning on the airspeed.
 benchmarks/sweep.py flies 20 seeds of each on either guidance, calm and in 8 m/s wind.
