@@ -5,6 +5,7 @@ from __future__ import annotations
 import itertools
 import json
 import math
+import signal
 import statistics
 import time
 from dataclasses import dataclass
@@ -342,20 +343,24 @@ def pub(
             typer.echo(f"warning: no subscriber for {topic} (instance {instance})", err=True)
         sent = 0
         period = 1.0 / rate if rate > 0 else 0.0
+        next_time = time.monotonic()
+        # Ctrl-C ends a --rate stream, what was sent is said below. A flag, not an exception: SIGINT may land
+        # while Zenoh publishes, and an exception raised there would leave its session unable to close.
+        interrupted: list[int] = []
+        previous = signal.signal(signal.SIGINT, lambda signum, frame: interrupted.append(signum))
         if rate > 0:
             until = f"{count} message{'s' if count != 1 else ''}" if count else "until Ctrl-C"
             typer.echo(f"publishing {type(template).__name__} on {topic} (instance {instance}) at {rate:g} Hz, {until}")
-        next_time = time.monotonic()
         try:
-            while True:
+            while not interrupted:
                 publisher.publish(msgspec.structs.replace(template))
                 sent += 1
                 if rate <= 0 or (count and sent >= count):
                     break
                 next_time += period
                 time.sleep(max(0.0, next_time - time.monotonic()))
-        except KeyboardInterrupt:
-            pass  # Ctrl-C ends a --rate stream: what was sent is said below
+        finally:
+            signal.signal(signal.SIGINT, previous)
         time.sleep(0.1)  # let Zenoh flush before the session closes
     typer.echo(f"published {sent} message{'s' if sent != 1 else ''} on {topic}")
 

@@ -105,7 +105,7 @@ def test_the_commander_does_not_import_the_position_controller():
 
 
 def test_launch_files_are_found_without_the_supervisor():
-    assert GRAPH["stack.launch_files"] == set()
+    assert GRAPH["stack.launch_files"] <= {"stack.names"}  # the closest name of a mission; nothing of the supervisor
     scenarios = [m for m in MODULES if m.startswith("stack.scenario.")]
     flying_files = ["stack.scenario.mission_box", "stack.scenario.plane_mission"]
     assert sorted(m for m in scenarios if "stack.launch_files" in GRAPH[m]) == flying_files

@@ -67,7 +67,7 @@ def test_a_good_profile_loads_in_order_with_parameters(tmp_path):
         (("critical = true", "critical = 1"), "module[0] (tick_source).critical", "expected bool"),
         (('"plot and TEST_OFFSET > 1"', '"plot and WHATEVER"'), "module[2] (pacer_when_plotting).condition", "unknown"),
         (('"plot and TEST_OFFSET > 1"', '"import os"'), "module[2] (pacer_when_plotting).condition", "cannot parse"),
-        (("seed = 3", 'seed = 3\nopen_topics = ["vehicle_atitude"]'), "stack.open_topics[0]", "'vehicle_attitude'?"),
+        (("seed = 3", 'seed = 3\nopen_topics = ["vehicle_atitude"]'), "stack.open_topics[0]", "vehicle_attitude?)"),
         (("seed = 3", 'seed = 3\nopen_topics = "vehicle_attitude"'), "stack.open_topics", "expected list"),
     ],
 )
