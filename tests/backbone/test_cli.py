@@ -90,10 +90,15 @@ def test_ctrl_c_ends_a_publishing_stream_saying_what_was_sent(stack):
         start_new_session=True,
     )
     assert stream.stdout is not None
-    first = stream.stdout.readline()
-    assert first == "publishing VehicleRatesSetpoint on vehicle_rates_setpoint (instance 0) at 20 Hz, until Ctrl-C\n"
-    os.killpg(stream.pid, signal.SIGINT)
-    out, err = stream.communicate(timeout=30)
+    try:
+        first = stream.stdout.readline()
+        said = "publishing VehicleRatesSetpoint on vehicle_rates_setpoint (instance 0) at 20 Hz, until Ctrl-C\n"
+        assert first == said
+        os.killpg(stream.pid, signal.SIGINT)
+        out, err = stream.communicate(timeout=30)
+    finally:
+        stream.kill()  # never left publishing if the test fails
+        stream.wait()
     assert stream.returncode == 0 and "Traceback" not in err, err
     assert re.fullmatch(r"published \d+ messages? on vehicle_rates_setpoint\n", out), out
 

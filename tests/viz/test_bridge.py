@@ -219,13 +219,18 @@ def test_ctrl_c_on_stack_plot_web_stops_it_quietly_with_its_server(tmp_path, mon
             start_new_session=True,
         )
         assert plot.stdout is not None
-        for line in plot.stdout:
-            if " ready " in line:
-                break
-        server = psutil.Process(plot.pid).children(recursive=True)
-        assert server, "no web viewer server"
-        os.killpg(plot.pid, signal.SIGINT)
-        out, err = plot.communicate(timeout=30)
+        try:
+            for line in plot.stdout:
+                if " ready " in line:
+                    break
+            server = psutil.Process(plot.pid).children(recursive=True)
+            assert server, "no web viewer server"
+            os.killpg(plot.pid, signal.SIGINT)
+            out, err = plot.communicate(timeout=30)
+        finally:
+            if plot.poll() is None:  # never left running if the test fails
+                os.killpg(plot.pid, signal.SIGKILL)
+                plot.wait()
         assert plot.returncode == 0, err
         assert "plot stopped" in out
         assert "ERROR" not in err and "\x1b[" not in err, err  # nothing from Rerun about a severed connection
