@@ -4,13 +4,11 @@ import json
 import os
 import re
 import signal
-import subprocess
-import sys
 
 import pytest
 
 from stack.bus.ports import free_port
-from tests.support.harness import REPO, RunningStack, chain_profile, run_cli, stack_env, wait_no_processes
+from tests.support.harness import RunningStack, chain_profile, cli_in_its_own_session, run_cli, wait_no_processes
 
 
 @pytest.fixture(scope="module")
@@ -80,15 +78,7 @@ def test_topic_pub_checks_the_schema_and_publishes(stack):
 
 
 def test_ctrl_c_ends_a_publishing_stream_saying_what_was_sent(stack):
-    stream = subprocess.Popen(
-        [sys.executable, "-m", "stack", "topic", "pub", "vehicle_rates_setpoint", '{"roll": 0.1}', "-r", "20"],
-        env=stack_env(stack.home),
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-        cwd=REPO,
-        start_new_session=True,
-    )
+    stream = cli_in_its_own_session(stack.home, "topic", "pub", "vehicle_rates_setpoint", '{"roll": 0.1}', "-r", "20")
     assert stream.stdout is not None
     try:
         first = stream.stdout.readline()

@@ -56,6 +56,20 @@ def run_cli(home: Path, *args: str, timeout: float = 60.0) -> subprocess.Complet
     )
 
 
+def cli_in_its_own_session(home: Path, *args: str) -> subprocess.Popen[str]:
+    """``stack ARGS`` started as a terminal starts it, in a process group of its own (so a Ctrl-C can be sent
+    to the whole group with ``os.killpg``), its output piped."""
+    return subprocess.Popen(
+        [sys.executable, "-m", "stack", *args],
+        env=stack_env(home),
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        cwd=REPO,
+        start_new_session=True,
+    )
+
+
 class RunningStack:
     """`stack up PROFILE ...` (or `stack fly SCENARIO ...` with ``command="fly"``) in the background, with its
     output collected line by line."""

@@ -19,6 +19,7 @@ from tests.support.harness import (
     REPO,
     RunningStack,
     chain_profile,
+    cli_in_its_own_session,
     eventually,
     run_cli,
     stack_env,
@@ -209,15 +210,7 @@ def test_ctrl_c_on_stack_plot_web_stops_it_quietly_with_its_server(tmp_path, mon
     try:
         stack.wait_up()
         # In a session of its own, as a terminal runs it: Ctrl-C signals the whole foreground process group.
-        plot = subprocess.Popen(
-            [sys.executable, "-m", "stack", "plot", "--web"],
-            env=stack_env(home),
-            stdout=subprocess.PIPE,
-            stderr=subprocess.PIPE,
-            text=True,
-            cwd=REPO,
-            start_new_session=True,
-        )
+        plot = cli_in_its_own_session(home, "plot", "--web")
         assert plot.stdout is not None
         try:
             for line in plot.stdout:
