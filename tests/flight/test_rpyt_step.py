@@ -4,8 +4,8 @@ rpyt_step flies steps of roll, pitch and yaw rate through the RotorS mode's stic
 each), judged by the limits of its profile; RotorS' law has no integrator, so the yaw rate settles short of the
 command by the rotors' drag torque over the yaw-rate gain, which the vehicle model predicts. The default profile
 flies the same steps with PX4's loops. These figures come from flights in one process (the ``stack fly`` flight,
-message for message). takeoff_land holds the default limits in PX4's auto modes, flown by RotorS' controller
-through the real CLI, every module its own process.
+message for message), as does takeoff_land, which holds the default limits in PX4's auto modes flown by RotorS'
+controller.
 """
 
 from __future__ import annotations
@@ -19,7 +19,7 @@ from stack.params import catalogue
 from stack.scenario.catalogue import scenarios
 from stack.sim.vehicle import load_vehicle
 from stack.supervisor.profile import load_profile
-from tests.flight.flights import InProcessFlight, fly_scenario
+from tests.flight.flights import InProcessFlight
 
 pytestmark = pytest.mark.flight
 
@@ -73,12 +73,12 @@ def test_the_yaw_rate_falls_short_by_the_rotor_drag_over_the_rate_gain(
         assert metrics[f"{axis}_up_rise_time_s"] > 0.0 and math.isfinite(metrics[f"{axis}_ss_error_deg"])
 
 
-def test_takeoff_land_in_the_auto_modes_meets_the_default_limits(tmp_path) -> None:
-    flight = fly_scenario(tmp_path, "takeoff_land", 3, "rotors_pelican", record=False)
-    assert flight.report["error"] is None, flight.output
-    assert flight.report["profile"] == "rotors_pelican"
-    assert flight.report["passed"] is True and flight.returncode == 0, flight.output
-    assert flight.report["metrics"]["landed_and_disarmed"] is True
+def test_takeoff_land_in_the_auto_modes_meets_the_default_limits(fly_here: FlyHere) -> None:
+    report = fly_here("takeoff_land", 3, "rotors_pelican").report
+    assert report["error"] is None, report
+    assert report["profile"] == "rotors_pelican"
+    assert report["passed"] is True, report
+    assert report["metrics"]["landed_and_disarmed"] is True
 
 
 def test_the_rotors_mode_on_px4s_attitude_loop_follows_the_sticks(fly_here: FlyHere) -> None:
