@@ -7,6 +7,7 @@ import os
 import signal
 import time
 from pathlib import Path
+from typing import Any
 
 import psutil
 import typer
@@ -24,6 +25,7 @@ from stack.cli.common import (
     command_group,
     connect,
     fail,
+    name_value_placeholders,
     print_table,
     query_json,
     to_jsonable,
@@ -278,5 +280,12 @@ def _latest(node: Node, topics: tuple[str, ...]) -> dict[str, object]:
     return latest
 
 
+def cli() -> Any:
+    """The ``stack`` command as Click runs it, each value's placeholder its name."""
+    command = typer.main.get_command(app)
+    name_value_placeholders(command)
+    return command
+
+
 def main() -> None:
-    app()
+    cli()()

@@ -9,7 +9,7 @@ import sys
 import time
 from collections.abc import Iterable, Iterator, Sequence
 from contextlib import contextmanager
-from typing import NoReturn
+from typing import Any, NoReturn
 
 import msgspec
 import typer
@@ -27,6 +27,19 @@ def command_group(**settings: object) -> typer.Typer:
     """A command group with plain help screens, as Click prints them: an option's value placeholder only where
     it takes a value (no ``<bool>`` beside a flag), no boxes."""
     return typer.Typer(rich_markup_mode=None, **settings)  # type: ignore[arg-type]
+
+
+def name_value_placeholders(command: Any) -> None:
+    """Each value's placeholder in the help is its name (``--seed SEED``), as Click and argparse print them, not its
+    Python type (``<int>``); a choice keeps its choices."""
+    for param in command.params:
+        takes_value = not getattr(param, "is_flag", False) and not getattr(param, "count", False)
+        if param.metavar is None and takes_value and not param.type_descriptor.is_choice and param.name:
+            param.metavar = param.name.upper()
+            if param.param_type_name == "argument":  # Typer prints an argument's type after its name
+                param.display_type_rich = lambda ctx: None
+    for sub in getattr(command, "commands", {}).values():
+        name_value_placeholders(sub)
 
 
 VehicleOption = typer.Option(
