@@ -257,8 +257,7 @@ class FixedwingNavigator:
             self._mission_start_counter = request.mission_start_counter
             if request.mission_start_index < tracker.progress.seq_total:
                 first = request.mission_start_index
-        home = inp.home.position if inp.home is not None else (0.0, 0.0, 0.0)
-        progress = tracker.start(inp.now_us, inp.position, first, home)
+        progress = self.missions.start(inp.now_us, inp.position, first, inp.home)
         self._on_item(inp, progress.seq_current)
 
     def _on_item(self, inp: FwNavigatorInputs, seq: int) -> None:

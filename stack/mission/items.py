@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterator, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from stack.mathlib.geo import MapProjection
 
@@ -133,6 +133,26 @@ class Mission:
 
     def __getitem__(self, index: int) -> MissionItem:
         return self.items[index]
+
+
+def about_home(mission: Mission, home: GeoPoint) -> Mission:
+    """The mission flown from ``home``: each item's latitude and longitude is a place on the ground and its AMSL
+    altitude a height, wherever home was when the mission was planned, as PX4's navigator flies global items at
+    their coordinates (home is set again at arming, after the upload). Local items and heights above home stay
+    about home."""
+    if mission.home == home:
+        return mission
+    projection = MapProjection(home.lat, home.lon)
+    items = []
+    for item in mission.items:
+        changes: dict[str, float] = {}
+        if math.isfinite(item.lat) and math.isfinite(item.lon):
+            changes["north"], changes["east"] = projection.project(item.lat, item.lon)
+        amsl = item.frame != MAV_FRAME_LOCAL_NED and item.frame not in GLOBAL_RELATIVE_FRAMES
+        if amsl and math.isfinite(item.alt) and math.isfinite(item.down):
+            changes["down"] = home.alt - item.alt
+        items.append(replace(item, **changes) if changes else item)
+    return Mission(tuple(items), home, mission.source)
 
 
 def _number(value: object) -> float:

@@ -11,9 +11,11 @@ from __future__ import annotations
 from collections.abc import Callable, Mapping
 from typing import TYPE_CHECKING, NamedTuple
 
+from stack.commander.home import HomePosition
+from stack.mathlib.vector import ZERO3, Vec3
 from stack.mission import feasibility
-from stack.mission.items import Mission
-from stack.mission.tracker import MissionTracker
+from stack.mission.items import GeoPoint, Mission, about_home
+from stack.mission.tracker import MissionProgress, MissionTracker
 from stack.mission.transfer import mission_from_message
 from stack.msg import navigation
 
@@ -67,6 +69,17 @@ class MissionStore:
         """An upload that could not even be read, or failed the checks: no mission, and the reason."""
         self.mission_id, self.reason, self.mission, self.tracker = mission_id, reason, None, None
         self._on_replaced()
+
+    def start(self, now_us: int, position: Vec3, first_index: int, home: HomePosition | None) -> MissionProgress:
+        """Start (or resume, ``first_index`` −1) the loaded mission from ``home``, its geodetic items placed about
+        it (:func:`stack.mission.items.about_home`)."""
+        assert self.mission is not None and self.tracker is not None
+        if home is not None and home.global_valid and self.mission.home is not None:
+            placed = about_home(self.mission, GeoPoint(home.lat, home.lon, home.alt))
+            if placed is not self.mission:
+                self.mission = placed
+                self.tracker.replace_items(placed)
+        return self.tracker.start(now_us, position, first_index, home.position if home is not None else ZERO3)
 
     def set_params(self, params: Mapping[str, object]) -> None:
         if self.tracker is not None:

@@ -131,6 +131,14 @@ class MissionTracker:
         """The state as of the last ``start`` or ``update``."""
         return self._progress()
 
+    def replace_items(self, mission: Mission | Sequence[MissionItem]) -> None:
+        """The same items placed elsewhere (:func:`stack.mission.items.about_home`); the progress is kept and the
+        current target follows at the next ``start``."""
+        items = tuple(mission)
+        if [i.command for i in items] != [i.command for i in self._items]:
+            raise ValueError("replace_items takes the same items, placed elsewhere")
+        self._items = items
+
     def start(
         self, now_us: int, position: Vec3, first_index: int = 0, home_ned: Vec3 = (0.0, 0.0, 0.0)
     ) -> MissionProgress:

@@ -348,8 +348,7 @@ class FlightModeManager:
             # An item set for a mission that was replaced since (a longer one) does not apply to this one.
             if request.mission_start_index < self.tracker.progress.seq_total:
                 first = request.mission_start_index
-        home = inp.home.position if inp.home is not None else (0.0, 0.0, 0.0)
-        self.tracker.start(inp.state.now_us, inp.state.position, first, home)
+        self.missions.start(inp.state.now_us, inp.state.position, first, inp.home)
         self._mission_returning = False
         self._land_xy = None
 
