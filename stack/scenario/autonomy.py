@@ -1,9 +1,18 @@
 """What the autonomous-flight scenarios share: getting ready, taking off, landing, and judging positions.
 
-Positions are compared about home: the estimator's local frame has its own origin (where GPS first
-fixed, at the height of the first barometer sample), the simulator's ground truth another (the
-simulated home point on the ground). Both are taken relative to the vehicle's position when home was
-set (at arming), which is what a pilot means by "5 m above home" and what return-to-launch aims for.
+Positions are compared about home, which is what a pilot means by "5 m above home" and what return-to-launch
+aims for: the estimator's local frame has its own origin (where GPS first fixed, at the height of the first
+barometer sample), the simulator's ground truth another (the simulated home point on the ground).
+
+- Horizontally, by where each truly is: the estimator's frame is tied to latitude and longitude by its
+  reference point, so a setpoint (or home) is a place on the ground, and the truth's latitude and longitude put
+  the vehicle in the same frame. The error of a hover is then the estimate's error and the control's at that
+  moment, not also the estimate's error at the instant home was set (a second draw of the GPS noise that a
+  position hold has nothing to do with).
+- Vertically, against the heights at arming: the estimate's height is referenced to the barometer at start,
+  and its absolute altitude carries the GPS altitude's metres of error.
+
+Without a reference point (an estimate that reports none), horizontally too against the positions at arming.
 """
 
 from __future__ import annotations
@@ -14,6 +23,7 @@ from collections.abc import Generator
 from typing import Any
 
 from stack.mathlib import quaternion as quat
+from stack.mathlib.geo import MapProjection
 from stack.mathlib.vector import Vec3
 from stack.msg.system import VehicleCommand, VehicleStatus
 from stack.scenario.metrics import value_at
@@ -97,8 +107,18 @@ class Frames:
             raise ScenarioError("no home position or no ground truth was received")
         self.truth = truth
         self.home: Vec3 = (home.x, home.y, home.z)
-        armed_at = ctx.state.get("armed_at", truth.times[0])
-        self.truth_home: Vec3 = truth_at(truth, armed_at).position
+        armed = truth_at(truth, ctx.state.get("armed_at", truth.times[0]))
+        self.projection: MapProjection | None = None
+        lpos = ctx.latest.get("vehicle_local_position")
+        if lpos is not None and lpos.xy_global and math.isfinite(armed.lat) and math.isfinite(armed.lon):
+            self.projection = MapProjection(lpos.ref_lat, lpos.ref_lon)
+            north, east = self.projection.project(armed.lat, armed.lon)
+            # Where home truly is, in the simulator's frame: the vehicle at arming, less its true offset from home.
+            self.truth_home: Vec3 = (
+                armed.position[0] - (north - home.x), armed.position[1] - (east - home.y), armed.position[2]
+            )
+        else:
+            self.truth_home = armed.position
 
     def truth_about_home(self, position: Vec3) -> Vec3:
         h = self.truth_home
@@ -107,6 +127,14 @@ class Frames:
     def local_about_home(self, position: Vec3) -> Vec3:
         h = self.home
         return (position[0] - h[0], position[1] - h[1], position[2] - h[2])
+
+    def place_about_home(self, lat: float, lon: float, north: float, east: float) -> tuple[float, float]:
+        """A place on the ground about home: by its latitude and longitude in the estimator's frame, or without a
+        reference point the ``north``/``east`` it was given about home."""
+        if self.projection is None:
+            return north, east
+        n, e = self.projection.project(lat, lon)
+        return n - self.home[0], e - self.home[1]
 
 
 def truth_at(series: Series, t: float) -> Any:

@@ -72,8 +72,10 @@ def evaluate(ctx: ScriptContext) -> dict[str, Any]:
     t0, t1 = ctx.state["armed_at"], ctx.state.get("disarmed_at", ctx.now)
     takeoff = next(item for item in mission if item.has_position)
     corners = [item for item in mission if item.command == MAV_CMD_NAV_WAYPOINT]
+    # The mission was planned about home before arming, which set home again: each corner is its place.
+    places = [(*frames.place_about_home(c.lat, c.lon, c.north, c.east), c.down) for c in corners]
     # The first leg starts above home at the takeoff altitude.
-    points = [(0.0, 0.0, takeoff.down)] + [item.position for item in corners]
+    points = [(0.0, 0.0, takeoff.down), *places]
     closest = [math.inf] * len(corners)
     track = 0.0
     seq_times, seqs = results.times, [m.seq_current for m in results.values]
@@ -81,8 +83,8 @@ def evaluate(ctx: ScriptContext) -> dict[str, Any]:
         if not t0 <= t <= t1:
             continue
         p = frames.truth_about_home(truth.position)
-        for i, corner in enumerate(corners):
-            closest[i] = min(closest[i], math.dist(p, corner.position))
+        for i, place in enumerate(places):
+            closest[i] = min(closest[i], math.dist(p, place))
         seq = value_at(seq_times, seqs, t)
         leg = next((i for i, c in enumerate(corners) if c.index == seq), None)
         if leg is not None:
