@@ -1,23 +1,25 @@
-"""Fixed-wing auto-landing: the glide slope, the flare and the approach line (PX4 v1.13
-``fw_pos_control_l1/Landingslope.cpp`` and ``FixedwingPositionControl::control_auto_landing``).
+"""Fixed-wing auto-landing: the glide slope, the flare and the approach line (PX4 v1.14
+``src/modules/fw_pos_control/FixedwingPositionControl.cpp``, ``control_auto_landing_straight``).
 
-Geometry (distances d to the landing point, heights relative to it): the slope at angle φ
-(FW_LND_ANG) reaches the flare height h_f (FW_LND_FLALT) where the flare starts; the flare is the
-exponential h(d) = H0·exp(−(L − d)/c) − H1 with H1 = FW_LND_HVIRT (a virtual height below the runway
-it aims at), H0 = h_f + H1, d1 = h_f / tan φ, c = H0·d1/h_f and L = c·ln(H0/H1), so that it leaves the
-slope at d = L tangent to it and touches down on the landing point. The slope is shifted back by
-L − d1 so that the two meet: h_slope(d) = (d − (L − d1))·tan φ.
+Vertically (heights relative to the landing point, d the distance to it): the glide slope is the straight line
+h(d) = d·tan(FW_LND_ANG) through the landing point, capped at the approach entrance's height (the previous
+waypoint's, or the vehicle's when the landing began without one). Until the vehicle is at or above the slope it
+holds the entrance's height; from then on (latched) it follows the slope. (PX4 v1.14 holds the present altitude
+below the slope, which leaves a sink below it uncorrected, and never latches; this is v1.13's capture.) Past the
+landing point (d < 0 along the approach line) the slope goes on below the runway; the flare takes over before.
 
-The landing flies the approach line from the previous waypoint through the landing point (to a point
-1 km beyond, so it keeps tracking past it); it holds the line's heading with at most 10° of roll
-from FW_LND_HHDIST before the landing point or once flaring. Vertically: until the slope is captured
-it holds the previous waypoint's altitude; then the slope; below the flare height the flare curve,
-with the pitch within FW_LND_FL_PMIN…FW_LND_FL_PMAX, and below FW_LND_TLALT the throttle at most
-FW_THR_LND_MAX (PX4 v1.13). The airspeed is FW_LND_AIRSPD_SC·FW_AIRSPD_MIN throughout. Flaring, the heading
-hold and the throttle limit latch until ``reset``. An idle flare (FW_THR_LND_MAX at FW_THR_IDLE) ends at the
-runway's height; a flare on throttle goes on below the runway past the landing point (a vehicle still in the air
-there keeps sinking instead of floating along the runway). The curve never rises again; the position controller
-idles the motor once the wheels are down.
+The flare starts below the higher of FW_LND_FLALT and FW_LND_FL_TIME·(sink rate), and latches until ``reset``.
+From its start it commands a height rate instead of an altitude: over FW_LND_FL_TIME seconds, with the ramp
+r = √(t/FW_LND_FL_TIME), the height-rate setpoint goes from the vertical speed at the flare's start to
+−FW_LND_FL_SINK, the pitch limits from FW_P_LIM_MIN…FW_P_LIM_MAX to FW_LND_FL_PMIN…FW_LND_FL_PMAX and the
+largest throttle from FW_THR_MAX to FW_THR_IDLE (the least throttle is FW_THR_IDLE throughout). The throttle sent
+is blended linearly over the same time from the throttle at the flare's start to TECS' (:meth:`Landing.flare_throttle`).
+With FW_LND_TD_TIME > 0, from max(FW_LND_TD_TIME, FW_LND_FL_TIME) after the flare's start both pitch limits go to
+RWTO_PSP within 0.5 s, to put the nose wheel down. The airspeed is FW_LND_AIRSPD_SC·FW_AIRSPD_MIN throughout.
+
+Laterally: the approach line from the previous waypoint through the landing point (to a point 1 km beyond, so it
+keeps tracking past it); its heading is held with at most 10° of roll from FW_LND_HHDIST before the landing point
+or once flaring (PX4 v1.13's heading hold; v1.14 tracks the line down to the runway instead).
 """
 
 from __future__ import annotations
@@ -27,7 +29,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import NamedTuple
 
-from stack.mathlib.scalar import wrap_pi
+from stack.mathlib.scalar import constrain
 
 Vec2 = tuple[float, float]
 
@@ -35,36 +37,8 @@ VIRTUAL_WAYPOINT_DISTANCE = 1000.0
 """How far beyond the landing point the approach line goes [m]."""
 HEADING_HOLD_ROLL_LIMIT = math.radians(10.0)
 """Roll limit once the heading is held, so no wing touches the ground first."""
-THROTTLE_LIMIT_FLARE_FRACTION = 0.66
-"""FW_LND_TLALT < 0: the throttle limit altitude is this fraction of the flare altitude."""
-THROTTLE_LIMIT_DISTANCE_MARGIN = 5.0
-"""The throttle is limited only within the flare length plus this [m] of the landing point."""
-
-
-class LandingSlope:
-    """The glide slope and flare curve (PX4 ``Landingslope``); heights relative to the landing point."""
-
-    def __init__(self, slope_angle: float, flare_altitude: float, h1_virtual: float) -> None:
-        self.slope_angle = slope_angle
-        self.flare_altitude = flare_altitude
-        self.h1_virtual = h1_virtual
-        self.h0 = flare_altitude + h1_virtual
-        self.d1 = flare_altitude / math.tan(slope_angle)
-        self.flare_constant = self.h0 * self.d1 / flare_altitude
-        self.flare_length = -math.log(h1_virtual / self.h0) * self.flare_constant
-        self.horizontal_slope_displacement = self.flare_length - self.d1
-
-    def slope_altitude(self, distance: float) -> float:
-        """Height of the slope at ``distance`` from the landing point [m]."""
-        return (distance - self.horizontal_slope_displacement) * math.tan(self.slope_angle)
-
-    def slope_distance(self, altitude: float) -> float:
-        """Distance from the landing point where the slope is at ``altitude`` [m]."""
-        return altitude / math.tan(self.slope_angle) + self.horizontal_slope_displacement
-
-    def flare_altitude_at(self, distance: float) -> float:
-        """Height of the flare curve at ``distance`` from the landing point [m] (0 at the point)."""
-        return self.h0 * math.exp(-max(0.0, self.flare_length - distance) / self.flare_constant) - self.h1_virtual
+POST_TOUCHDOWN_CLAMP_TIME = 0.5
+"""Time over which the pitch limits go to RWTO_PSP at the touchdown time [s] (PX4's constant)."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -73,32 +47,49 @@ class LandingParams:
 
     slope_angle: float
     """FW_LND_ANG [rad]"""
-    h1_virtual: float
     flare_altitude: float
-    throttle_limit_altitude: float
-    """FW_LND_TLALT, or 2/3 of FW_LND_FLALT when it is negative [m]."""
+    """FW_LND_FLALT: the least height the flare starts at [m]."""
+    flare_time: float
+    """FW_LND_FL_TIME [s]"""
+    flare_sink_rate: float
+    """FW_LND_FL_SINK [m/s, down]"""
+    touchdown_time: float
+    """FW_LND_TD_TIME [s] after the flare's start; ≤ 0: no nose-down clamp."""
     heading_hold_distance: float
     """FW_LND_HHDIST [m], 0 = no heading hold."""
     flare_pitch_min: float
-    """[rad]"""
+    """FW_LND_FL_PMIN [rad]"""
     flare_pitch_max: float
-    """[rad]"""
+    """FW_LND_FL_PMAX [rad]"""
+    pitch_min: float
+    """FW_P_LIM_MIN [rad]: where the flare's lower pitch limit starts."""
+    pitch_max: float
+    """FW_P_LIM_MAX [rad]"""
+    runway_pitch: float
+    """RWTO_PSP [rad]: the pitch on the wheels the touchdown clamp goes to (PX4 v1.14 blends the parameter's
+    degrees into its radian limits unconverted; here it is converted)."""
+    throttle_max: float
+    """FW_THR_MAX: where the flare's throttle limit starts."""
+    throttle_idle: float
+    """FW_THR_IDLE: where it ends, and the least throttle of the flare."""
     airspeed: float
     """FW_LND_AIRSPD_SC·FW_AIRSPD_MIN [m/s]"""
-    idle_flare: bool
-    """FW_THR_LND_MAX at most FW_THR_IDLE: nothing holds the vehicle up past the landing point."""
 
     PARAM_NAMES = (
         "FW_LND_ANG",
-        "FW_LND_HVIRT",
         "FW_LND_FLALT",
-        "FW_LND_TLALT",
+        "FW_LND_FL_TIME",
+        "FW_LND_FL_SINK",
+        "FW_LND_TD_TIME",
         "FW_LND_HHDIST",
         "FW_LND_FL_PMIN",
         "FW_LND_FL_PMAX",
         "FW_LND_AIRSPD_SC",
         "FW_AIRSPD_MIN",
-        "FW_THR_LND_MAX",
+        "FW_P_LIM_MIN",
+        "FW_P_LIM_MAX",
+        "RWTO_PSP",
+        "FW_THR_MAX",
         "FW_THR_IDLE",
     )
 
@@ -107,35 +98,40 @@ class LandingParams:
         def f(name: str) -> float:
             return float(values[name])  # type: ignore[arg-type]
 
-        flare_altitude = f("FW_LND_FLALT")
-        throttle_limit_altitude = f("FW_LND_TLALT")
         return cls(
             slope_angle=math.radians(f("FW_LND_ANG")),
-            h1_virtual=f("FW_LND_HVIRT"),
-            flare_altitude=flare_altitude,
-            throttle_limit_altitude=throttle_limit_altitude
-            if throttle_limit_altitude > 0.0
-            else THROTTLE_LIMIT_FLARE_FRACTION * flare_altitude,
+            flare_altitude=f("FW_LND_FLALT"),
+            flare_time=f("FW_LND_FL_TIME"),
+            flare_sink_rate=f("FW_LND_FL_SINK"),
+            touchdown_time=f("FW_LND_TD_TIME"),
             heading_hold_distance=f("FW_LND_HHDIST"),
             flare_pitch_min=math.radians(f("FW_LND_FL_PMIN")),
             flare_pitch_max=math.radians(f("FW_LND_FL_PMAX")),
+            pitch_min=math.radians(f("FW_P_LIM_MIN")),
+            pitch_max=math.radians(f("FW_P_LIM_MAX")),
+            runway_pitch=math.radians(f("RWTO_PSP")),
+            throttle_max=f("FW_THR_MAX"),
+            throttle_idle=f("FW_THR_IDLE"),
             airspeed=f("FW_LND_AIRSPD_SC") * f("FW_AIRSPD_MIN"),
-            idle_flare=f("FW_THR_LND_MAX") <= f("FW_THR_IDLE"),
         )
 
 
 class LandingSetpoint(NamedTuple):
     altitude_sp: float
-    """[m, up]"""
+    """[m, up]; NaN while flaring: the height rate alone is controlled."""
+    height_rate_sp: float
+    """[m/s, up] while flaring; NaN before."""
     airspeed_sp: float
     """Calibrated airspeed [m/s]."""
     flaring: bool
     pitch_min: float
-    """Flare pitch limits [rad] while flaring; NaN: the controller's own."""
+    """Pitch limits [rad] while flaring; NaN: the controller's own."""
     pitch_max: float
-    throttle_limited: bool
-    """Below the throttle limit altitude in the flare, near the landing point: throttle at most FW_THR_LND_MAX."""
+    throttle_min: float
+    """Throttle limits while flaring; NaN: the controller's own."""
+    throttle_max: float
     on_slope: bool
+    """The glide slope is captured (latched until ``reset``)."""
     heading_hold: bool
     """Hold ``target_bearing`` (rudder and wheel) instead of tracking the line."""
     target_bearing: float
@@ -153,20 +149,21 @@ class Landing:
 
     def __init__(self, params: LandingParams) -> None:
         self.params = params
-        self.slope = LandingSlope(params.slope_angle, params.flare_altitude, params.h1_virtual)
         self.reset()
 
     def set_params(self, params: LandingParams) -> None:
         self.params = params
-        self.slope = LandingSlope(params.slope_angle, params.flare_altitude, params.h1_virtual)
 
     def reset(self) -> None:
         self.flaring = False
         self.on_slope = False
         self.heading_hold = False
-        self.throttle_limited = False
         self.target_bearing = math.nan
-        self._flare_curve_last = math.inf
+        self.entrance_height = math.nan
+        self.flare_start = math.nan
+        self.flare_initial_height_rate = math.nan
+        self.flare_initial_throttle = math.nan
+        self.flare_ramp = 0.0  # time since the flare's start over FW_LND_FL_TIME, within [0, 1]
 
     def update(
         self,
@@ -177,9 +174,15 @@ class Landing:
         yaw: float,
         previous: Vec2 | None = None,
         previous_altitude: float = math.nan,
+        *,
+        now: float,
+        down_speed: float,
+        throttle: float = math.nan,
     ) -> LandingSetpoint:
-        """Local NED (north, east) positions [m], altitudes [m, up]; ``previous`` is the waypoint before
-        the landing point (None: none, and the approach line is the present bearing to the point)."""
+        """Local NED (north, east) positions [m], altitudes [m, up]; ``previous`` is the waypoint before the
+        landing point (None: none, and the approach line is the present bearing to the point). ``now`` [s],
+        ``down_speed`` the vertical speed [m/s, NED down], ``throttle`` the one commanded last step (held from
+        the flare's start for :meth:`flare_throttle`)."""
         p = self.params
         to_land = (land_point[0] - position[0], land_point[1] - position[1])
         distance = math.hypot(to_land[0], to_land[1])
@@ -195,9 +198,15 @@ class Landing:
             land_point[0] + VIRTUAL_WAYPOINT_DISTANCE * math.cos(line_bearing),
             land_point[1] + VIRTUAL_WAYPOINT_DISTANCE * math.sin(line_bearing),
         )
-        # Past the landing point (it lies behind) the slope is at its height; the flare curve goes on below it.
-        in_front = abs(wrap_pi(bearing_to_land - line_bearing)) < 0.5 * math.pi
+        # The slope is flown by the distance to the landing point (PX4 v1.13's; v1.14 takes it along the approach
+        # line): a vehicle still turning onto the line, abeam of the point, is not yet low on the slope. Past the
+        # point it goes on below the runway.
         along = to_land[0] * math.cos(line_bearing) + to_land[1] * math.sin(line_bearing)
+        slope_distance = distance if along > 0.0 else along
+        height = altitude - land_altitude
+        if not math.isfinite(self.entrance_height):
+            entrance = previous_altitude if previous is not None and math.isfinite(previous_altitude) else altitude
+            self.entrance_height = max(entrance - land_altitude, 0.0)
 
         if (
             p.heading_hold_distance > 0.0
@@ -207,36 +216,44 @@ class Landing:
             self.heading_hold = True
             self.target_bearing = line_bearing if previous is not None else yaw
 
-        height = altitude - land_altitude
-        pitch_min = pitch_max = math.nan
-        if height < p.flare_altitude or self.flaring:
-            if height < p.throttle_limit_altitude and along < self.slope.flare_length + THROTTLE_LIMIT_DISTANCE_MARGIN:
-                self.throttle_limited = True
-            # On idle the curve ends at the runway's height (PX4 v1.13); with throttle, TECS would hold the vehicle
-            # there, so the curve sinks on past the landing point (towards −FW_LND_HVIRT) until it touches down. It
-            # never rises again (a vehicle that swerved away from the point).
-            curve = self.slope.flare_altitude_at(along)
-            flare_height = min(max(curve, 0.0) if p.idle_flare else curve, self._flare_curve_last)
-            self._flare_curve_last = flare_height
-            self.flaring = True
-            altitude_sp = land_altitude + flare_height
-            pitch_min, pitch_max = p.flare_pitch_min, p.flare_pitch_max
+        sink = down_speed if math.isfinite(down_speed) else 0.0
+        flare_height = max(p.flare_time * sink, p.flare_altitude)
+        slope_height = min(slope_distance * math.tan(p.slope_angle), self.entrance_height)
+        altitude_sp = height_rate_sp = pitch_min = pitch_max = throttle_min = throttle_max = math.nan
+        if height < flare_height or self.flaring:
+            if not self.flaring:
+                self.flaring = True
+                self.flare_start = now
+                self.flare_initial_height_rate = -sink
+                self.flare_initial_throttle = throttle
+            elapsed = now - self.flare_start
+            self.flare_ramp = constrain(elapsed / max(p.flare_time, 1e-3), 0.0, 1.0)
+            # PX4 eases the setpoints in on the square root of the ramp: most of the change comes early.
+            r = math.sqrt(self.flare_ramp)
+            height_rate_sp = r * -p.flare_sink_rate + (1.0 - r) * self.flare_initial_height_rate
+            pitch_min = r * p.flare_pitch_min + (1.0 - r) * p.pitch_min
+            pitch_max = r * p.flare_pitch_max + (1.0 - r) * p.pitch_max
+            if p.touchdown_time > 0.0:
+                touchdown = max(p.touchdown_time, p.flare_time)
+                clamp = constrain((elapsed - touchdown) / POST_TOUCHDOWN_CLAMP_TIME, 0.0, 1.0)
+                pitch_min = clamp * p.runway_pitch + (1.0 - clamp) * pitch_min
+                pitch_max = clamp * p.runway_pitch + (1.0 - clamp) * pitch_max
+            throttle_min = p.throttle_idle
+            throttle_max = r * p.throttle_idle + (1.0 - r) * p.throttle_max
+        elif height >= slope_height or self.on_slope:
+            self.on_slope = True
+            altitude_sp = land_altitude + slope_height
         else:
-            slope_height = self.slope.slope_altitude(distance) if in_front else 0.0
-            if height > slope_height or self.on_slope:
-                self.on_slope = True
-                altitude_sp = land_altitude + slope_height
-            elif previous is not None and math.isfinite(previous_altitude):
-                altitude_sp = previous_altitude
-            else:
-                altitude_sp = altitude
+            altitude_sp = land_altitude + self.entrance_height
         return LandingSetpoint(
             altitude_sp=altitude_sp,
+            height_rate_sp=height_rate_sp,
             airspeed_sp=p.airspeed,
             flaring=self.flaring,
             pitch_min=pitch_min,
             pitch_max=pitch_max,
-            throttle_limited=self.throttle_limited,
+            throttle_min=throttle_min,
+            throttle_max=throttle_max,
             on_slope=self.on_slope,
             heading_hold=self.heading_hold,
             target_bearing=self.target_bearing if self.heading_hold else line_bearing,
@@ -244,3 +261,10 @@ class Landing:
             track_b=track_b,
             roll_limit=HEADING_HOLD_ROLL_LIMIT if self.heading_hold else math.inf,
         )
+
+    def flare_throttle(self, tecs_throttle: float) -> float:
+        """The throttle to send while flaring: from the throttle at the flare's start to TECS' over
+        FW_LND_FL_TIME (PX4 keeps the throttle continuous where altitude control hands over to height rate)."""
+        if not math.isfinite(self.flare_initial_throttle):
+            return tecs_throttle
+        return self.flare_ramp * tecs_throttle + (1.0 - self.flare_ramp) * self.flare_initial_throttle

@@ -9,7 +9,8 @@ PX4's ``fw_pos_control_l1`` (v1.13; ``FixedwingPositionControl.cpp``) in one I/O
   pitch and throttle setpoints;
 * per setpoint type: POSITION flies the line previous → current; LOITER the circle about current; TAKEOFF
   the runway takeoff (:class:`~stack.fw.runway_takeoff.RunwayTakeoff`: heading held on the wheels, rotation,
-  climb-out along the runway's line); LAND the glide slope and flare (:class:`~stack.fw.landing.Landing`),
+  climb-out along the runway's line); LAND the glide slope and PX4 v1.14's sink-rate flare
+  (:class:`~stack.fw.landing.Landing`: TECS on a height rate, pitch and throttle limits ramped towards the flare's),
   then the roll-out on the wheels with the throttle at idle;
 * Altitude mode: roll from the roll stick (FW_MAN_R_MAX), height rate from the pitch stick (up to
   FW_T_CLMB_MAX / FW_T_SINK_MAX), airspeed from the throttle stick (FW_AIRSPD_MIN…TRIM…MAX); Position mode
@@ -53,7 +54,7 @@ MANUAL_STICK_DEADZONE = 0.05
 DESCEND_BANK = math.radians(15.0)
 """The descent's bank angle (PX4 NAV_GPSF_R default)."""
 TOUCHDOWN_HEIGHT = 0.3
-"""Below this height over the landing point after the flare the aircraft is on its wheels [m]."""
+"""Below this height over the landing point in the flare the aircraft is on its wheels, or about to be [m]."""
 CLIMBOUT_PITCH_MIN = math.radians(10.0)
 """TECS' lower pitch limit during the climb-out (PX4 FW_P_LIM_MIN is the other bound)."""
 SWITCH_DISTANCE_CAP = 500.0
@@ -147,6 +148,7 @@ class FixedwingPositionControl:
         self._hold_center: Vec3 | None = None
         self._landing_key: tuple[float, float, float, float] | None = None
         self._touched_down = False
+        self._land_throttle = NAN
         self._altitude_hold = NAN
         self.status = GuidanceStatus(NAN, NAN, NAN, NAN, NAN, NAN, NAN, 0)
         self.set_params(params or {})
@@ -226,6 +228,7 @@ class FixedwingPositionControl:
             self.landing.reset()
             self._landing_key = None
             self._touched_down = False
+            self._land_throttle = NAN
 
     # ------------------------------------------------------------------ building blocks
 
@@ -243,6 +246,7 @@ class FixedwingPositionControl:
         height_rate_sp: float = NAN,
         pitch_min: float = NAN,
         pitch_max: float = NAN,
+        throttle_min: float = NAN,
         throttle_max: float = NAN,
         climbout: bool = False,
         in_air: bool = True,
@@ -250,6 +254,7 @@ class FixedwingPositionControl:
         p = self._p
         pitch_min = pitch_min if math.isfinite(pitch_min) else math.radians(p["FW_P_LIM_MIN"])
         pitch_max = pitch_max if math.isfinite(pitch_max) else math.radians(p["FW_P_LIM_MAX"])
+        throttle_min = throttle_min if math.isfinite(throttle_min) else p["FW_THR_MIN"]
         throttle_max = throttle_max if math.isfinite(throttle_max) else p["FW_THR_MAX"]
         vz = inp.velocity[2]
         out = self.tecs.update(
@@ -267,7 +272,7 @@ class FixedwingPositionControl:
             airspeed_sp=airspeed_sp,
             pitch_min=pitch_min,
             pitch_max=pitch_max,
-            throttle_min=p["FW_THR_MIN"],
+            throttle_min=throttle_min,
             throttle_max=throttle_max,
             throttle_trim=p["FW_THR_CRUISE"],
             height_rate_sp=height_rate_sp,
@@ -398,6 +403,7 @@ class FixedwingPositionControl:
             self.landing.reset()
             self._landing_key = key
             self._touched_down = False
+            self._land_throttle = NAN
         sp = self.landing.update(
             _xy(inp.position),
             -inp.position[2],
@@ -406,26 +412,39 @@ class FixedwingPositionControl:
             inp.yaw,
             _xy(previous) if previous is not None else None,
             -previous.z if previous is not None else NAN,
+            now=inp.now_us * 1e-6,
+            down_speed=inp.velocity[2],
+            throttle=self._land_throttle,
         )
         p = self._p
         height = current.z - inp.position[2]
         if sp.flaring and (height < TOUCHDOWN_HEIGHT or inp.landed):
             self._touched_down = True
-        if self._touched_down:
-            # On the wheels: idle, nose held at the flare's lowest pitch, steered along the runway.
-            self._report(inp, _xy(current), current.type)
-            return FwPosOutput(0.0, math.radians(p["FW_LND_FL_PMIN"]), sp.target_bearing, p["FW_THR_IDLE"], True, True)
-        roll = self._heading(inp, sp.target_bearing) if sp.heading_hold else self._line(inp, sp.track_a, sp.track_b)
-        roll = constrain(roll, -sp.roll_limit, sp.roll_limit)
-        self._report(inp, _xy(current), current.type)
+        # TECS' underspeed protection stays on in the flare, so that with the throttle going to idle the pitch
+        # gives way to the airspeed before the wing stalls. PX4 v1.14 turns it off there
+        # (FixedwingPositionControl.cpp: tecs_update_pitch_throttle(..., disable_underspeed_detection=true, ...)).
         pitch, throttle = self._tecs(
             inp,
             sp.altitude_sp,
             self._airspeed_sp(sp.airspeed_sp),
+            height_rate_sp=sp.height_rate_sp,
             pitch_min=sp.pitch_min,
             pitch_max=sp.pitch_max,
-            throttle_max=p["FW_THR_LND_MAX"] if sp.throttle_limited else NAN,
+            throttle_min=sp.throttle_min,
+            throttle_max=sp.throttle_max,
+            in_air=not inp.landed,
         )
+        if self._touched_down:
+            # On the wheels, or just above them: idle, steered along the runway. The pitch stays the flare's (PX4
+            # v1.14 flies it down to the ground): raising the nose of a vehicle still floating would stall it.
+            self._report(inp, _xy(current), current.type)
+            return FwPosOutput(0.0, pitch, sp.target_bearing, p["FW_THR_IDLE"], True, True)
+        roll = self._heading(inp, sp.target_bearing) if sp.heading_hold else self._line(inp, sp.track_a, sp.track_b)
+        roll = constrain(roll, -sp.roll_limit, sp.roll_limit)
+        self._report(inp, _xy(current), current.type)
+        if sp.flaring:
+            throttle = self.landing.flare_throttle(throttle)
+        self._land_throttle = throttle
         return FwPosOutput(roll, pitch, sp.target_bearing, throttle, False, False)
 
     # ------------------------------------------------------------------ pilot and failsafe modes

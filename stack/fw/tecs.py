@@ -1,9 +1,9 @@
 """Total Energy Control System: pitch and throttle from an altitude and an airspeed demand (PX4 TECS).
 
-Follows ``src/lib/tecs/TECS.cpp`` of PX4 v1.13 (Paul Riseborough's TECS, after Lambregts, "Vertical
-flight path and speed control autopilot design using total energy principles", AIAA 1983). The
-specific (per unit mass) energies are the potential SPE = g·h and the kinetic SKE = ½·V²; their
-rates are SPĖ = g·ḣ and SKĖ = V·V̇ (V the true airspeed).
+Follows ``src/lib/tecs/TECS.cpp`` of PX4 v1.13, with v1.14's underspeed protection (Paul Riseborough's TECS,
+after Lambregts, "Vertical flight path and speed control autopilot design using total energy principles",
+AIAA 1983). The specific (per unit mass) energies are the potential SPE = g·h and the kinetic SKE = ½·V²;
+their rates are SPĖ = g·ḣ and SKĖ = V·V̇ (V the true airspeed).
 
 - Throttle controls the total energy rate STĖ = SPĖ + SKĖ. The demanded rate maps linearly onto
   throttle from the trim throttle: full throttle at STĖ = g·FW_T_CLMB_MAX, minimum throttle at
@@ -21,10 +21,12 @@ The airspeed is smoothed by a second-order complementary filter with the airspee
 PX4's earlier third-order baro-inertial complementary filter (FW_T_HGT_OMEGA; Widnall and Sinha,
 AIAA 78-1307R).
 
-Protections: underspeed (airspeed below 90 % of the minimum at ≥ 95 % throttle → full throttle,
-pitch for speed only, airspeed setpoint at the minimum), uncommanded descent (large energy deficit
-while losing energy at high throttle → minimum airspeed setpoint), and climb-out (full throttle,
-pitch for speed only, pitch at least the climb-out minimum). Without an airspeed (NaN) TECS flies
+Protections: underspeed (v1.14's ``TECSControl::_detectUnderspeed``: a ratio that ramps from 0 to 1 as the
+airspeed falls from the minimum less 15 % of the trim airspeed to the minimum less 30 %; by that ratio the pitch
+loop is blended towards speed only, the throttle towards its maximum and the airspeed setpoint towards the
+minimum, and the throttle integrator is held), uncommanded descent (v1.13's: large energy deficit while losing
+energy at high throttle → minimum airspeed setpoint), and climb-out (v1.13's: full throttle, pitch for speed
+only, pitch at least the climb-out minimum). Without an airspeed (NaN) TECS flies
 the trim airspeed open loop: pitch controls height alone and throttle is the predicted throttle.
 
 Units: SI, angles in radians, altitude positive up, airspeeds equivalent (EAS) unless named true.
@@ -55,8 +57,9 @@ JERK_MAX = 1000.0
 """Jerk of the altitude trajectory [m/s³]: PX4 wants none, so a large value."""
 TAS_STATE_MIN = 3.0
 """Floor of the filtered true airspeed [m/s] (PX4 keeps it off zero for the divisions by V)."""
-UNDERSPEED_AIRSPEED_RATIO = 0.9
-UNDERSPEED_THROTTLE_RATIO = 0.95
+TAS_ERROR_PERCENTAGE = 0.15
+"""The airspeed tracking error expected, as a fraction of the trim airspeed: the underspeed ramp starts that far
+below the minimum airspeed and is as wide (PX4 v1.14 TECS.hpp ``tas_error_percentage``)."""
 DESCENT_ENERGY_ERROR = 200.0
 """Specific total energy deficit [m²/s²] beyond which a descent at high throttle is uncommanded."""
 DESCENT_THROTTLE_RATIO = 0.9
@@ -167,7 +170,7 @@ class Tecs:
         self._pitch_setpoint = 0.0
         self._pitch_setpoint_unc = 0.0
         self._throttle_trim = math.nan
-        self._underspeed = False
+        self._underspeed_ratio = 0.0
         self._uncommanded_descent = False
 
     def set_params(self, params: TecsParams) -> None:
@@ -250,7 +253,7 @@ class Tecs:
         self._update_speed_states(dt, eas * eas_to_tas, airspeed_enabled)
         ste_rate_max = max(p.fw_t_clmb_max, FLT_EPSILON) * G
         ste_rate_min = -max(p.fw_t_sink_min, FLT_EPSILON) * G
-        self._detect_underspeed(detect_underspeed and not climbout, throttle_max, p.fw_airspd_min * eas_to_tas)
+        self._detect_underspeed(detect_underspeed and not climbout, p.fw_airspd_min * eas_to_tas)
         self._update_weights(airspeed_enabled, climbout)
         self._detect_uncommanded_descent(throttle_max, climbout)
         self._update_speed_setpoint(airspeed_sp, eas_to_tas, ste_rate_min, ste_rate_max)
@@ -261,7 +264,7 @@ class Tecs:
             dt, airspeed_enabled, load_factor, ste_rate_min, ste_rate_max, throttle_min, throttle_max, climbout
         )
         self._update_pitch(dt, climbout, pitch_min, pitch_max)
-        if self._underspeed:
+        if self._underspeed_ratio > FLT_EPSILON:
             self._mode = TecsMode.UNDERSPEED
         elif self._uncommanded_descent:
             self._mode = TecsMode.BAD_DESCENT
@@ -305,7 +308,7 @@ class Tecs:
         self._hgt_setpoint = altitude
         self._hgt_rate_setpoint = 0.0
         self._alt_trajectory.reset(0.0, 0.0, altitude)
-        self._underspeed = False
+        self._underspeed_ratio = 0.0
         self._uncommanded_descent = False
         self._ste_rate_error = 0.0
         self._initialised = True
@@ -346,19 +349,27 @@ class Tecs:
         tas_state_input = self._tas_rate_state + self._tas_rate_raw + self._tas_innov * omega * math.sqrt(2.0)
         self._tas_state = max(self._tas_state + tas_state_input * dt, TAS_STATE_MIN)
 
-    def _detect_underspeed(self, enabled: bool, throttle_max: float, tas_min: float) -> None:
+    def _detect_underspeed(self, enabled: bool, tas_min: float) -> None:
+        """How far into underspeed the airspeed is, 0…1 (PX4 v1.14 ``src/lib/tecs/TECS.cpp``,
+        ``TECSControl::_detectUnderspeed``)."""
         if not enabled:
-            self._underspeed = False
+            self._underspeed_ratio = 0.0
             return
-        self._underspeed = (
-            self._tas_state < tas_min * UNDERSPEED_AIRSPEED_RATIO
-            and self._throttle_setpoint >= throttle_max * UNDERSPEED_THROTTLE_RATIO
-        ) or (self._vert_pos < self._hgt_setpoint and self._underspeed)
+        # The bounds are fractions of the trim airspeed (EAS), as PX4's.
+        error_bound = TAS_ERROR_PERCENTAGE * self.params.fw_airspd_trim
+        fully_undersped = max(tas_min - 2.0 * error_bound, 0.0)
+        starting_to_underspeed = max(tas_min - error_bound, fully_undersped)
+        self._underspeed_ratio = 1.0 - constrain(
+            (self._tas_state - fully_undersped) / max(starting_to_underspeed - fully_undersped, FLT_EPSILON), 0.0, 1.0
+        )
 
     def _update_weights(self, airspeed_enabled: bool, climbout: bool) -> None:
         ske_weighting = constrain(self.params.fw_t_spdweight, 0.0, 2.0)
-        if (self._underspeed or climbout) and airspeed_enabled:
+        ratio = self._underspeed_ratio
+        if climbout and airspeed_enabled:
             ske_weighting = 2.0
+        elif ratio > FLT_EPSILON and airspeed_enabled:
+            ske_weighting = 2.0 * ratio + (1.0 - ratio) * ske_weighting
         elif not airspeed_enabled:
             ske_weighting = 0.0
         # No weight above one: it would shorten the loop's time constant and can destabilise it.
@@ -373,13 +384,13 @@ class Tecs:
         ste_rate = self._spe_rate + self._ske_rate
         if (
             not self._uncommanded_descent
-            and not self._underspeed
+            and self._underspeed_ratio <= FLT_EPSILON
             and self._ste_error > DESCENT_ENERGY_ERROR
             and ste_rate < 0.0
             and self._throttle_setpoint >= throttle_max * DESCENT_THROTTLE_RATIO
         ):
             self._uncommanded_descent = True
-        elif self._uncommanded_descent and (self._underspeed or self._ste_error < 0.0):
+        elif self._uncommanded_descent and (self._underspeed_ratio > FLT_EPSILON or self._ste_error < 0.0):
             self._uncommanded_descent = False
 
     def _update_speed_setpoint(
@@ -392,8 +403,9 @@ class Tecs:
         eas_sp = airspeed_sp if math.isfinite(airspeed_sp) else p.fw_airspd_trim
         self._eas_setpoint = eas_sp
         tas_sp = eas_sp * eas_to_tas
-        if self._underspeed or self._uncommanded_descent:
+        if self._uncommanded_descent:
             tas_sp = tas_min
+        tas_sp = self._underspeed_ratio * tas_min + (1.0 - self._underspeed_ratio) * tas_sp
         self._tas_setpoint_adj = constrain(tas_sp, tas_min, tas_max)
         # Half the rate the throttle range allows, leaving the rest to correct errors.
         rate_max = 0.5 * ste_rate_max / self._tas_state
@@ -456,38 +468,38 @@ class Tecs:
         self._ste_rate_error = self._ste_rate_error_filter.update(
             ste_rate_setpoint - self._spe_rate - self._ske_rate
         )
-        if self._underspeed:
-            throttle = throttle_max
+        ratio = self._underspeed_ratio
+        # Induced drag grows with the load factor n = 1/cos(roll): ask for more energy in turns.
+        ste_rate_setpoint += p.fw_t_rll2thr * (load_factor - 1.0)
+        ste_rate_setpoint = constrain(ste_rate_setpoint, ste_rate_min, ste_rate_max)
+        if ste_rate_setpoint >= 0.0:
+            predicted = trim + ste_rate_setpoint / ste_rate_max * (throttle_max - trim)
         else:
-            # Induced drag grows with the load factor n = 1/cos(roll): ask for more energy in turns.
-            ste_rate_setpoint += p.fw_t_rll2thr * (load_factor - 1.0)
-            ste_rate_setpoint = constrain(ste_rate_setpoint, ste_rate_min, ste_rate_max)
-            if ste_rate_setpoint >= 0.0:
-                predicted = trim + ste_rate_setpoint / ste_rate_max * (throttle_max - trim)
+            predicted = trim + ste_rate_setpoint / ste_rate_min * (throttle_min - trim)
+        ste_rate_to_throttle = 1.0 / (ste_rate_max - ste_rate_min)
+        throttle = self._ste_rate_error * p.fw_t_thr_damp * ste_rate_to_throttle + predicted
+        throttle = constrain(throttle, throttle_min, throttle_max)
+        if airspeed_enabled:
+            if p.fw_t_i_gain_thr > 0.0:
+                integ_max = throttle_max - throttle
+                integ_min = throttle_min - throttle
+                # Underspeed holds the integrator: the throttle it needs comes from the blend towards the maximum.
+                integ_input = self._ste_rate_error * p.fw_t_i_gain_thr * dt * ste_rate_to_throttle * (1.0 - ratio)
+                # Only let the integrator move the way that unsaturates the throttle.
+                if self._throttle_integ > integ_max:
+                    integ_input = min(0.0, integ_input)
+                elif self._throttle_integ < integ_min:
+                    integ_input = max(0.0, integ_input)
+                self._throttle_integ += integ_input
+                if climbout:
+                    # No throttle dip when climb-out hands over to closed-loop control.
+                    self._throttle_integ = integ_max
             else:
-                predicted = trim + ste_rate_setpoint / ste_rate_min * (throttle_min - trim)
-            ste_rate_to_throttle = 1.0 / (ste_rate_max - ste_rate_min)
-            throttle = self._ste_rate_error * p.fw_t_thr_damp * ste_rate_to_throttle + predicted
-            throttle = constrain(throttle, throttle_min, throttle_max)
-            if airspeed_enabled:
-                if p.fw_t_i_gain_thr > 0.0:
-                    integ_max = throttle_max - throttle
-                    integ_min = throttle_min - throttle
-                    integ_input = self._ste_rate_error * p.fw_t_i_gain_thr * dt * ste_rate_to_throttle
-                    # Only let the integrator move the way that unsaturates the throttle.
-                    if self._throttle_integ > integ_max:
-                        integ_input = min(0.0, integ_input)
-                    elif self._throttle_integ < integ_min:
-                        integ_input = max(0.0, integ_input)
-                    self._throttle_integ += integ_input
-                    if climbout:
-                        # No throttle dip when climb-out hands over to closed-loop control.
-                        self._throttle_integ = integ_max
-                else:
-                    self._throttle_integ = 0.0
-                throttle += self._throttle_integ
-            else:
-                throttle = predicted
+                self._throttle_integ = 0.0
+            throttle += self._throttle_integ
+        else:
+            throttle = predicted
+        throttle = ratio * throttle_max + (1.0 - ratio) * throttle
         self._throttle_setpoint = constrain(throttle, throttle_min, throttle_max)
 
     def _seb_rates(self) -> tuple[float, float]:
@@ -549,5 +561,5 @@ class Tecs:
             throttle_sp=self._throttle_setpoint,
             pitch_sp_rad=self._pitch_setpoint,
             throttle_trim=self._throttle_trim,
-            underspeed_ratio=1.0 if self._underspeed else 0.0,
+            underspeed_ratio=self._underspeed_ratio,
         )

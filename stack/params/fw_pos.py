@@ -1,9 +1,10 @@
 """Fixed-wing position control: L1 (``src/lib/l1/``), NPFG (``src/lib/npfg/``), TECS (``src/lib/tecs/``),
 runway takeoff (``runway_takeoff_params.c``) and landing (``fw_pos_control_l1_params.c``).
 
-PX4 v1.13's names and defaults, but NPFG's under the names v1.14 gave them (FW_NPFG_*, v1.13: NPFG_*),
-and FW_T_HGT_OMEGA from the TECS before v1.12 (its baro-inertial height filter, used here when the
-estimator has no vertical velocity)."""
+PX4 v1.13's names and defaults, but NPFG's under the names v1.14 gave them (FW_NPFG_*, v1.13: NPFG_*), the
+landing's flare as v1.14 has it (``fw_pos_control_params.c``: FW_LND_FL_TIME, FW_LND_FL_SINK, FW_LND_TD_TIME,
+FW_LND_FLALT 0.5 m; no FW_LND_HVIRT, FW_LND_TLALT or FW_THR_LND_MAX), and FW_T_HGT_OMEGA from the TECS before
+v1.12 (its baro-inertial height filter, used here when the estimator has no vertical velocity)."""
 
 from stack.params.param import ENABLED, Param
 
@@ -163,17 +164,31 @@ RUNWAY_TAKEOFF: tuple[Param, ...] = (
 
 LANDING: tuple[Param, ...] = (
     Param("FW_LND_ANG", 5.0, 1.0, 15.0, "deg", "Landing slope angle"),
-    Param("FW_LND_HVIRT", 10.0, 1.0, 15.0, "m", "Virtual height below the runway the flare curve aims at"),
-    Param("FW_LND_FLALT", 3.0, 0.0, 25.0, "m", "Flare altitude above the landing point"),
     Param(
-        "FW_LND_TLALT",
-        -1.0,
-        -1.0,
-        30.0,
+        "FW_LND_FLALT",
+        0.5,
+        0.0,
+        25.0,
         "m",
-        "Altitude above the landing point below which the throttle is at most FW_THR_LND_MAX (-1: 2/3 of FW_LND_FLALT)",
+        "Flare altitude above the landing point: the flare starts below max(FW_LND_FLALT, FW_LND_FL_TIME * sink rate)",
     ),
-    Param("FW_THR_LND_MAX", 1.0, 0.0, 1.0, "", "Largest throttle below FW_LND_TLALT, up to the touchdown"),
+    Param(
+        "FW_LND_FL_TIME",
+        1.0,
+        0.1,
+        5.0,
+        "s",
+        "Flare time: times the sink rate, the flare altitude; the time the flare's setpoints and limits ramp over",
+    ),
+    Param("FW_LND_FL_SINK", 0.25, 0.0, 2.0, "m/s", "Sink rate the flare ends at (TECS on pitch, throttle at idle)"),
+    Param(
+        "FW_LND_TD_TIME",
+        -1.0,
+        -1.0,
+        5.0,
+        "s",
+        "Touchdown time after the flare's start (at least FW_LND_FL_TIME): the pitch then goes to RWTO_PSP (-1: off)",
+    ),
     Param("FW_LND_HHDIST", 15.0, 0.0, 30.0, "m", "Distance to the landing point where heading hold starts (0 = off)"),
     Param("FW_LND_FL_PMIN", 2.5, 0.0, 15.0, "deg", "Smallest pitch of the flare (nose up)"),
     Param("FW_LND_FL_PMAX", 15.0, 0.0, 45.0, "deg", "Largest pitch of the flare"),

@@ -2,107 +2,170 @@ import math
 
 import pytest
 
-from stack.fw.landing import Landing, LandingParams, LandingSlope
+from stack.fw.landing import Landing, LandingParams
 from stack.params import catalogue
 
-DEFAULTS = LandingParams.from_params({n: catalogue.get(n).default for n in LandingParams.PARAM_NAMES})
+VALUES = {n: catalogue.get(n).default for n in LandingParams.PARAM_NAMES}
+DEFAULTS = LandingParams.from_params(VALUES)
 TAN5 = math.tan(math.radians(5.0))
-# FW_LND_FLALT 3 m, FW_LND_HVIRT 10 m: H0 = 13, d1 = 3/tan 5°, c = H0·d1/3, L = c·ln(13/10).
-D1 = 3.0 / TAN5
-C = 13.0 * D1 / 3.0
-L = C * math.log(13.0 / 10.0)
 LAND = (0.0, 0.0)
-PREVIOUS = (-500.0, 0.0)  # approaching northbound
+PREVIOUS = (-500.0, 0.0)  # approaching northbound, from 30 m
+P_LIM_MIN, P_LIM_MAX = math.radians(-45.0), math.radians(45.0)  # FW_P_LIM_MIN/MAX
 
 
-def test_parameters():
-    assert DEFAULTS.throttle_limit_altitude == pytest.approx(0.66 * 3.0)  # FW_LND_TLALT −1
+def update(landing, north, altitude, *, now=0.0, down_speed=1.0, throttle=0.5, yaw=0.0):
+    return landing.update(
+        (north, 0.0), altitude, LAND, 0.0, yaw, PREVIOUS, 30.0, now=now, down_speed=down_speed, throttle=throttle
+    )
+
+
+def flare(landing, t0=10.0, down_speed=1.2, throttle=0.4):
+    """Approach at 5 m, then start the flare at t0 at 0.3 m."""
+    update(landing, -60.0, 5.0, now=t0 - 1.0, down_speed=down_speed, throttle=throttle)
+    return update(landing, -4.0, 0.3, now=t0, down_speed=down_speed, throttle=throttle)
+
+
+def test_parameters_are_px4_v1_14s():
+    assert DEFAULTS.flare_altitude == 0.5 and DEFAULTS.flare_time == 1.0 and DEFAULTS.flare_sink_rate == 0.25
+    assert DEFAULTS.touchdown_time == -1.0
     assert DEFAULTS.airspeed == pytest.approx(1.3 * 10.0)
     assert (DEFAULTS.flare_pitch_min, DEFAULTS.flare_pitch_max) == pytest.approx(
         (math.radians(2.5), math.radians(15.0))
     )
+    assert (DEFAULTS.pitch_min, DEFAULTS.pitch_max) == pytest.approx((P_LIM_MIN, P_LIM_MAX))
+    assert (DEFAULTS.throttle_max, DEFAULTS.throttle_idle) == (1.0, 0.0)
+    for removed in ("FW_LND_HVIRT", "FW_LND_TLALT", "FW_THR_LND_MAX"):
+        assert removed not in catalogue.CATALOGUE
 
 
-def test_slope_and_flare_geometry():
-    slope = LandingSlope(math.radians(5.0), 3.0, 10.0)
-    assert slope.flare_length == pytest.approx(L)
-    assert slope.horizontal_slope_displacement == pytest.approx(L - D1)
-    assert slope.slope_altitude(100.0) == pytest.approx((100.0 - (L - D1)) * TAN5)
-    assert slope.slope_altitude(300.0) == pytest.approx(25.8, abs=0.05)
-    assert slope.slope_distance(slope.slope_altitude(250.0)) == pytest.approx(250.0)
-    # The flare leaves the slope at its start, at the flare altitude and tangent to it, and touches down
-    # on the landing point.
-    assert slope.slope_altitude(L) == pytest.approx(3.0)
-    assert slope.flare_altitude_at(L) == pytest.approx(3.0)
-    assert slope.flare_altitude_at(2.0 * L) == pytest.approx(3.0)
-    assert slope.flare_altitude_at(0.0) == pytest.approx(0.0, abs=1e-12)
-    step = 1e-4
-    assert (slope.flare_altitude_at(L) - slope.flare_altitude_at(L - step)) / step == pytest.approx(TAN5, rel=1e-3)
-    assert slope.flare_altitude_at(L / 2.0) == pytest.approx(13.0 * math.exp(-L / 2.0 / C) - 10.0)
-
-
-def update(landing, north, altitude, yaw=0.0):
-    return landing.update((north, 0.0), altitude, LAND, 0.0, yaw, PREVIOUS, 30.0)
-
-
-def test_approach_holds_altitude_then_captures_the_slope():
+def test_the_glide_slope_is_a_straight_line_to_the_landing_point_capped_at_the_entrance():
     landing = Landing(DEFAULTS)
-    sp = update(landing, -500.0, 30.0)  # below the slope (43 m here): hold the previous waypoint's altitude
-    assert sp.altitude_sp == 30.0 and not sp.on_slope and not sp.flaring
+    # Below the slope (26 m here): hold the entrance's height (the previous waypoint's 30 m) until it is captured.
+    sp = update(landing, -300.0, 20.0)
+    assert not sp.on_slope and not sp.flaring and sp.altitude_sp == 30.0
+    assert math.isnan(sp.height_rate_sp) and math.isnan(sp.pitch_min) and math.isnan(sp.throttle_max)
     assert sp.airspeed_sp == pytest.approx(13.0)
-    assert math.isnan(sp.pitch_min) and math.isnan(sp.pitch_max)
     assert sp.track_a == PREVIOUS and sp.track_b == pytest.approx((1000.0, 0.0))
     assert sp.target_bearing == 0.0 and not sp.heading_hold and sp.roll_limit == math.inf
-    sp = update(landing, -300.0, 30.0)  # above the slope: follow it down
-    assert sp.on_slope and sp.altitude_sp == pytest.approx((300.0 - (L - D1)) * TAN5)
-    sp = update(landing, -200.0, 5.0)  # below it again, but captured
-    assert sp.on_slope and sp.altitude_sp == pytest.approx((200.0 - (L - D1)) * TAN5)
+    # At or above it: follow it down, and keep following it once captured.
+    sp = update(landing, -200.0, 20.0)
+    assert sp.on_slope and sp.altitude_sp == pytest.approx(200.0 * TAN5)
+    sp = update(landing, -150.0, 10.0)
+    assert sp.on_slope and sp.altitude_sp == pytest.approx(150.0 * TAN5)
+    # Far out the slope would be above the entrance: capped there.
+    assert update(landing, -450.0, 35.0).altitude_sp == pytest.approx(30.0)
+    # Still turning onto the line, abeam of its first 100 m: the slope is by the distance to the point (316 m).
+    sp = Landing(DEFAULTS).update((-100.0, 300.0), 20.0, LAND, 0.0, 0.0, PREVIOUS, 30.0, now=0.0, down_speed=0.0)
+    assert sp.altitude_sp == 30.0 and not sp.on_slope
+    # Past the landing point the slope goes on below the runway.
+    assert update(Landing(DEFAULTS), 10.0, 3.0, down_speed=0.0).altitude_sp == pytest.approx(-10.0 * TAN5)
 
 
-def test_flare_pitch_limits_throttle_limit_and_heading_hold():
+def test_the_flare_starts_at_the_higher_of_the_flare_altitude_and_the_flare_time_times_the_sink_rate():
+    # Sinking at 0.3 m/s: FW_LND_FLALT (0.5 m) decides.
     landing = Landing(DEFAULTS)
-    update(landing, -300.0, 30.0)
-    sp = update(landing, -30.0, 2.9)
-    assert sp.flaring and sp.altitude_sp == pytest.approx(13.0 * math.exp(-(L - 30.0) / C) - 10.0)
-    assert (sp.pitch_min, sp.pitch_max) == (DEFAULTS.flare_pitch_min, DEFAULTS.flare_pitch_max)
-    assert not sp.throttle_limited  # above 2/3 of the flare altitude
-    assert not sp.heading_hold  # from the next step on, as in PX4
-    sp = update(landing, -28.0, 2.5, yaw=0.3)
-    assert sp.heading_hold and sp.target_bearing == 0.0 and sp.roll_limit == pytest.approx(math.radians(10.0))
-    sp = update(landing, -20.0, 1.9)
-    assert sp.throttle_limited
-    sp = update(landing, -10.0, 3.5)  # a bounce does not end the flare
-    assert sp.flaring and sp.throttle_limited
-    sp = update(landing, 5.0, 0.5)  # past the landing point, still flying: the curve goes on below the runway
-    assert sp.altitude_sp == pytest.approx(13.0 * math.exp(-(L + 5.0) / C) - 10.0) and sp.altitude_sp < -0.3
+    assert not update(landing, -10.0, 0.55, down_speed=0.3).flaring
+    assert update(landing, -9.0, 0.45, down_speed=0.3).flaring
+    # Sinking at 2 m/s: 1 s before the runway, at 2 m.
+    landing = Landing(DEFAULTS)
+    assert not update(landing, -30.0, 2.05, down_speed=2.0).flaring
+    assert update(landing, -29.0, 1.95, down_speed=2.0).flaring
+    landing = Landing(LandingParams.from_params(VALUES | {"FW_LND_FL_TIME": 2.0, "FW_LND_FLALT": 3.0}))
+    assert not update(landing, -30.0, 3.1, down_speed=1.0).flaring
+    assert update(landing, -29.0, 2.9, down_speed=1.0).flaring
+
+
+def test_the_flare_ramps_height_rate_pitch_limits_and_throttle_over_the_flare_time():
+    landing = Landing(DEFAULTS)
+    start = flare(landing, down_speed=1.2)
+    # At its start: the sink rate it had, the controller's pitch limits, full throttle allowed, at least idle.
+    assert start.flaring and math.isnan(start.altitude_sp)
+    assert start.height_rate_sp == pytest.approx(-1.2)
+    assert (start.pitch_min, start.pitch_max) == pytest.approx((P_LIM_MIN, P_LIM_MAX))
+    assert (start.throttle_min, start.throttle_max) == (0.0, 1.0)
+    # A quarter of the way: the ramp is √(1/4) = 1/2.
+    sp = update(landing, -1.0, 0.2, now=10.25)
+    assert sp.height_rate_sp == pytest.approx(0.5 * -0.25 + 0.5 * -1.2)
+    assert sp.pitch_min == pytest.approx(0.5 * math.radians(2.5) + 0.5 * P_LIM_MIN)
+    assert sp.pitch_max == pytest.approx(0.5 * math.radians(15.0) + 0.5 * P_LIM_MAX)
+    assert sp.throttle_max == pytest.approx(0.5)
+    # From FW_LND_FL_TIME on: the flare's sink rate and pitch limits, idle throttle.
+    for now in (11.0, 13.0):
+        sp = update(landing, 2.0, 0.1, now=now)
+        assert sp.height_rate_sp == pytest.approx(-0.25)
+        assert (sp.pitch_min, sp.pitch_max) == pytest.approx((math.radians(2.5), math.radians(15.0)))
+        assert sp.throttle_max == pytest.approx(0.0)
+
+
+def test_the_throttle_goes_to_idle_even_with_a_non_zero_idle():
+    landing = Landing(LandingParams.from_params(VALUES | {"FW_THR_IDLE": 0.15, "FW_THR_MAX": 0.9}))
+    flare(landing)
+    sp = update(landing, -1.0, 0.2, now=10.25)
+    assert sp.throttle_min == 0.15 and sp.throttle_max == pytest.approx(0.5 * 0.15 + 0.5 * 0.9)
+    assert update(landing, 2.0, 0.1, now=11.5).throttle_max == pytest.approx(0.15)
+
+
+def test_the_sent_throttle_blends_from_the_flare_start_throttle_to_tecs_linearly():
+    landing = Landing(DEFAULTS)
+    flare(landing, throttle=0.4)
+    assert landing.flare_throttle(0.1) == pytest.approx(0.4)
+    update(landing, -1.0, 0.2, now=10.25)
+    assert landing.flare_throttle(0.1) == pytest.approx(0.25 * 0.1 + 0.75 * 0.4)
+    update(landing, 2.0, 0.1, now=11.0)
+    assert landing.flare_throttle(0.1) == pytest.approx(0.1)
+    # Without a throttle at its start, TECS' own.
+    landing = Landing(DEFAULTS)
+    flare(landing, throttle=math.nan)
+    assert landing.flare_throttle(0.3) == 0.3
+
+
+def test_the_flare_latches_until_reset():
+    landing = Landing(DEFAULTS)
+    flare(landing, down_speed=1.0)
+    sp = update(landing, 1.0, 4.0, now=10.5, down_speed=-3.0)  # a bounce, climbing: still flaring, same ramp
+    assert sp.flaring and sp.height_rate_sp == pytest.approx(math.sqrt(0.5) * -0.25 + (1.0 - math.sqrt(0.5)) * -1.0)
+    assert update(landing, -200.0, 25.0).flaring  # nor does climbing back to the slope end it
     landing.reset()
-    assert not update(landing, -300.0, 30.0).flaring
+    assert update(landing, -200.0, 25.0, now=20.0).on_slope
 
 
-def test_an_idle_flare_ends_at_the_runway_height():
-    values = {n: catalogue.get(n).default for n in LandingParams.PARAM_NAMES} | {"FW_THR_LND_MAX": 0.0}
+def test_the_touchdown_time_clamps_the_pitch_to_the_runway_pitch():
+    values = VALUES | {"FW_LND_TD_TIME": 2.0, "RWTO_PSP": 1.0}
     landing = Landing(LandingParams.from_params(values))
-    update(landing, -300.0, 30.0)
-    assert update(landing, -20.0, 1.9).throttle_limited
-    assert update(landing, 5.0, 0.5).altitude_sp == 0.0  # past the point: nothing holds it up, it settles
+    flare(landing)
+    assert update(landing, 2.0, 0.1, now=12.0).pitch_min == pytest.approx(math.radians(2.5))
+    sp = update(landing, 3.0, 0.05, now=12.25)  # half way through the 0.5 s clamp
+    assert sp.pitch_min == pytest.approx(0.5 * math.radians(1.0) + 0.5 * math.radians(2.5))
+    assert sp.pitch_max == pytest.approx(0.5 * math.radians(1.0) + 0.5 * math.radians(15.0))
+    sp = update(landing, 4.0, 0.0, now=12.5)
+    assert (sp.pitch_min, sp.pitch_max) == pytest.approx((math.radians(1.0), math.radians(1.0)))
+    # It waits for the flare to have ramped in: at least FW_LND_FL_TIME after its start.
+    values = VALUES | {"FW_LND_TD_TIME": 0.5, "FW_LND_FL_TIME": 2.0, "RWTO_PSP": 1.0}
+    landing = Landing(LandingParams.from_params(values))
+    flare(landing)
+    assert update(landing, 2.0, 0.1, now=12.0).pitch_min == pytest.approx(math.radians(2.5))
 
 
-def test_heading_hold_from_the_hold_distance():
+def test_heading_hold_from_the_hold_distance_or_the_flare():
     landing = Landing(DEFAULTS)
     assert not update(landing, -16.0, 4.0).heading_hold
-    assert update(landing, -14.0, 4.0).heading_hold
-
-
-def test_a_flare_curve_never_rises_again():
+    sp = update(landing, -14.0, 4.0, yaw=0.3)
+    assert sp.heading_hold and sp.target_bearing == 0.0 and sp.roll_limit == pytest.approx(math.radians(10.0))
+    landing = Landing(LandingParams.from_params(VALUES | {"FW_LND_HHDIST": 0.0}))
+    assert not flare(landing).heading_hold
     landing = Landing(DEFAULTS)
-    low = update(landing, -20.0, 2.0).altitude_sp
-    assert update(landing, -25.0, 1.0).altitude_sp == low  # farther from the point: the curve would rise
-    assert update(landing, -10.0, 0.5).altitude_sp < low
+    update(landing, -60.0, 5.0)
+    assert update(landing, -50.0, 0.3).flaring
+    assert update(landing, -49.0, 0.2).heading_hold  # from the step after the flare's start, as in PX4 v1.13
 
 
 def test_without_a_previous_waypoint_the_line_is_the_bearing_to_the_landing_point():
     landing = Landing(DEFAULTS)
-    sp = landing.update((0.0, -100.0), 20.0, LAND, 0.0, 0.0)
+    sp = landing.update((0.0, -300.0), 20.0, LAND, 0.0, 0.0, now=0.0, down_speed=0.0)
     assert sp.target_bearing == pytest.approx(0.5 * math.pi)
-    assert sp.track_a == (0.0, -100.0) and sp.track_b == pytest.approx((0.0, 1000.0))
-    assert sp.altitude_sp == pytest.approx((100.0 - (L - D1)) * TAN5)  # above the slope: on it
+    assert sp.track_a == (0.0, -300.0) and sp.track_b == pytest.approx((0.0, 1000.0))
+    # The entrance is where the landing began: the slope (26 m here) is capped at its 20 m.
+    assert sp.altitude_sp == 20.0 and sp.on_slope
+    assert landing.update((0.0, -250.0), 22.0, LAND, 0.0, 0.0, now=1.0, down_speed=0.0).altitude_sp == 20.0
+    sp = landing.update((0.0, -100.0), 20.0, LAND, 0.0, 0.0, now=2.0, down_speed=0.0)
+    assert sp.altitude_sp == pytest.approx(100.0 * TAN5)

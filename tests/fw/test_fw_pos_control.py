@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 import math
 
 import pytest
@@ -73,15 +74,53 @@ def test_after_the_flare_it_rolls_out_at_idle_steering_along_the_runway() -> Non
     assert out.wheel_steering and out.throttle == 0.0 and out.roll == 0.0 and out.yaw == pytest.approx(0.0)
 
 
-@pytest.mark.parametrize("limit", [0.0, 0.3])
-def test_below_the_throttle_limit_altitude_the_flare_keeps_at_most_fw_thr_lnd_max(limit: float) -> None:
-    control = FixedwingPositionControl({"FW_THR_LND_MAX": limit, "FW_LND_FLALT": 3.0, "FW_LND_TLALT": -1.0})
+def fly_flare(control: FixedwingPositionControl, seconds: float, **state) -> list:
+    """An approach step at 5 m, then ``seconds`` of steps at 0.5 m (the flare), all in ``state``; the outputs."""
     land = line(SP.SETPOINT_TYPE_LAND, start=(-300.0, 0.0, -15.0), end=(0.0, 0.0, 0.0))
-    slow = dict(velocity=(8.0, 0.0, 0.5), airspeed=8.0)  # well below the landing airspeed: TECS asks for throttle
-    flaring = control.update(inputs(NS.NAVIGATION_STATE_AUTO_RTL, land, position=(-30.0, 0.0, -2.5), **slow))
-    assert flaring.throttle > 0.3  # above FW_LND_TLALT (2/3 of the flare altitude) the throttle is TECS'
-    limited = control.update(inputs(NS.NAVIGATION_STATE_AUTO_RTL, land, position=(-20.0, 0.0, -1.5), **slow))
-    assert 0.0 <= limited.throttle <= limit and not limited.wheel_steering
+    rtl = NS.NAVIGATION_STATE_AUTO_RTL
+    outs = [control.update(inputs(rtl, land, now_us=0, position=(-60.0, 0.0, -5.0), **state))]
+    for i in range(round(seconds / 0.004)):
+        outs.append(control.update(inputs(rtl, land, now_us=4000 * (i + 1), position=(-50.0, 0.0, -0.5), **state)))
+    return outs
+
+
+def test_the_flare_flies_a_height_rate_and_takes_the_throttle_to_idle() -> None:
+    control = FixedwingPositionControl({"FW_THR_IDLE": 0.05})
+    outs = fly_flare(control, 1.5, velocity=(13.0, 0.0, 1.0), airspeed=13.0)
+    assert control.landing.flaring and not outs[-1].wheel_steering
+    # From the sink rate at its start to FW_LND_FL_SINK in FW_LND_FL_TIME, with no altitude to track.
+    assert control.landing.flare_initial_height_rate == -1.0
+    status = control.tecs.status()
+    assert math.isnan(status.altitude_sp) and status.height_rate_setpoint == pytest.approx(-0.25)
+    # The throttle leaves the approach's smoothly and ends at idle.
+    steps = [abs(b.throttle - a.throttle) for a, b in itertools.pairwise(outs)]
+    assert max(steps) < 0.05
+    assert outs[-1].throttle == pytest.approx(0.05)
+
+
+def test_in_the_flare_the_pitch_gives_way_to_the_airspeed_before_the_wing_stalls() -> None:
+    # Half way through the flare's ramp, sinking at 1 m/s: far below the minimum airspeed TECS' underspeed protection
+    # flies the airspeed (towards FW_AIRSPD_MIN) instead of the sink rate, nose down.
+    pitch = {}
+    for airspeed in (13.0, 5.0):
+        control = FixedwingPositionControl({"FW_LND_FL_PMIN": 0.0})
+        outs = fly_flare(control, 0.5, velocity=(airspeed, 0.0, 1.0), airspeed=airspeed)
+        pitch[airspeed] = outs[-1].pitch
+        status = control.tecs.status()
+        assert status.underspeed_ratio == (1.0 if airspeed < 10.0 else 0.0)
+        assert status.true_airspeed_sp == (10.0 if airspeed < 10.0 else 13.0)
+    assert pitch[5.0] < pitch[13.0] - math.radians(4.0)
+
+
+def test_just_above_the_runway_it_steers_on_the_wheels_at_idle_but_keeps_the_flares_pitch() -> None:
+    control = FixedwingPositionControl({"FW_LND_FL_PMIN": 0.0, "FW_THR_IDLE": 0.05})
+    fly_flare(control, 0.3, velocity=(12.0, 0.0, 1.0), airspeed=12.0)
+    land = line(SP.SETPOINT_TYPE_LAND, start=(-300.0, 0.0, -15.0), end=(0.0, 0.0, 0.0))
+    low = dict(now_us=304_000, position=(-49.0, 0.0, -0.2), velocity=(12.0, 0.0, 1.0), airspeed=12.0)
+    out = control.update(inputs(NS.NAVIGATION_STATE_AUTO_RTL, land, **low))
+    assert out.wheel_steering and out.reset_integral and out.roll == 0.0 and out.throttle == 0.05
+    # Nose below the flare's final least pitch: not raised to it while the vehicle may still be floating.
+    assert out.pitch == control.tecs.status().pitch_sp_rad < 0.0
 
 
 def test_altitude_mode_banks_with_the_stick_and_descend_circles_gently() -> None:

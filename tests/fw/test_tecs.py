@@ -137,17 +137,41 @@ def test_climbout_full_throttle_and_at_least_the_climbout_pitch():
     assert out.pitch_sp == pytest.approx(pitch_min + 1.1 * 17.0 * 0.4 / (17.0 * G))
 
 
-def test_underspeed_gives_full_throttle_and_the_minimum_airspeed():
+@pytest.mark.parametrize(("airspeed", "ratio"), [(9.0, 0.0), (7.75, 0.0), (6.625, 0.5), (5.5, 1.0), (4.0, 1.0)])
+def test_the_underspeed_ratio_ramps_in_below_the_minimum_airspeed(airspeed: float, ratio: float):
+    # FW_AIRSPD_MIN 10, trim 15 (PX4 v1.14): none above 10 − 0.15·15 = 7.75 m/s, full below 10 − 0.3·15 = 5.5 m/s.
     tecs = Tecs(DEFAULTS)
-    for _ in range(500):
-        out = step(tecs, airspeed=8.0, airspeed_sp=15.0, throttle_max=0.7)
-        if out.mode is TecsMode.UNDERSPEED:
-            break
+    out = step(tecs, airspeed=airspeed)
+    assert tecs.status().underspeed_ratio == pytest.approx(ratio)
+    assert out.mode is (TecsMode.UNDERSPEED if ratio > 0.0 else TecsMode.NORMAL)
+
+
+def test_underspeed_blends_throttle_towards_its_maximum_and_pitch_towards_speed():
+    # Half undersped at 6.625 m/s and asked to climb, asking for the minimum airspeed (so the setpoint blend
+    # changes nothing).
+    normal, undersped = Tecs(BARE), Tecs(BARE)
+    kw = dict(airspeed=6.625, airspeed_sp=10.0, altitude_sp=110.0, throttle_max=0.7)
+    for _ in range(50):
+        off = step(normal, detect_underspeed=False, **kw)
+        on = step(undersped, **kw)
+    assert on.throttle_sp == pytest.approx(0.5 * 0.7 + 0.5 * off.throttle_sp)
+    # The speed weight 1 goes half way to 2: the climb counts half in the balance, the nose stays lower.
+    status = undersped.status()
+    ske_rate_sp = status.true_airspeed_filtered * status.true_airspeed_derivative_sp
+    assert status.total_energy_balance_rate_sp == pytest.approx(0.5 * G * status.height_rate_setpoint - ske_rate_sp)
+    assert on.pitch_sp < off.pitch_sp
+
+
+def test_full_underspeed_gives_full_throttle_the_minimum_airspeed_and_holds_the_throttle_integrator():
+    tecs = Tecs(DEFAULTS)
+    for _ in range(50):
+        out = step(tecs, airspeed=5.0, airspeed_sp=15.0, throttle_max=0.7)
     assert out.mode is TecsMode.UNDERSPEED
     assert out.throttle_sp == 0.7
     assert tecs.status().true_airspeed_sp == DEFAULTS.fw_airspd_min
-    out = step(tecs, airspeed=8.0, airspeed_sp=15.0, throttle_max=0.7, detect_underspeed=False)
-    assert out.mode is TecsMode.NORMAL
+    assert tecs.status().throttle_integ == 0.0
+    out = step(tecs, airspeed=5.0, airspeed_sp=15.0, throttle_max=0.7, detect_underspeed=False)
+    assert out.mode is TecsMode.NORMAL and tecs.status().underspeed_ratio == 0.0
 
 
 def test_without_airspeed_pitch_holds_height_and_throttle_is_open_loop():
