@@ -6,8 +6,7 @@ ground truth: the radius error (RMS), the altitude error and the true-airspeed e
 wind a guidance that ignores the wind (L1) flies an egg-shaped circle; NPFG, fed the airspeed selector's wind
 estimate, should hold it better.
 Then Return and a landing on the runway. The limits are the calm limits doubled (the issue's rule for wind). The
-touchdown's sink rate is reported, not judged: in these gusts the SIH airplane's nose-level flare now and then still
-stalls at a few metres (plane_mission judges the touchdown).
+touchdown's sink rate is reported, not judged here (plane_mission judges the touchdown).
 """
 
 from __future__ import annotations
