@@ -22,6 +22,7 @@ import numpy as np
 from stack.mathlib.scalar import FLT_EPSILON
 from stack.mathlib.vector import Vec3
 from stack.mixer.effectiveness import effectiveness_from_params
+from stack.msg.system import VehicleLandDetected
 from stack.params import catalogue
 from stack.params.param import Param
 
@@ -126,6 +127,17 @@ def desaturate(u: list[float], vec: tuple[float, ...], hi: float = ACTUATOR_MAX,
         u[i] += gain * v
 
 
+def thrust_has_priority(land: VehicleLandDetected | None) -> bool:
+    """Whether airmode is off for this allocation: while a descent is demanded and on the ground.
+
+    ArduPilot's rule (``Copter::update_throttle_mix``: the throttle mix is at its minimum, attitude never
+    raises the throttle, while landed and while a descent is demanded). A vehicle touching down tilted in wind
+    tips onto its legs; with airmode, the torque that fights that rotation raised the collective thrust and
+    lifted it off again, so that it hopped downwind for seconds before the land detector could settle.
+    """
+    return land is not None and (land.in_descend or land.ground_contact or land.maybe_landed or land.landed)
+
+
 class ControlAllocator:
     """Pseudo-inverse allocation with PX4's sequential desaturation for a multirotor (actuators in [0, 1])."""
 
@@ -174,21 +186,18 @@ class ControlAllocator:
         """Per-axis normalisation scale: allocated control = (B · u) ∘ scale."""
         return self._scale
 
-    def allocate(self, torque: Vec3, thrust: Vec3, on_ground: bool = False) -> AllocationResult:
+    def allocate(self, torque: Vec3, thrust: Vec3, thrust_priority: bool = False) -> AllocationResult:
         """Motor commands for a normalised torque (roll, pitch, yaw) and body thrust (x, y, z; z < 0 is up).
 
-        ``on_ground`` (the land detector's ground contact): thrust has priority over attitude, as without
-        airmode, so that torque demands never raise the collective thrust. ArduPilot does the same while
-        landing and landed (``Copter::update_throttle_mix`` → ``set_throttle_mix_min``): a vehicle touching
-        down tilted in wind tips onto its legs, and airmode's added thrust for that rotation lifted it off
-        again, so that it hopped downwind instead of settling.
+        ``thrust_priority`` (see :func:`thrust_has_priority`): thrust has priority over attitude, as without
+        airmode, so that torque demands never raise the collective thrust.
         """
         tr, tp, ty = torque
         fx, fy, fz = thrust
         cr, cp, cy = self._col_r, self._col_p, self._col_y
         cfx, cfy, cfz = self._col_fx, self._col_fy, self._col_fz
         u = [cr[i] * tr + cp[i] * tp + cfx[i] * fx + cfy[i] * fy + cfz[i] * fz for i in range(self._n)]
-        airmode = 0 if on_ground else self._airmode
+        airmode = 0 if thrust_priority else self._airmode
         if airmode == 2:
             for i in range(self._n):
                 u[i] += cy[i] * ty

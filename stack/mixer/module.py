@@ -3,8 +3,8 @@
 CA_AIRFRAME chooses the allocation, rebuilt when its parameters change:
 
 - 0, multirotor: from the CA_ROTOR* geometry. Motors idle when armed and are stopped when disarmed. The saturation
-  of each axis goes back to the rate loop in ``control_allocator_status``. While the land detector reports ground
-  contact, airmode is off (see :meth:`ControlAllocator.allocate`).
+  of each axis goes back to the rate loop in ``control_allocator_status``. While a descent is demanded and on the
+  ground, airmode is off (:func:`stack.mixer.allocation.thrust_has_priority`).
 - 1, fixed wing: the CA_ROTOR* motors pushing forward, then the CA_SV_CS* control surfaces
   (:mod:`stack.mixer.fixedwing`). ``actuator_motors`` carries the motors, ``actuator_servos`` the surfaces, and
   the outputs list the motors then the surfaces (the default plane: throttle, aileron, elevator, rudder).
@@ -84,9 +84,8 @@ class ControlAllocatorModule(Module):
         if self.plane is not None:
             self._run_fixed_wing(self.plane, torque_sp.timestamp_sample, torque, thrust, armed, dt)
             return
-        land = self.latest("vehicle_land_detected")
-        on_ground = land is not None and (land.ground_contact or land.maybe_landed or land.landed)
-        result = self.allocator.allocate(torque, thrust, on_ground)
+        priority = allocation.thrust_has_priority(self.latest("vehicle_land_detected"))
+        result = self.allocator.allocate(torque, thrust, priority)
         out = self.outputs.update(result.motors, armed, dt)
         n = self.allocator.num_motors
         t = torque_sp.timestamp_sample

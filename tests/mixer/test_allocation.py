@@ -6,8 +6,15 @@ import numpy as np
 import pytest
 
 from stack.attctl.rate_control import saturation_from_allocator
-from stack.mixer.allocation import AllocationResult, ControlAllocator, desaturate, normalized_allocation
+from stack.mixer.allocation import (
+    AllocationResult,
+    ControlAllocator,
+    desaturate,
+    normalized_allocation,
+    thrust_has_priority,
+)
 from stack.mixer.effectiveness import effectiveness_from_params, rotor_effectiveness
+from stack.msg.system import VehicleLandDetected
 
 # SIH quad X in PX4 motor order: (x, y, KM); KM > 0 is counter-clockwise.
 QUAD_X = [(1.0, 1.0, 0.05), (-1.0, -1.0, 0.05), (1.0, -1.0, -0.05), (-1.0, 1.0, -0.05)]
@@ -156,9 +163,9 @@ def test_yaw_airmode_keeps_yaw_at_low_thrust():
 
 @pytest.mark.parametrize("airmode", [1, 2])
 @pytest.mark.parametrize("torque", [(0.5, 0.0, 0.0), (0.0, 0.0, 0.4)])
-def test_on_the_ground_torque_never_raises_the_thrust(airmode, torque):
+def test_with_thrust_priority_torque_never_raises_the_thrust(airmode, torque):
     # A vehicle tipping onto its legs must not be lifted off by airmode's added thrust.
-    r = quad(airmode=airmode).allocate(torque, (0.0, 0.0, -0.1), on_ground=True)
+    r = quad(airmode=airmode).allocate(torque, (0.0, 0.0, -0.1), thrust_priority=True)
     assert r.allocated_thrust[2] >= -0.1 - 1e-9
     assert r == quad(airmode=0).allocate(torque, (0.0, 0.0, -0.1))
 
@@ -206,3 +213,11 @@ def test_normalization_cancels_thrust_coefficient_and_arm_length():
     mix_ref, scale_ref = normalized_allocation(effectiveness_from_params(rotor_params(QUAD_X)))
     assert mix_small == pytest.approx(mix_ref)
     assert scale_small != pytest.approx(scale_ref)
+
+
+def test_thrust_has_priority_while_descending_and_on_the_ground():
+    assert not thrust_has_priority(None)
+    flying = {"ground_contact": False, "maybe_landed": False, "landed": False, "in_descend": False}
+    assert not thrust_has_priority(VehicleLandDetected(**flying))
+    for flag in flying:
+        assert thrust_has_priority(VehicleLandDetected(**{**flying, flag: True})), flag
