@@ -5,7 +5,10 @@ used by ``FlightTaskAuto``. Every cycle, from the current trajectory state and t
 triplet (previous, target, next):
 
 1. a velocity target points at the target, or, while turning onto a new leg, at the point of the
-   leg at L1 = max(acceptance radius, 5 m) from the trajectory (``line_crossing_point``);
+   leg at L1 = max(acceptance radius, 5 m) from the trajectory (``line_crossing_point``) if that is
+   short of the target. Once the trajectory has gone beyond a target that the vehicle has not reached
+   within the acceptance radius, it comes back and stops there (PX4 aims on along the leg, beyond the
+   target, so that the trajectory flies on, away from it, for as long as the target stays);
 2. its magnitude is the largest speed from which the vehicle can still slow down, with jerk-limited
    braking, to the speed allowed at the target: v = ½(−b + √(b² − 4c)) with b = 4a²/j and
    c = −2·a·d − v_end². v_end comes from the turn at the target onto the next leg (a circle
@@ -166,7 +169,7 @@ class PositionSmoothing:
         Returns the new setpoint; the plan for the following cycle is made from it.
         """
         previous, target, following = waypoints
-        if stop_at_target or is_single_waypoint:
+        if stop_at_target or is_single_waypoint or self._past(previous, target):
             following = target
         if is_single_waypoint:
             previous = target
@@ -191,6 +194,13 @@ class PositionSmoothing:
         else:
             z_axis.max_vel = self._params.mpc_z_v_auto_dn
             z_axis.max_accel = self._params.mpc_acc_down_max
+
+    def _past(self, previous: Vec3, target: Vec3) -> bool:
+        """Whether the trajectory has gone beyond the target along the leg from ``previous``."""
+        x_axis, y_axis, _ = self._trajectory.axes
+        return (x_axis.pos - target[0]) * (target[0] - previous[0]) + (y_axis.pos - target[1]) * (
+            target[1] - previous[1]
+        ) > 0.0
 
     def _time_stretch(self, position: Vec3) -> float:
         x_axis, y_axis, _ = self._trajectory.axes
@@ -217,11 +227,15 @@ class PositionSmoothing:
     def _velocity_target(self, previous: Vec3, target: Vec3, following: Vec3, single: bool) -> Vec3:
         pos = self._trajectory.position
         turning = not single and self._is_turning(target)
+        aim = target
         if turning:
             distance = max(self._params.nav_acc_rad, _MIN_CROSSING_DISTANCE)
-            aim = line_crossing_point(previous, target, pos, distance)
-        else:
-            aim = target
+            crossing = line_crossing_point(previous, target, pos, distance)
+            # Never beyond the target on its leg: a trajectory that has gone past a target the vehicle has not
+            # reached yet would otherwise follow the leg on, away from it, for as long as the target stays.
+            leg_x, leg_y = target[0] - previous[0], target[1] - previous[1]
+            if (crossing[0] - target[0]) * leg_x + (crossing[1] - target[1]) * leg_y < 0.0:
+                aim = crossing
 
         xy_speed = self._max_xy_speed(pos, target, following)
         if turning:

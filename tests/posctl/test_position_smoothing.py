@@ -169,3 +169,20 @@ def test_reached_uses_both_acceptance_radii():
     assert not ps.reached(target, (10.0, 0.0, -6.0))
     ps.reset(target, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0))
     assert ps.reached(target)
+
+
+def test_a_target_not_yet_reached_holds_the_trajectory_at_it():
+    # The navigator moves on only once the vehicle is within the acceptance radius. Until then the trajectory must
+    # stay at the target, even once it has gone past it: aiming along the leg beyond it would fly on forever.
+    ps = PositionSmoothing(PositionSmoothingParams(nav_acc_rad=0.1))
+    previous, target, following = (20.0, 20.0, -10.0), (0.0, 20.0, -10.0), (0.0, 0.0, -10.0)
+    ps.reset(previous, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0))
+    lagging = (0.0, 0.3, 0.0)  # the vehicle, beside the trajectory, never within 0.1 m of the target
+    beyond = 0.0
+    for _ in range(round(60.0 / DT)):
+        p = ps.point().position
+        point = ps.generate(DT, (p[0] + lagging[0], p[1] + lagging[1], p[2]), (previous, target, following))
+        beyond = max(beyond, -point.position[0])
+    assert beyond < 0.2
+    assert math.dist(ps.point().position, target) < 0.01
+    assert math.hypot(*ps.point().velocity[:2]) < 0.01
