@@ -6,7 +6,8 @@ PX4's ``fw_pos_control_l1`` (v1.13; ``FixedwingPositionControl.cpp``) in one I/O
   (:class:`~stack.fw.npfg.NPFG`), chosen by FW_USE_NPFG: lines between waypoints, loiter circles and headings
   give a lateral acceleration, flown as the roll angle atan(a/g) within FW_R_LIM;
 * longitudinal control by TECS (:class:`~stack.fw.tecs.Tecs`): altitude and airspeed setpoints give the
-  pitch and throttle setpoints;
+  pitch and throttle setpoints; the airspeed setpoint is kept above FW_AIRSPD_MIN (the landing's airspeed while
+  landing) times √(load factor) of the bank commanded, as the stall speed rises in a turn (PX4 v1.14);
 * per setpoint type: POSITION flies the line previous → current; LOITER the circle about current; TAKEOFF
   the runway takeoff (:class:`~stack.fw.runway_takeoff.RunwayTakeoff`: heading held on the wheels, rotation,
   climb-out along the runway's line); LAND the glide slope and PX4 v1.14's sink-rate flare
@@ -33,7 +34,7 @@ from stack.fw.landing import Landing, LandingParams
 from stack.fw.npfg import NPFG, NpfgParams
 from stack.fw.runway_takeoff import RunwayTakeoff, RunwayTakeoffParams, RunwayTakeoffState
 from stack.fw.tecs import Tecs, TecsParams
-from stack.mathlib.scalar import constrain
+from stack.mathlib.scalar import FLT_EPSILON, constrain
 from stack.mathlib.vector import Vec3
 from stack.msg.fixedwing import PositionSetpoint, PositionSetpointTriplet
 from stack.msg.setpoints import ManualControlSetpoint
@@ -150,6 +151,7 @@ class FixedwingPositionControl:
         self._touched_down = False
         self._land_throttle = NAN
         self._altitude_hold = NAN
+        self._roll_sp = 0.0
         self.status = GuidanceStatus(NAN, NAN, NAN, NAN, NAN, NAN, NAN, 0)
         self.set_params(params or {})
 
@@ -178,6 +180,11 @@ class FixedwingPositionControl:
     # ------------------------------------------------------------------ cycle
 
     def update(self, inp: FwPosInputs) -> FwPosOutput | None:
+        out = self._update(inp)
+        self._roll_sp = out.roll if out is not None else 0.0
+        return out
+
+    def _update(self, inp: FwPosInputs) -> FwPosOutput | None:
         if not inp.armed:
             self._mode_key = None
             self.tecs.reset()
@@ -232,10 +239,15 @@ class FixedwingPositionControl:
 
     # ------------------------------------------------------------------ building blocks
 
-    def _airspeed_sp(self, requested: float = NAN) -> float:
+    def _airspeed_sp(self, requested: float = NAN, minimum: float = NAN) -> float:
+        """``requested`` (else FW_AIRSPD_TRIM) within the least airspeed and FW_AIRSPD_MAX. The least is ``minimum``
+        (else FW_AIRSPD_MIN) raised as the stall speed rises in a turn, by the square root of the load factor
+        1/cos(roll) of the bank last commanded (PX4 v1.14 ``FixedwingPositionControl::adapt_airspeed_setpoint``)."""
         p = self._p
         speed = requested if math.isfinite(requested) and requested > 0.0 else p["FW_AIRSPD_TRIM"]
-        return constrain(speed, p["FW_AIRSPD_MIN"], p["FW_AIRSPD_MAX"])
+        least = minimum if math.isfinite(minimum) else p["FW_AIRSPD_MIN"]
+        least *= math.sqrt(1.0 / max(math.cos(self._roll_sp), FLT_EPSILON))
+        return constrain(speed, min(least, p["FW_AIRSPD_MAX"]), p["FW_AIRSPD_MAX"])
 
     def _tecs(
         self,
@@ -426,7 +438,7 @@ class FixedwingPositionControl:
         pitch, throttle = self._tecs(
             inp,
             sp.altitude_sp,
-            self._airspeed_sp(sp.airspeed_sp),
+            self._airspeed_sp(sp.airspeed_sp, min(p["FW_AIRSPD_MIN"], sp.airspeed_sp)),
             height_rate_sp=sp.height_rate_sp,
             pitch_min=sp.pitch_min,
             pitch_max=sp.pitch_max,

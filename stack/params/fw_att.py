@@ -15,7 +15,9 @@ SHARED: tuple[Param, ...] = (
     Param("FW_THR_CRUISE", 0.6, 0.0, 1.0, "", "Throttle at the trim airspeed in level flight"),
     Param("FW_THR_MIN", 0.0, 0.0, 1.0, "", "Minimum throttle in the auto modes"),
     Param("FW_THR_MAX", 1.0, 0.0, 1.0, "", "Maximum throttle in the auto modes"),
-    Param("FW_THR_IDLE", 0.0, 0.0, 0.4, "", "Idle throttle (landed, or after the flare)"),
+    Param(
+        "FW_THR_IDLE", 0.0, 0.0, 0.4, "", "Idle throttle: on the ground, and where the flare ramps the throttle to"
+    ),
 )
 
 ATTITUDE: tuple[Param, ...] = (

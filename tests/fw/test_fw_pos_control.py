@@ -5,6 +5,7 @@ from __future__ import annotations
 import itertools
 import math
 
+import msgspec
 import pytest
 
 from stack.fw.pos_control import DESCEND_BANK, FixedwingPositionControl, FwPosInputs
@@ -130,3 +131,18 @@ def test_altitude_mode_banks_with_the_stick_and_descend_circles_gently() -> None
     assert out.roll == pytest.approx(math.radians(22.5))
     out = control.update(inputs(NS.NAVIGATION_STATE_DESCEND, position=(math.nan, math.nan, -40.0)))
     assert out.roll == DESCEND_BANK
+
+
+def test_the_least_airspeed_rises_with_the_load_factor_of_the_bank() -> None:
+    # PX4 v1.14 adapt_airspeed_setpoint: the stall speed, and so FW_AIRSPD_MIN, grows as √(1/cos(roll)).
+    control = FixedwingPositionControl({"FW_AIRSPD_MIN": 10.0, "FW_AIRSPD_TRIM": 15.0, "FW_AIRSPD_MAX": 20.0})
+    triplet = line()
+    triplet = msgspec.structs.replace(triplet, current=msgspec.structs.replace(triplet.current, cruising_speed=10.0))
+    far_right = inputs(NS.NAVIGATION_STATE_AUTO_MISSION, triplet, position=(0.0, 300.0, -40.0))
+    banks = [control.update(far_right).roll for _ in range(500)]  # the roll setpoint slews at FW_L1_R_SLEW_MAX
+    assert banks[-1] < -math.radians(20.0)
+    assert control.tecs.status().true_airspeed_sp == pytest.approx(10.0 / math.sqrt(math.cos(banks[-2])))
+    on_the_line = inputs(NS.NAVIGATION_STATE_AUTO_MISSION, triplet)
+    for _ in range(500):
+        control.update(on_the_line)
+    assert control.tecs.status().true_airspeed_sp == pytest.approx(10.0)
