@@ -20,7 +20,8 @@ WIND_PARAMS: dict[str, object] = {
     "SIM_WIND_GUST": 1.0,
     "SIM_WIND_GUST_T": 2.0,
 }
-"""The issue's "5 m/s with gusts": a westerly at 5 m/s with 1.5 m/s (1 σ) gusts of 2 s correlation time."""
+"""``--wind``: a westerly at 5 m/s with gusts of 1 m/s (1 σ) horizontally and half that vertically (the simulator's
+rule for SIM_WIND_GUST), 2 s correlation time."""
 
 
 def prepare_flight(
