@@ -128,7 +128,7 @@ def desaturate(u: list[float], vec: tuple[float, ...], hi: float = ACTUATOR_MAX,
 
 
 def thrust_has_priority(land: VehicleLandDetected | None) -> bool:
-    """Whether airmode is off for this allocation: while a descent is demanded and on the ground.
+    """Whether airmode is off for this allocation: while a descent is demanded, and on the ground.
 
     ArduPilot's rule (``Copter::update_throttle_mix``: the throttle mix is at its minimum, attitude never
     raises the throttle, while landed and while a descent is demanded). A vehicle touching down tilted in wind

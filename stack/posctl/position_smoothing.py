@@ -66,6 +66,11 @@ def _unit2(x: float, y: float) -> tuple[float, float]:
     return (x / n, y / n) if n > FLT_EPSILON else (0.0, 0.0)
 
 
+def _beyond(point: Vec3, previous: Vec3, target: Vec3) -> bool:
+    """Whether ``point`` lies past ``target`` along the leg from ``previous`` (horizontally)."""
+    return (point[0] - target[0]) * (target[0] - previous[0]) + (point[1] - target[1]) * (target[1] - previous[1]) > 0.0
+
+
 def _angle_at_corner(ux: float, uy: float, wx: float, wy: float) -> float:
     """Angle between the unit 2-D vectors u and w, kept below π so tan(α/2) stays finite."""
     d = ux * wx + uy * wy
@@ -169,7 +174,7 @@ class PositionSmoothing:
         Returns the new setpoint; the plan for the following cycle is made from it.
         """
         previous, target, following = waypoints
-        if stop_at_target or is_single_waypoint or self._past(previous, target):
+        if stop_at_target or is_single_waypoint or _beyond(self._trajectory.position, previous, target):
             following = target
         if is_single_waypoint:
             previous = target
@@ -194,13 +199,6 @@ class PositionSmoothing:
         else:
             z_axis.max_vel = self._params.mpc_z_v_auto_dn
             z_axis.max_accel = self._params.mpc_acc_down_max
-
-    def _past(self, previous: Vec3, target: Vec3) -> bool:
-        """Whether the trajectory has gone beyond the target along the leg from ``previous``."""
-        x_axis, y_axis, _ = self._trajectory.axes
-        return (x_axis.pos - target[0]) * (target[0] - previous[0]) + (y_axis.pos - target[1]) * (
-            target[1] - previous[1]
-        ) > 0.0
 
     def _time_stretch(self, position: Vec3) -> float:
         x_axis, y_axis, _ = self._trajectory.axes
@@ -233,8 +231,7 @@ class PositionSmoothing:
             crossing = line_crossing_point(previous, target, pos, distance)
             # Never beyond the target on its leg: a trajectory that has gone past a target the vehicle has not
             # reached yet would otherwise follow the leg on, away from it, for as long as the target stays.
-            leg_x, leg_y = target[0] - previous[0], target[1] - previous[1]
-            if (crossing[0] - target[0]) * leg_x + (crossing[1] - target[1]) * leg_y < 0.0:
+            if not _beyond(crossing, previous, target):
                 aim = crossing
 
         xy_speed = self._max_xy_speed(pos, target, following)
