@@ -181,7 +181,7 @@ class FixedwingPositionControl:
 
     def update(self, inp: FwPosInputs) -> FwPosOutput | None:
         out = self._update(inp)
-        self._roll_sp = out.roll if out is not None else 0.0
+        self._roll_sp = out.roll if out is not None and math.isfinite(out.roll) else 0.0
         return out
 
     def _update(self, inp: FwPosInputs) -> FwPosOutput | None:
