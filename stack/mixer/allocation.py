@@ -6,6 +6,11 @@ Follows PX4 ``control_allocator``: the pseudo-inverse with multirotor RPY normal
 the status of ``ControlAllocator.cpp`` (allocated/unallocated control, achieved flags, actuator
 saturation).
 
+One departure: with yaw airmode (MC_AIRMODE 2) yaw may raise the collective thrust to fit, as in PX4's
+``mixAirmodeRPY``, but lowers it only within the minimum yaw margin, as ``mixYaw`` does without yaw airmode.
+PX4 lowers it as far as yaw asks, so at full thrust (a downdraft at full tilt) a heading correction took
+the thrust that held the height.
+
 After normalisation the torque setpoint is in "motor command units": CT and the arm length cancel, so
 for a quad X u_i = m_r·τx + m_p·τy + m_y·τz − T_z with |m_r| = |m_p| = 0.7071 and |m_y| = 1.
 The matrix work is numpy at setup; ``allocate`` is plain Python over the (≤ 12) motors.
@@ -113,12 +118,13 @@ def _desaturation_gain(vec: tuple[float, ...], u: list[float], hi: float) -> flo
     return k_min + k_max
 
 
-def desaturate(u: list[float], vec: tuple[float, ...], hi: float = ACTUATOR_MAX, reduce_only: bool = False) -> None:
+def desaturate(u: list[float], vec: tuple[float, ...], hi: float = ACTUATOR_MAX, reduce_only: bool = False,
+               raise_only: bool = False) -> None:
     """Shift u in place along vec to bring saturated actuators back into [0, hi]: by the gain k_min + k_max
     over the violations (actuators with |vec_i| < 0.2 ignored), then by half of the gain recomputed after it.
     ``reduce_only`` skips a first gain below zero (along the thrust vector: never add thrust)."""
     gain = _desaturation_gain(vec, u, hi)
-    if reduce_only and gain < 0.0:
+    if (reduce_only and gain < 0.0) or (raise_only and gain > 0.0):
         return
     for i, v in enumerate(vec):
         u[i] += gain * v
@@ -199,10 +205,12 @@ class ControlAllocator:
         u = [cr[i] * tr + cp[i] * tp + cfx[i] * fx + cfy[i] * fy + cfz[i] * fz for i in range(self._n)]
         airmode = 0 if thrust_priority else self._airmode
         if airmode == 2:
+            desaturate(u, cfz)
             for i in range(self._n):
                 u[i] += cy[i] * ty
-            desaturate(u, cfz)
-            desaturate(u, cy)
+            desaturate(u, cfz, raise_only=True)
+            desaturate(u, cy, hi=ACTUATOR_MAX + MINIMUM_YAW_MARGIN * (ACTUATOR_MAX - ACTUATOR_MIN))
+            desaturate(u, cfz, reduce_only=True)
         else:
             if airmode == 1:
                 desaturate(u, cfz)

@@ -11,7 +11,8 @@ PARAMS: tuple[Param, ...] = (
         2,
         "",
         "Multicopter air-mode: thrust may rise to keep attitude control at low and high throttle (Roll/Pitch/Yaw "
-        "also keeps the yaw: no yaw reset on the arming gesture)",
+        "also keeps the yaw: thrust may rise for it, but falls for it only within the 15 % yaw margin; no yaw "
+        "reset on the arming gesture)",
         values={0: "Disabled", 1: "Roll/Pitch", 2: "Roll/Pitch/Yaw"},
     ),
     Param("THR_MDL_FAC", 0.0, 0.0, 1.0, "", "Thrust model: rel_thrust = f·u² + (1−f)·u (0 linear, 1 quadratic)"),

@@ -7,6 +7,7 @@ import pytest
 
 from stack.attctl.rate_control import saturation_from_allocator
 from stack.mixer.allocation import (
+    MINIMUM_YAW_MARGIN,
     AllocationResult,
     ControlAllocator,
     desaturate,
@@ -159,6 +160,14 @@ def test_yaw_airmode_keeps_yaw_at_low_thrust():
     rpy = quad(airmode=2).allocate((0.0, 0.0, 0.4), (0.0, 0.0, -0.1))
     assert rpy.allocated_torque[2] == pytest.approx(0.4, abs=1e-6)
     assert without.allocated_torque[2] < 0.4 - 0.1
+
+
+def test_yaw_airmode_takes_full_thrust_for_yaw_only_within_the_yaw_margin():
+    # A heading correction in a downdraft at full tilt must not take the thrust that holds the height.
+    r = quad(airmode=2).allocate((0.0, 0.0, 0.4), (0.0, 0.0, -1.0))
+    assert r.allocated_thrust[2] == pytest.approx(-(1.0 - MINIMUM_YAW_MARGIN), abs=1e-9)
+    assert r.allocated_torque[2] == pytest.approx(MINIMUM_YAW_MARGIN, abs=1e-9)
+    assert r == quad(airmode=1).allocate((0.0, 0.0, 0.4), (0.0, 0.0, -1.0))
 
 
 @pytest.mark.parametrize("airmode", [1, 2])
