@@ -121,7 +121,7 @@ class StackLink:
 
     def poll(self, channel: str) -> int | None:
         item = self.subs[channel].poll()
-        return None if item is None else item[3].timestamp_sample - SEQ_OFFSET
+        return None if item is None else item.msg.timestamp_sample - SEQ_OFFSET
 
     def matched(self) -> bool:
         return all(p.matching() for p in self.pubs.values())

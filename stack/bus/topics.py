@@ -60,9 +60,19 @@ TELEMETRY_TOPICS = frozenset(
     {"rate_ctrl_status", "vehicle_local_position_setpoint", "sim_groundtruth", "actuator_outputs", "parameter_update"}
 )
 
-# (publication time µs — or -1 when not lockstep time —, publisher id, publisher sequence, message,
-#  index of the message on its topic for that publisher)
-Received = tuple[int, int, int, Any, int]
+
+class Received(msgspec.Struct, frozen=True, gc=False):
+    """One message as a subscription delivers it, with what the lockstep needs to know of its publication."""
+
+    time_us: int
+    """When it was published, in lockstep (simulated) time; -1 when published on the wall clock."""
+    publisher: int
+    """The publisher's id (:func:`stack.bus.node.stable_publisher_id`)."""
+    seq: int
+    """The publisher's sequence number, one sequence for all its topics."""
+    msg: Any
+    index: int
+    """Its index among the publisher's messages on this topic (1, 2, ...)."""
 
 
 class TopicPublisher:
@@ -246,7 +256,7 @@ class TopicSubscriber:
                 log.warning("%s: dropped malformed message (%d so far): %s", self.key, self.decode_errors, e)
             return None
         self.received += 1
-        return (pub_time if flags & FLAG_LOCKSTEP_TIME else -1, pub_id, seq, msg, index)
+        return Received(pub_time if flags & FLAG_LOCKSTEP_TIME else -1, pub_id, seq, msg, index)
 
     def _reject_schema(self, why: str) -> None:
         self.schema_errors += 1

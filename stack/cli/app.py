@@ -275,7 +275,7 @@ def _latest(node: Node, topics: tuple[str, ...]) -> dict[str, object]:
     while len(latest) < len(topics) and time.monotonic() < deadline:
         for name, sub in subs.items():
             while (item := sub.poll()) is not None:
-                latest[name] = item[3]
+                latest[name] = item.msg
         time.sleep(0.01)
     return latest
 

@@ -134,7 +134,7 @@ class _Link:
         new: New = []
         for topic, sub in self._watched.items():
             while (item := sub.poll()) is not None:
-                _, publisher, seq, msg, _ = item
+                publisher, seq, msg = item.publisher, item.seq, item.msg
                 if topic == "vehicle_status" and self._after is not None:
                     ack_publisher, ack_seq = self._after
                     if publisher == ack_publisher and seq <= ack_seq:
@@ -167,7 +167,7 @@ class _Link:
                     fail(f"{label}: no acknowledgement within {self.timeout:g} s (is the commander running?)")
                 time.sleep(POLL_S)
                 continue
-            _, publisher, seq, ack, _ = item
+            publisher, seq, ack = item.publisher, item.seq, item.msg
             if answers(ack, cmd):
                 break
         self._after = (publisher, seq)

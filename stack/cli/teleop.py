@@ -317,7 +317,7 @@ class _Link:
     def _poll(self, now: float) -> None:
         for topic, sub in self._subs.items():
             while (item := sub.poll()) is not None:
-                msg = item[3]
+                msg = item.msg
                 if topic == "vehicle_command_ack":
                     if self._awaiting is not None and answers(msg, self._awaiting[1]):
                         self.answer = outcome(self._awaiting[0], msg)

@@ -160,7 +160,7 @@ def _subscribe(node: Node, topic: str, instance: int, capacity: int) -> tuple[ze
                 )
             return
         try:
-            inbox.put((t, pub, seq, decoder.decode(sample.payload.to_bytes()), index))
+            inbox.put(Received(t, pub, seq, decoder.decode(sample.payload.to_bytes()), index))
         except msgspec.DecodeError as e:
             typer.echo(f"warning: malformed {topic} message dropped: {e}", err=True)
 
@@ -217,7 +217,7 @@ def echo(
                 if not period and inbox.dropped > reported:
                     typer.echo(f"[{inbox.dropped - reported} {topic} messages dropped: output too slow]", err=True)
                     reported = inbox.dropped
-                _print_message(topic, instance, item[3], paths, as_json, shown)
+                _print_message(topic, instance, item.msg, paths, as_json, shown)
         finally:
             sub.undeclare()
             if not period and inbox.dropped:
@@ -270,7 +270,7 @@ def hz(
             while duration == 0 or time.monotonic() - start < duration:
                 if (item := inbox.get(timeout=0.05)) is not None:
                     arrivals.append(time.monotonic())
-                    stamps.append(item[3].timestamp)
+                    stamps.append(item.msg.timestamp)
                     del arrivals[: -window - 1], stamps[: -window - 1]
                 if time.monotonic() >= next_print:
                     next_print += 1.0

@@ -1,6 +1,7 @@
 """A module's subscriptions on the fast path: the rings of the run's publishers, plus Zenoh from outside.
 
-The visibility rules are those of :mod:`stack.runtime.inputs`: a run at time ``t`` triggered by a
+The visibility rules are those of :mod:`stack.runtime.inputs` (:func:`~stack.runtime.inputs.visible`, with a
+publisher's slot in place of its id): a run at time ``t`` triggered by a
 record of publisher ``P`` sees every record published before ``t``, and the records ``P`` published at
 ``t`` before its trigger; records other members publish at ``t`` wait for the next run. Messages from
 outside the run arrive over Zenoh and are seen at once; samples on Zenoh from the run's own publishers
@@ -16,7 +17,7 @@ import msgspec
 from stack.bus.topics import Received, TopicSubscriber
 from stack.fastpath.layout import Region, topic_hash
 from stack.fastpath.ring import RingReader
-from stack.runtime.inputs import InputBuffer
+from stack.runtime.inputs import InputBuffer, visible
 
 log = logging.getLogger("stack.fastpath")
 
@@ -99,7 +100,7 @@ class FastInput(InputBuffer):
         ground-station link, ``stack topic echo``): it carries the run's lockstep time (only the run's members
         stamp it, and samples of other runs are dropped on arrival) or comes from a publisher known to be in it.
         The time tells even before this process has learnt who is in the run."""
-        return item[0] >= 0 or item[1] in self._inside
+        return item.time_us >= 0 or item.publisher in self._inside
 
     # -- reading -----------------------------------------------------------------------------------
 
@@ -126,7 +127,7 @@ class FastInput(InputBuffer):
             if head is None:
                 return
             _, t, seq, rec = head
-            if t < now or (r.slot == trigger_slot and seq < trigger_seq):
+            if visible(t, r.slot, seq, now, trigger_slot, trigger_seq):
                 self._decode(r, n, rec, t, seq)
                 r.taken = n
                 return
@@ -142,7 +143,7 @@ class FastInput(InputBuffer):
                 r.lost += 1
             else:
                 _, t, seq, rec = head
-                if not (t < now or (r.slot == trigger_slot and seq < trigger_seq)):
+                if not visible(t, r.slot, seq, now, trigger_slot, trigger_seq):
                     return
                 if self.every_us:
                     bucket = t // self.every_us
@@ -176,7 +177,7 @@ class FastInput(InputBuffer):
         while arrived:
             item = arrived.popleft()
             if not self.from_inside(item):
-                self._accept((now, item[1], item[2]), item[3])
+                self._accept((now, item.publisher, item.seq), item.msg)
 
 
 def first_at_or_after(reader: RingReader, time_us: int) -> int:

@@ -49,14 +49,12 @@ from stack.fastpath.layout import (
 )
 from stack.fastpath.ring import RingWriter
 from stack.fastpath.topology import Participant, Topology
-from stack.runtime.lockstep import LockstepError, timer_due
+from stack.runtime.lockstep import SLOW_WAIT_S, VERDICT_TIMEOUT_S, LockstepError, timer_due
 
 log = logging.getLogger("stack.lockstep")
 
 WAIT_MS = 5
-SLOW_WAIT_S = 2.0
 START_TIMEOUT_S = 60.0
-VERDICT_TIMEOUT_S = 5.0
 LAG_WAKE_STEPS = 32
 ADMIT_SCAN_STEPS = 250
 LAG_MAX_STEPS = 128

@@ -337,7 +337,7 @@ class MavlinkModule(Module):
     def _read_bus(self) -> None:
         for sub in (*self._subs.values(), *self._telemetry):
             while (item := sub.sub.poll()) is not None:
-                msg = item[3]
+                msg = item.msg
                 self.clock.observe(msg.timestamp)
                 field = VIEW_FIELDS.get(sub.topic)
                 if field is not None:

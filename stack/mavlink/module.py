@@ -215,7 +215,7 @@ class PixhawkAdapterModule(Module):
         while (newest := self.setpoints.poll()) is not None:
             item = newest
         if item is not None:
-            self._forward(item[3], now)
+            self._forward(item.msg, now)
 
     def _connected(self, now: int) -> bool:
         """The Pixhawk is heard: data within SILENCE_US, and its heartbeat within the link timeout (counted from
@@ -226,7 +226,7 @@ class PixhawkAdapterModule(Module):
 
     def _track_estimate(self) -> None:
         while (item := self.estimates.poll()) is not None:
-            self._estimate_sample_us = item[3].timestamp_sample
+            self._estimate_sample_us = item.msg.timestamp_sample
 
     def _forward(self, setpoint: Any, now: int) -> None:
         """Send the stack's newest setpoint (while it is armed and the link is up); NaN or out of range: refused."""

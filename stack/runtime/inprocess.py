@@ -92,9 +92,9 @@ class InProcessRuntime(Runtime):
         admitted = self._take_trigger(self._trigger_buf, trigger)
         for buf in self.data:
             buf.pull()
-            buf.promote_visible(t, trigger[1], trigger[2], members)
+            buf.promote_visible(t, trigger.publisher, trigger.seq, members)
         if admitted:
-            msg = trigger[3]
+            msg = trigger.msg
             self.last_sample_us = self._run(msg, sample_time(msg), self.last_sample_us)
 
 

@@ -28,6 +28,12 @@ from stack.msg.validity import refusal
 log = logging.getLogger("stack.runtime")
 
 
+def visible(published_us: int, publisher: int, seq: int, now_us: int, trigger_publisher: int, trigger_seq: int) -> bool:
+    """Whether a run at ``now_us`` for the trigger ``(trigger_publisher, trigger_seq)`` sees a message a lockstep
+    member published at ``published_us`` (the rule of the module docstring; -1 for a timer tick's trigger)."""
+    return published_us < now_us or (publisher == trigger_publisher and seq < trigger_seq)
+
+
 class InputBuffer:
     __slots__ = (
         "_latest_key",
@@ -116,15 +122,15 @@ class InputBuffer:
         item = poll()
         while item is not None:
             self._pending.append(item)
-            if item[4] > last.get(item[1], 0):
-                last[item[1]] = item[4]
+            if item.index > last.get(item.publisher, 0):
+                last[item.publisher] = item.index
             item = poll()
 
     def promote_all(self) -> None:
         """Real time: every received message becomes visible, in arrival order."""
         if not self._pending:
             return
-        admitted = [item[3] for item in self._pending if self.admits(item[3], item[1])]
+        admitted = [item.msg for item in self._pending if self.admits(item.msg, item.publisher)]
         self._pending.clear()
         if not admitted:
             return
@@ -145,11 +151,11 @@ class InputBuffer:
             return
         waiting: list[Received] = []
         for item in self._pending:
-            t, pub, seq, msg = item[0], item[1], item[2], item[3]
+            t, pub, seq = item.time_us, item.publisher, item.seq
             if pub not in members:
-                self._accept((now, pub, seq), msg)
-            elif t < now or (pub == trigger_pub and seq < trigger_seq):
-                self._accept((t, pub, seq), msg)
+                self._accept((now, pub, seq), item.msg)
+            elif visible(t, pub, seq, now, trigger_pub, trigger_seq):
+                self._accept((t, pub, seq), item.msg)
             else:
                 waiting.append(item)
         self._pending = waiting

@@ -2,7 +2,7 @@
 
 A publisher numbers its messages as :class:`stack.bus.topics.TopicPublisher` does (one sequence per
 module shared by its topics, an index per topic, ``timestamp`` stamped when 0) and delivers each
-message at once to every subscription of its topic, as the ``Received`` tuple a Zenoh subscriber's
+message at once to every subscription of its topic, as the :class:`stack.bus.topics.Received` a Zenoh subscriber's
 ``poll`` would return. With ``wire=True`` each subscription gets its own copy decoded from the msgpack
 bytes, as a subscriber process does (a message that does not decode is counted and dropped); with
 ``wire=False`` every subscription gets the publisher's object itself.
@@ -74,7 +74,7 @@ class MemorySubscription:
             if self.decode_errors == 1 or self.decode_errors % 1000 == 0:
                 log.warning("%s: dropped malformed message (%d so far): %s", self.suffix, self.decode_errors, e)
             return
-        self.deliver((t, publisher_id, seq, msg, index))
+        self.deliver(Received(t, publisher_id, seq, msg, index))
 
     def poll(self) -> Received | None:
         return self._items.popleft() if self._items else None
@@ -111,7 +111,7 @@ class MemoryPublisher:
             for sub in self._subs:
                 sub.deliver_encoded(now_us, pid, seq, data, count)
         else:
-            item = (now_us, pid, seq, msg, count)
+            item = Received(now_us, pid, seq, msg, count)
             for sub in self._subs:
                 sub.deliver(item)
 

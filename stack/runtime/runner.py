@@ -318,7 +318,7 @@ class Runtime:
             for d in data:
                 d.pull()
                 d.promote_all()
-            last_sample = self._run(item[3], sample_time(item[3]), last_sample)
+            last_sample = self._run(item.msg, sample_time(item.msg), last_sample)
 
     def _loop_wall_timer(self, period_us: int) -> None:
         data = self._wall_inputs()
@@ -346,7 +346,7 @@ class Runtime:
         last_sample = 0
         while True:
             item = buf.sub.recv()
-            t, pub, seq, msg = item[0], item[1], item[2], item[3]
+            t, pub, seq, msg = item.time_us, item.publisher, item.seq, item.msg
             if t < 0:
                 self._ignore_outside_trigger(suffix)
                 continue
@@ -446,10 +446,10 @@ class Runtime:
 
     def _take_trigger(self, buf: InputBuffer, item: Received) -> bool:
         """Take a trigger message in; False if it is refused (the module does not run on it)."""
-        buf.last_index[item[1]] = item[4]
-        if not buf.admits(item[3], item[1]):
+        buf.last_index[item.publisher] = item.index
+        if not buf.admits(item.msg, item.publisher):
             return False
-        buf.latest = item[3]
+        buf.latest = item.msg
         return True
 
     def _run(self, msg: Any, sample_us: int, last_sample_us: int) -> int:

@@ -10,6 +10,7 @@ import pytest
 
 from stack.bus.access import COMMAND_TOPICS, OFFBOARD_TOPICS, Access, tool_may_publish
 from stack.bus.node import stable_publisher_id
+from stack.bus.topics import Received
 from stack.msg.actuators import ActuatorMotors
 from stack.msg.estimation import VehicleAttitude, VehicleLocalPosition
 from stack.msg.fixedwing import PositionSetpoint, PositionSetpointTriplet
@@ -86,13 +87,16 @@ def test_an_input_keeps_the_last_good_message_and_counts_the_rest() -> None:
     buf = InputBuffer(_Sub(), False)
     buf.members = frozenset({MEMBER})
     good = VehicleLocalPosition(z=-5.0)
-    buf.sub.items += [(-1, MEMBER, 1, good, 1), (-1, MEMBER, 2, VehicleLocalPosition(z=NAN), 2)]
-    buf.sub.items += [(-1, STRANGER, 1, VehicleLocalPosition(z=-10.0), 1)]
+    buf.sub.items += [Received(-1, MEMBER, 1, good, 1), Received(-1, MEMBER, 2, VehicleLocalPosition(z=NAN), 2)]
+    buf.sub.items += [Received(-1, STRANGER, 1, VehicleLocalPosition(z=-10.0), 1)]
     buf.pull()
     buf.promote_all()
     assert buf.latest is good and (buf.invalid, buf.unauthorized) == (1, 1)
     # In lockstep the same: the barrier still counts each message as received.
-    buf.sub.items += [(10, MEMBER, 3, VehicleLocalPosition(z=INF), 3), (-1, STRANGER, 2, VehicleLocalPosition(), 2)]
+    buf.sub.items += [
+        Received(10, MEMBER, 3, VehicleLocalPosition(z=INF), 3),
+        Received(-1, STRANGER, 2, VehicleLocalPosition(), 2),
+    ]
     buf.pull()
     buf.promote_visible(20, -1, 0, frozenset({MEMBER}))
     assert buf.latest is good and (buf.invalid, buf.unauthorized) == (2, 2) and buf.last_index[MEMBER] == 3
@@ -102,12 +106,12 @@ def test_an_offboard_setpoint_from_a_tool_is_heard_only_in_offboard() -> None:
     offboard = [False]
     buf = InputBuffer(_Sub(), True)
     buf.members, buf.open_while = frozenset({MEMBER}), lambda: offboard[0]
-    buf.sub.items.append((-1, STRANGER, 1, TrajectorySetpoint(position=(0.0, 0.0, -3.0)), 1))
+    buf.sub.items.append(Received(-1, STRANGER, 1, TrajectorySetpoint(position=(0.0, 0.0, -3.0)), 1))
     buf.pull()
     buf.promote_all()
     assert buf.take() == [] and buf.unauthorized == 1
     offboard[0] = True
-    buf.sub.items.append((-1, STRANGER, 2, TrajectorySetpoint(position=(0.0, 0.0, -3.0)), 2))
+    buf.sub.items.append(Received(-1, STRANGER, 2, TrajectorySetpoint(position=(0.0, 0.0, -3.0)), 2))
     buf.pull()
     buf.promote_all()
     assert len(buf.take()) == 1 and buf.unauthorized == 1

@@ -101,7 +101,10 @@ def test_outside_messages_are_seen_at_once_and_copies_of_ring_records_skipped(ru
     inp, sub = make_input(host, sources, queue=True)
     publish(w["a"], 1.0, 4000, 1)
     sub.arrived.extend(
-        [(-1, 555, 1, VehicleRatesSetpoint(roll=7.0), 1), (4000, 101, 1, VehicleRatesSetpoint(roll=1.0), 1)]
+        [
+            Received(-1, 555, 1, VehicleRatesSetpoint(roll=7.0), 1),
+            Received(4000, 101, 1, VehicleRatesSetpoint(roll=1.0), 1),
+        ]
     )
     inp.refresh(8000)
     assert sorted(m.roll for m in inp.take()) == [1.0, 7.0]

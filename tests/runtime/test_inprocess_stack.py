@@ -102,11 +102,10 @@ def test_messages_carry_the_bus_header_and_subscribers_get_a_copy_on_the_wire(wi
     bus.publisher(sim, "sensor_gyro", 0).publish(sent, 4000)
     a, b = first.poll(), second.poll()
     assert a is not None and b is not None and first.poll() is None
-    t, pub, seq, msg, index = a
-    assert (t, pub, seq, index) == (4000, sim.publisher_id, 2, 1)  # one sequence over the module's topics
-    assert msg == sent == b[3] and sent.timestamp == 4000  # stamped as TopicPublisher.publish does
+    assert (a.time_us, a.publisher, a.seq, a.index) == (4000, sim.publisher_id, 2, 1)  # one sequence, all topics
+    assert a.msg == sent == b.msg and sent.timestamp == 4000  # stamped as TopicPublisher.publish does
     # On the wire each subscriber decodes its own copy; shared, all get the publisher's object.
-    assert (msg is sent, b[3] is sent) == (not wire, not wire)
+    assert (a.msg is sent, b.msg is sent) == (not wire, not wire)
     assert [(m.topic, m.index, m.pub_time_us, m.flags) for m in bus.published] == [
         ("sensor_accel", 1, 4000, 1),
         ("sensor_gyro", 1, 4000, 1),

@@ -3,6 +3,7 @@ seeing an input (MISSION_START on a mission_result) is never judged without it."
 
 from __future__ import annotations
 
+from stack.bus.topics import Received
 from stack.runtime.inputs import InputBuffer
 from stack.runtime.runner import Runtime
 
@@ -36,8 +37,8 @@ def test_an_input_that_arrives_during_the_pulls_is_seen_with_the_command_it_caus
     order = runtime._wall_inputs()
     # Both arrive after the first pull of this run: the command waits for the next run, with its result.
     order[0].pull()
-    result_arrivals.append((0, 1, 1, "result", 1))
-    command_arrivals.append((0, 2, 1, "MISSION_START", 1))
+    result_arrivals.append(Received(0, 1, 1, "result", 1))
+    command_arrivals.append(Received(0, 2, 1, "MISSION_START", 1))
     order[1].pull()
     for buf in order:
         buf.promote_all()

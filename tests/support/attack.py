@@ -109,23 +109,23 @@ def main() -> None:
         start = None
         while start is None:
             item = truth.recv()
-            start = item[3].position if item[1] == simulator else None
+            start = item.msg.position if item.publisher == simulator else None
         worst = [0.0, 0.0]
 
         def look() -> None:
             while (item := truth.poll()) is not None:
-                if item[1] != simulator:
+                if item.publisher != simulator:
                     continue
-                gt: SimGroundtruth = item[3]
+                gt: SimGroundtruth = item.msg
                 north, east, down = (a - b for a, b in zip(gt.position, start, strict=True))
                 worst[0] = max(worst[0], math.hypot(north, east))
                 worst[1] = max(worst[1], abs(down))
             while (item := status.poll()) is not None:
-                seen["failsafe"] |= item[3].failsafe
-                seen["nav_state"], seen["armed"] = item[3].nav_state, item[3].arming_state == 2
+                seen["failsafe"] |= item.msg.failsafe
+                seen["nav_state"], seen["armed"] = item.msg.nav_state, item.msg.arming_state == 2
             while (item := said.poll()) is not None:
-                if item[3].severity <= MavlinkLog.SEVERITY_WARNING:
-                    seen["said"].append(item[3].text)
+                if item.msg.severity <= MavlinkLog.SEVERITY_WARNING:
+                    seen["said"].append(item.msg.text)
 
         sent = 0
         began = time.monotonic()

@@ -61,7 +61,8 @@ def subscribe(endpoint: str, n: int, out: str) -> None:
         sub = node.subscriber("vehicle_command", capacity=n + 16)
         got = []
         while len(got) < n:
-            t, pub, seq, msg, _ = sub.recv()
+            item = sub.recv()
+            t, pub, seq, msg = item.time_us, item.publisher, item.seq, item.msg
             got.append({"t": t, "publisher": pub, "seq": seq, "param1": msg.param1, "command": msg.command})
     with open(out, "w") as f:
         json.dump(got, f)
