@@ -49,6 +49,7 @@ from stack.fastpath.layout import (
 )
 from stack.fastpath.ring import RingWriter
 from stack.fastpath.topology import Participant, Topology
+from stack.runtime.ledger import StepLedger, TimedMember, TriggeredMember, TriggerSource
 from stack.runtime.lockstep import SLOW_WAIT_S, VERDICT_TIMEOUT_S, LockstepError, timer_due
 
 log = logging.getLogger("stack.lockstep")
@@ -100,9 +101,9 @@ class FastCoordinator:
         self._gone: dict[int, int] = {}  # slot → the last incarnation seen to die (never admitted again)
         self._last_fire: dict[int, int | None] = {}
         self._topology = Topology(region)
-        # Completion checks, with counter indices relative to the counter block (as in a snapshot).
-        self._timed: list[tuple[Participant, int, int, int]] = []
-        self._triggered: list[tuple[Participant, int, int, list[tuple[int, int, int]]]] = []
+        # The step's accounting, with counter indices relative to the counter block (as in a snapshot).
+        self._ledger = StepLedger()
+        self._members: dict[int, Participant] = {}  # slot → member
         self._passive: list[Participant] = []
         self._lag_woken: dict[int, int] = {}
         self.w[H_COORDINATOR] = att.slot + 1
@@ -142,10 +143,12 @@ class FastCoordinator:
         w[H_STEP] = self.steps
         last_fire = self._last_fire
         counters = self.region.counters_word
-        for m, _, _, ticks in self._timed:
+        members = self._members
+        for timed in self._ledger.timed:
+            m = members[timed.key]
             if timer_due(t, last_fire[m.slot], m.period_us):
                 last_fire[m.slot] = t
-                w[counters + ticks] += 1
+                w[counters + timed.ticks] += 1
                 os.eventfd_write(m.eventfd, 1)
         return t
 
@@ -248,16 +251,17 @@ class FastCoordinator:
         topo = self._topology = Topology(region)
         publishers = {p.slot: p for p in topo.participants}
         me = self.att.slot
-        self._timed, self._triggered = [], []
+        first = region.counters_word
+        timed, triggered = [], []
         for m in topo.participants:
-            started, finished = region.counter_word(m.slot, C_STARTED), region.counter_word(m.slot, C_FINISHED)
-            snap = (started - region.counters_word, finished - region.counters_word)
+            started = region.counter_word(m.slot, C_STARTED) - first
+            finished = region.counter_word(m.slot, C_FINISHED) - first
             if m.role == ROLE_TIMED:
                 ticks = region.counter_word(m.slot, C_TICKS)
                 if m.slot in new:
-                    w[ticks] = w[started]
+                    w[ticks] = w[started + first]
                     self._last_fire[m.slot] = None
-                self._timed.append((m, *snap, ticks - region.counters_word))
+                timed.append(TimedMember(m.name, m.slot, started, finished, ticks - first))
             elif m.role == ROLE_TRIGGERED:
                 sources = []
                 for p in publishers.values():
@@ -267,9 +271,11 @@ class FastCoordinator:
                     base = region.slot_word(m.slot, S_BASE + p.slot)
                     if m.slot in new or p.slot in new:
                         w[base] = w[count]
-                    consumed = region.counter_word(m.slot, C_CONSUMED + p.slot)
-                    sources.append((count - region.counters_word, consumed - region.counters_word, int(w[base])))
-                self._triggered.append((m, *snap, sources))
+                    taken = region.counter_word(m.slot, C_CONSUMED + p.slot)
+                    sources.append(TriggerSource(count - first, taken - first, int(w[base])))
+                triggered.append(TriggeredMember(m.name, m.slot, started, finished, tuple(sources)))
+        self._ledger = StepLedger(timed, triggered)
+        self._members = {m.slot: m for m in topo.participants if m.member}
         self._passive = [p for p in topo.passive() if p.slot != me]
 
     # -- the step ----------------------------------------------------------------------------------
@@ -280,7 +286,7 @@ class FastCoordinator:
         progress = time.monotonic()
         while True:
             snap = self.region.counter_snapshot()
-            if self._complete(snap):
+            if self._ledger.complete(snap):
                 return
             if self._reap(WAIT_MS):
                 continue
@@ -295,47 +301,23 @@ class FastCoordinator:
                 )
             self._rewake(snap)
 
-    def _complete(self, snap: memoryview) -> bool:
-        for _, started, finished, ticks in self._timed:
-            s = snap[started]
-            if s != snap[finished] or s != snap[ticks]:
-                return False
-        for _, started, finished, sources in self._triggered:
-            if snap[started] != snap[finished]:
-                return False
-            for count, consumed, base in sources:
-                c = snap[count]
-                if c > base and c > snap[consumed]:
-                    return False
-        return True
-
-    def _pending(self, snap: memoryview) -> list[tuple[Participant, bool]]:
-        """Members with work left: (member, whether it is in the middle of a run)."""
-        found = []
-        for m, started, finished, ticks in self._timed:
-            if snap[started] != snap[finished] or snap[ticks] != snap[started]:
-                found.append((m, snap[started] != snap[finished]))
-        for m, started, finished, sources in self._triggered:
-            waiting = any(snap[c] > b and snap[c] > snap[k] for c, k, b in sources)
-            if snap[started] != snap[finished] or waiting:
-                found.append((m, snap[started] != snap[finished]))
-        return found
-
     def _rewake(self, snap: memoryview) -> None:
         """A member with work and no run going may have missed its wake-up: wake it again (harmless if not)."""
-        for m, running in self._pending(snap):
+        for m, running in self._ledger.with_work(snap):
             if not running:
-                os.eventfd_write(m.eventfd, 1)
+                os.eventfd_write(self._members[m.key].eventfd, 1)
 
     def _busy(self, snap: memoryview) -> list[str]:
         names = {}
         for p in self._topology.participants:
             for pub in self.region.publications(p.slot):
                 names[pub.topic] = pub.name
-        return sorted(
-            f"{m.name} ({names.get(m.trigger, '?') if m.role == ROLE_TRIGGERED else '@timer'})"
-            for m, _ in self._pending(snap)
-        )
+        members = self._members
+        described = []
+        for entry, _ in self._ledger.with_work(snap):
+            m = members[entry.key]
+            described.append(f"{m.name} ({names.get(m.trigger, '?') if m.role == ROLE_TRIGGERED else '@timer'})")
+        return sorted(described)
 
     def _reap(self, timeout_ms: int) -> bool:
         """Wait up to ``timeout_ms`` for a wake-up or a death, dropping members that died; False on timeout."""

@@ -1,0 +1,47 @@
+"""The step's accounting on its own: when lockstep time may advance, from the participants' counters."""
+
+from stack.runtime.ledger import StepLedger, TimedMember, TriggeredMember, TriggerSource
+
+# Counter indices: a timed member (0 started, 1 finished, 2 ticks issued), a triggered member (3 started,
+# 4 finished, 5 index of the last trigger it took) and its trigger's publisher (6 messages written).
+TIMED = TimedMember("commander", key=1, started=0, finished=1, ticks=2)
+
+
+def triggered(base: int = 0) -> TriggeredMember:
+    return TriggeredMember("rate_control", key=2, started=3, finished=4, sources=(TriggerSource(6, 5, base),))
+
+
+def ledger(base: int = 0) -> StepLedger:
+    return StepLedger([TIMED], [triggered(base)])
+
+
+def test_a_step_is_over_when_every_tick_and_every_trigger_has_been_run():
+    assert ledger().complete([3, 3, 3, 7, 7, 7, 7])
+    assert ledger().with_work([3, 3, 3, 7, 7, 7, 7]) == []
+
+
+def test_a_tick_not_yet_started_is_work_left_but_no_run_going():
+    counters = [3, 3, 4, 7, 7, 7, 7]
+    assert not ledger().complete(counters)
+    assert ledger().with_work(counters) == [(TIMED, False)]
+
+
+def test_a_run_in_progress_holds_the_step():
+    counters = [4, 3, 4, 7, 7, 7, 7]
+    assert not ledger().complete(counters)
+    assert ledger().with_work(counters) == [(TIMED, True)]
+
+
+def test_a_trigger_message_not_yet_taken_holds_the_step():
+    counters = [3, 3, 3, 7, 7, 7, 8]
+    assert not ledger().complete(counters)
+    assert ledger().with_work(counters) == [(triggered(), False)]
+    taken = [3, 3, 3, 8, 7, 8, 8]  # taken, and its run started
+    assert ledger().with_work(taken) == [(triggered(), True)]
+    assert ledger().complete([3, 3, 3, 8, 8, 8, 8])
+
+
+def test_a_member_never_waits_for_messages_written_before_it_was_admitted():
+    # Restarted: its new process took nothing yet, but the publisher had written 8 when it came back.
+    assert ledger(base=8).complete([3, 3, 3, 0, 0, 0, 8])
+    assert not ledger(base=8).complete([3, 3, 3, 0, 0, 0, 9])
