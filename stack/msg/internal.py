@@ -58,11 +58,13 @@ class LockstepClock(Message):
 
 
 class LockstepAck(Message):
-    """A member finished one run at ``timestamp``; ``published`` holds its new per-topic totals."""
+    """A member finished one run at ``timestamp``, on the tick or on message ``trigger_index`` of
+    ``trigger_publisher`` on ``trigger_topic``; ``published`` holds its new per-topic totals."""
 
     run: int = 0
     member: str = ""
     publisher_id: int = 0
     trigger_publisher: int = 0
+    trigger_index: int = 0
     trigger_topic: str = ""
     published: list[tuple[str, int]] = msgspec.field(default_factory=list)

@@ -11,11 +11,11 @@ the same rules with other means); this transport serves profiles that choose
   and the cumulative publication counts up to the previous step), then its own messages. Timed
   members receive the clock on their own key, and only on the steps their timer is due, so a 50 Hz
   module is not woken 250 times a second.
-- A member runs once per trigger message (or per tick) and then acknowledges, reporting how many
-  messages it published on each topic during that run.
-- The coordinator keeps, per (member, trigger), the number of runs it still expects: it adds the
-  runs each reported publication will cause and subtracts each acknowledgement. The step is done
-  when every count is back to zero; only then does time advance.
+- A member runs once per trigger message (or per tick) and then acknowledges, reporting its message
+  totals per topic and which trigger message (publisher and index) it took.
+- From the acknowledgements the coordinator keeps every participant's counters, and the step is done
+  when :class:`stack.runtime.ledger.StepLedger` says so (every tick run, every trigger message taken);
+  only then does time advance.
 - Before acting at time ``t`` a member waits until it holds every message the counts say was
   published before ``t`` (the *barrier*). With the visibility rules of :mod:`stack.runtime.inputs`
   this makes every run see the same inputs whatever the process scheduling, so lockstep runs with
@@ -47,6 +47,7 @@ from stack.bus.node import Node
 from stack.bus.topics import TopicPublisher
 from stack.msg.internal import LockstepAck, LockstepClock
 from stack.runtime.inputs import InputBuffer
+from stack.runtime.ledger import StepLedger, TimedMember, TriggeredMember, TriggerSource
 
 log = logging.getLogger("stack.lockstep")
 
@@ -273,7 +274,9 @@ class LockstepMember:
             time.sleep(0.0002)
         return arrived.popleft()
 
-    def ack(self, trigger_publisher: int, trigger_topic: str, touched: Iterable[TopicPublisher]) -> None:
+    def ack(
+        self, trigger_publisher: int, trigger_index: int, trigger_topic: str, touched: Iterable[TopicPublisher]
+    ) -> None:
         if not self.admitted:
             return
         self._ack_pub.put(
@@ -284,6 +287,7 @@ class LockstepMember:
                     member=self.node.name,
                     publisher_id=self.node.publisher_id,
                     trigger_publisher=trigger_publisher,
+                    trigger_index=trigger_index,
                     trigger_topic=trigger_topic,
                     published=[(p.suffix, p.count) for p in touched],
                 )
@@ -315,8 +319,13 @@ class LockstepCoordinator:
         self.members: dict[int, _Member] = {}
         self.barrier = Barrier(own_inputs)
         self._triggered_by: dict[str, list[int]] = {}
-        self._pending: dict[tuple[int, str], int] = {}
         self._totals: dict[tuple[int, str], int] = {}
+        # The participants' counters (see stack.runtime.ledger), kept from the acknowledgements: one list, and
+        # where each counter is in it. A member's runs started are its runs finished (only those are heard of).
+        self._counters: list[int] = []
+        self._where: dict[tuple[object, ...], int] = {}
+        self._bases: dict[tuple[int, int, str], int] = {}  # (member, publisher, topic) → count at admission
+        self._ledger = StepLedger()
         self._tick_pubs: dict[int, zenoh.Publisher] = {}
         self._events: list[tuple[str, _Member]] = []
         self._events_lock = threading.Lock()
@@ -369,10 +378,25 @@ class LockstepCoordinator:
                 self._awaited.pop(m.name, None)
                 if m.trigger is not None:
                     self._triggered_by.setdefault(m.trigger, []).append(m.publisher_id)
+                self._admit(m)
                 log.info("lockstep member %s joined at t=%.3f s", m.name, self.now / 1e6)
             elif m.publisher_id in self.members:
                 self._drop(m.publisher_id, f"lockstep member {m.name} left at t={self.now / 1e6:.3f} s")
                 self._awaited[m.name] = time.monotonic()
+
+    def _admit(self, m: _Member) -> None:
+        """A (re)started member: its runs count from zero, and neither it nor its subscribers wait for messages
+        written before it came."""
+        me = m.publisher_id
+        self._counters[self._counter("finished", me)] = 0
+        self._counters[self._counter("ticks", me)] = 0
+        for (publisher, suffix), total in self._totals.items():
+            if publisher != me and suffix == m.trigger:
+                self._bases[(me, publisher, suffix)] = total
+            elif publisher == me:
+                for member in self._triggered_by.get(suffix, ()):
+                    self._bases[(member, me, suffix)] = total
+        self._rebuild()
 
     def _drop(self, publisher_id: int, why: str) -> None:
         m = self.members.pop(publisher_id)
@@ -381,16 +405,40 @@ class LockstepCoordinator:
             tick.undeclare()
         if m.trigger is not None:
             self._triggered_by[m.trigger].remove(publisher_id)
-        for key in [k for k in self._pending if k[0] == publisher_id]:
-            del self._pending[key]
-        # A member killed between publishing and acknowledging leaves its subscribers' runs on that last
-        # message acknowledged (pending below zero) but never announced: it never will be. (A topic with
-        # a second publisher whose announcement is late would lose that run's wait too: none has one.)
-        for suffix in {s for pub, s in self._totals if pub == publisher_id}:
-            for member in self._triggered_by.get(suffix, ()):
-                if self._pending.get((member, suffix), 0) < 0:
-                    del self._pending[(member, suffix)]
+        # A member killed between publishing and acknowledging leaves messages never announced: as it is no
+        # longer a publisher of the ledger, nobody waits for them.
+        self._rebuild()
         log.info("%s", why)  # the supervisor says whether the process failed
+
+    def _counter(self, *key: object) -> int:
+        """Where the counter ``key`` is in the list (a new one starts at zero)."""
+        where = self._where.get(key)
+        if where is None:
+            where = self._where[key] = len(self._counters)
+            self._counters.append(0)
+        return where
+
+    def _rebuild(self) -> None:
+        """The ledger for the members now in the run and the publishers they take triggers from."""
+        me = self.node.publisher_id
+        publishers = {*self.members, me}
+        timed, triggered = [], []
+        for pid, m in self.members.items():
+            finished = self._counter("finished", pid)
+            if m.period_us is not None:
+                timed.append(TimedMember(m.name, pid, finished, finished, self._counter("ticks", pid)))
+            elif m.trigger is not None:
+                sources = tuple(
+                    TriggerSource(
+                        self._counter("published", publisher, suffix),
+                        self._counter("taken", pid, publisher),
+                        self._bases.get((pid, publisher, suffix), 0),
+                    )
+                    for (publisher, suffix) in self._totals
+                    if suffix == m.trigger and publisher != pid and publisher in publishers
+                )
+                triggered.append(TriggeredMember(m.name, pid, finished, finished, sources))
+        self._ledger = StepLedger(timed, triggered)
 
     # -- the step -----------------------------------------------------------------------------
 
@@ -420,7 +468,7 @@ class LockstepCoordinator:
         for m in self.members.values():
             if m.period_us is not None and timer_due(t, m.last_fire, m.period_us):
                 m.last_fire = t
-                self._expect(m.publisher_id, TIMER, 1)
+                self._counters[self._counter("ticks", m.publisher_id)] += 1
                 self._tick_publisher(m).put(clock)
 
     def _await_restarts(self) -> None:
@@ -471,34 +519,26 @@ class LockstepCoordinator:
         self._account(self.node.publisher_id, ((p.suffix, p.count) for p in touched))
 
     def _account(self, publisher_id: int, published: Iterable[tuple[str, int]]) -> None:
+        counters, totals, new_source = self._counters, self._totals, False
         for suffix, total in published:
             if not isinstance(total, int) or total < 0:
                 continue
             key = (publisher_id, suffix)
-            runs = total - self._totals.get(key, 0)
-            self._totals[key] = total
+            if key not in totals:
+                new_source = new_source or suffix in self._triggered_by
+            totals[key] = total
+            counters[self._counter("published", publisher_id, suffix)] = total
             self.barrier.require(publisher_id, suffix, total)
-            if runs > 0:
-                for m in self._triggered_by.get(suffix, ()):
-                    if m != publisher_id:
-                        self._expect(m, suffix, runs)
-
-    def _expect(self, member: int, what: str, n: int) -> None:
-        key = (member, what)
-        left = self._pending.get(key, 0) + n
-        if left:
-            # Negative while a run's acknowledgement arrived before the one announcing its trigger.
-            self._pending[key] = left
-        else:
-            del self._pending[key]
+        if new_source:
+            self._rebuild()
 
     def finish_step(self) -> None:
         """Block until every run the step caused has been acknowledged and its messages received."""
         self._waiting_since = time.monotonic()
         try:
-            while self._pending or self._events:
+            while self._events or not self._ledger.complete(self._counters):
                 self._apply_membership()
-                if not self._pending:
+                if self._ledger.complete(self._counters):
                     break
                 ack = self._acks.decode(self._ack_sub.recv())
                 if ack is not None:
@@ -515,16 +555,21 @@ class LockstepCoordinator:
         if sender not in self.members:
             return
         self._account(sender, ack.published)
-        if ack.trigger_topic == TIMER:
-            self._expect(sender, TIMER, -1)
-        elif ack.trigger_publisher in self.members or ack.trigger_publisher == self.node.publisher_id:
-            self._expect(sender, ack.trigger_topic, -1)
+        counters = self._counters
+        counters[self._counter("finished", sender)] += 1
+        if ack.trigger_topic != TIMER:
+            taken = self._counter("taken", sender, ack.trigger_publisher)
+            counters[taken] = max(counters[taken], ack.trigger_index)
 
     def _check_stall(self) -> None:
         since = self._waiting_since
         if since is None or time.monotonic() - since < self.stall_timeout_s:
             return
-        waiting = sorted({f"{self.members[m].name} ({what})" for (m, what) in self._pending if m in self.members})
+        waiting = sorted(
+            f"{m.name} ({self.members[m.key].trigger or TIMER})"
+            for m, _ in self._ledger.with_work(self._counters)
+            if m.key in self.members
+        )
         raise LockstepError(
             f"lockstep stalled at t={self.now / 1e6:.3f} s: no progress for {self.stall_timeout_s:.0f} s, "
             f"waiting for {', '.join(waiting)}"

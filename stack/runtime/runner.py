@@ -362,7 +362,7 @@ class Runtime:
                 d.promote_visible(now, trigger_pub, seq, members)
             if admitted:
                 last_sample = self._run(msg, sample_time(msg), last_sample)
-            member.ack(pub, suffix, touched)
+            member.ack(pub, item.index, suffix, touched)
             touched.clear()
 
     def _loop_lockstep_timer(self, member: LockstepMember) -> None:
@@ -380,7 +380,7 @@ class Runtime:
                 d.pull()
                 d.promote_visible(now, -1, 0, members)
             last = self._run(None, now, last)
-            member.ack(0, TIMER, touched)
+            member.ack(0, 0, TIMER, touched)
             touched.clear()
 
     def _loop_coordinator(self, coordinator: LockstepCoordinator) -> None:

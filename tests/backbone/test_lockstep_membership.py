@@ -1,10 +1,14 @@
-"""The coordinator's member list, fed by liveliness tokens (no bus needed for the bookkeeping)."""
+"""The coordinator's bookkeeping (no bus needed): its member list, fed by liveliness tokens, and the step's
+accounts, fed by the members' acknowledgements."""
 
 import threading
+from types import SimpleNamespace
 
-from stack.runtime.lockstep import LockstepCoordinator, _parse_member
+from stack.msg.internal import LockstepAck
+from stack.runtime.lockstep import TIMER, LockstepCoordinator, _parse_member
 
 TOKEN = "stack/v1/@lockstep/member/{name}/{pid}/topic/vehicle_local_position/0"
+TOPIC = "vehicle_local_position/0"
 
 
 def coordinator_without_bus() -> LockstepCoordinator:
@@ -15,6 +19,10 @@ def coordinator_without_bus() -> LockstepCoordinator:
     c._events = []
     c._events_lock = threading.Lock()
     c._awaited = {}
+    c._totals, c._counters, c._where, c._bases = {}, [], {}, {}
+    c.node = SimpleNamespace(publisher_id=1)
+    c.barrier = SimpleNamespace(require=lambda *_: None)
+    c._tick_pubs = {}
     return c
 
 
@@ -31,3 +39,42 @@ def test_a_token_reported_twice_counts_its_member_once():
     c._apply_membership()
     assert c._triggered_by == {"vehicle_local_position/0": [7, 8]}
     assert sorted(c.members) == [7, 8]
+
+
+def test_a_step_waits_for_every_trigger_announced_whatever_order_the_acknowledgements_come_in():
+    # A timed commander (5) publishes vehicle_local_position/0, which triggers mc_pos_control (8); the run of
+    # mc_pos_control may be acknowledged before the commander's run that announced its trigger.
+    c = coordinator_without_bus()
+    commander = _parse_member("stack/v1/@lockstep/member/commander/5/timer/20000")
+    pos = _parse_member(TOKEN.format(name="mc_pos_control", pid=8))
+    c._events = [("join", commander), ("join", pos)]
+    c._apply_membership()
+    c._counters[c._counter("ticks", 5)] += 1  # the step ticks the commander
+    assert not c._ledger.complete(c._counters)
+    c._handle_ack(LockstepAck(publisher_id=8, trigger_publisher=5, trigger_index=1, trigger_topic=TOPIC))
+    assert not c._ledger.complete(c._counters)
+    c._handle_ack(LockstepAck(publisher_id=5, trigger_topic=TIMER, published=[(TOPIC, 1)]))
+    assert c._ledger.complete(c._counters)
+    # The other order: the trigger is announced first, and the step waits for its run.
+    c._counters[c._counter("ticks", 5)] += 1
+    c._handle_ack(LockstepAck(publisher_id=5, trigger_topic=TIMER, published=[(TOPIC, 2)]))
+    assert not c._ledger.complete(c._counters)
+    assert [m.name for m, _ in c._ledger.with_work(c._counters)] == ["mc_pos_control"]
+    c._handle_ack(LockstepAck(publisher_id=8, trigger_publisher=5, trigger_index=2, trigger_topic=TOPIC))
+    assert c._ledger.complete(c._counters)
+
+
+def test_a_member_that_rejoins_waits_only_for_triggers_written_after_it_came_back():
+    c = coordinator_without_bus()
+    commander = _parse_member("stack/v1/@lockstep/member/commander/5/timer/20000")
+    pos = _parse_member(TOKEN.format(name="mc_pos_control", pid=8))
+    c._events = [("join", commander), ("join", pos)]
+    c._apply_membership()
+    c._counters[c._counter("ticks", 5)] += 1
+    c._handle_ack(LockstepAck(publisher_id=5, trigger_topic=TIMER, published=[(TOPIC, 1)]))
+    c._events = [("leave", pos)]
+    c._apply_membership()
+    assert c._ledger.complete(c._counters)  # nobody waits for the run of a member that left
+    c._events = [("join", pos)]
+    c._apply_membership()
+    assert c._ledger.complete(c._counters)  # nor for message 1, written before it came back
