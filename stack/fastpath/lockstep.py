@@ -49,8 +49,17 @@ from stack.fastpath.layout import (
 )
 from stack.fastpath.ring import RingWriter
 from stack.fastpath.topology import Participant, Topology
-from stack.runtime.ledger import StepLedger, TimedMember, TriggeredMember, TriggerSource
-from stack.runtime.lockstep import SLOW_WAIT_S, VERDICT_TIMEOUT_S, LockstepError, timer_due
+from stack.runtime.ledger import (
+    SLOW_WAIT_S,
+    Departure,
+    Departures,
+    StepLedger,
+    TimedMember,
+    TriggeredMember,
+    TriggerSource,
+    Word,
+)
+from stack.runtime.lockstep import LockstepError, timer_due
 
 log = logging.getLogger("stack.lockstep")
 
@@ -75,13 +84,6 @@ class _Watched:
     exits: int  # the supervisor's count of this module's exits when it was admitted
 
 
-@dataclass
-class _Awaited:
-    name: str
-    exits: int
-    since: float
-
-
 class FastCoordinator:
     """The clock's side. Call :meth:`start` once, then :meth:`begin_step` and :meth:`finish_step` per step."""
 
@@ -97,7 +99,7 @@ class FastCoordinator:
         self._poll.register(att.eventfd, select.POLLIN)
         self._watched: dict[int, _Watched] = {}
         self._pidfd_slot: dict[int, int] = {}
-        self._awaited: dict[int, _Awaited] = {}
+        self._departures = Departures()
         self._gone: dict[int, int] = {}  # slot → the last incarnation seen to die (never admitted again)
         self._last_fire: dict[int, int | None] = {}
         self._topology = Topology(region)
@@ -161,7 +163,7 @@ class FastCoordinator:
         Processes attach at start (all admitted then) or after a restart (announced by a death), so the
         slots are scanned for newcomers only while a restart is awaited, and every ADMIT_SCAN_STEPS steps.
         """
-        scan = bool(self._awaited) or self.steps % ADMIT_SCAN_STEPS == 0
+        scan = bool(self._departures) or self.steps % ADMIT_SCAN_STEPS == 0
         if not (scan or self._passive):
             return
         started_waiting = 0.0
@@ -180,17 +182,9 @@ class FastCoordinator:
 
     def _waiting_for(self) -> list[str]:
         region, w = self.region, self.w
-        waiting = []
-        for slot, a in list(self._awaited.items()):
-            verdict = w[region.slot_word(slot, S_EXITS)] > a.exits
-            restarting = w[region.slot_word(slot, S_RESTART)] != 0
-            if verdict and not restarting:
-                del self._awaited[slot]
-            elif not verdict and time.monotonic() - a.since > VERDICT_TIMEOUT_S:
-                log.warning("no word from the supervisor on %s after %.0f s: time goes on", a.name, VERDICT_TIMEOUT_S)
-                del self._awaited[slot]
-            else:
-                waiting.append(f"{a.name} to restart" if verdict else f"the supervisor's word on {a.name}")
+        waiting = self._departures.awaited(self._word, time.monotonic())
+        for name in self._departures.silent:
+            log.warning("no word from the supervisor on %s: time goes on", name)
         lag_wake, lag_max = LAG_WAKE_STEPS * self.period_us, LAG_MAX_STEPS * self.period_us
         for p in self._passive:
             lag = self.now - int(w[region.slot_word(p.slot, S_READ_TIME)])
@@ -200,6 +194,14 @@ class FastCoordinator:
             if lag >= lag_max and p.flags & FLAG_LOSSLESS:
                 waiting.append(f"{p.name} to catch up")
         return waiting
+
+    def _word(self, departure: Departure) -> Word:
+        """The supervisor's word on a member that left, from its slot: a higher count of exits, and whether a
+        restart is pending."""
+        slot = self.region.slot_of(departure.name)
+        if self.w[self.region.slot_word(slot, S_EXITS)] <= departure.exits:
+            return Word.NONE
+        return Word.RESTARTING if self.w[self.region.slot_word(slot, S_RESTART)] else Word.GONE
 
     def _admit_attached(self) -> None:
         region, w = self.region, self.w
@@ -222,7 +224,7 @@ class FastCoordinator:
             self._watched[slot] = _Watched(name, pid, incarnation, pidfd, int(w[region.slot_word(slot, S_EXITS)]))
             self._pidfd_slot[pidfd] = slot
             self._poll.register(pidfd, select.POLLIN)
-            self._awaited.pop(slot, None)
+            self._departures.back(name)
             w[region.slot_word(slot, S_ADMIT_TIME)] = self.now + 1
             w[region.slot_word(slot, S_ADMITTED)] = incarnation
             admitted.append(slot)
@@ -238,7 +240,7 @@ class FastCoordinator:
         del self._pidfd_slot[watched.pidfd]
         os.close(watched.pidfd)
         self.w[self.region.slot_word(slot, S_ADMITTED)] = 0
-        self._awaited[slot] = _Awaited(watched.name, watched.exits, time.monotonic())
+        self._departures.left(watched.name, time.monotonic(), watched.exits)
         # Information, not a warning: the supervisor says whether the process failed (a scenario that
         # finished its flight ends as planned).
         log.info("lockstep member %s %s at t=%.3f s", watched.name, why, self.now / 1e6)

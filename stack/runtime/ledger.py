@@ -1,4 +1,5 @@
-"""When lockstep time may advance: the step's accounting, written once for every transport.
+"""When lockstep time may advance: the step's accounting and the members that left, written once for every
+transport.
 
 Each participant of a lockstep run keeps cumulative counters that only it writes: runs started and
 finished, and, per publisher of its trigger topic, the index of the last trigger message it took. Each
@@ -18,8 +19,14 @@ indices a :class:`TimedMember` or :class:`TriggeredMember` names.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+import enum
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+
+SLOW_WAIT_S = 2.0
+"""A wait of the lockstep longer than this is said in the log (once per wait)."""
+VERDICT_TIMEOUT_S = 5.0
+"""How long time waits for the supervisor's word on a member that left before it goes on without it."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -93,3 +100,62 @@ class StepLedger:
             if running or waiting:
                 found.append((t, running))
         return found
+
+
+class Word(enum.Enum):
+    """What the supervisor says of a member that left the run."""
+
+    GONE = "gone"
+    """It will not be back (it exited or failed, and no restart is coming): time goes on without it."""
+    RESTARTING = "restarting"
+    """A new process is on its way: time waits until it is admitted."""
+    NONE = "none"
+    """No word yet: time waits for one, at most VERDICT_TIMEOUT_S."""
+
+
+@dataclass(slots=True)
+class Departure:
+    name: str
+    since_s: float
+    """When it left (monotonic seconds)."""
+    exits: int = 0
+    """The supervisor's count of the module's exits when it was admitted (its word is a higher count)."""
+
+
+class Departures:
+    """Members that left the run, until the supervisor's word on each (PX4 SITL has one process and no such
+    question): time waits while one is being restarted, and goes on without one that is gone or of which no
+    word comes within VERDICT_TIMEOUT_S."""
+
+    __slots__ = ("_left", "silent")
+
+    def __init__(self) -> None:
+        self._left: dict[str, Departure] = {}
+        self.silent: list[str] = []
+        """Members given up for want of a word, since the last :meth:`awaited` (for the caller to log)."""
+
+    def __bool__(self) -> bool:
+        return bool(self._left)
+
+    def left(self, name: str, now_s: float, exits: int = 0) -> None:
+        self._left[name] = Departure(name, now_s, exits)
+
+    def back(self, name: str) -> None:
+        self._left.pop(name, None)
+
+    def awaited(self, word: Callable[[Departure], Word], now_s: float) -> list[str]:
+        """What time still waits for, given the supervisor's ``word`` on each departure."""
+        waiting = []
+        self.silent = []
+        for name, departure in list(self._left.items()):
+            said = word(departure)
+            if said is Word.GONE:
+                del self._left[name]
+            elif said is Word.RESTARTING:
+                waiting.append(f"{name} to restart")
+            elif now_s - departure.since_s > VERDICT_TIMEOUT_S:
+                del self._left[name]
+                self.silent.append(name)
+            else:
+                waiting.append(f"the supervisor's word on {name}")
+        return waiting

@@ -47,7 +47,15 @@ from stack.bus.node import Node
 from stack.bus.topics import TopicPublisher
 from stack.msg.internal import LockstepAck, LockstepClock
 from stack.runtime.inputs import InputBuffer
-from stack.runtime.ledger import StepLedger, TimedMember, TriggeredMember, TriggerSource
+from stack.runtime.ledger import (
+    SLOW_WAIT_S,
+    Departures,
+    StepLedger,
+    TimedMember,
+    TriggeredMember,
+    TriggerSource,
+    Word,
+)
 
 log = logging.getLogger("stack.lockstep")
 
@@ -57,8 +65,6 @@ TIMER = "@timer"
 # clock out, and a member that is not triggered for minutes (the allocator of a disarmed vehicle) never fills a
 # queue that would block the session's receiving thread and, through it, the coordinator's clock.
 CLOCK_QUEUE = 1 << 14
-SLOW_WAIT_S = 2.0
-VERDICT_TIMEOUT_S = 5.0
 _WAKE = "@wake"
 _encoder = msgspec.msgpack.Encoder()
 
@@ -331,7 +337,7 @@ class LockstepCoordinator:
         self._events_lock = threading.Lock()
         self._waiting_since: float | None = None
         self._closed = threading.Event()
-        self._awaited: dict[str, float] = {}  # members that left, until the supervisor's word on them
+        self._departures = Departures()
         self._acks = ProtocolDecoder(LockstepAck, node.run_id, keys.lockstep_ack_key(node.vehicle))
         vehicle = node.vehicle
         self._clock_pub = node.session.declare_publisher(
@@ -375,14 +381,14 @@ class LockstepCoordinator:
                     # started both from its history and live: count each member once.
                     continue
                 self.members[m.publisher_id] = m
-                self._awaited.pop(m.name, None)
+                self._departures.back(m.name)
                 if m.trigger is not None:
                     self._triggered_by.setdefault(m.trigger, []).append(m.publisher_id)
                 self._admit(m)
                 log.info("lockstep member %s joined at t=%.3f s", m.name, self.now / 1e6)
             elif m.publisher_id in self.members:
                 self._drop(m.publisher_id, f"lockstep member {m.name} left at t={self.now / 1e6:.3f} s")
-                self._awaited[m.name] = time.monotonic()
+                self._departures.left(m.name, time.monotonic())
 
     def _admit(self, m: _Member) -> None:
         """A (re)started member: its runs count from zero, and neither it nor its subscribers wait for messages
@@ -455,7 +461,7 @@ class LockstepCoordinator:
     def begin_step(self, t: int) -> None:
         """Announce time ``t``: publish the clock. Publish this step's own messages right after."""
         self._apply_membership()
-        if self._awaited:
+        if self._departures:
             self._await_restarts()
         self.now = t
         self.step += 1
@@ -473,22 +479,19 @@ class LockstepCoordinator:
 
     def _await_restarts(self) -> None:
         """Time waits while a member that left is being restarted by the supervisor (asked every 50 ms)."""
+        started = time.monotonic()
         logged = False
-        while self._awaited:
+        while self._departures:
             states = self._supervisor_states()
-            now = time.monotonic()
-            for name, since in list(self._awaited.items()):
-                state = states.get(name, "")
-                if state in ("failed", "exited", "stopping") or (
-                    state == "running" and now - since > VERDICT_TIMEOUT_S
-                ):
-                    del self._awaited[name]  # not coming back (or no word on it): time goes on
-            if not self._awaited:
+            words = {name: supervisor_word(state) for name, state in states.items()}
+            waiting = self._departures.awaited(lambda d, said=words: said.get(d.name, Word.NONE), time.monotonic())
+            for name in self._departures.silent:
+                log.warning("no word from the supervisor on %s: time goes on", name)
+            if not waiting:
                 return
-            if not logged and now - min(self._awaited.values()) > SLOW_WAIT_S:
+            if not logged and time.monotonic() - started > SLOW_WAIT_S:
                 logged = True
-                waiting = ", ".join(self._awaited)
-                log.warning("lockstep time waits at t=%.3f s for %s to restart", self.now / 1e6, waiting)
+                log.warning("lockstep time waits at t=%.3f s for %s", self.now / 1e6, ", ".join(waiting))
             time.sleep(0.05)
             self._apply_membership()
 
@@ -590,6 +593,16 @@ class LockstepCoordinator:
         self._member_sub.undeclare()
         self._ack_sub.undeclare()
         self._clock_pub.undeclare()
+
+
+def supervisor_word(state: str) -> Word:
+    """What a module's state in the supervisor's status says of a member that left (a module still "running"
+    was restarted and not yet admitted, or its death not yet noticed: no word)."""
+    if state in ("failed", "exited", "stopping"):
+        return Word.GONE
+    if state in ("restarting", "starting"):
+        return Word.RESTARTING
+    return Word.NONE
 
 
 def _parse_member(key: str) -> _Member | None:

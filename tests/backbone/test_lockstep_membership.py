@@ -5,6 +5,7 @@ import threading
 from types import SimpleNamespace
 
 from stack.msg.internal import LockstepAck
+from stack.runtime.ledger import Departures
 from stack.runtime.lockstep import TIMER, LockstepCoordinator, _parse_member
 
 TOKEN = "stack/v1/@lockstep/member/{name}/{pid}/topic/vehicle_local_position/0"
@@ -18,7 +19,7 @@ def coordinator_without_bus() -> LockstepCoordinator:
     c._triggered_by = {}
     c._events = []
     c._events_lock = threading.Lock()
-    c._awaited = {}
+    c._departures = Departures()
     c._totals, c._counters, c._where, c._bases = {}, [], {}, {}
     c.node = SimpleNamespace(publisher_id=1)
     c.barrier = SimpleNamespace(require=lambda *_: None)

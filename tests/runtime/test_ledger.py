@@ -1,6 +1,14 @@
 """The step's accounting on its own: when lockstep time may advance, from the participants' counters."""
 
-from stack.runtime.ledger import StepLedger, TimedMember, TriggeredMember, TriggerSource
+from stack.runtime.ledger import (
+    VERDICT_TIMEOUT_S,
+    Departures,
+    StepLedger,
+    TimedMember,
+    TriggeredMember,
+    TriggerSource,
+    Word,
+)
 
 # Counter indices: a timed member (0 started, 1 finished, 2 ticks issued), a triggered member (3 started,
 # 4 finished, 5 index of the last trigger it took) and its trigger's publisher (6 messages written).
@@ -45,3 +53,24 @@ def test_a_member_never_waits_for_messages_written_before_it_was_admitted():
     # Restarted: its new process took nothing yet, but the publisher had written 8 when it came back.
     assert ledger(base=8).complete([3, 3, 3, 0, 0, 0, 8])
     assert not ledger(base=8).complete([3, 3, 3, 0, 0, 0, 9])
+
+
+def test_time_waits_for_a_member_being_restarted_and_goes_on_without_one_that_is_gone():
+    departures = Departures()
+    departures.left("commander", now_s=10.0)
+    departures.left("navigator", now_s=10.0)
+    said = {"commander": Word.RESTARTING, "navigator": Word.GONE}
+    assert departures.awaited(lambda d: said[d.name], 10.1) == ["commander to restart"]
+    assert departures.awaited(lambda d: said[d.name], 99.0) == ["commander to restart"]  # as long as it takes
+    departures.back("commander")
+    assert not departures and departures.awaited(lambda d: said[d.name], 99.0) == []
+
+
+def test_without_a_word_from_the_supervisor_time_waits_only_so_long():
+    departures = Departures()
+    departures.left("commander", now_s=10.0)
+    assert departures.awaited(lambda _: Word.NONE, 10.0 + VERDICT_TIMEOUT_S) == [
+        "the supervisor's word on commander"
+    ]
+    assert departures.awaited(lambda _: Word.NONE, 10.1 + VERDICT_TIMEOUT_S) == []
+    assert departures.silent == ["commander"] and not departures
