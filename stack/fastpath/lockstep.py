@@ -53,13 +53,14 @@ from stack.runtime.ledger import (
     SLOW_WAIT_S,
     Departure,
     Departures,
+    LockstepError,
     StepLedger,
     TimedMember,
     TriggeredMember,
     TriggerSource,
     Word,
+    timer_due,
 )
-from stack.runtime.lockstep import LockstepError, timer_due
 
 log = logging.getLogger("stack.lockstep")
 

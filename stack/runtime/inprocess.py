@@ -6,7 +6,7 @@ changes, dt from ``timestamp_sample`` clamped to ``DT_RANGE``, a failing run log
 Passive modules (recorder, plot bridge) only observe and are left out. One lockstep step at time ``t``,
 as :mod:`stack.runtime.lockstep` and :mod:`stack.fastpath` schedule it across processes:
 
-1. the timed members whose timer is due (:func:`stack.runtime.lockstep.timer_due`) run, in profile order;
+1. the timed members whose timer is due (:func:`stack.runtime.ledger.timer_due`) run, in profile order;
 2. the coordinator (the simulator) runs;
 3. every message published on a module's trigger topic runs that module once, first published
    first run, until none is left (the runs of the step publish further triggers).
@@ -34,7 +34,7 @@ from collections.abc import Callable
 from stack.bus.node import stable_publisher_id
 from stack.bus.topics import Received
 from stack.runtime.inputs import InputBuffer, sample_time
-from stack.runtime.lockstep import timer_due
+from stack.runtime.ledger import timer_due
 from stack.runtime.membus import MemoryBus, MemorySubscription, PublishedMessage
 from stack.runtime.module import Timer, Trigger
 from stack.runtime.runner import Runtime

@@ -29,6 +29,16 @@ VERDICT_TIMEOUT_S = 5.0
 """How long time waits for the supervisor's word on a member that left before it goes on without it."""
 
 
+class LockstepError(RuntimeError):
+    """The lockstep cannot continue (a member stalled past the timeout)."""
+
+
+def timer_due(t: int, last_fire: int | None, period_us: int) -> bool:
+    """Whether a timer of ``period_us`` that last fired at ``last_fire`` fires at step ``t``: on the first step of
+    each period-aligned interval (the coordinator ticks by this rule, whatever the transport)."""
+    return last_fire is None or t // period_us > last_fire // period_us
+
+
 @dataclass(frozen=True, slots=True)
 class TriggerSource:
     """One publisher of a triggered member's trigger topic, as counter indices and the member's base."""

@@ -50,11 +50,13 @@ from stack.runtime.inputs import InputBuffer
 from stack.runtime.ledger import (
     SLOW_WAIT_S,
     Departures,
+    LockstepError,
     StepLedger,
     TimedMember,
     TriggeredMember,
     TriggerSource,
     Word,
+    timer_due,
 )
 
 log = logging.getLogger("stack.lockstep")
@@ -69,10 +71,6 @@ _WAKE = "@wake"
 _encoder = msgspec.msgpack.Encoder()
 
 P = TypeVar("P", LockstepClock, LockstepAck)
-
-
-class LockstepError(RuntimeError):
-    """The lockstep cannot continue (a member stalled past the timeout)."""
 
 
 class ProtocolDecoder(Generic[P]):
@@ -96,11 +94,6 @@ class ProtocolDecoder(Generic[P]):
             why = "does not decode" if msg is None else "is from outside this run"
             log.warning("%s: ignored a message that %s (%d so far)", self._where, why, self.rejected)
         return None
-
-
-def timer_due(t: int, last_fire: int | None, period_us: int) -> bool:
-    """Timers fire on the first tick of each period-aligned interval; both sides use this rule."""
-    return last_fire is None or t // period_us > last_fire // period_us
 
 
 class Barrier:

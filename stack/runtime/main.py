@@ -22,7 +22,7 @@ from pathlib import Path
 from types import FrameType
 
 from stack.params.param import ParamError
-from stack.runtime.lockstep import LockstepError
+from stack.runtime.ledger import LockstepError
 from stack.runtime.orphan import watch_supervisor
 from stack.runtime.runner import Runtime, Shutdown, shutdown_behind
 from stack.runtime.spec import ModuleSpec, load_module_class

@@ -8,6 +8,7 @@ from stack.runtime.ledger import (
     TriggeredMember,
     TriggerSource,
     Word,
+    timer_due,
 )
 
 # Counter indices: a timed member (0 started, 1 finished, 2 ticks issued), a triggered member (3 started,
@@ -74,3 +75,12 @@ def test_without_a_word_from_the_supervisor_time_waits_only_so_long():
     ]
     assert departures.awaited(lambda _: Word.NONE, 10.1 + VERDICT_TIMEOUT_S) == []
     assert departures.silent == ["commander"] and not departures
+
+
+def test_a_timer_fires_on_the_first_step_of_each_period_aligned_interval():
+    fired, last = [], None
+    for t in range(4000, 60001, 4000):  # 250 Hz steps, a 50 Hz timer
+        if timer_due(t, last, 20000):
+            fired.append(t)
+            last = t
+    assert fired == [4000, 20000, 40000, 60000]
