@@ -1,10 +1,9 @@
 """A module's subscriptions on the fast path: the rings of the run's publishers, plus Zenoh from outside.
 
-The visibility rules are those of :mod:`stack.runtime.inputs` (:func:`~stack.runtime.inputs.visible`, with a
-publisher's slot in place of its id): a run at time ``t`` triggered by a
-record of publisher ``P`` sees every record published before ``t``, and the records ``P`` published at
-``t`` before its trigger; records other members publish at ``t`` wait for the next run. Messages from
-outside the run arrive over Zenoh and are seen at once; samples on Zenoh from the run's own publishers
+The visibility rules are those of :mod:`stack.runtime.inputs` (:func:`~stack.runtime.inputs.visible`): a run
+at time ``t`` triggered by a record of publisher ``P`` sees every record published before ``t``, and the records
+``P`` published at ``t`` before its trigger; records other members publish at ``t`` wait for the next run.
+Messages from outside the run arrive over Zenoh and are seen at once; samples on Zenoh from the run's own publishers
 (put there for outside subscribers) are duplicates of ring records and are skipped.
 """
 
@@ -104,22 +103,25 @@ class FastInput(InputBuffer):
 
     # -- reading -----------------------------------------------------------------------------------
 
-    def refresh(self, now: int, trigger_slot: int = -1, trigger_seq: int = 0) -> None:
-        """Take in what a run at ``now`` may see (see the module docstring), then Zenoh's outside messages."""
+    def refresh(
+        self, now: int, members: frozenset[int] = frozenset(), trigger_publisher: int = -1, trigger_seq: int = 0
+    ) -> None:
+        """Take in what a run at ``now`` may see (see the module docstring), then Zenoh's outside messages (the
+        rings are the run's members')."""
         for r in self.readers:
             count = r.words[r.count_word]
             if count > r.taken:
                 if self.queue_mode:
-                    self._take_all(r, count, now, trigger_slot, trigger_seq)
+                    self._take_all(r, count, now, trigger_publisher, trigger_seq)
                 else:
-                    self._take_newest(r, count, now, trigger_slot, trigger_seq)
+                    self._take_newest(r, count, now, trigger_publisher, trigger_seq)
         if self.sub.arrived:
             self._take_outside(now)
 
     def take_in_everything(self) -> None:
         self.refresh(1 << 63)
 
-    def _take_newest(self, r: RingReader, count: int, now: int, trigger_slot: int, trigger_seq: int) -> None:
+    def _take_newest(self, r: RingReader, count: int, now: int, trigger_publisher: int, trigger_seq: int) -> None:
         n = count
         floor = max(r.taken, count - r.records)
         while n > floor:
@@ -127,13 +129,13 @@ class FastInput(InputBuffer):
             if head is None:
                 return
             _, t, seq, rec = head
-            if visible(t, r.slot, seq, now, trigger_slot, trigger_seq):
+            if visible(t, r.publisher_id, seq, now, trigger_publisher, trigger_seq):
                 self._decode(r, n, rec, t, seq)
                 r.taken = n
                 return
             n -= 1
 
-    def _take_all(self, r: RingReader, count: int, now: int, trigger_slot: int, trigger_seq: int) -> None:
+    def _take_all(self, r: RingReader, count: int, now: int, trigger_publisher: int, trigger_seq: int) -> None:
         n = r.oldest_readable(count)
         if self.keep and count - n >= self.keep:
             n = count - self.keep + 1
@@ -143,7 +145,7 @@ class FastInput(InputBuffer):
                 r.lost += 1
             else:
                 _, t, seq, rec = head
-                if not visible(t, r.slot, seq, now, trigger_slot, trigger_seq):
+                if not visible(t, r.publisher_id, seq, now, trigger_publisher, trigger_seq):
                     return
                 if self.every_us:
                     bucket = t // self.every_us

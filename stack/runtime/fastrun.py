@@ -51,6 +51,8 @@ class FastDriver:
         self.w = att.region.words
         self.topology_seen = -1
         self.topology: Topology | None = None
+        self.members: frozenset[int] = frozenset()
+        """The publisher ids of the run's admitted processes."""
         self.trigger = rt.trigger_input
         self.data = [buf for buf in rt.inputs.values() if isinstance(buf, FastInput) and buf is not self.trigger]
         self.member = FastMember(att)
@@ -64,6 +66,7 @@ class FastDriver:
             return
         topo = self.topology = Topology(self.region)
         self.topology_seen = topo.generation
+        self.members = topo.publisher_ids
         me, since = self.att.slot, int(self.w[self.region.slot_word(self.att.slot, S_ADMIT_TIME)])
         for buf in self.data:
             buf.resolve(topo.sources(buf.hash), topo.publisher_ids, since)
@@ -120,7 +123,7 @@ class FastDriver:
                 self.refresh_topology()
                 rt._now = t
                 for buf in data:
-                    buf.refresh(t)
+                    buf.refresh(t, self.members)
                 try:
                     last = rt._run(None, t, last)
                 finally:
@@ -146,7 +149,7 @@ class FastDriver:
                 now = int(w[H_NOW])
                 rt._now = now
                 for buf in data:
-                    buf.refresh(now)
+                    buf.refresh(now, self.members)
                 try:
                     last = rt._run(None, now, last)
                 finally:
@@ -194,7 +197,7 @@ class FastDriver:
                     trigger.latest = msg
                 rt._now = t
                 for buf in data:
-                    buf.refresh(t, reader.slot, seq)
+                    buf.refresh(t, self.members, reader.publisher_id, seq)
                 try:
                     if admitted:
                         last = rt._run(msg, sample_time(msg), last)
@@ -230,7 +233,7 @@ class FastDriver:
             self.refresh_topology()
             now = int(w[H_NOW])
             for buf in self.data:
-                buf.refresh(now)
+                buf.refresh(now, self.members)
             if self.data:
                 w[read_time] = now
             last = rt._run(None, rt.now_us(), last)

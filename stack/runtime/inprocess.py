@@ -84,15 +84,13 @@ class InProcessRuntime(Runtime):
         self._now = t
         if trigger is None:
             for buf in self.data:
-                buf.pull()
-                buf.promote_visible(t, -1, 0, members)
+                buf.refresh(t, members)
             self.last_sample_us = self._run(None, t, self.last_sample_us)
             return
         assert self._trigger_buf is not None
         admitted = self._take_trigger(self._trigger_buf, trigger)
         for buf in self.data:
-            buf.pull()
-            buf.promote_visible(t, trigger.publisher, trigger.seq, members)
+            buf.refresh(t, members, trigger.publisher, trigger.seq)
         if admitted:
             msg = trigger.msg
             self.last_sample_us = self._run(msg, sample_time(msg), self.last_sample_us)

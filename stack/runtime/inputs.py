@@ -141,9 +141,18 @@ class InputBuffer:
         self._new = True
 
     def take_in_everything(self) -> None:
-        """Make every message received so far visible (a passive module's last look before it stops)."""
+        """Real time: make every message received so far visible (and a passive module's last look before it
+        stops)."""
         self.pull()
         self.promote_all()
+
+    def refresh(
+        self, now: int, members: frozenset[int], trigger_publisher: int = -1, trigger_seq: int = 0
+    ) -> None:
+        """Lockstep: take in what a run at ``now`` may see, for a tick or for the trigger message ``trigger_seq``
+        of ``trigger_publisher``, in a run of ``members`` (the rules of the module docstring)."""
+        self.pull()
+        self.promote_visible(now, trigger_publisher, trigger_seq, members)
 
     def promote_visible(self, now: int, trigger_pub: int, trigger_seq: int, members: frozenset[int]) -> None:
         """Lockstep: make visible exactly the messages the rules in the module docstring allow."""

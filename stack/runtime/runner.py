@@ -316,8 +316,7 @@ class Runtime:
                 continue
             self.behind = bool(buf.sub.arrived)
             for d in data:
-                d.pull()
-                d.promote_all()
+                d.take_in_everything()
             last_sample = self._run(item.msg, sample_time(item.msg), last_sample)
 
     def _loop_wall_timer(self, period_us: int) -> None:
@@ -333,8 +332,7 @@ class Runtime:
             if next_due < now:
                 next_due = now + period_us  # overran: skip missed ticks instead of bursting
             for d in data:
-                d.pull()
-                d.promote_all()
+                d.take_in_everything()
             last = self._run(None, now, last)
 
     def _loop_lockstep_trigger(self, member: LockstepMember) -> None:
@@ -358,8 +356,7 @@ class Runtime:
             now = self._now
             trigger_pub = pub if t == now else -1
             for d in data:
-                d.pull()
-                d.promote_visible(now, trigger_pub, seq, members)
+                d.refresh(now, members, trigger_pub, seq)
             if admitted:
                 last_sample = self._run(msg, sample_time(msg), last_sample)
             member.ack(pub, item.index, suffix, touched)
@@ -377,8 +374,7 @@ class Runtime:
             member.barrier.wait()
             members = member.members
             for d in data:
-                d.pull()
-                d.promote_visible(now, -1, 0, members)
+                d.refresh(now, members)
             last = self._run(None, now, last)
             member.ack(0, 0, TIMER, touched)
             touched.clear()
@@ -397,8 +393,7 @@ class Runtime:
             coordinator.begin_step(t)
             members = frozenset((*coordinator.members, self.node.publisher_id))
             for d in data:
-                d.pull()
-                d.promote_visible(t, -1, 0, members)
+                d.refresh(t, members)
             self._now = t
             last = self._run(None, t, last)
             coordinator.account_own(touched)

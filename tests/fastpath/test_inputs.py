@@ -70,7 +70,7 @@ def test_the_trigger_publisher_s_earlier_records_of_the_same_time_are_visible(ru
     inp, _ = make_input(host, sources, queue=False)
     publish(w["a"], 1.0, 4000, 5)
     publish(w["b"], 9.0, 4000, 1)
-    inp.refresh(4000, trigger_slot=sources[0][0], trigger_seq=6)
+    inp.refresh(4000, trigger_publisher=101, trigger_seq=6)
     assert inp.latest.roll == 1.0  # a's record (seq 5 < 6) yes, b's record of the same time no
 
 
