@@ -8,6 +8,7 @@ from typing import TYPE_CHECKING, Any
 
 import msgspec
 
+from stack.bus.topics import Received
 from stack.fastpath.inputs import FastInput
 from stack.fastpath.layout import (
     FLAG_LOSSLESS,
@@ -24,7 +25,6 @@ from stack.fastpath.layout import (
 from stack.fastpath.lockstep import FastCoordinator, FastMember, drain
 from stack.fastpath.ring import RingReader, wake_all
 from stack.fastpath.topology import Topology
-from stack.runtime.inputs import sample_time
 from stack.runtime.module import Timer, Trigger
 from stack.runtime.pacing import Pacer
 
@@ -54,7 +54,6 @@ class FastDriver:
         self.members: frozenset[int] = frozenset()
         """The publisher ids of the run's admitted processes."""
         self.trigger = rt.trigger_input
-        self.data = [buf for buf in rt.inputs.values() if isinstance(buf, FastInput) and buf is not self.trigger]
         self.member = FastMember(att)
 
     # -- topology ----------------------------------------------------------------------------------
@@ -68,7 +67,8 @@ class FastDriver:
         self.topology_seen = topo.generation
         self.members = topo.publisher_ids
         me, since = self.att.slot, int(self.w[self.region.slot_word(self.att.slot, S_ADMIT_TIME)])
-        for buf in self.data:
+        for buf in self.rt.data:
+            assert isinstance(buf, FastInput)
             buf.resolve(topo.sources(buf.hash), topo.publisher_ids, since)
         if self.trigger is not None:
             # Trigger records count only from the publishers admitted now (so does the coordinator).
@@ -113,19 +113,14 @@ class FastDriver:
             rt.state = "waiting for modules"
             coordinator.start()
             rt.state = "running"
-            data = self.data
             wakes = self.att.wakes
-            last = 0
             pacer = Pacer(rt.spec.speed)
             while True:
                 pacer.wait(coordinator.now + coordinator.period_us)
                 t = coordinator.begin_step()
                 self.refresh_topology()
-                rt._now = t
-                for buf in data:
-                    buf.refresh(t, self.members)
                 try:
-                    last = rt._run(None, t, last)
+                    rt.run_at(t, self.members)
                 finally:
                     if wakes:
                         wake_all(wakes)
@@ -134,10 +129,9 @@ class FastDriver:
             coordinator.close()
 
     def _run_timed(self) -> None:
-        rt, w, member, data = self.rt, self.w, self.member, self.data
+        rt, w, member = self.rt, self.w, self.member
         started, finished, ticks = member.started, member.finished, member.ticks
         touched, wakes = rt.node.touched, self.att.wakes
-        last = 0
         while True:
             member.wait()
             if w[H_TOPOLOGY] != self.topology_seen:
@@ -146,12 +140,8 @@ class FastDriver:
                 continue
             while w[ticks] > w[started]:
                 w[started] += 1
-                now = int(w[H_NOW])
-                rt._now = now
-                for buf in data:
-                    buf.refresh(now, self.members)
                 try:
-                    last = rt._run(None, now, last)
+                    rt.run_at(int(w[H_NOW]), self.members)
                 finally:
                     if wakes:
                         wake_all(wakes)
@@ -160,14 +150,13 @@ class FastDriver:
             touched.clear()
 
     def _run_triggered(self) -> None:
-        rt, w, member, data = self.rt, self.w, self.member, self.data
+        rt, w, member = self.rt, self.w, self.member
         trigger = self.trigger
         assert trigger is not None
         started, finished = member.started, member.finished
         decode = msgspec.msgpack.Decoder(trigger.sub.msg_type).decode
         touched, wakes = rt.node.touched, self.att.wakes
         consumed = [member.consumed_word(slot) for slot in range(self.region.slots)]
-        last = 0
         while True:
             member.wait()
             if w[H_TOPOLOGY] != self.topology_seen:
@@ -192,15 +181,8 @@ class FastDriver:
                     reader.lost += 1
                     w[finished] += 1
                     continue
-                admitted = trigger.admits(msg, reader.publisher_id)
-                if admitted:
-                    trigger.latest = msg
-                rt._now = t
-                for buf in data:
-                    buf.refresh(t, self.members, reader.publisher_id, seq)
                 try:
-                    if admitted:
-                        last = rt._run(msg, sample_time(msg), last)
+                    rt.run_at(t, self.members, Received(t, reader.publisher_id, seq, msg, n))
                 finally:
                     if wakes:
                         wake_all(wakes)
@@ -232,9 +214,9 @@ class FastDriver:
                 drain(self.att.eventfd)
             self.refresh_topology()
             now = int(w[H_NOW])
-            for buf in self.data:
+            for buf in rt.data:
                 buf.refresh(now, self.members)
-            if self.data:
+            if rt.data:
                 w[read_time] = now
             last = rt._run(None, rt.now_us(), last)
 

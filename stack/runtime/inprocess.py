@@ -33,7 +33,7 @@ from collections.abc import Callable
 
 from stack.bus.node import stable_publisher_id
 from stack.bus.topics import Received
-from stack.runtime.inputs import InputBuffer, sample_time
+from stack.runtime.inputs import InputBuffer
 from stack.runtime.ledger import timer_due
 from stack.runtime.membus import MemoryBus, MemorySubscription, PublishedMessage
 from stack.runtime.module import Timer, Trigger
@@ -53,7 +53,6 @@ class InProcessRuntime(Runtime):
         self.critical = critical
         self.publisher_id = stable_publisher_id(spec.vehicle, spec.name)
         self.seq = 0  # the publisher sequence, shared by all the module's topics
-        self.last_sample_us = 0
         self.last_fire: int | None = None
         self.trigger_sub: MemorySubscription | None = None
         self._declare_trigger()
@@ -78,22 +77,6 @@ class InProcessRuntime(Runtime):
             self.trigger_sub = self.bus.subscribe(self, trigger.topic, trigger.instance)
             self._trigger_buf = self.guard(InputBuffer(self.trigger_sub, False), trigger.topic)
             self.inputs[(trigger.topic, trigger.instance)] = self._trigger_buf
-
-    def run_at(self, t: int, trigger: Received | None, members: frozenset[int]) -> None:
-        """One run at time ``t``: on a timer tick (``trigger`` None) or for one trigger message."""
-        self._now = t
-        if trigger is None:
-            for buf in self.data:
-                buf.refresh(t, members)
-            self.last_sample_us = self._run(None, t, self.last_sample_us)
-            return
-        assert self._trigger_buf is not None
-        admitted = self._take_trigger(self._trigger_buf, trigger)
-        for buf in self.data:
-            buf.refresh(t, members, trigger.publisher, trigger.seq)
-        if admitted:
-            msg = trigger.msg
-            self.last_sample_us = self._run(msg, sample_time(msg), self.last_sample_us)
 
 
 def module_spec(profile: Profile, entry: ModuleEntry) -> ModuleSpec:
@@ -186,7 +169,7 @@ class InProcessStack:
     def _run(self, rt: InProcessRuntime, t: int, trigger: Received | None) -> None:
         """One run; a module that raises SystemExit leaves the run, and a critical one ends it after this step."""
         try:
-            rt.run_at(t, trigger, self._members)
+            rt.run_at(t, self._members, trigger)
         except SystemExit as e:
             log.info("%s exited (code %s) at t=%.3f s", rt.name, e.code, t / 1e6)
             self._leave(rt)

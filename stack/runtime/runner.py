@@ -88,6 +88,9 @@ class Runtime:
         self._last_beat = time.monotonic()
         self._param_instance = 0
         self._trigger_buf: InputBuffer | None = None
+        self.data: list[InputBuffer] = []
+        """The inputs other than the trigger, once the module has declared them."""
+        self._last_sample = 0
         # The same-host fast path (stack.fastpath), when the supervisor gave this process its region.
         self.fast: Attachment | None = None
         self.trigger_input: FastInput | None = None
@@ -189,6 +192,7 @@ class Runtime:
                     self.fast = Attachment(region, self.name, node.publisher_id)
                 self._declare_trigger()
                 self.module = self.module_cls(self)
+                self.data = self._data_inputs()
                 self._param_pub = node.publisher("parameter_update", reliable=self.lockstep)
                 services.append(ParamService(node.session, node.vehicle, self.name, self.params))
                 services.append(Heartbeat(node.session, node.vehicle, self.name, self.snapshot))
@@ -250,7 +254,8 @@ class Runtime:
             sub = self.node.subscriber(trigger.topic, trigger.instance, capacity=OUTSIDE_QUEUE, callback=True)
             self.fast.subscription(sub.suffix, SUB_TRIGGER)
             self.trigger_input = FastInput(self.fast.region, sub, False)
-            self.inputs[(trigger.topic, trigger.instance)] = self.guard(self.trigger_input, trigger.topic)
+            self._trigger_buf = self.guard(self.trigger_input, trigger.topic)
+            self.inputs[(trigger.topic, trigger.instance)] = self._trigger_buf
             return
         if self.lockstep:
             sub = self.node.subscriber(trigger.topic, trigger.instance, capacity=LOCKSTEP_QUEUE)
@@ -338,64 +343,40 @@ class Runtime:
     def _loop_lockstep_trigger(self, member: LockstepMember) -> None:
         buf = self._trigger_buf
         assert buf is not None
-        data = self._data_inputs()
         suffix = buf.sub.suffix
         touched = self.node.touched
-        last_sample = 0
         while True:
             item = buf.sub.recv()
-            t, pub, seq, msg = item.time_us, item.publisher, item.seq, item.msg
-            if t < 0:
+            if item.time_us < 0:
                 self._ignore_outside_trigger(suffix)
                 continue
-            admitted = self._take_trigger(buf, item)
-            member.advance_to(t)
-            self._now = t
+            member.advance_to(item.time_us)
             member.barrier.wait()
-            members = member.members
-            now = self._now
-            trigger_pub = pub if t == now else -1
-            for d in data:
-                d.refresh(now, members, trigger_pub, seq)
-            if admitted:
-                last_sample = self._run(msg, sample_time(msg), last_sample)
-            member.ack(pub, item.index, suffix, touched)
+            self.run_at(item.time_us, member.members, item)
+            member.ack(item.publisher, item.index, suffix, touched)
             touched.clear()
 
     def _loop_lockstep_timer(self, member: LockstepMember) -> None:
         """The coordinator sends this member a tick on each step its timer is due."""
-        data = self._data_inputs()
         touched = self.node.touched
-        last = 0
         while True:
             member.next_clock()
-            now = member.now
-            self._now = now
             member.barrier.wait()
-            members = member.members
-            for d in data:
-                d.refresh(now, members)
-            last = self._run(None, now, last)
+            self.run_at(member.now, member.members)
             member.ack(0, 0, TIMER, touched)
             touched.clear()
 
     def _loop_coordinator(self, coordinator: LockstepCoordinator) -> None:
         self._wait_for_synced_roster(coordinator)
         period = self.module.step_period_us()
-        data = self._data_inputs()
         touched = self.node.touched
-        last = 0
         pacer = Pacer(self.spec.speed)
         while True:
             coordinator.finish_step()
             t = coordinator.now + period
             pacer.wait(t)
             coordinator.begin_step(t)
-            members = frozenset((*coordinator.members, self.node.publisher_id))
-            for d in data:
-                d.refresh(t, members)
-            self._now = t
-            last = self._run(None, t, last)
+            self.run_at(t, frozenset((*coordinator.members, self.node.publisher_id)))
             coordinator.account_own(touched)
             touched.clear()
 
@@ -438,6 +419,23 @@ class Runtime:
             log.warning("%s: ignoring messages from outside the lockstep run on its trigger %s", self.name, suffix)
 
     # -- one run ---------------------------------------------------------------------------------------
+
+    def run_at(self, t: int, members: frozenset[int], trigger: Received | None = None) -> None:
+        """One lockstep run at ``t`` of a run of ``members``, whatever the transport: on a timer tick (``trigger``
+        None) or for one trigger message, with the inputs showing what the visibility rule lets it see."""
+        self._now = t
+        if trigger is None:
+            for buf in self.data:
+                buf.refresh(t, members)
+            self._last_sample = self._run(None, t, self._last_sample)
+            return
+        assert self._trigger_buf is not None
+        admitted = self._take_trigger(self._trigger_buf, trigger)
+        for buf in self.data:
+            buf.refresh(t, members, trigger.publisher, trigger.seq)
+        if admitted:
+            msg = trigger.msg
+            self._last_sample = self._run(msg, sample_time(msg), self._last_sample)
 
     def _take_trigger(self, buf: InputBuffer, item: Received) -> bool:
         """Take a trigger message in; False if it is refused (the module does not run on it)."""
