@@ -55,6 +55,10 @@ class FastDriver:
         """The publisher ids of the run's admitted processes."""
         self.trigger = rt.trigger_input
         self.member = FastMember(att)
+        self._consumed = [self.member.consumed_word(slot) for slot in range(self.region.slots)]
+        self._decode_trigger = (
+            msgspec.msgpack.Decoder(self.trigger.sub.msg_type).decode if self.trigger is not None else None
+        )
 
     # -- topology ----------------------------------------------------------------------------------
 
@@ -98,10 +102,10 @@ class FastDriver:
             self._run_passive(cls.TRIGGER.period_us)
         elif isinstance(cls.TRIGGER, Trigger):
             self._ready(ROLE_TRIGGERED, trigger=f"{cls.TRIGGER.topic}/{cls.TRIGGER.instance}")
-            self._run_triggered()
+            self._serve(self.work_triggered)
         elif isinstance(cls.TRIGGER, Timer):
             self._ready(ROLE_TIMED, period_us=cls.TRIGGER.period_us)
-            self._run_timed()
+            self._serve(self.work_timed)
         else:
             raise RuntimeError(f"{cls.__name__} declares neither a trigger nor a timer")
 
@@ -128,67 +132,75 @@ class FastDriver:
         finally:
             coordinator.close()
 
-    def _run_timed(self) -> None:
+    def _serve(self, work: Callable[[], None]) -> None:
+        """A member's process: sleep until woken, then do what there is to do."""
+        while True:
+            self.member.wait()
+            work()
+
+    def _admitted(self) -> bool:
+        if self.w[H_TOPOLOGY] != self.topology_seen:
+            self.refresh_topology()
+        return self.member.admitted()
+
+    def work_timed(self) -> None:
+        """Run every tick issued and not yet run, then tell the coordinator if the step may be over (never blocks)."""
+        if not self._admitted():
+            return
         rt, w, member = self.rt, self.w, self.member
         started, finished, ticks = member.started, member.finished, member.ticks
-        touched, wakes = rt.node.touched, self.att.wakes
-        while True:
-            member.wait()
-            if w[H_TOPOLOGY] != self.topology_seen:
-                self.refresh_topology()
-            if not member.admitted():
-                continue
-            while w[ticks] > w[started]:
-                w[started] += 1
-                try:
-                    rt.run_at(int(w[H_NOW]), self.members)
-                finally:
-                    if wakes:
-                        wake_all(wakes)
-                w[finished] += 1
-            member.done(fast_writers(touched))
-            touched.clear()
+        wakes = self.att.wakes
+        while w[ticks] > w[started]:
+            w[started] += 1
+            try:
+                rt.run_at(int(w[H_NOW]), self.members)
+            finally:
+                if wakes:
+                    wake_all(wakes)
+            w[finished] += 1
+        self._done()
 
-    def _run_triggered(self) -> None:
-        rt, w, member = self.rt, self.w, self.member
+    def work_triggered(self) -> None:
+        """Run once per trigger record not yet taken, earliest first, then tell the coordinator if the step may be
+        over (never blocks)."""
+        if not self._admitted():
+            return
         trigger = self.trigger
         assert trigger is not None
-        started, finished = member.started, member.finished
-        decode = msgspec.msgpack.Decoder(trigger.sub.msg_type).decode
-        touched, wakes = rt.node.touched, self.att.wakes
-        consumed = [member.consumed_word(slot) for slot in range(self.region.slots)]
+        if trigger.sub.arrived:
+            self._drop_outside_triggers(trigger)
+        rt, w, member = self.rt, self.w, self.member
+        started, finished, consumed = member.started, member.finished, self._consumed
+        decode, wakes = self._decode_trigger, self.att.wakes
+        assert decode is not None
         while True:
-            member.wait()
-            if w[H_TOPOLOGY] != self.topology_seen:
-                self.refresh_topology()
-            if not member.admitted():
-                continue
-            if trigger.sub.arrived:
-                self._drop_outside_triggers(trigger)
-            while True:
-                found = next_trigger(trigger.readers)
-                if found is None:
-                    break
-                reader, n, t, seq, rec = found
-                w[started] += 1
-                w[consumed[reader.slot]] = n
-                reader.taken = n
-                try:
-                    msg = decode(reader.payload(rec))
-                except msgspec.DecodeError:
-                    msg = None
-                if msg is None or not reader.still(n, rec):
-                    reader.lost += 1
-                    w[finished] += 1
-                    continue
-                try:
-                    rt.run_at(t, self.members, Received(t, reader.publisher_id, seq, msg, n))
-                finally:
-                    if wakes:
-                        wake_all(wakes)
+            found = next_trigger(trigger.readers)
+            if found is None:
+                break
+            reader, n, t, seq, rec = found
+            w[started] += 1
+            w[consumed[reader.slot]] = n
+            reader.taken = n
+            try:
+                msg = decode(reader.payload(rec))
+            except msgspec.DecodeError:
+                msg = None
+            if msg is None or not reader.still(n, rec):
+                reader.lost += 1
                 w[finished] += 1
-            member.done(fast_writers(touched))
-            touched.clear()
+                continue
+            try:
+                rt.run_at(t, self.members, Received(t, reader.publisher_id, seq, msg, n))
+            finally:
+                if wakes:
+                    wake_all(wakes)
+            w[finished] += 1
+        self._done()
+
+    def _done(self) -> None:
+        touched = self.rt.node.touched
+        self.member.done(fast_writers(touched))
+        touched.clear()
 
     def _drop_outside_triggers(self, trigger: FastInput) -> None:
         """Triggers from outside the run are refused; the run's own records put on Zenoh for an outside subscriber
