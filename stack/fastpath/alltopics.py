@@ -74,12 +74,11 @@ class AllTopicsReader:
         while n <= count:
             head = r.header(n)
             if head is not None:
-                index, t, _seq, rec = head
-                if t >= horizon:
+                if head.time_us >= horizon:
                     break
-                payload = bytes(r.payload(rec))
-                if r.still(n, rec):
-                    records.append((suffix, fingerprint, r.publisher_id, index, t, payload))
+                payload = bytes(r.payload(head.offset))
+                if r.still(n, head.offset):
+                    records.append((suffix, fingerprint, r.publisher_id, head.index, head.time_us, payload))
                 else:
                     r.lost += 1
             else:

@@ -10,6 +10,7 @@ Messages from outside the run arrive over Zenoh and are seen at once; samples on
 from __future__ import annotations
 
 import logging
+from typing import NamedTuple
 
 import msgspec
 
@@ -20,8 +21,13 @@ from stack.runtime.inputs import InputBuffer, visible
 
 log = logging.getLogger("stack.fastpath")
 
-# (slot, publication index, publisher id) of a topic's publisher in the run.
-Source = tuple[int, int, int]
+class Source(NamedTuple):
+    """A publisher of a topic in the run, as a reader finds its ring."""
+
+    slot: int
+    publication: int
+    """The index of the topic among the slot's publications."""
+    publisher_id: int
 
 
 class FastInput(InputBuffer):
@@ -128,9 +134,9 @@ class FastInput(InputBuffer):
             head = r.header(n)
             if head is None:
                 return
-            _, t, seq, rec = head
+            t, seq = head.time_us, head.seq
             if visible(t, r.publisher_id, seq, now, trigger_publisher, trigger_seq):
-                self._decode(r, n, rec, t, seq)
+                self._decode(r, n, head.offset, t, seq)
                 r.taken = n
                 return
             n -= 1
@@ -144,7 +150,7 @@ class FastInput(InputBuffer):
             if head is None:
                 r.lost += 1
             else:
-                _, t, seq, rec = head
+                t, seq = head.time_us, head.seq
                 if not visible(t, r.publisher_id, seq, now, trigger_publisher, trigger_seq):
                     return
                 if self.every_us:
@@ -154,7 +160,7 @@ class FastInput(InputBuffer):
                         n += 1
                         continue
                     self._buckets[r.slot] = bucket
-                self._decode(r, n, rec, t, seq)
+                self._decode(r, n, head.offset, t, seq)
             r.taken = n
             n += 1
 
@@ -188,7 +194,7 @@ def first_at_or_after(reader: RingReader, time_us: int) -> int:
     n = count
     while n > max(0, count - reader.records):
         head = reader.header(n)
-        if head is None or head[1] < time_us:
+        if head is None or head.time_us < time_us:
             break
         n -= 1
     return n + 1

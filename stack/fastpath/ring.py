@@ -21,6 +21,8 @@ from __future__ import annotations
 
 import os
 
+import msgspec
+
 from stack.fastpath.layout import (
     C_PUBS,
     MAX_PUBS,
@@ -205,6 +207,19 @@ def wake_all(wakes: set[int]) -> None:
     wakes.clear()
 
 
+
+class RecordHeader(msgspec.Struct, frozen=True, gc=False):
+    """What a record's header words say, and where the record is."""
+
+    index: int
+    """The message's index on its topic for its publisher."""
+    time_us: int
+    """When it was published (simulated µs)."""
+    seq: int
+    """The publisher's sequence number."""
+    offset: int
+    """Byte offset of the record in the region (for ``payload`` and ``still``)."""
+
 class RingReader:
     """A subscriber's view of one publisher's ring of a topic.
 
@@ -251,8 +266,8 @@ class RingReader:
     def count(self) -> int:
         return int(self.words[self.count_word])
 
-    def header(self, n: int) -> tuple[int, int, int, int] | None:
-        """(index, time, seq, offset of the record) of record ``n``, or None if it is not in the ring."""
+    def header(self, n: int) -> RecordHeader | None:
+        """The header of record ``n``, or None if it is not in the ring."""
         rec = self.ring + (n % self.records) * self.record
         q = rec >> 3
         w = self.words
@@ -264,7 +279,7 @@ class RingReader:
             q = rec >> 3
             if w[q] != n:
                 return None
-        return int(w[q + 1]), int(w[q + 2]), int(w[q + 3]), rec
+        return RecordHeader(int(w[q + 1]), int(w[q + 2]), int(w[q + 3]), rec)
 
     def payload(self, rec: int) -> memoryview:
         size = int(self.words[(rec >> 3) + 4])

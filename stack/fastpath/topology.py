@@ -77,7 +77,7 @@ class Topology:
         """The rings ``topic`` is read from: a module reads its own publications as uORB's subscribers do,
         but is never triggered by them (``exclude_slot``)."""
         return [
-            (p.slot, p.pubs[topic], p.publisher_id)
+            Source(p.slot, p.pubs[topic], p.publisher_id)
             for p in self.participants
             if topic in p.pubs and p.slot != exclude_slot
         ]

@@ -23,7 +23,7 @@ from stack.fastpath.layout import (
     S_READ_TIME,
 )
 from stack.fastpath.lockstep import FastCoordinator, FastMember, drain
-from stack.fastpath.ring import RingReader, wake_all
+from stack.fastpath.ring import RecordHeader, RingReader, wake_all
 from stack.fastpath.topology import Topology
 from stack.runtime.module import Timer, Trigger
 from stack.runtime.pacing import Pacer
@@ -177,20 +177,20 @@ class FastDriver:
             found = next_trigger(trigger.readers)
             if found is None:
                 break
-            reader, n, t, seq, rec = found
+            reader, n, head = found
             w[started] += 1
             w[consumed[reader.slot]] = n
             reader.taken = n
             try:
-                msg = decode(reader.payload(rec))
+                msg = decode(reader.payload(head.offset))
             except msgspec.DecodeError:
                 msg = None
-            if msg is None or not reader.still(n, rec):
+            if msg is None or not reader.still(n, head.offset):
                 reader.lost += 1
                 w[finished] += 1
                 continue
             try:
-                rt.run_at(t, self.members, Received(t, reader.publisher_id, seq, msg, n))
+                rt.run_at(head.time_us, self.members, Received(head.time_us, reader.publisher_id, head.seq, msg, n))
             finally:
                 if wakes:
                     wake_all(wakes)
@@ -233,9 +233,9 @@ class FastDriver:
             last = rt._run(None, rt.now_us(), last)
 
 
-def next_trigger(readers: list[RingReader]) -> tuple[RingReader, int, int, int, int] | None:
-    """The earliest trigger record not taken yet, by (time, publisher id, sequence)."""
-    best: tuple[RingReader, int, int, int, int] | None = None
+def next_trigger(readers: list[RingReader]) -> tuple[RingReader, int, RecordHeader] | None:
+    """The earliest trigger record not taken yet, by (time, publisher id, sequence): its reader, number and header."""
+    best: tuple[RingReader, int, RecordHeader] | None = None
     best_key = None
     for r in readers:
         count = r.words[r.count_word]
@@ -243,9 +243,9 @@ def next_trigger(readers: list[RingReader]) -> tuple[RingReader, int, int, int, 
         while n <= count:
             head = r.header(n)
             if head is not None:
-                key = (head[1], r.publisher_id, head[2])
+                key = (head.time_us, r.publisher_id, head.seq)
                 if best_key is None or key < best_key:
-                    best, best_key = (r, n, head[1], head[2], head[3]), key
+                    best, best_key = (r, n, head), key
                 break
             r.lost += 1
             r.taken = n

@@ -9,7 +9,7 @@ import pytest
 from stack.bus.topics import Received
 from stack.fastpath.attach import Attachment
 from stack.fastpath.host import FastPathHost
-from stack.fastpath.inputs import FastInput
+from stack.fastpath.inputs import FastInput, Source
 from stack.msg.setpoints import VehicleRatesSetpoint
 
 encode = msgspec.msgpack.Encoder().encode
@@ -37,7 +37,7 @@ def run():
         "a": a.publication(TOPIC, 1, 40),
         "b": b.publication(TOPIC, 1, 40),
     }
-    sources = [(a.slot, 0, 101), (b.slot, 0, 102)]
+    sources = [Source(a.slot, 0, 101), Source(b.slot, 0, 102)]
     yield host, writers, sources
     host.close()
 
