@@ -10,15 +10,32 @@ from __future__ import annotations
 
 import heapq
 from collections.abc import Callable
-from operator import itemgetter
+from operator import attrgetter
+
+import msgspec
 
 from stack.fastpath.attach import Attachment
 from stack.fastpath.layout import H_NOW, H_TOPOLOGY, P_FINGERPRINT, S_READ_TIME
 from stack.fastpath.ring import RingReader
 from stack.fastpath.topology import Topology
 
-# Takes (topic/instance, fingerprint, publisher id, index on its topic, publication time µs, payload).
-RecordSink = Callable[[tuple[str, int, int, int, int, bytes]], None]
+
+class RingRecord(msgspec.Struct, frozen=True, gc=False):
+    """A record copied out of a ring, with what a recording keeps of it."""
+
+    topic: str
+    """``topic/instance``."""
+    fingerprint: int
+    """The schema fingerprint of its message type."""
+    publisher_id: int
+    index: int
+    """Its index on its topic for its publisher."""
+    time_us: int
+    """When it was published (simulated µs)."""
+    payload: bytes
+
+
+RecordSink = Callable[[RingRecord], None]
 
 
 class AllTopicsReader:
@@ -58,13 +75,13 @@ class AllTopicsReader:
         horizon = 1 << 63 if final else now
         batches = [self._take(r, suffix, horizon) for r, suffix in self._readers]
         taken = 0
-        for record in heapq.merge(*batches, key=itemgetter(4)):
+        for record in heapq.merge(*batches, key=attrgetter("time_us")):
             sink(record)
             taken += 1
         w[self.region.slot_word(self.att.slot, S_READ_TIME)] = now
         return taken
 
-    def _take(self, r: RingReader, suffix: str, horizon: int) -> list[tuple[str, int, int, int, int, bytes]]:
+    def _take(self, r: RingReader, suffix: str, horizon: int) -> list[RingRecord]:
         count = r.count
         if count <= r.taken:
             return []
@@ -78,7 +95,7 @@ class AllTopicsReader:
                     break
                 payload = bytes(r.payload(head.offset))
                 if r.still(n, head.offset):
-                    records.append((suffix, fingerprint, r.publisher_id, head.index, head.time_us, payload))
+                    records.append(RingRecord(suffix, fingerprint, r.publisher_id, head.index, head.time_us, payload))
                 else:
                     r.lost += 1
             else:

@@ -39,7 +39,7 @@ import zenoh
 from stack.bus import keys
 from stack.bus.node import stable_publisher_id, wall_clock_us
 from stack.bus.topics import FLAG_LOCKSTEP_TIME, FLAG_PROBE, HEADER
-from stack.fastpath.alltopics import AllTopicsReader
+from stack.fastpath.alltopics import AllTopicsReader, RingRecord
 from stack.msg.registry import TOPICS, fingerprint
 from stack.record.provenance import git_commit
 from stack.record.recorder import RecordingWriter, new_recording_info
@@ -107,8 +107,9 @@ class SampleRecorder:
         self._routes[key] = route
         return route
 
-    def handle_fast(self, suffix: str, fp: int, publisher: int, index: int, pub_time: int, payload: bytes) -> None:
+    def handle_fast(self, record: RingRecord) -> None:
         """A record read from the fast path: lockstep time, logged at its publication time."""
+        suffix, pub_time = record.topic, record.time_us
         try:
             route = self._suffix_routes[suffix]
         except KeyError:
@@ -119,7 +120,8 @@ class SampleRecorder:
             return
         if pub_time > self.sim_now_us:
             self.sim_now_us = pub_time
-        self._record(route, fp, publisher, index, pub_time, FLAG_LOCKSTEP_TIME, pub_time, payload)
+        fp, publisher, index = record.fingerprint, record.publisher_id, record.index
+        self._record(route, fp, publisher, index, pub_time, FLAG_LOCKSTEP_TIME, pub_time, record.payload)
 
     def handle(self, sample: zenoh.Sample) -> None:
         key = str(sample.key_expr)
@@ -184,7 +186,7 @@ class RecordingPump:
         self._sub = sub
         self._sink = sink
         # Records the module's thread read from the fast path, waiting for this thread.
-        self.fast: collections.deque[tuple[str, int, int, int, int, bytes]] = collections.deque()
+        self.fast: collections.deque[RingRecord] = collections.deque()
         self._log = log
         self._stop = threading.Event()
         self._stop_deadline = 0.0
@@ -261,13 +263,13 @@ class RecordingPump:
         while pending:
             record = pending.popleft()
             try:
-                handle(*record)
+                handle(record)
             except OSError:
                 raise
             except Exception:
                 self.errors += 1
                 if self.errors <= 10 or self.errors % 1000 == 0:
-                    self._log.exception("failed to record a message on %s (%d so far)", record[0], self.errors)
+                    self._log.exception("failed to record a message on %s (%d so far)", record.topic, self.errors)
 
     def _cut_short(self) -> None:
         for _ in range(QUEUE_CAPACITY):
