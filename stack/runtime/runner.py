@@ -96,6 +96,8 @@ class Runtime:
         self.trigger_input: FastInput | None = None
         self.reads_all_topics = False
         self._lockstep: LockstepMember | LockstepCoordinator | None = None
+        self._region: Region | None = None
+        self._services: list[ParamService | Heartbeat] = []
         self.node: Node
         self.module: Module
         self._module_watchers: list[zenoh.Subscriber] = []
@@ -167,74 +169,91 @@ class Runtime:
     def run(self, on_ready: Callable[[], None] | None = None) -> None:
         """Run the module until it stops; ``on_ready`` is called once it is up and about to loop."""
         spec = self.spec
-        run_id = spec.run_id if spec.lockstep else 0
         if not spec.lockstep and self.module_cls.WORK_QUEUE is not None:
             # Before the session opens, so that its threads (which deliver the inputs) inherit the priority.
             raise_priority(self.name, self.module_cls.WORK_QUEUE)
+        run_id = spec.run_id if spec.lockstep else 0
         with Node(spec.bus, spec.vehicle, self.name, clock=self.now_us, run_id=run_id) as node:
-            self.node = node
-            if self.lockstep:
-                node.header_flags = FLAG_LOCKSTEP_TIME
-            services: list[Any] = []
-            lockstep_part: LockstepMember | LockstepCoordinator | None = None
-            shm = spec.lockstep and spec.fastpath_fd >= 0
-            outside = self.module_cls.OUTSIDE_LOCKSTEP
-            region = Region(spec.fastpath_fd) if shm and not outside else None
-            if self.module_cls.PASSIVE:
-                # An observer yields to the control loops (a lossless one that falls far behind makes
-                # lockstep time wait, see stack.fastpath.lockstep), yet still gets its share of a machine
-                # loaded by other programs (SCHED_IDLE would starve it there, and the run with it).
-                os.nice(PASSIVE_NICENESS)
             try:
-                if region is not None:
-                    if region.nonce != spec.run_id:
-                        raise ValueError(f"fd {spec.fastpath_fd} is the fast-path region of another run")
-                    self.fast = Attachment(region, self.name, node.publisher_id)
-                self._declare_trigger()
-                self.module = self.module_cls(self)
-                self.data = self._data_inputs()
-                self._param_pub = node.publisher("parameter_update", reliable=self.lockstep)
-                services.append(ParamService(node.session, node.vehicle, self.name, self.params))
-                services.append(Heartbeat(node.session, node.vehicle, self.name, self.snapshot))
-                if self.fast is not None:
+                self.open(node)
+                self.serve(on_ready)
+            finally:
+                self.close()
 
-                    def announce() -> None:
-                        node.declare_token(keys.alive_token(node.vehicle, self.name, os.getpid()))
-                        self.state = "running"
-                        log.info("%s ready (%s, shared-memory fast path)", self.name, self.describe_trigger())
-                        if on_ready is not None:
-                            on_ready()
+    def open(self, node: Node) -> None:
+        """Everything but the loop, on the module's session: its shared memory (on the fast path), the module
+        itself and its services (parameters, heartbeat). :meth:`close` undoes it, also when it failed half-way."""
+        spec = self.spec
+        self.node = node
+        if self.lockstep:
+            node.header_flags = FLAG_LOCKSTEP_TIME
+        shm = spec.lockstep and spec.fastpath_fd >= 0
+        if shm and not self.module_cls.OUTSIDE_LOCKSTEP:
+            self._region = Region(spec.fastpath_fd)
+        if self.module_cls.PASSIVE:
+            # An observer yields to the control loops (a lossless one that falls far behind makes
+            # lockstep time wait, see stack.fastpath.lockstep), yet still gets its share of a machine
+            # loaded by other programs (SCHED_IDLE would starve it there, and the run with it).
+            os.nice(PASSIVE_NICENESS)
+        region = self._region
+        if region is not None:
+            if region.nonce != spec.run_id:
+                raise ValueError(f"fd {spec.fastpath_fd} is the fast-path region of another run")
+            self.fast = Attachment(region, self.name, node.publisher_id)
+        self._declare_trigger()
+        self.module = self.module_cls(self)
+        self.data = self._data_inputs()
+        self._param_pub = node.publisher("parameter_update", reliable=self.lockstep)
+        self._services.append(ParamService(node.session, node.vehicle, self.name, self.params))
+        self._services.append(Heartbeat(node.session, node.vehicle, self.name, self.snapshot))
 
-                    FastDriver(self, announce).run()
-                    return
-                lockstep_part = self._lockstep = self._make_lockstep()
+    def serve(self, on_ready: Callable[[], None] | None = None) -> None:
+        """Say the module is up, then run it until it stops (on the fast path, on Zenoh's lockstep, or on the wall
+        clock)."""
+        node, spec = self.node, self.spec
+        if self.fast is not None:
+
+            def announce() -> None:
                 node.declare_token(keys.alive_token(node.vehicle, self.name, os.getpid()))
-                # Over Zenoh the simulator starts once every module of the roster has synced; on the fast path
-                # it waits for the participants only, which an outside module is not. An observer joining a
-                # running stack (`stack plot`, or a restart) has nothing to wait for: nobody probes any more.
-                observer_joining = self.module_cls.PASSIVE and spec.late_join
-                if spec.lockstep and not (outside and shm) and not observer_joining:
-                    self.state = "syncing"
-                    member = lockstep_part if isinstance(lockstep_part, LockstepMember) else None
-                    coordinator = lockstep_part if isinstance(lockstep_part, LockstepCoordinator) else None
-                    announce = coordinator.announce if coordinator is not None else None
-                    startup.sync(node, self.inputs.values(), member, self.spec.late_join, announce)
                 self.state = "running"
-                log.info("%s ready (%s)", self.name, self.describe_trigger())
+                log.info("%s ready (%s, shared-memory fast path)", self.name, self.describe_trigger())
                 if on_ready is not None:
                     on_ready()
-                self._loop(lockstep_part)
-            finally:
-                self.state = "stopping"
-                module = getattr(self, "module", None)
-                if module is not None:
-                    module.close()
-                for service in services:
-                    service.close()
-                if lockstep_part is not None:
-                    lockstep_part.close()
-                if region is not None:
-                    region.close()
+
+            FastDriver(self, announce).run()
+            return
+        lockstep_part = self._lockstep = self._make_lockstep()
+        node.declare_token(keys.alive_token(node.vehicle, self.name, os.getpid()))
+        # Over Zenoh the simulator starts once every module of the roster has synced; on the fast path
+        # it waits for the participants only, which an outside module is not. An observer joining a
+        # running stack (`stack plot`, or a restart) has nothing to wait for: nobody probes any more.
+        shm = spec.lockstep and spec.fastpath_fd >= 0
+        observer_joining = self.module_cls.PASSIVE and spec.late_join
+        if spec.lockstep and not (self.module_cls.OUTSIDE_LOCKSTEP and shm) and not observer_joining:
+            self.state = "syncing"
+            member = lockstep_part if isinstance(lockstep_part, LockstepMember) else None
+            coordinator = lockstep_part if isinstance(lockstep_part, LockstepCoordinator) else None
+            announce = coordinator.announce if coordinator is not None else None
+            startup.sync(node, self.inputs.values(), member, self.spec.late_join, announce)
+        self.state = "running"
+        log.info("%s ready (%s)", self.name, self.describe_trigger())
+        if on_ready is not None:
+            on_ready()
+        self._loop(lockstep_part)
+
+    def close(self) -> None:
+        """Stop the module, then its services, its part in the lockstep and its shared memory (the session is
+        the caller's)."""
+        self.state = "stopping"
+        module = getattr(self, "module", None)
+        if module is not None:
+            module.close()
+        for service in self._services:
+            service.close()
+        if self._lockstep is not None:
+            self._lockstep.close()
+        if self._region is not None:
+            self._region.close()
 
     def describe_trigger(self) -> str:
         trigger = self.module_cls.TRIGGER
