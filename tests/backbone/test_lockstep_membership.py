@@ -6,7 +6,7 @@ from types import SimpleNamespace
 
 from stack.msg.internal import LockstepAck
 from stack.runtime.ledger import Departures
-from stack.runtime.lockstep import TIMER, LockstepCoordinator, _parse_member
+from stack.runtime.lockstep import TIMER, LockstepCoordinator, _Member, _parse_member
 
 TOKEN = "stack/v1/@lockstep/member/{name}/{pid}/topic/vehicle_local_position/0"
 TOPIC = "vehicle_local_position/0"
@@ -42,14 +42,22 @@ def test_a_token_reported_twice_counts_its_member_once():
     assert sorted(c.members) == [7, 8]
 
 
-def test_a_step_waits_for_every_trigger_announced_whatever_order_the_acknowledgements_come_in():
-    # A timed commander (5) publishes vehicle_local_position/0, which triggers mc_pos_control (8); the run of
-    # mc_pos_control may be acknowledged before the commander's run that announced its trigger.
+def commander_and_position_control() -> tuple[LockstepCoordinator, _Member]:
+    """A coordinator with a timed commander (5), which publishes vehicle_local_position/0, and mc_pos_control (8),
+    which that topic triggers; and mc_pos_control's member."""
     c = coordinator_without_bus()
     commander = _parse_member("stack/v1/@lockstep/member/commander/5/timer/20000")
     pos = _parse_member(TOKEN.format(name="mc_pos_control", pid=8))
+    assert commander is not None and pos is not None
     c._events = [("join", commander), ("join", pos)]
     c._apply_membership()
+    return c, pos
+
+
+def test_a_step_waits_for_every_trigger_announced_whatever_order_the_acknowledgements_come_in():
+    # A timed commander (5) publishes vehicle_local_position/0, which triggers mc_pos_control (8); the run of
+    # mc_pos_control may be acknowledged before the commander's run that announced its trigger.
+    c, _ = commander_and_position_control()
     c._counters[c._counter("ticks", 5)] += 1  # the step ticks the commander
     assert not c._ledger.complete(c._counters)
     c._handle_ack(LockstepAck(publisher_id=8, trigger_publisher=5, trigger_index=1, trigger_topic=TOPIC))
@@ -66,11 +74,7 @@ def test_a_step_waits_for_every_trigger_announced_whatever_order_the_acknowledge
 
 
 def test_a_member_that_rejoins_waits_only_for_triggers_written_after_it_came_back():
-    c = coordinator_without_bus()
-    commander = _parse_member("stack/v1/@lockstep/member/commander/5/timer/20000")
-    pos = _parse_member(TOKEN.format(name="mc_pos_control", pid=8))
-    c._events = [("join", commander), ("join", pos)]
-    c._apply_membership()
+    c, pos = commander_and_position_control()
     c._counters[c._counter("ticks", 5)] += 1
     c._handle_ack(LockstepAck(publisher_id=5, trigger_topic=TIMER, published=[(TOPIC, 1)]))
     c._events = [("leave", pos)]
