@@ -4,8 +4,11 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import signal
+import sys
 import time
+from decimal import Decimal
 from pathlib import Path
 from typing import Any
 
@@ -287,5 +290,15 @@ def cli() -> Any:
     return command
 
 
+_EXPONENT_NUMBER = re.compile(r"-(\d+\.?\d*|\.\d+)[eE][+-]?\d+")
+
+
+def numbers_as_values(args: list[str]) -> list[str]:
+    """A negative number in exponent form (``-2.1e-05``, as ``str()`` writes a small float) written out in full:
+    click would read its letters as short options (``-e`` is ``--endpoint``); a plain negative number it leaves a
+    value."""
+    return [format(Decimal(a), "f") if _EXPONENT_NUMBER.fullmatch(a) else a for a in args]
+
+
 def main() -> None:
-    cli()()
+    cli()(args=numbers_as_values(sys.argv[1:]))
