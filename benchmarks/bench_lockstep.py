@@ -12,6 +12,11 @@ interleaved, ``--runs`` times:
 - ``up``: ``stack up --speed max`` for ``--duration`` seconds, disarmed;
 - ``paced``: ``stack up`` as a user starts it (``--speed 1``: paced to the wall clock), disarmed, for as
   long: its real-time factor (1 when it keeps up) and the CPU it costs, in cores;
+- ``inner``, ``two`` and ``one``: the fast flight with modules sharing processes (a profile's
+  ``process = "NAME"``): the simulator and the 250 Hz inner loop (attitude estimator, attitude and rate
+  control, allocation) in one process and the rest each in its own; those two and the position chain in
+  another; every lockstep module in one process. Each also runs as ``stack up --speed 1``, disarmed, for
+  its resident and unique memory (all the stack's processes) and idle CPU;
 - ``ceiling``: the same scenario and seed flown by :class:`stack.runtime.inprocess.InProcessStack`, the
   same modules chained in this one process with no bus (what the algorithms cost by themselves).
 
@@ -60,6 +65,27 @@ STEP_US = 4000
 # the ceiling (the same modules chained in one process).
 TARGETS = {"fast": 12.0, "up": 16.0, "observed": 9.0, "zenoh": 4.0}
 RATIO_TARGET = 0.7
+# The modules of the simulator's 250 Hz loop: gyro to attitude estimate, attitude and rate control, allocation.
+INNER_LOOP = ("simulator", "attitude_estimator_q", "mc_att_control", "mc_rate_control", "control_allocator")
+GROUPINGS = ("inner", "two", "one")
+
+
+def grouped_profile(base: str, grouping: str, directory: Path) -> Path:
+    """A profile that extends ``base`` and puts its lockstep modules in shared processes (see the docstring)."""
+    prof = load_profile(base)
+    lines = [f"extends = {json.dumps(str(prof.path))}"]
+    for m in prof.modules:
+        if m.cls.PASSIVE or m.cls.OUTSIDE_LOCKSTEP:
+            continue
+        process = "vehicle" if grouping == "one" else "inner" if m.name in INNER_LOOP else None
+        if process is None and grouping == "two":
+            process = "outer"
+        if process is not None:
+            lines += ["[[module]]", f"name = {json.dumps(m.name)}", f"module = {json.dumps(m.module)}"]
+            lines.append(f'process = "{process}"')
+    path = directory / f"{prof.name}_{grouping}.toml"
+    path.write_text("\n".join(lines) + "\n")
+    return path
 
 
 @dataclass
@@ -76,6 +102,7 @@ class Run:
     samples: list[Sample] = field(default_factory=list)
     beats: dict[str, list[ModuleHeartbeat]] = field(default_factory=dict)
     report: dict | None = None
+    memory: tuple[int, int, int] = (0, 0, 0)  # processes, resident and unique bytes (the last sample)
 
     def window(self) -> tuple[Sample, Sample]:
         full = max((set(s.cpu) for s in self.samples), key=len, default=set())
@@ -120,10 +147,11 @@ def module_processes(supervisor_pid: int) -> dict[str, psutil.Process]:
         return {}
     for child in children:
         try:
-            spec = next(a for a in child.cmdline() if a.endswith(".spec.json"))
-        except (StopIteration, psutil.Error):
+            specs = [Path(a).name.removesuffix(".spec.json") for a in child.cmdline() if a.endswith(".spec.json")]
+        except psutil.Error:
             continue
-        found[Path(spec).name.removesuffix(".spec.json")] = child
+        if specs:
+            found[specs[0] + (f" +{len(specs) - 1}" if len(specs) > 1 else "")] = child
     return found
 
 
@@ -134,6 +162,15 @@ def measure(procs: dict[str, psutil.Process], wall: float, sim_us: int) -> Sampl
     except psutil.Error:
         return None  # a process has just exited
     return Sample(wall, sim_us, cpu, switches)  # type: ignore[arg-type]
+
+
+def memory(procs: dict[str, psutil.Process]) -> tuple[int, int, int] | None:
+    """How many processes, and their resident and unique memory in bytes."""
+    try:
+        infos = [p.memory_full_info() for p in procs.values()]
+    except psutil.Error:
+        return None
+    return len(infos), sum(i.rss for i in infos), sum(i.uss for i in infos)
 
 
 def watch(proc: subprocess.Popen, run: Run, timeout: float) -> None:
@@ -165,6 +202,8 @@ def watch(proc: subprocess.Popen, run: Run, timeout: float) -> None:
                 measured = measure(procs, time.monotonic(), hb.sim_time_us)
                 if measured is not None:
                     run.samples.append(measured)
+                    if run.kind.startswith("paced"):
+                        run.memory = memory(procs) or run.memory
         finally:
             sub.undeclare()
 
@@ -189,9 +228,9 @@ def run_stack(kind: str, args: list[str], home: Path, timeout: float) -> Run:
     return run
 
 
-def fly(kind: str, args: argparse.Namespace, home: Path, extra: list[str]) -> Run:
+def fly(kind: str, args: argparse.Namespace, home: Path, extra: list[str], profile: str = "") -> Run:
     report = home / f"{kind}-report.json"
-    fly_args = ["fly", args.scenario, "--profile", args.profile, "--seed", str(args.seed), "-q"]
+    fly_args = ["fly", args.scenario, "--profile", profile or args.profile, "--seed", str(args.seed), "-q"]
     run = run_stack(kind, [*fly_args, "--report", str(report), *extra], home, timeout=600.0)
     run.report = json.loads(report.read_text())
     if not run.report["passed"]:
@@ -201,7 +240,7 @@ def fly(kind: str, args: argparse.Namespace, home: Path, extra: list[str]) -> Ru
 
 def print_kinds(runs: dict[str, list[Run]], ceiling_rtf: float) -> dict[str, float]:
     print(
-        f"\n{'kind':<9} {'runs':>4} {'RTF':>6} {'lowest':>6} {'highest':>7} {'wall/step':>10} {'CPU/step':>9}"
+        f"\n{'kind':<12} {'runs':>4} {'RTF':>6} {'lowest':>6} {'highest':>7} {'wall/step':>10} {'CPU/step':>9}"
         f" {'switches/step':>13} {'scenario RTF':>12}"
     )
     means = {}
@@ -212,12 +251,12 @@ def print_kinds(runs: dict[str, list[Run]], ceiling_rtf: float) -> dict[str, flo
         scenario = [r.report["realtime_factor"] for r in kind_runs if r.report]
         means[kind] = statistics.fmean(rtfs)
         print(
-            f"{kind:<9} {len(figs):>4} {means[kind]:>6.2f} {min(rtfs):>6.2f} {max(rtfs):>7.2f}"
+            f"{kind:<12} {len(figs):>4} {means[kind]:>6.2f} {min(rtfs):>6.2f} {max(rtfs):>7.2f}"
             f" {sum(f['wall'] for f in figs) / steps * 1e6:>8.0f}µs {sum(f['cpu'] for f in figs) / steps * 1e6:>7.0f}µs"
             f" {sum(f['switches'] for f in figs) / steps:>13.1f}"
             f" {(f'{statistics.fmean(scenario):.2f}' if scenario else ''):>12}"
         )
-    print(f"{'ceiling':<9} {'':>4} {ceiling_rtf:>6.2f}  (the same modules in one process: CPU = wall)")
+    print(f"{'ceiling':<12} {'':>4} {ceiling_rtf:>6.2f}  (the same modules in one process: CPU = wall)")
     return means
 
 
@@ -254,25 +293,40 @@ def main() -> None:
     print(f"load average {load[0]:.2f} {load[1]:.2f} {load[2]:.2f} on {os.cpu_count()} CPUs; profile {args.profile}")
     ceiling = fly_in_process(args.scenario, args.profile, args.seed)
     ceiling_rtf = STEP_US / ceiling.cpu_us_per_step
-    runs: dict[str, list[Run]] = {"fast": [], "zenoh": [], "observed": [], "up": [], "paced": []}
+    kinds = ["fast", "zenoh", "observed", "up", "paced", *GROUPINGS, *(f"paced {g}" for g in GROUPINGS)]
+    runs: dict[str, list[Run]] = {kind: [] for kind in kinds}
     with tempfile.TemporaryDirectory(prefix="bench_lockstep") as tmp:
         home = Path(tmp)
         os.environ["STACK_HOME"] = str(home)  # connect() finds the stack through it
+        grouped = {g: str(grouped_profile(args.profile, g, home)) for g in GROUPINGS}
         for i in range(args.runs):
             runs["fast"].append(fly("fast", args, home, []))
             runs["zenoh"].append(fly("zenoh", args, home, ["--lockstep-transport", "zenoh"]))
             observers = ["--record", str(home / "flight.mcap"), "--save", str(home / "flight.rrd")]
             runs["observed"].append(fly("observed", args, home, observers))
-            up_args = ["up", args.profile, "--duration", str(args.duration), "-q"]
-            runs["up"].append(run_stack("up", [*up_args, "--speed", "max"], home, timeout=600.0))
-            runs["paced"].append(run_stack("paced", [*up_args, "--speed", "1"], home, timeout=600.0))
+            up_args = ["--duration", str(args.duration), "-q"]
+            runs["up"].append(run_stack("up", ["up", args.profile, *up_args, "--speed", "max"], home, timeout=600.0))
+            runs["paced"].append(run_stack("paced", ["up", args.profile, *up_args, "--speed", "1"], home, 600.0))
+            for g, profile in grouped.items():
+                runs[g].append(fly(g, args, home, [], profile))
+                paced = f"paced {g}"
+                runs[paced].append(run_stack(paced, ["up", profile, *up_args, "--speed", "1"], home, 600.0))
             print(f"run {i + 1}/{args.runs} done", flush=True)
     means = print_kinds(runs, ceiling_rtf)
-    paced = [r.figures() for r in runs["paced"]]
-    cores = sum(f["cpu"] for f in paced) / sum(f["wall"] for f in paced)
-    print(f"\nidle `stack up` at --speed 1: real-time factor {means['paced']:.2f}, {cores:.2f} cores of CPU")
+    print("\nidle `stack up` at --speed 1, by grouping: real-time factor, CPU, processes, memory (all the stack's)")
+    for g in ("", *GROUPINGS):
+        kind = f"paced {g}".strip()
+        figs = [r.figures() for r in runs[kind]]
+        cores = sum(f["cpu"] for f in figs) / sum(f["wall"] for f in figs)
+        n, rss, uss = runs[kind][-1].memory
+        print(
+            f"  {g or 'per module':<10} RTF {means[kind]:.2f}, {cores:.2f} cores, {n} processes,"
+            f" {rss / 2**20:.0f} MB resident, {uss / 2**20:.0f} MB unique"
+        )
     print_modules("fast path, flying", runs["fast"])
     print_modules("Zenoh, flying", runs["zenoh"])
+    for g in GROUPINGS:
+        print_modules(f"fast path, flying, grouped {g}", runs[g])
     print(
         f"\nceiling: {ceiling.cpu_us_per_step:.0f} µs of CPU per step ({ceiling.steps} steps of {args.scenario},"
         f" seed {args.seed}, in process); fast path / ceiling = {means['fast'] / ceiling_rtf:.2f}"

@@ -235,11 +235,14 @@ def status(
     if "vehicle_summary" in report:
         for line in vehicle_summary.lines(report["vehicle_summary"]):
             typer.echo(line)
+    # Modules sharing a process (a profile's `process = "NAME"`) show it; their CPU% and MEM are the process's.
+    shared = any(m.get("process", m["module"]) != m["module"] for m in report["modules"])
     rows = []
     for m in report["modules"]:
         rows.append(
             (
                 m["module"],
+                *((m.get("process", m["module"]),) if shared else ()),
                 m["state"],
                 m["pid"] or "-",
                 f"{m.get('cpu_percent', 0.0):.1f}",
@@ -253,9 +256,8 @@ def status(
                 f"{m.get('loop_avg_us', 0.0):.0f}/{m.get('loop_max_us', 0.0):.0f}",
             )
         )
-    print_table(
-        ("MODULE", "STATE", "PID", "CPU%", "MEM", "RESTARTS", "RATE", "RUNS", "IN", "OUT", "ERR", "LOOP us"), rows
-    )
+    columns = ("STATE", "PID", "CPU%", "MEM", "RESTARTS", "RATE", "RUNS", "IN", "OUT", "ERR", "LOOP us")
+    print_table(("MODULE", *(("PROCESS",) if shared else ()), *columns), rows)
     for m in report["modules"]:
         drops = [f"{DROP_COUNTERS[k]} {m[k]}" for k in DROP_COUNTERS if m.get(k)]
         if drops:

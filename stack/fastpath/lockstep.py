@@ -20,6 +20,7 @@ import logging
 import os
 import select
 import time
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 from stack.fastpath.attach import Attachment
@@ -88,7 +89,15 @@ class _Watched:
 class FastCoordinator:
     """The clock's side. Call :meth:`start` once, then :meth:`begin_step` and :meth:`finish_step` per step."""
 
-    def __init__(self, att: Attachment, period_us: int, stall_timeout_s: float) -> None:
+    def __init__(
+        self,
+        att: Attachment,
+        period_us: int,
+        stall_timeout_s: float,
+        pump: Callable[[list[int]], bool] | None = None,
+        pump_fds: Sequence[int] = (),
+    ) -> None:
+        """``pump`` runs members sharing the coordinator's process (woken through ``pump_fds``) while it waits."""
         self.att = att
         self.region = region = att.region
         self.w = region.words
@@ -98,6 +107,10 @@ class FastCoordinator:
         self.steps = 0
         self._poll = select.poll()
         self._poll.register(att.eventfd, select.POLLIN)
+        self._pump = pump
+        self._pump_fds = frozenset(pump_fds)
+        for fd in self._pump_fds:
+            self._poll.register(fd, select.POLLIN)
         self._watched: dict[int, _Watched] = {}
         self._pidfd_slot: dict[int, int] = {}
         self._departures = Departures()
@@ -325,13 +338,17 @@ class FastCoordinator:
     def _reap(self, timeout_ms: int) -> bool:
         """Wait up to ``timeout_ms`` for a wake-up or a death, dropping members that died; False on timeout."""
         events = self._poll.poll(timeout_ms)
+        woken = []
         for fd, _ in events:
             if fd == self.att.eventfd:
                 drain(fd)
-                continue
-            slot = self._pidfd_slot.get(fd)
-            if slot is not None:
+            elif fd in self._pump_fds:
+                drain(fd)
+                woken.append(fd)
+            elif (slot := self._pidfd_slot.get(fd)) is not None:
                 self._drop(slot, "left")
+        if woken and self._pump is not None:
+            self._pump(woken)
         return bool(events)
 
     def close(self) -> None:

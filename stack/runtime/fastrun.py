@@ -2,8 +2,9 @@
 
 from __future__ import annotations
 
+import os
 import select
-from collections.abc import Callable
+from collections.abc import Callable, Iterable, Sequence
 from typing import TYPE_CHECKING, Any
 
 import msgspec
@@ -59,6 +60,8 @@ class FastDriver:
         self._decode_trigger = (
             msgspec.msgpack.Decoder(self.trigger.sub.msg_type).decode if self.trigger is not None else None
         )
+        self.wake: Callable[[set[int]], None] = wake_all
+        """Wakes the members this process's records trigger (a process group runs its own members directly)."""
 
     # -- topology ----------------------------------------------------------------------------------
 
@@ -89,30 +92,51 @@ class FastDriver:
 
     # -- loops -------------------------------------------------------------------------------------
 
-    def _ready(self, role: int, **kwargs: Any) -> None:
-        self.att.ready(role, **kwargs)
-        self._announce()
-
-    def run(self) -> None:
+    def ready(self) -> None:
+        """Take this module's role in the run (its slot then counts as attached) and say it is alive."""
         cls = self.rt.module_cls
         if cls.LOCKSTEP_COORDINATOR:
-            self._run_coordinator()
+            self.att.ready(ROLE_COORDINATOR)
+        elif cls.PASSIVE:
+            flags = (FLAG_LOSSLESS if cls.LOSSLESS else 0) | (FLAG_READS_ALL if self.rt.reads_all_topics else 0)
+            self.att.ready(ROLE_PASSIVE, flags=flags)
+        elif isinstance(cls.TRIGGER, Trigger):
+            self.att.ready(ROLE_TRIGGERED, trigger=f"{cls.TRIGGER.topic}/{cls.TRIGGER.instance}")
+        elif isinstance(cls.TRIGGER, Timer):
+            self.att.ready(ROLE_TIMED, period_us=cls.TRIGGER.period_us)
+        else:
+            raise RuntimeError(f"{cls.__name__} declares neither a trigger nor a timer")
+        self._announce()
+
+    def work(self) -> bool:
+        """A lockstep member's runs that are due (never blocks); True if it ran any."""
+        return self.work_triggered() if self.trigger is not None else self.work_timed()
+
+    def run(self) -> None:
+        """Take the role, then loop until the process is stopped."""
+        self.ready()
+        cls = self.rt.module_cls
+        if cls.LOCKSTEP_COORDINATOR:
+            self.run_coordinator()
         elif cls.PASSIVE:
             assert isinstance(cls.TRIGGER, Timer)
             self._run_passive(cls.TRIGGER.period_us)
-        elif isinstance(cls.TRIGGER, Trigger):
-            self._ready(ROLE_TRIGGERED, trigger=f"{cls.TRIGGER.topic}/{cls.TRIGGER.instance}")
-            self._serve(self.work_triggered)
-        elif isinstance(cls.TRIGGER, Timer):
-            self._ready(ROLE_TIMED, period_us=cls.TRIGGER.period_us)
-            self._serve(self.work_timed)
         else:
-            raise RuntimeError(f"{cls.__name__} declares neither a trigger nor a timer")
+            self._serve()
 
-    def _run_coordinator(self) -> None:
+    def run_coordinator(self, others: Sequence[FastDriver] = ()) -> None:
+        """Drive the run's steps; ``others`` are members sharing this process, run while the coordinator waits."""
         rt = self.rt
-        self._ready(ROLE_COORDINATOR)
-        coordinator = FastCoordinator(self.att, rt.module.step_period_us(), rt.spec.stall_timeout_s)
+        group = ProcessGroup(others) if others else None
+        coordinator = FastCoordinator(
+            self.att,
+            rt.module.step_period_us(),
+            rt.spec.stall_timeout_s,
+            group.pump if group is not None else None,
+            group.eventfds if group is not None else (),
+        )
+        if group is not None:
+            self.wake = group.wake
         try:
             rt.state = "waiting for modules"
             coordinator.start()
@@ -127,44 +151,49 @@ class FastDriver:
                     rt.run_at(t, self.members)
                 finally:
                     if wakes:
-                        wake_all(wakes)
+                        self.wake(wakes)
+                if group is not None:
+                    group.pump()
                 coordinator.finish_step()
         finally:
             coordinator.close()
 
-    def _serve(self, work: Callable[[], None]) -> None:
+    def _serve(self) -> None:
         """A member's process: sleep until woken, then do what there is to do."""
         while True:
             self.member.wait()
-            work()
+            self.work()
 
     def _admitted(self) -> bool:
         if self.w[H_TOPOLOGY] != self.topology_seen:
             self.refresh_topology()
         return self.member.admitted()
 
-    def work_timed(self) -> None:
+    def work_timed(self) -> bool:
         """Run every tick issued and not yet run, then tell the coordinator if the step may be over (never blocks)."""
         if not self._admitted():
-            return
+            return False
         rt, w, member = self.rt, self.w, self.member
         started, finished, ticks = member.started, member.finished, member.ticks
         wakes = self.att.wakes
+        ran = w[ticks] > w[started]
         while w[ticks] > w[started]:
             w[started] += 1
             try:
                 rt.run_at(int(w[H_NOW]), self.members)
             finally:
                 if wakes:
-                    wake_all(wakes)
+                    self.wake(wakes)
             w[finished] += 1
-        self._done()
+        if ran:
+            self._done()
+        return ran
 
-    def work_triggered(self) -> None:
+    def work_triggered(self) -> bool:
         """Run once per trigger record not yet taken, earliest first, then tell the coordinator if the step may be
         over (never blocks)."""
         if not self._admitted():
-            return
+            return False
         trigger = self.trigger
         assert trigger is not None
         if trigger.sub.arrived:
@@ -173,10 +202,12 @@ class FastDriver:
         started, finished, consumed = member.started, member.finished, self._consumed
         decode, wakes = self._decode_trigger, self.att.wakes
         assert decode is not None
+        ran = False
         while True:
             found = next_trigger(trigger.readers)
             if found is None:
                 break
+            ran = True
             reader, n, head = found
             w[started] += 1
             w[consumed[reader.slot]] = n
@@ -193,9 +224,11 @@ class FastDriver:
                 rt.run_at(head.time_us, self.members, Received(head.time_us, reader.publisher_id, head.seq, msg, n))
             finally:
                 if wakes:
-                    wake_all(wakes)
+                    self.wake(wakes)
             w[finished] += 1
-        self._done()
+        if ran:
+            self._done()
+        return ran
 
     def _done(self) -> None:
         touched = self.rt.node.touched
@@ -215,8 +248,6 @@ class FastDriver:
         """A passive module runs on its wall-clock timer, or sooner when the coordinator wakes a lossless
         reader that fell behind (it marks how far it has read itself: see stack.fastpath.alltopics)."""
         rt, w = self.rt, self.w
-        flags = (FLAG_LOSSLESS if rt.module_cls.LOSSLESS else 0) | (FLAG_READS_ALL if rt.reads_all_topics else 0)
-        self._ready(ROLE_PASSIVE, flags=flags)
         poll = select.poll()
         poll.register(self.att.eventfd, select.POLLIN)
         read_time = self.region.slot_word(self.att.slot, S_READ_TIME)
@@ -231,6 +262,70 @@ class FastDriver:
             if rt.data:
                 w[read_time] = now
             last = rt._run(None, rt.now_us(), last)
+
+
+class ProcessGroup:
+    """Lockstep members sharing one process (``process = "NAME"`` in a profile), each still its own module with
+    its slot, topics, parameters and heartbeat.
+
+    One thread serves them all: it sleeps until any of their eventfds is written, then runs the members woken,
+    in the profile's order, until none is left. A member woken by another of the group is marked, not sent
+    a wake-up, and runs in the same pass; the coordinator, when it is in the group, runs them while it waits
+    for the step to end.
+    """
+
+    def __init__(self, drivers: Sequence[FastDriver]) -> None:
+        self.drivers = list(drivers)
+        self.eventfds = [d.att.eventfd for d in self.drivers]
+        self._local = frozenset(self.eventfds)
+        self._pending: set[int] = set()
+        for d in self.drivers:
+            d.wake = self.wake
+
+    def wake(self, wakes: set[int]) -> None:
+        for fd in wakes:
+            if fd in self._local:
+                self._pending.add(fd)
+            else:
+                os.eventfd_write(fd, 1)
+        wakes.clear()
+
+    def pump(self, woken: Iterable[int] = ()) -> bool:
+        """Run the members woken (their eventfds ``woken`` and those marked) until none is left; True if any ran."""
+        pending = self._pending
+        pending.update(woken)
+        ran = False
+        while pending:
+            for d in self.drivers:
+                fd = d.att.eventfd
+                if fd in pending:
+                    pending.discard(fd)
+                    ran |= d.work()
+        return ran
+
+    def serve(self) -> None:
+        poll = select.poll()
+        for fd in self.eventfds:
+            poll.register(fd, select.POLLIN)
+        while True:
+            woken = [fd for fd, _ in poll.poll()]
+            for fd in woken:
+                drain(fd)
+            self.pump(woken)
+
+
+def serve_group(drivers: Sequence[FastDriver]) -> None:
+    """Run modules sharing a process until it is stopped: each takes its role, then the coordinator (if one is
+    among them) drives the run and runs the others while it waits, or the others serve together."""
+    members = [d for d in drivers if not d.rt.module_cls.LOCKSTEP_COORDINATOR]
+    for d in members:
+        d.ready()
+    coordinator = next((d for d in drivers if d.rt.module_cls.LOCKSTEP_COORDINATOR), None)
+    if coordinator is not None:
+        coordinator.ready()
+        coordinator.run_coordinator(members)
+    else:
+        ProcessGroup(members).serve()
 
 
 def next_trigger(readers: list[RingReader]) -> tuple[RingReader, int, RecordHeader] | None:

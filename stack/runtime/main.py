@@ -1,7 +1,8 @@
-"""Process entry point of a module: ``python -m stack.runtime.main SPEC_FILE``.
+"""Process entry point of a module: ``python -m stack.runtime.main SPEC_FILE [SPEC_FILE...]``.
 
 The supervisor writes the spec (JSON) into the run directory and starts one such process per
-module. SIGTERM and SIGINT unwind the loop so the Zenoh session is always closed; when the supervisor
+module, or one for the modules a profile puts in one process (``process = "NAME"``), given all their
+specs. SIGTERM and SIGINT unwind the loop so the Zenoh session is always closed; when the supervisor
 dies the process stops too, within a second (:mod:`stack.runtime.orphan`).
 
 The process loads its code first, then waits for the supervisor's go (a line on its standard input)
@@ -24,7 +25,7 @@ from types import FrameType
 from stack.params.param import ParamError
 from stack.runtime.ledger import LockstepError
 from stack.runtime.orphan import watch_supervisor
-from stack.runtime.runner import Runtime, Shutdown, shutdown_behind
+from stack.runtime.runner import Runtime, Shutdown, run_together, shutdown_behind
 from stack.runtime.spec import ModuleSpec, load_module_class
 
 # Where each module writes its cProfile statistics (<module>.prof) when it stops, if set: for finding
@@ -43,10 +44,12 @@ def _on_signal(signum: int, frame: FrameType | None) -> None:
 
 def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else argv
-    if len(argv) != 1:
-        print("usage: python -m stack.runtime.main SPEC_FILE", file=sys.stderr)
+    if not argv:
+        print("usage: python -m stack.runtime.main SPEC_FILE [SPEC_FILE...]", file=sys.stderr)
         return 2
-    spec = ModuleSpec.from_json(Path(argv[0]).read_text())
+    specs = [ModuleSpec.from_json(Path(arg).read_text()) for arg in argv]
+    spec = specs[0]
+    name = "+".join(each.name for each in specs)
     logging.basicConfig(
         level=getattr(logging, spec.log_level.upper(), logging.INFO),
         stream=sys.stderr,
@@ -54,17 +57,21 @@ def main(argv: list[str] | None = None) -> int:
     )
     signal.signal(signal.SIGTERM, _on_signal)
     signal.signal(signal.SIGINT, _on_signal)
-    log = logging.getLogger(spec.name)
+    log = logging.getLogger(name)
     profile_dir = os.environ.get(PROFILE_ENV)
     profiler = cProfile.Profile(time.thread_time) if profile_dir else None
     try:
         if spec.supervisor_pid > 0 and not watch_supervisor(spec.supervisor_pid):
             raise Shutdown("supervisor already gone")
-        load_module_class(spec.module)
+        for each in specs:
+            load_module_class(each.module)
         sys.stdin.buffer.readline()
         if profiler is not None:
             profiler.enable()
-        Runtime(spec).run()
+        if len(specs) == 1:
+            Runtime(spec).run()
+        else:
+            run_together(specs)
     except Shutdown as stop:
         log.info("stopped (%s)", stop)
         return 0
@@ -81,7 +88,7 @@ def main(argv: list[str] | None = None) -> int:
     finally:
         if profiler is not None:
             profiler.disable()
-            profiler.dump_stats(Path(str(profile_dir)) / f"{spec.name}.prof")
+            profiler.dump_stats(Path(str(profile_dir)) / f"{name}.prof")
     return 0
 
 

@@ -11,6 +11,7 @@ import logging
 import os
 import time
 from collections.abc import Callable
+from contextlib import ExitStack
 from typing import Any
 
 import zenoh
@@ -27,7 +28,7 @@ from stack.msg.registry import fingerprint
 from stack.msg.system import ParameterUpdate
 from stack.params.store import ParamStore
 from stack.runtime import startup
-from stack.runtime.fastrun import FastDriver
+from stack.runtime.fastrun import FastDriver, serve_group
 from stack.runtime.inputs import InputBuffer, sample_time
 from stack.runtime.lockstep import TIMER, LockstepCoordinator, LockstepMember
 from stack.runtime.module import TRIGGER_BACKLOG, Module, Timer, Trigger
@@ -63,6 +64,26 @@ def shutdown_behind(error: BaseException) -> Shutdown | None:
             return seen
         seen = seen.__context__
     return None
+
+
+def run_together(specs: list[ModuleSpec]) -> None:
+    """Run several lockstep modules of a fast-path run in this process (a profile's ``process = "NAME"``) until
+    it is stopped: each is a module of its own, on one Zenoh session, served by one thread
+    (:class:`stack.runtime.fastrun.ProcessGroup`)."""
+    runtimes = [Runtime(spec) for spec in specs]
+    for rt in runtimes:
+        if not (rt.lockstep and rt.spec.fastpath_fd >= 0):
+            raise ValueError(f"{rt.name}: only lockstep modules on the shared-memory fast path can share a process")
+    with ExitStack() as stack:
+        session: zenoh.Session | None = None
+        for rt in runtimes:
+            spec = rt.spec
+            node = Node(spec.bus, spec.vehicle, rt.name, clock=rt.now_us, run_id=spec.run_id, session=session)
+            session = node.session
+            stack.callback(node.close)
+            stack.callback(rt.close)
+            rt.open(node)
+        serve_group([rt.fast_driver() for rt in runtimes])
 
 
 class Runtime:
@@ -212,15 +233,7 @@ class Runtime:
         clock)."""
         node, spec = self.node, self.spec
         if self.fast is not None:
-
-            def announce() -> None:
-                node.declare_token(keys.alive_token(node.vehicle, self.name, os.getpid()))
-                self.state = "running"
-                log.info("%s ready (%s, shared-memory fast path)", self.name, self.describe_trigger())
-                if on_ready is not None:
-                    on_ready()
-
-            FastDriver(self, announce).run()
+            self.fast_driver(on_ready).run()
             return
         lockstep_part = self._lockstep = self._make_lockstep()
         node.declare_token(keys.alive_token(node.vehicle, self.name, os.getpid()))
@@ -240,6 +253,19 @@ class Runtime:
         if on_ready is not None:
             on_ready()
         self._loop(lockstep_part)
+
+    def fast_driver(self, on_ready: Callable[[], None] | None = None) -> FastDriver:
+        """The module's loop on the fast path; ``on_ready`` is called once it has taken its role."""
+        node = self.node
+
+        def announce() -> None:
+            node.declare_token(keys.alive_token(node.vehicle, self.name, os.getpid()))
+            self.state = "running"
+            log.info("%s ready (%s, shared-memory fast path)", self.name, self.describe_trigger())
+            if on_ready is not None:
+                on_ready()
+
+        return FastDriver(self, announce)
 
     def close(self) -> None:
         """Stop the module, then its services, its part in the lockstep and its shared memory (the session is

@@ -11,6 +11,12 @@ give only what differs: its tables are merged into the base's key by key, and ea
 lists changes the base's module of the same name (its ``params`` and ``args`` merged likewise) or, if
 the base has none, is started after the base's modules.
 
+Modules given the same ``process = "NAME"`` share one OS process (as ROS 2 component containers do; PX4 runs
+all its modules in one): each stays a module with its topics, parameters, heartbeat and status row, and a
+crash restarts the process if any of its modules' policies asks. Only lockstep modules can share a process,
+and only in a shared-memory lockstep run; otherwise (``--realtime``, lockstep over Zenoh) each module runs
+in its own process.
+
 A ``[[process]]`` is a supervised program that is not a module (no bus, no heartbeat), such as the
 simulated Pixhawk ``stack pixhawk-sim``: the processes start first, in order, each ready once it has run
 ``ready_after_s`` without exiting; they stop last; their death is noticed and handled as a module's
@@ -68,6 +74,8 @@ class ModuleEntry:
     restart: str
     max_restarts: int
     critical: bool
+    process: str = ""
+    """The process it shares with the other modules of the same ``process`` name; empty: a process of its own."""
 
 
 @dataclass
@@ -310,6 +318,7 @@ class _Loader:
             ):
                 continue
             profile.processes.append(process)
+        self._check_process_groups(profile)
         for module in profile.modules:
             for aname, value in module.args.items():
                 if isinstance(value, str):
@@ -317,9 +326,18 @@ class _Loader:
         profile.scenario_limits, profile.scenario_options = self._scenario_settings(self._table(doc, "scenario"))
         return profile
 
-    def _scenario_settings(
-        self, table: dict
-    ) -> tuple[dict[str, dict[str, float | bool]], dict[str, dict[str, str]]]:
+    def _check_process_groups(self, profile: Profile) -> None:
+        """A process group's name is not another module's or a ``[[process]]``'s."""
+        for module in profile.modules:
+            group = module.process
+            if not group:
+                continue
+            clash = [m.name for m in profile.modules if m.name == group and m.process != group]
+            clash += [p.name for p in profile.processes if p.name == group]
+            if clash:
+                raise self.fail(f"module ({module.name}).process", f"'{group}' is also the name of {clash[0]}")
+
+    def _scenario_settings(self, table: dict) -> tuple[dict[str, dict[str, float | bool]], dict[str, dict[str, str]]]:
         """Per-scenario check limits and options for this vehicle (``[scenario.attitude_step] yaw_rise_time_s =
         0.3``, ``[scenario.plane_mission] mission = "c172_rectangle"``)."""
         from stack.scenario.catalogue import scenarios, unknown_scenario
@@ -394,7 +412,9 @@ class _Loader:
         if not isinstance(entry, dict):
             raise self.fail(where, "expected a table")
         self._only(
-            entry, where, {"name", "module", "params", "args", "condition", "restart", "max_restarts", "critical"}
+            entry,
+            where,
+            {"name", "module", "params", "args", "condition", "restart", "max_restarts", "critical", "process"},
         )
         ref = self._get(entry, where, "module", str, None)
         if ref is None:
@@ -431,6 +451,17 @@ class _Loader:
         condition = self._get(entry, where, "condition", str, "")
         if condition:
             self._condition(f"{where}.condition", condition, variables, shared)
+        process = self._get(entry, where, "process", str, "")
+        if process:
+            try:
+                keys.check_name("process", process)
+            except ValueError as e:
+                raise self.fail(f"{where}.process", str(e)) from None
+            if cls.PASSIVE or cls.OUTSIDE_LOCKSTEP:
+                kind = "reads on the wall clock beside the lockstep" if cls.PASSIVE else "runs outside the lockstep"
+                raise self.fail(
+                    f"{where}.process", f"{name} {kind}; only lockstep modules can share a process (leave it its own)"
+                )
         return ModuleEntry(
             name=name,
             module=ref,
@@ -441,6 +472,7 @@ class _Loader:
             restart=restart,
             max_restarts=max_restarts,
             critical=self._get(entry, where, "critical", bool, False),
+            process=process,
         )
 
     def _process(self, i: int, entry: object, shared: dict[str, object], variables: dict[str, object]) -> ProcessEntry:

@@ -72,6 +72,8 @@ class ModuleProcess:
     entry: ModuleEntry
     spec_path: Path
     log_path: Path
+    process: str
+    """The OS process it runs in: its own name, or the group it shares a process with (``process = "NAME"``)."""
     proc: subprocess.Popen | None = None
     state: str = "stopped"
     restarts: int = 0
@@ -111,11 +113,18 @@ class Supervisor:
         self.run_dir = run_dir
         self.vehicle = profile.vehicle
         self._set_port(profile.port or free_port())
+        # Modules share a process only in a shared-memory lockstep run (see stack.supervisor.profile).
+        self.grouping = profile.lockstep and profile.lockstep_transport == "shm"
+        self.modules = []
+        for e in profile.modules:
+            process = e.process if e.process and self.grouping else e.name
+            self.modules.append(ModuleProcess(e, run_dir / f"{e.name}.spec.json", run_dir / f"{process}.log", process))
+        self.groups: dict[str, list[ModuleProcess]] = {}
+        for m in self.modules:
+            self.groups.setdefault(m.process, []).append(m)
         local_mesh = profile.bus.mode == "peer" and profile.bus.listen == (LOOPBACK_ANY_PORT,)
-        self.module_endpoints = {e.name: f"tcp/127.0.0.1:{free_port()}" for e in profile.modules} if local_mesh else {}
-        self.modules = [
-            ModuleProcess(e, run_dir / f"{e.name}.spec.json", run_dir / f"{e.name}.log") for e in profile.modules
-        ]
+        endpoints = {process: f"tcp/127.0.0.1:{free_port()}" for process in self.groups} if local_mesh else {}
+        self.module_endpoints = {m.entry.name: endpoints[m.process] for m in self.modules} if local_mesh else {}
         self.programs = [ProgramProcess(e, run_dir / f"{e.name}.log") for e in profile.processes]
         self.placeholders = {
             "python": sys.executable,
@@ -195,6 +204,7 @@ class Supervisor:
             ]
             run_state.write_state(self.vehicle, self.state_record())
             self._say(f"run directory {self.run_dir}")
+            self._say_groups()
             self._say(f"bus rendezvous {self.endpoint}, vehicle '{self.vehicle}'")
             if self._start_all():
                 self.roster_complete = True
@@ -232,6 +242,14 @@ class Supervisor:
         done = f"{len(started)} of {total} started" + (f" ({', '.join(started)})" if started else "")
         doing = f", {starting[0]} starting" if starting else ""
         self._say(f"start-up interrupted by {signal.Signals(signum).name}: {done}{doing}; stopping them")
+
+    def _say_groups(self) -> None:
+        for process, members in self.groups.items():
+            if len(members) > 1:
+                self._say(f"process {process}: {', '.join(m.entry.name for m in members)}")
+        if not self.grouping and any(m.entry.process for m in self.modules):
+            how = "--realtime" if not self.profile.lockstep else "lockstep over Zenoh"
+            self._say(f"{how}: each module in its own process (modules share one only in a shared-memory lockstep)")
 
     def _say_links(self) -> None:
         """The links modules gave the user (Module.show_link), last, where they are seen: even with --quiet."""
@@ -288,11 +306,13 @@ class Supervisor:
             return self.module_bus
         names = [m.entry.name for m in self.modules]
         peers = [n for n in names if n != name] if restarted else names[: names.index(name)]
+        own = self.module_endpoints[name]
+        connect = dict.fromkeys(self.module_endpoints[n] for n in peers if self.module_endpoints[n] != own)
         bus = self.module_bus
         return BusConfig(
             mode=bus.mode,
-            connect=(*bus.connect, *(self.module_endpoints[n] for n in peers)),
-            listen=(self.module_endpoints[name],),
+            connect=(*bus.connect, *connect),
+            listen=(own,),
             low_latency=bus.low_latency,
             lease_ms=bus.lease_ms,
         )
@@ -331,13 +351,16 @@ class Supervisor:
         }
 
     def _spawn(self, m: ModuleProcess, go: bool = True) -> None:
-        """Start the module's process; it loads its code, then waits for ``_go`` (given now unless ``go`` is False)."""
-        m.spec_path.write_text(self._spec(m).to_json())
+        """Start the process of the module (and of the modules sharing it); it loads their code, then waits for
+        ``_go`` (given now unless ``go`` is False)."""
+        members = self.groups[m.process]
+        for each in members:
+            each.spec_path.write_text(self._spec(each).to_json())
         env = self._environment()
         # fork+exec via posix_spawn/vfork (no Python code runs in the child before exec); own process
         # group so a terminal Ctrl-C reaches the supervisor only and it can stop modules in order.
-        m.proc = subprocess.Popen(
-            [sys.executable, "-m", "stack.runtime.main", str(m.spec_path)],
+        proc = subprocess.Popen(
+            [sys.executable, "-m", "stack.runtime.main", *(str(each.spec_path) for each in members)],
             stdin=subprocess.PIPE,
             stdout=subprocess.PIPE,
             stderr=subprocess.STDOUT,
@@ -345,11 +368,13 @@ class Supervisor:
             process_group=0,
             pass_fds=self.fast.pass_fds() if self.fast is not None else (),
         )
-        m.exit_code = None
-        m.restart_at = None
         log_file = m.log_path.open("a")
-        m.reader = threading.Thread(target=self._pump, args=(m.entry.name, m.proc.stdout, log_file), daemon=True)
-        m.reader.start()
+        reader = threading.Thread(target=self._pump, args=(m.process, proc.stdout, log_file), daemon=True)
+        for each in members:
+            each.proc, each.reader = proc, reader
+            each.exit_code = None
+            each.restart_at = None
+        reader.start()
         if go:
             self._go(m)
 
@@ -358,6 +383,8 @@ class Supervisor:
         assert m.proc is not None and m.proc.stdin is not None
         m.state = "starting"
         self._say(f"starting {m.entry.name} (pid {m.proc.pid})")
+        if m.proc.stdin.closed:
+            return  # a process shared with a module started before
         try:
             m.proc.stdin.write(b"go\n")
             m.proc.stdin.close()
@@ -470,18 +497,14 @@ class Supervisor:
             if deadline is not None and now >= deadline:
                 self._say(f"duration of {self.options.duration:g} s reached")
                 return
-            for m in self.modules:
-                if m.state == "running" and m.proc is not None and m.proc.poll() is not None:
-                    self._on_exit(m)
-                elif m.state == "restarting" and m.restart_at is not None and now >= m.restart_at:
-                    m.restarts += 1
-                    self._say(f"restarting {m.entry.name} (restart {m.restarts})")
-                    self._spawn(m)
-                    if self._wait_ready(m):
-                        if self.fast is not None and self._on_fast_path(m):
-                            self.fast.restart_over(m.entry.name)
-                    else:
-                        self._plan_restart_or_give_up(m)
+            for members in self.groups.values():
+                proc = members[0].proc
+                if proc is not None and proc.poll() is not None and any(m.state == "running" for m in members):
+                    self._on_exit(members)
+                elif all(m.state == "restarting" for m in members):
+                    restart_at = members[0].restart_at
+                    if restart_at is not None and now >= restart_at:
+                        self._restart(members)
             self._watch_programs(now)
             for m in self.modules:
                 if m.entry.critical and m.state == "exited":
@@ -498,39 +521,83 @@ class Supervisor:
                 self._say("all modules have exited")
                 return
 
-    def _on_exit(self, m: ModuleProcess) -> None:
-        assert m.proc is not None
-        m.exit_code = m.proc.returncode
-        if m.exit_code == 0:
-            self._say(f"{m.entry.name} exited")
-        else:
-            m.failures += 1
-            self._say(f"{m.entry.name} failed with exit code {m.exit_code} (see {m.log_path})")
-        if m.entry.restart == "always" or (m.entry.restart == "on-failure" and m.exit_code != 0):
-            self._plan_restart_or_give_up(m)
-        else:
-            m.state = "exited" if m.exit_code == 0 else "failed"
-        if self.fast is not None and self._on_fast_path(m):
-            self.fast.exit_handled(m.entry.name, m.state == "restarting")
+    @staticmethod
+    def _label(members: list[ModuleProcess]) -> str:
+        """How the supervisor names a process: its module, or the group and the modules in it."""
+        if len(members) == 1:
+            return members[0].entry.name
+        return f"process {members[0].process} ({', '.join(m.entry.name for m in members)})"
 
-    def _plan_restart_or_give_up(self, m: ModuleProcess) -> None:
-        if m.restarts >= m.entry.max_restarts:
-            self._say(f"{m.entry.name}: giving up after {m.restarts} restarts")
-            m.state = "failed"
-            if self.fast is not None and self._on_fast_path(m):
-                self.fast.restart_over(m.entry.name)
+    def _on_exit(self, members: list[ModuleProcess]) -> None:
+        """The process of ``members`` exited: restart it if any of their policies asks, else they are over."""
+        proc = members[0].proc
+        assert proc is not None
+        code = proc.returncode
+        for m in members:
+            m.exit_code = code
+            m.failures += code != 0
+        label = self._label(members)
+        if code == 0:
+            self._say(f"{label} exited")
+        else:
+            self._say(f"{label} failed with exit code {code} (see {members[0].log_path})")
+        policies = {m.entry.restart for m in members}
+        if "always" in policies or ("on-failure" in policies and code != 0):
+            self._plan_restart_or_give_up(members)
+        else:
+            for m in members:
+                m.state = "exited" if code == 0 else "failed"
+        if self.fast is not None:
+            for m in members:
+                if self._on_fast_path(m):
+                    self.fast.exit_handled(m.entry.name, m.state == "restarting")
+
+    def _restart(self, members: list[ModuleProcess]) -> None:
+        for m in members:
+            m.restarts += 1
+        self._say(f"restarting {self._label(members)} (restart {members[0].restarts})")
+        self._spawn(members[0])
+        for m in members[1:]:
+            self._go(m)
+        if all(self._wait_ready(m) for m in members):
+            if self.fast is not None:
+                for m in members:
+                    if self._on_fast_path(m):
+                        self.fast.restart_over(m.entry.name)
             return
-        delay = min(0.5 * 2**m.restarts, BACKOFF_MAX_S)
-        m.state = "restarting"
-        m.restart_at = time.monotonic() + delay
-        self._say(f"{m.entry.name}: restart in {delay:.1f} s")
+        proc = members[0].proc
+        if proc is not None and proc.poll() is None:
+            proc.kill()  # a module of it never came up: the next attempt starts the process anew
+            proc.wait()
+        self._plan_restart_or_give_up(members)
+
+    def _plan_restart_or_give_up(self, members: list[ModuleProcess]) -> None:
+        label = self._label(members)
+        restarts = members[0].restarts
+        if restarts >= max(m.entry.max_restarts for m in members):
+            self._say(f"{label}: giving up after {restarts} restarts")
+            for m in members:
+                m.state = "failed"
+                if self.fast is not None and self._on_fast_path(m):
+                    self.fast.restart_over(m.entry.name)
+            return
+        delay = min(0.5 * 2**restarts, BACKOFF_MAX_S)
+        restart_at = time.monotonic() + delay
+        for m in members:
+            m.state = "restarting"
+            m.restart_at = restart_at
+        self._say(f"{label}: restart in {delay:.1f} s")
 
     # -- stopping ----------------------------------------------------------------------------------
 
     def _stop_all(self) -> None:
         for m in self._stop_order():
             proc = m.proc
-            if proc is None or proc.poll() is not None:
+            if proc is None:
+                continue
+            if proc.poll() is not None:
+                if m.state in ("starting", "running", "stopping"):
+                    m.exit_code, m.state = proc.returncode, "exited"  # its process was stopped with another module
                 continue
             m.state = "stopping"
             try:
@@ -547,9 +614,8 @@ class Supervisor:
             m.state = "exited"
         for p in reversed(self.programs):
             self._stop_program(p)
-        for r in (*self.modules, *self.programs):
-            if r.reader is not None:
-                r.reader.join(timeout=2.0)
+        for reader in {r.reader for r in (*self.modules, *self.programs) if r.reader is not None}:
+            reader.join(timeout=2.0)
 
     def _stop_program(self, p: ProgramProcess) -> None:
         proc = p.proc
@@ -600,6 +666,7 @@ class Supervisor:
             row: dict[str, object] = {
                 "module": m.entry.name,
                 "type": m.entry.module,
+                "process": m.process,
                 "state": m.state,
                 "pid": m.pid,
                 "restarts": m.restarts,

@@ -17,19 +17,25 @@ from tests.support.once import key_dir, once
 
 @pytest.fixture(scope="session")
 def fly(tmp_path_factory: pytest.TempPathFactory) -> Callable[..., Flight]:
-    """``fly(seed, run=0, scenario="attitude_step", wind=False, transport="shm")``: ``stack fly`` of that
-    scenario and seed on the default profile, every module its own process (``run`` tells repeated flights
-    apart; ``wind`` flies ``--wind``; ``transport`` carries the lockstep's messages)."""
+    """``fly(seed, run=0, scenario="attitude_step", wind=False, transport="shm", profile="sitl_quad")``: ``stack
+    fly`` of that scenario and seed, every module its own process unless the profile groups them (``run``
+    tells repeated flights apart; ``wind`` flies ``--wind``; ``transport`` carries the lockstep's messages)."""
 
     def flight(
-        seed: int, run: int = 0, scenario: str = "attitude_step", wind: bool = False, transport: str = "shm"
+        seed: int,
+        run: int = 0,
+        scenario: str = "attitude_step",
+        wind: bool = False,
+        transport: str = "shm",
+        profile: str = "sitl_quad",
     ) -> Flight:
         def work(home: Path) -> dict:
-            done = fly_scenario(home, scenario, seed, wind=wind, transport=transport)
+            done = fly_scenario(home, scenario, seed, profile=profile, wind=wind, transport=transport)
             return {"returncode": done.returncode, "output": done.output, "report": done.report}
 
         windy = "-wind" if wind else ""
-        key = f"fly-{scenario}-seed{seed}-run{run}{windy}-{transport}"
+        grouped = "" if profile == "sitl_quad" else f"-{profile}"
+        key = f"fly-{scenario}-seed{seed}-run{run}{windy}-{transport}{grouped}"
         done = once(tmp_path_factory, key, work)
         recording = key_dir(tmp_path_factory, key) / "flight.mcap"
         return Flight(done["returncode"], done["output"], done["report"], recording)

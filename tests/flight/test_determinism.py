@@ -1,7 +1,9 @@
-"""Lockstep flights are deterministic: the same seed gives the same flight, bit for bit, on either transport.
+"""Lockstep flights are deterministic: the same seed gives the same flight, bit for bit, on either transport
+and however the modules share processes.
 
-Two ``stack fly attitude_step --seed 3`` runs, one on the shared-memory fast path and one with the
-lockstep over Zenoh, are compared through their recordings (read with the stack's RecordingReader):
+``stack fly attitude_step --seed 3`` runs, on the shared-memory fast path with every module its own process,
+with the lockstep over Zenoh, and with the modules in two processes (sitl_quad_grouped), are compared through
+their recordings (read with the stack's RecordingReader):
 every message any module published up to the scenario's last tick, with its bus header and every
 field, must be identical, and none may be missing. A different seed draws different sensor noise, so
 the estimates, and through the control loops the trajectory, differ (flown in one process: the same flights).
@@ -44,8 +46,9 @@ def every_message(flight: Flight, until_us: int) -> list[tuple[str, int, int, in
     return sorted(messages)
 
 
-def test_same_seed_gives_the_same_flight_on_either_transport(fly: Fly) -> None:
-    a, b = fly(3, 0), fly(3, 0, transport="zenoh")
+@pytest.mark.parametrize("other", [{"transport": "zenoh"}, {"profile": "sitl_quad_grouped"}], ids=["zenoh", "grouped"])
+def test_same_seed_gives_the_same_flight_whatever_carries_it(fly: Fly, other: dict[str, str]) -> None:
+    a, b = fly(3, 0), fly(3, 0, **other)
     end = a.scenario_end_us()
     assert b.scenario_end_us() == end
     truth_a, truth_b = ground_truth(a, end), ground_truth(b, end)

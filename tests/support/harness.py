@@ -266,9 +266,12 @@ def chain_profile(
     extra: str = "",
     transport: str = "shm",
     doubler: str = "",
+    processes: dict[str, str] | None = None,
 ) -> Path:
     """The test processing chain: a tick source, a doubler, a summer and a timer module, with lockstep
-    traffic over ``transport`` (shm or zenoh); ``doubler`` is appended to the doubler's entry."""
+    traffic over ``transport`` (shm or zenoh); ``doubler`` is appended to the doubler's entry; ``processes``
+    puts modules (by class name: TickSource, Doubler, Summer, Pacer) in shared processes by name."""
+    shared = {cls: f'process = "{name}"' for cls, name in (processes or {}).items()}
     return write_profile(
         path,
         f"""
@@ -283,16 +286,20 @@ stall_timeout_s = 4.0
 module = "tests.support.modules:TickSource"
 args = {{ {tick_args} }}
 critical = true
+{shared.get("TickSource", "")}
 
 [[module]]
 module = "tests.support.modules:Doubler"
 {doubler}
+{shared.get("Doubler", "")}
 
 [[module]]
 module = "tests.support.modules:Summer"
+{shared.get("Summer", "")}
 
 [[module]]
 module = "tests.support.modules:Pacer"
+{shared.get("Pacer", "")}
 {extra}
 """,
     )

@@ -1,0 +1,125 @@
+"""Modules that share a process (``process = "NAME"``): the same run, message for message, in fewer processes.
+
+The test chain (tests.support.modules) with the tick source and the doubler in one process (the lockstep's
+coordinator runs its member while it waits for the step to end) and the summer and the pacer in another (two
+members served by one thread), against the chain with every module its own process. Each module of a shared
+process keeps its status row, heartbeat and parameters; the process's death is every module's, and a restart
+brings them all back into the lockstep.
+"""
+
+import json
+import os
+import signal
+
+import pytest
+
+from stack.supervisor.profile import ProfileError, load_profile
+from tests.support.harness import (
+    RunningStack,
+    chain_profile,
+    eventually,
+    wait_no_processes,
+    write_profile,
+)
+
+STEPS = 2000
+TWO_PROCESSES = {"TickSource": "clock", "Doubler": "clock", "Summer": "chain", "Pacer": "chain"}
+
+
+def run_chain(tmp_path, name: str, processes: dict[str, str] | None) -> tuple[list, list, str]:
+    home = tmp_path / f"home-{name}"
+    trace, probe = tmp_path / f"{name}.json", tmp_path / f"{name}-probe.json"
+    profile = chain_profile(
+        tmp_path / f"{name}.toml",
+        tick_args=f'trace = "{trace}", steps = {STEPS}',
+        extra=f'[[module]]\nmodule = "tests.support.modules:Probe"\nargs = {{ out = "{probe}" }}\n',
+        processes=processes,
+    )
+    stack = RunningStack(home, profile)
+    code = stack.wait(timeout=300)
+    assert code == 0, stack.output
+    assert not wait_no_processes(home)
+    return json.loads(trace.read_text()), json.loads(probe.read_text()), stack.output
+
+
+def test_modules_sharing_processes_run_the_same_lockstep_message_for_message(tmp_path):
+    trace_own, probe_own, _ = run_chain(tmp_path, "own", None)
+    trace_shared, probe_shared, output = run_chain(tmp_path, "shared", TWO_PROCESSES)
+    assert "process clock: tick_source, doubler" in output
+    assert "process chain: summer, pacer" in output
+    assert len(trace_own) == STEPS - 1
+    assert trace_shared == trace_own
+    assert probe_shared[: STEPS - 1] == probe_own[: STEPS - 1]
+
+
+def test_a_shared_process_that_dies_takes_its_modules_and_comes_back_with_them(tmp_path):
+    home = tmp_path / "home"
+    profile = chain_profile(
+        tmp_path / "chain.toml",
+        doubler='restart = "on-failure"\nmax_restarts = 2',
+        processes={"Doubler": "pair", "Summer": "pair"},
+    )
+    stack = RunningStack(home, profile)
+    try:
+        stack.wait_up()
+        stack.wait_for(r"lockstep starting")
+        rows = {m["module"]: m for m in stack.status()["modules"]}
+        # A row per module, each naming the process it shares.
+        assert rows["doubler"]["pid"] == rows["summer"]["pid"] != rows["pacer"]["pid"]
+        assert rows["doubler"]["process"] == rows["summer"]["process"] == "pair"
+        assert rows["pacer"]["process"] == "pacer"
+        assert rows["summer"]["state"] == rows["doubler"]["state"] == "running"
+        eventually(lambda: sim_time(stack) > 500_000, what="half a simulated second")
+        os.kill(rows["doubler"]["pid"], signal.SIGKILL)
+        stack.wait_for(r"process pair \(doubler, summer\) failed with exit code -9")
+        stack.wait_for(r"restarting process pair \(doubler, summer\) \(restart 1\)", timeout=30)
+        for name in ("doubler", "summer"):
+            stack.wait_for(rf"lockstep: {name} admitted at t=", timeout=60)
+        t1 = sim_time(stack)
+        eventually(lambda: sim_time(stack) > t1 + 1_000_000, what="a simulated second with the pair back")
+        rows = {m["module"]: m for m in stack.status()["modules"]}
+        assert rows["doubler"]["pid"] == rows["summer"]["pid"] != 0
+        for name in ("doubler", "summer"):
+            assert rows[name]["restarts"] == 1 and rows[name]["runs"] > 100, rows[name]
+    finally:
+        assert stack.stop() == 1  # the pair failed once
+    assert "stalled" not in stack.output
+    assert not wait_no_processes(home)
+
+
+def sim_time(stack: RunningStack) -> int:
+    return max(m.get("sim_time_us", 0) for m in stack.status()["modules"])
+
+
+def test_a_real_time_run_gives_each_module_its_own_process(tmp_path):
+    home = tmp_path / "home"
+    profile = chain_profile(tmp_path / "chain.toml", lockstep=False, processes=TWO_PROCESSES)
+    stack = RunningStack(home, profile)
+    try:
+        stack.wait_up()
+        assert "--realtime: each module in its own process" in stack.output
+        pids = stack.module_pids()
+        assert len(set(pids.values())) == len(pids) == 4
+    finally:
+        stack.stop()
+    assert not wait_no_processes(home)
+
+
+@pytest.mark.parametrize(
+    ("entry", "problem"),
+    [
+        ('module = "recorder"\nprocess = "all"', "recorder reads on the wall clock beside the lockstep"),
+        ('module = "mavlink"\nprocess = "all"', "mavlink runs outside the lockstep"),
+        ('module = "commander"\nprocess = "a b"', "invalid process name 'a b'"),
+        ('module = "commander"\nprocess = "simulator"', "'simulator' is also the name of simulator"),
+    ],
+)
+def test_a_process_no_module_can_share_is_refused_naming_the_key(tmp_path, entry, problem):
+    path = write_profile(
+        tmp_path / "grouped.toml", f'[stack]\nlockstep = true\n[[module]]\nmodule = "simulator"\n[[module]]\n{entry}\n'
+    )
+    with pytest.raises(ProfileError) as refused:
+        load_profile(path)
+    assert f"{path}: module[1]" in str(refused.value) or f"{path}: module (" in str(refused.value)
+    assert ".process: " in str(refused.value) and problem in str(refused.value)
+
