@@ -96,8 +96,10 @@ class FastCoordinator:
         stall_timeout_s: float,
         pump: Callable[[list[int]], bool] | None = None,
         pump_fds: Sequence[int] = (),
+        mark: Callable[[int], None] | None = None,
     ) -> None:
-        """``pump`` runs members sharing the coordinator's process (woken through ``pump_fds``) while it waits."""
+        """``pump`` runs members sharing the coordinator's process (their eventfds ``pump_fds``) while it waits;
+        ``mark`` gives such a member its tick without a system call."""
         self.att = att
         self.region = region = att.region
         self.w = region.words
@@ -109,6 +111,7 @@ class FastCoordinator:
         self._poll.register(att.eventfd, select.POLLIN)
         self._pump = pump
         self._pump_fds = frozenset(pump_fds)
+        self._mark = mark
         for fd in self._pump_fds:
             self._poll.register(fd, select.POLLIN)
         self._watched: dict[int, _Watched] = {}
@@ -159,13 +162,16 @@ class FastCoordinator:
         w[H_STEP] = self.steps
         last_fire = self._last_fire
         counters = self.region.counters_word
-        members = self._members
+        members, local, mark = self._members, self._pump_fds, self._mark
         for timed in self._ledger.timed:
             m = members[timed.key]
             if timer_due(t, last_fire[m.slot], m.period_us):
                 last_fire[m.slot] = t
                 w[counters + timed.ticks] += 1
-                os.eventfd_write(m.eventfd, 1)
+                if mark is not None and m.eventfd in local:
+                    mark(m.eventfd)
+                else:
+                    os.eventfd_write(m.eventfd, 1)
         return t
 
     def _settle(self) -> None:
@@ -380,6 +386,8 @@ class FastMember:
         self._incarnation_word = region.slot_word(me, S_INCARNATION)
         self.topology_seen = -1
         self.coordinator_fd = -1
+        self.beside_coordinator = False
+        """In the coordinator's process, which looks at the counters once its group has run: no wake-up needed."""
         self._others: list[tuple[int, int, int]] = []  # (started, finished, ticks) words of the other members
 
     def wait(self) -> None:
@@ -394,7 +402,7 @@ class FastMember:
     def on_topology(self, topo: Topology) -> None:
         self.topology_seen = topo.generation
         c = topo.coordinator()
-        self.coordinator_fd = c.eventfd if c is not None else -1
+        self.coordinator_fd = c.eventfd if c is not None and not self.beside_coordinator else -1
         cw = self.region.counter_word
         self._others = [
             (cw(p.slot, C_STARTED), cw(p.slot, C_FINISHED), cw(p.slot, C_TICKS))

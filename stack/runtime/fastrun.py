@@ -134,9 +134,12 @@ class FastDriver:
             rt.spec.stall_timeout_s,
             group.pump if group is not None else None,
             group.eventfds if group is not None else (),
+            group.mark if group is not None else None,
         )
         if group is not None:
             self.wake = group.wake
+            for d in others:
+                d.member.beside_coordinator = True
         try:
             rt.state = "waiting for modules"
             coordinator.start()
@@ -281,6 +284,10 @@ class ProcessGroup:
         self._pending: set[int] = set()
         for d in self.drivers:
             d.wake = self.wake
+
+    def mark(self, fd: int) -> None:
+        """Wake a member of the group: it runs in the next pass."""
+        self._pending.add(fd)
 
     def wake(self, wakes: set[int]) -> None:
         for fd in wakes:
