@@ -94,7 +94,7 @@ class FastCoordinator:
         att: Attachment,
         period_us: int,
         stall_timeout_s: float,
-        pump: Callable[[list[int]], bool] | None = None,
+        pump: Callable[[list[int]], None] | None = None,
         pump_fds: Sequence[int] = (),
         mark: Callable[[int], None] | None = None,
     ) -> None:

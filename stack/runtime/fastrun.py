@@ -108,9 +108,12 @@ class FastDriver:
             raise RuntimeError(f"{cls.__name__} declares neither a trigger nor a timer")
         self._announce()
 
-    def work(self) -> bool:
-        """A lockstep member's runs that are due (never blocks); True if it ran any."""
-        return self.work_triggered() if self.trigger is not None else self.work_timed()
+    def work(self) -> None:
+        """A lockstep member's runs that are due (never blocks)."""
+        if self.trigger is not None:
+            self.work_triggered()
+        else:
+            self.work_timed()
 
     def run(self) -> None:
         """Take the role, then loop until the process is stopped."""
@@ -172,10 +175,10 @@ class FastDriver:
             self.refresh_topology()
         return self.member.admitted()
 
-    def work_timed(self) -> bool:
+    def work_timed(self) -> None:
         """Run every tick issued and not yet run, then tell the coordinator if the step may be over (never blocks)."""
         if not self._admitted():
-            return False
+            return
         rt, w, member = self.rt, self.w, self.member
         started, finished, ticks = member.started, member.finished, member.ticks
         wakes = self.att.wakes
@@ -190,13 +193,12 @@ class FastDriver:
             w[finished] += 1
         if ran:
             self._done()
-        return ran
 
-    def work_triggered(self) -> bool:
+    def work_triggered(self) -> None:
         """Run once per trigger record not yet taken, earliest first, then tell the coordinator if the step may be
         over (never blocks)."""
         if not self._admitted():
-            return False
+            return
         trigger = self.trigger
         assert trigger is not None
         if trigger.sub.arrived:
@@ -231,7 +233,6 @@ class FastDriver:
             w[finished] += 1
         if ran:
             self._done()
-        return ran
 
     def _done(self) -> None:
         touched = self.rt.node.touched
@@ -297,18 +298,16 @@ class ProcessGroup:
                 os.eventfd_write(fd, 1)
         wakes.clear()
 
-    def pump(self, woken: Iterable[int] = ()) -> bool:
-        """Run the members woken (their eventfds ``woken`` and those marked) until none is left; True if any ran."""
+    def pump(self, woken: Iterable[int] = ()) -> None:
+        """Run the members woken (their eventfds ``woken`` and those marked) until none is left."""
         pending = self._pending
         pending.update(woken)
-        ran = False
         while pending:
             for d in self.drivers:
                 fd = d.att.eventfd
                 if fd in pending:
                     pending.discard(fd)
-                    ran |= d.work()
-        return ran
+                    d.work()
 
     def serve(self) -> None:
         poll = select.poll()
