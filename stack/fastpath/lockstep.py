@@ -55,6 +55,7 @@ from stack.runtime.ledger import (
     Departure,
     Departures,
     LockstepError,
+    StallWatch,
     StepLedger,
     TimedMember,
     TriggeredMember,
@@ -104,7 +105,7 @@ class FastCoordinator:
         self.region = region = att.region
         self.w = region.words
         self.period_us = period_us
-        self.stall_timeout_s = stall_timeout_s
+        self._stall = StallWatch(stall_timeout_s)
         self.now = 0
         self.steps = 0
         self._poll = select.poll()
@@ -304,23 +305,15 @@ class FastCoordinator:
 
     def finish_step(self) -> None:
         """Block until every run of the step has finished (see the module docstring)."""
-        last = b""
-        progress = time.monotonic()
+        stall = self._stall
+        stall.start(time.monotonic())
         while True:
             snap = self.region.counter_snapshot()
             if self._ledger.complete(snap):
                 return
             if self._reap(WAIT_MS):
                 continue
-            raw = snap.obj
-            now = time.monotonic()
-            if raw != last:
-                last, progress = raw, now
-            elif now - progress > self.stall_timeout_s:
-                raise LockstepError(
-                    f"lockstep stalled at t={self.now / 1e6:.3f} s: no progress for {self.stall_timeout_s:.0f} s, "
-                    f"waiting for {', '.join(self._busy(snap))}"
-                )
+            stall.check(snap.obj, time.monotonic(), self.now, lambda snap=snap: self._busy(snap))
             self._rewake(snap)
 
     def _rewake(self, snap: memoryview) -> None:
@@ -339,7 +332,7 @@ class FastCoordinator:
         for entry, _ in self._ledger.with_work(snap):
             m = members[entry.key]
             described.append(f"{m.name} ({names.get(m.trigger, '?') if m.role == ROLE_TRIGGERED else '@timer'})")
-        return sorted(described)
+        return described
 
     def _reap(self, timeout_ms: int) -> bool:
         """Wait up to ``timeout_ms`` for a wake-up or a death, dropping members that died; False on timeout."""

@@ -112,6 +112,33 @@ class StepLedger:
         return found
 
 
+class StallWatch:
+    """The verdict on a step that does not end: it makes progress while its counters change, and none for
+    ``timeout_s`` is a stall, which stops the run naming who has work left (PX4 SITL's lockstep would hang)."""
+
+    __slots__ = ("_last", "_since", "timeout_s")
+
+    def __init__(self, timeout_s: float) -> None:
+        self.timeout_s = timeout_s
+        self._last: object = None
+        self._since = 0.0
+
+    def start(self, now_s: float) -> None:
+        """A step's wait begins."""
+        self._last, self._since = None, now_s
+
+    def check(self, counters: object, now_s: float, now_us: int, waiting: Callable[[], list[str]]) -> None:
+        """Note the counters as seen now (any comparable value); raise LockstepError, naming ``waiting()``, once
+        they have not changed for the timeout."""
+        if counters != self._last:
+            self._last, self._since = counters, now_s
+        elif now_s - self._since > self.timeout_s:
+            raise LockstepError(
+                f"lockstep stalled at t={now_us / 1e6:.3f} s: no progress for {self.timeout_s:.0f} s, "
+                f"waiting for {', '.join(sorted(waiting()))}"
+            )
+
+
 class Word(enum.Enum):
     """What the supervisor says of a member that left the run."""
 

@@ -50,7 +50,7 @@ from stack.runtime.inputs import InputBuffer
 from stack.runtime.ledger import (
     SLOW_WAIT_S,
     Departures,
-    LockstepError,
+    StallWatch,
     StepLedger,
     TimedMember,
     TriggeredMember,
@@ -312,7 +312,7 @@ class LockstepCoordinator:
 
     def __init__(self, node: Node, own_inputs: Iterable[InputBuffer], stall_timeout_s: float = 10.0) -> None:
         self.node = node
-        self.stall_timeout_s = stall_timeout_s
+        self._stall = StallWatch(stall_timeout_s)
         self.now = 0
         self.step = 0
         self.members: dict[int, _Member] = {}
@@ -531,6 +531,7 @@ class LockstepCoordinator:
     def finish_step(self) -> None:
         """Block until every run the step caused has been acknowledged and its messages received."""
         self._waiting_since = time.monotonic()
+        self._stall.start(self._waiting_since)
         try:
             while self._events or not self._ledger.complete(self._counters):
                 self._apply_membership()
@@ -558,25 +559,22 @@ class LockstepCoordinator:
             counters[taken] = max(counters[taken], ack.trigger_index)
 
     def _check_stall(self) -> None:
-        since = self._waiting_since
-        if since is None or time.monotonic() - since < self.stall_timeout_s:
-            return
-        waiting = sorted(
+        self._stall.check(tuple(self._counters), time.monotonic(), self.now, self._busy)
+
+    def _busy(self) -> list[str]:
+        return [
             f"{m.name} ({self.members[m.key].trigger or TIMER})"
             for m, _ in self._ledger.with_work(self._counters)
             if m.key in self.members
-        )
-        raise LockstepError(
-            f"lockstep stalled at t={self.now / 1e6:.3f} s: no progress for {self.stall_timeout_s:.0f} s, "
-            f"waiting for {', '.join(waiting)}"
-        )
+        ]
 
     def _wake(self) -> None:
         self.node.session.put(self._ack_key, _encoder.encode(LockstepAck(run=self.node.run_id, trigger_topic=_WAKE)))
 
     def _watch(self) -> None:
+        """Wake a coordinator whose step takes long, twice a second, to judge whether it still makes progress."""
         while not self._closed.wait(0.5):
-            if self._waiting_since is not None and time.monotonic() - self._waiting_since > self.stall_timeout_s:
+            if self._waiting_since is not None and time.monotonic() - self._waiting_since > self._stall.timeout_s:
                 self._wake()
 
     def close(self) -> None:

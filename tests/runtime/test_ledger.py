@@ -1,8 +1,12 @@
 """The step's accounting on its own: when lockstep time may advance, from the participants' counters."""
 
+import pytest
+
 from stack.runtime.ledger import (
     VERDICT_TIMEOUT_S,
     Departures,
+    LockstepError,
+    StallWatch,
     StepLedger,
     TimedMember,
     TriggeredMember,
@@ -84,3 +88,29 @@ def test_a_timer_fires_on_the_first_step_of_each_period_aligned_interval():
             fired.append(t)
             last = t
     assert fired == [4000, 20000, 40000, 60000]
+
+
+def test_a_step_is_stalled_only_after_the_timeout_without_any_progress() -> None:
+    watch = StallWatch(4.0)
+    watch.start(100.0)
+    named = []
+
+    def waiting() -> list[str]:
+        named.append(True)
+        return ["rate (sensor_gyro/0)", "alloc (vehicle_torque_setpoint/0)"]
+
+    watch.check((1, 2), 100.0, 8000, waiting)
+    watch.check((1, 2), 103.9, 8000, waiting)  # no progress, but not for 4 s yet
+    watch.check((1, 3), 104.5, 8000, waiting)  # progress: the 4 s start again
+    watch.check((1, 3), 108.4, 8000, waiting)
+    assert not named
+    with pytest.raises(LockstepError) as stalled:
+        watch.check((1, 3), 108.6, 8000, waiting)
+    assert str(stalled.value) == (
+        "lockstep stalled at t=0.008 s: no progress for 4 s, waiting for "
+        "alloc (vehicle_torque_setpoint/0), rate (sensor_gyro/0)"
+    )
+    # A new step's wait starts afresh.
+    watch.start(200.0)
+    watch.check((1, 3), 200.0, 12000, waiting)
+    watch.check((1, 3), 203.0, 12000, waiting)
