@@ -19,7 +19,7 @@ from stack.msg.estimation import EstimatorStatus, VehicleAngularVelocity, Vehicl
 from stack.msg.sensors import SensorAccel, SensorGyro
 from stack.params import catalogue
 from stack.params.param import Param
-from stack.runtime.module import KEEP_PERIOD_US, TRIGGER_BACKLOG, Module, Trigger
+from stack.runtime.module import TRIGGER_BACKLOG, Module, Trigger
 from stack.runtime.priority import INS
 
 ATTITUDE_PARAMS = catalogue.params(
@@ -105,7 +105,6 @@ class AttitudeEstimatorModule(Module):
         self.acceleration = VelocityDerivative(float(self.params["ATT_ACC_COMP_LP"]))
         self._accels: deque[SensorAccel] = deque(maxlen=TRIGGER_BACKLOG)
         self._velocity_time = 0
-        self._kept_at = 0
         self._resume(self.kept_state())
 
     def _resume(self, kept: dict | None) -> None:
@@ -150,9 +149,8 @@ class AttitudeEstimatorModule(Module):
         )
         if self.estimator.initialised:
             self.publish("vehicle_attitude", VehicleAttitude(timestamp_sample=t, q=self.estimator.q))
-            self._attitude_time = now = self.now_us()
-            if now - self._kept_at >= KEEP_PERIOD_US:
-                self._kept_at = now
+            self._attitude_time = self.now_us()
+            if self.keep_due():
                 self.keep_state({"q": list(self.estimator.q), "gyro_bias": list(self.estimator.gyro_bias)})
         if t - self.imu.start_us >= STATUS_INTERVAL_US:
             self._publish_status(gyro_msg)

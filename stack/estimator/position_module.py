@@ -21,7 +21,7 @@ from stack.estimator.position_kf import LocalPositionEstimate, LocalPositionKF
 from stack.mathlib.atmosphere import isa_altitude_m
 from stack.mathlib.quaternion import yaw
 from stack.msg.estimation import VehicleGlobalPosition, VehicleLocalPosition
-from stack.runtime.module import KEEP_PERIOD_US, Module, Timer
+from stack.runtime.module import Module, Timer
 from stack.runtime.priority import INS
 
 PERIOD_US = 20_000
@@ -111,7 +111,6 @@ class LocalPositionEstimatorModule(Module):
         self.advertise("vehicle_local_position")
         self.advertise("vehicle_global_position")
         self.kf = LocalPositionKF(**self._kf_params())
-        self._kept_at = 0
         kept = self.kept_state()
         if kept is not None:
             try:
@@ -149,8 +148,7 @@ class LocalPositionEstimatorModule(Module):
             self.kf.fuse_land()
         est = self.kf.estimate()
         now = self.now_us()
-        if now - self._kept_at >= KEEP_PERIOD_US:
-            self._kept_at = now
+        if self.keep_due():
             self.keep_state(self.kf.snapshot())
         self.publish("vehicle_local_position", local_position_message(est, yaw(attitude.q), now))
         self.publish("vehicle_global_position", global_position_message(est, now))

@@ -20,7 +20,7 @@ from stack.msg.setpoints import TakeoffState, TakeoffStatus, VehicleAttitudeSetp
 from stack.params import catalogue
 from stack.posctl.position_control import PositionControl, PositionControlParams, failsafe_setpoint
 from stack.posctl.takeoff import Takeoff, TakeoffParams, wants_takeoff
-from stack.runtime.module import KEEP_PERIOD_US, Module, Trigger
+from stack.runtime.module import Module, Trigger
 from stack.runtime.priority import NAV_AND_CONTROLLERS
 
 NAN = math.nan
@@ -97,7 +97,6 @@ class MulticopterPositionControl(Module):
         self._failsafe_action = ""
         kept = self.kept_state()
         self._kept_integral = kept.get("velocity_integral") if kept is not None else None
-        self._kept_at = 0
 
     def on_params_changed(self, changed: set[str]) -> None:
         self.control.set_params(control_params(self.params))
@@ -195,8 +194,7 @@ class MulticopterPositionControl(Module):
             self._failsafe_action = ""
         self._publish_setpoints(lpos.timestamp_sample, now)
         self._publish_takeoff_status(now)
-        if now - self._kept_at >= KEEP_PERIOD_US:
-            self._kept_at = now
+        if self.keep_due():
             self.keep_state({"velocity_integral": list(self.control.velocity_integral)})
 
     def _fresh_setpoint(self, now: int):

@@ -28,6 +28,7 @@ from __future__ import annotations
 import json
 import logging
 import os
+import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -48,6 +49,9 @@ TRIGGER_BACKLOG = 256
 KEEP_PERIOD_US = 200_000
 """How often a module whose state changes every run (an estimator) keeps it for an instance restarted after a
 crash: in lockstep the kept state is at most this old when it resumes (simulated time waits for the restart)."""
+KEEP_WRITE_PERIOD_S = 0.2
+"""And at most this often on the wall clock: a lockstep run ten times faster than real time would otherwise write
+each estimator's file 50 times a second."""
 
 
 @dataclass(frozen=True)
@@ -125,6 +129,8 @@ class Module:
         self.args: dict[str, ParamValue] = rt.args
         self.log = logging.getLogger(rt.name)
         self._kept: dict[str, Any] | None = None
+        self._kept_at_us = 0
+        self._kept_at_s = 0.0
 
     # -- declarations (call from __init__) -------------------------------------------------------
 
@@ -192,6 +198,15 @@ class Module:
         self.log.info("%s: %s", what, url)
         if self.rt.spec.run_dir:
             (Path(self.rt.spec.run_dir) / f"{self.rt.spec.name}{LINK_SUFFIX}").write_text(f"{what}: {url}")
+
+    def keep_due(self) -> bool:
+        """Whether a module whose state changes every run keeps it now (then call :meth:`keep_state`): every
+        KEEP_PERIOD_US of its time, at most every KEEP_WRITE_PERIOD_S of the wall clock."""
+        now_us, now_s = self.now_us(), time.monotonic()
+        if now_us - self._kept_at_us < KEEP_PERIOD_US or now_s - self._kept_at_s < KEEP_WRITE_PERIOD_S:
+            return False
+        self._kept_at_us, self._kept_at_s = now_us, now_s
+        return True
 
     def keep_state(self, state: dict[str, Any]) -> None:
         """Keep what an instance restarted after a crash resumes from (JSON, in the run directory; written
