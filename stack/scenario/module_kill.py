@@ -1,7 +1,9 @@
 """Scenario ``module_kill``: each control module the profile runs is killed in turn (SIGKILL, as a crash ends it)
 during a hover.
 
-The control modules restart by default. In lockstep, simulated time waits while the supervisor restarts a dead
+The control modules restart by default. Modules sharing the simulator's process (``process = "NAME"``) are left
+alone: killing one would end the simulated world with it; a module sharing a process with others takes them
+down too, and they come back together. In lockstep, simulated time waits while the supervisor restarts a dead
 module, so the flight must simply go on: after each restart the vehicle is still armed, in its mode, holding where
 it was. In real time the vehicle flies on without the module until the commander notices it (within 100 ms) and
 takes its failsafe (:mod:`stack.commander.control_chain`): flight termination for a loss of attitude control,
@@ -39,8 +41,14 @@ def script(ctx: ScriptContext) -> Generator[Wait, None, None]:
     yield ctx.wait(2.0)
     kills: list[dict[str, Any]] = []
     ctx.state["kills"] = kills
-    # The chain's modules this profile runs (the RotorS profiles run RotorS' controller instead of three of PX4's).
-    ctx.state["modules"] = running = [m for m in MODULES if ctx.pid(m) is not None]
+    # The chain's modules this profile runs (the RotorS profiles run RotorS' controller instead of three of PX4's),
+    # but those sharing the simulator's process: killing one would end the simulated world with it.
+    world = ctx.pid("simulator")
+    running = [m for m in MODULES if ctx.pid(m) is not None]
+    beside_world = [m for m in running if ctx.pid(m) == world]
+    if beside_world:
+        ctx.log(f"not killing {', '.join(beside_world)}: they share the simulator's process")
+    ctx.state["modules"] = running = [m for m in running if m not in beside_world]
     for module in running:
         if not autonomy.armed(ctx):
             break

@@ -13,9 +13,10 @@ the base has none, is started after the base's modules.
 
 Modules given the same ``process = "NAME"`` share one OS process (as ROS 2 component containers do; PX4 runs
 all its modules in one): each stays a module with its topics, parameters, heartbeat and status row, and a
-crash restarts the process if any of its modules' policies asks. Only lockstep modules can share a process,
-and only in a shared-memory lockstep run; otherwise (``--realtime``, lockstep over Zenoh) each module runs
-in its own process.
+crash restarts the process if every one of its modules' policies asks (a module that may not restart, such as
+the simulator, keeps the process down: a crash of any module of it is then that module's crash). Only
+lockstep modules can share a process, and only in a shared-memory lockstep run; otherwise (``--realtime``,
+lockstep over Zenoh) each module runs in its own process.
 
 A ``[[process]]`` is a supervised program that is not a module (no bus, no heartbeat), such as the
 simulated Pixhawk ``stack pixhawk-sim``: the processes start first, in order, each ready once it has run

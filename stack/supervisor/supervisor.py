@@ -529,7 +529,8 @@ class Supervisor:
         return f"process {members[0].process} ({', '.join(m.entry.name for m in members)})"
 
     def _on_exit(self, members: list[ModuleProcess]) -> None:
-        """The process of ``members`` exited: restart it if any of their policies asks, else they are over."""
+        """The process of ``members`` exited: restart it if every one of their policies asks (a module that may not
+        restart, such as the simulator, keeps its process down), else they are over."""
         proc = members[0].proc
         assert proc is not None
         code = proc.returncode
@@ -541,8 +542,7 @@ class Supervisor:
             self._say(f"{label} exited")
         else:
             self._say(f"{label} failed with exit code {code} (see {members[0].log_path})")
-        policies = {m.entry.restart for m in members}
-        if "always" in policies or ("on-failure" in policies and code != 0):
+        if all(m.entry.restart == "always" or (m.entry.restart == "on-failure" and code != 0) for m in members):
             self._plan_restart_or_give_up(members)
         else:
             for m in members:

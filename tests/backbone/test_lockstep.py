@@ -97,7 +97,7 @@ def test_a_member_that_dies_is_named_and_the_rest_go_on(tmp_path, transport):
 def test_a_restarted_member_rejoins_at_the_step_it_left_and_time_waits_for_it(tmp_path, transport):
     home = tmp_path / "home"
     profile = chain_profile(
-        tmp_path / "chain.toml", transport=transport, doubler='restart = "on-failure"\nmax_restarts = 2'
+        tmp_path / "chain.toml", transport=transport, entries={"Doubler": 'restart = "on-failure"\nmax_restarts = 2'}
     )
     stack = RunningStack(home, profile)
     try:

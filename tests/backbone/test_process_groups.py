@@ -23,17 +23,24 @@ from tests.support.harness import (
 )
 
 STEPS = 2000
-TWO_PROCESSES = {"TickSource": "clock", "Doubler": "clock", "Summer": "chain", "Pacer": "chain"}
+TWO_PROCESSES = {
+    "TickSource": 'process = "clock"',
+    "Doubler": 'process = "clock"',
+    "Summer": 'process = "chain"',
+    "Pacer": 'process = "chain"',
+}
+RESTARTS = 'restart = "on-failure"\nmax_restarts = 2'
 
 
 def run_chain(tmp_path, name: str, processes: dict[str, str] | None) -> tuple[list, list, str]:
+    """The chain's lockstep trace and probe, and the stack's output; ``processes``: chain_profile's entries."""
     home = tmp_path / f"home-{name}"
     trace, probe = tmp_path / f"{name}.json", tmp_path / f"{name}-probe.json"
     profile = chain_profile(
         tmp_path / f"{name}.toml",
         tick_args=f'trace = "{trace}", steps = {STEPS}',
         extra=f'[[module]]\nmodule = "tests.support.modules:Probe"\nargs = {{ out = "{probe}" }}\n',
-        processes=processes,
+        entries=processes,
     )
     stack = RunningStack(home, profile)
     code = stack.wait(timeout=300)
@@ -54,11 +61,8 @@ def test_modules_sharing_processes_run_the_same_lockstep_message_for_message(tmp
 
 def test_a_shared_process_that_dies_takes_its_modules_and_comes_back_with_them(tmp_path):
     home = tmp_path / "home"
-    profile = chain_profile(
-        tmp_path / "chain.toml",
-        doubler='restart = "on-failure"\nmax_restarts = 2',
-        processes={"Doubler": "pair", "Summer": "pair"},
-    )
+    pair = f'{RESTARTS}\nprocess = "pair"'
+    profile = chain_profile(tmp_path / "chain.toml", entries={"Doubler": pair, "Summer": pair})
     stack = RunningStack(home, profile)
     try:
         stack.wait_up()
@@ -87,13 +91,35 @@ def test_a_shared_process_that_dies_takes_its_modules_and_comes_back_with_them(t
     assert not wait_no_processes(home)
 
 
+def test_a_shared_process_with_a_module_that_may_not_restart_stays_down(tmp_path):
+    """The tick source (the lockstep's clock, critical, no restart) shares its process with a doubler that would
+    restart: the process is not restarted, the tick source has failed, and the stack stops."""
+    home = tmp_path / "home"
+    profile = chain_profile(
+        tmp_path / "chain.toml",
+        entries={"TickSource": 'process = "clock"', "Doubler": f'{RESTARTS}\nprocess = "clock"'},
+    )
+    stack = RunningStack(home, profile)
+    try:
+        stack.wait_up()
+        stack.wait_for(r"lockstep starting")
+        os.kill(stack.module_pids()["doubler"], signal.SIGKILL)
+        stack.wait_for(r"process clock \(tick_source, doubler\) failed with exit code -9")
+        stack.wait_for(r"critical module tick_source failed: stopping the stack")
+        assert stack.wait(timeout=60) == 1
+    finally:
+        stack.stop()
+    assert "restarting process clock" not in stack.output
+    assert not wait_no_processes(home)
+
+
 def sim_time(stack: RunningStack) -> int:
     return max(m.get("sim_time_us", 0) for m in stack.status()["modules"])
 
 
 def test_a_real_time_run_gives_each_module_its_own_process(tmp_path):
     home = tmp_path / "home"
-    profile = chain_profile(tmp_path / "chain.toml", lockstep=False, processes=TWO_PROCESSES)
+    profile = chain_profile(tmp_path / "chain.toml", lockstep=False, entries=TWO_PROCESSES)
     stack = RunningStack(home, profile)
     try:
         stack.wait_up()

@@ -265,13 +265,12 @@ def chain_profile(
     tick_args: str = "",
     extra: str = "",
     transport: str = "shm",
-    doubler: str = "",
-    processes: dict[str, str] | None = None,
+    entries: dict[str, str] | None = None,
 ) -> Path:
     """The test processing chain: a tick source, a doubler, a summer and a timer module, with lockstep
-    traffic over ``transport`` (shm or zenoh); ``doubler`` is appended to the doubler's entry; ``processes``
-    puts modules (by class name: TickSource, Doubler, Summer, Pacer) in shared processes by name."""
-    shared = {cls: f'process = "{name}"' for cls, name in (processes or {}).items()}
+    traffic over ``transport`` (shm or zenoh); ``entries`` adds lines to modules' entries, by class name
+    (TickSource, Doubler, Summer, Pacer), e.g. a restart policy or ``process = "NAME"``."""
+    more = entries or {}
     return write_profile(
         path,
         f"""
@@ -286,20 +285,19 @@ stall_timeout_s = 4.0
 module = "tests.support.modules:TickSource"
 args = {{ {tick_args} }}
 critical = true
-{shared.get("TickSource", "")}
+{more.get("TickSource", "")}
 
 [[module]]
 module = "tests.support.modules:Doubler"
-{doubler}
-{shared.get("Doubler", "")}
+{more.get("Doubler", "")}
 
 [[module]]
 module = "tests.support.modules:Summer"
-{shared.get("Summer", "")}
+{more.get("Summer", "")}
 
 [[module]]
 module = "tests.support.modules:Pacer"
-{shared.get("Pacer", "")}
+{more.get("Pacer", "")}
 {extra}
 """,
     )
