@@ -124,7 +124,7 @@ class Run:
         a, b = self.window()
         out = {}
         for m in b.cpu:
-            busy = self.runs_between(m, a.sim_us, b.sim_us)
+            busy = sum(self.runs_between(name, a.sim_us, b.sim_us) for name in m.split("+"))
             vol = b.switches[m][0] - a.switches[m][0]
             invol = b.switches[m][1] - a.switches[m][1]
             out[m] = (b.cpu[m] - a.cpu[m], busy, vol, invol)
@@ -139,7 +139,8 @@ class Run:
 
 
 def module_processes(supervisor_pid: int) -> dict[str, psutil.Process]:
-    """The supervisor and its module processes by module name (from their spec file ``<name>.spec.json``)."""
+    """The supervisor and its module processes by module name (from their spec file ``<name>.spec.json``), a process
+    shared by modules by their names joined with '+'."""
     try:
         found = {"supervisor": psutil.Process(supervisor_pid)}
         children = found["supervisor"].children()
@@ -151,7 +152,7 @@ def module_processes(supervisor_pid: int) -> dict[str, psutil.Process]:
         except psutil.Error:
             continue
         if specs:
-            found[specs[0] + (f" +{len(specs) - 1}" if len(specs) > 1 else "")] = child
+            found["+".join(specs)] = child
     return found
 
 
@@ -271,7 +272,9 @@ def print_modules(kind: str, runs: list[Run]) -> None:
     print(f"{'module':<26} {'CPU µs':>7} {'in run()':>8} {'voluntary':>9} {'involuntary':>11}")
     for m, (cpu, busy, vol, invol) in sorted(totals.items(), key=lambda kv: -kv[1][0]):
         share = f"{busy / cpu * 100:.0f} %" if cpu > 0 and m != "supervisor" else "-"
-        print(f"{m:<26} {cpu / steps * 1e6:>7.0f} {share:>8} {vol / steps:>9.2f} {invol / steps:>11.2f}")
+        names = m.split("+")
+        label = names[0] + (f" +{len(names) - 1}" if len(names) > 1 else "")
+        print(f"{label:<26} {cpu / steps * 1e6:>7.0f} {share:>8} {vol / steps:>9.2f} {invol / steps:>11.2f}")
     cpu, busy, vol, invol = (sum(v[i] for v in totals.values()) for i in range(4))
     share = f"{busy / cpu * 100:.0f} %"
     print(f"{'total':<26} {cpu / steps * 1e6:>7.0f} {share:>8} {vol / steps:>9.2f} {invol / steps:>11.2f}")
