@@ -19,7 +19,9 @@ input that is visible at its time (:mod:`stack.runtime.inputs` gives the rules).
 work left and everything it triggered has finished, it wakes the coordinator, which checks on a
 consistent snapshot of the counters that every run of the step has finished before it advances time.
 Waiting uses ``poll()`` on the eventfd plus, in the coordinator, the members' pidfds, so a member that
-dies is noticed within milliseconds.
+dies is noticed within milliseconds. Modules sharing a process (a profile's ``process = "NAME"``) keep a
+slot each; one thread serves them, running a member another of them woke without an eventfd
+(:class:`stack.runtime.fastrun.ProcessGroup`).
 
 A topic is also put on Zenoh while something outside the fast path subscribes to it (the supervisor
 watches the topic graph and sets a flag per publication), so ``stack topic``, ground stations and
