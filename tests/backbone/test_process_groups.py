@@ -73,6 +73,9 @@ def test_a_shared_process_that_dies_takes_its_modules_and_comes_back_with_them(t
         assert rows["doubler"]["process"] == rows["summer"]["process"] == "pair"
         assert rows["pacer"]["process"] == "pacer"
         assert rows["summer"]["state"] == rows["doubler"]["state"] == "running"
+        table = stack.cli("status").stdout.splitlines()
+        assert "PROCESS" in next(line for line in table if line.startswith("MODULE"))
+        assert next(line for line in table if line.startswith("summer")).split()[1] == "pair"
         eventually(lambda: sim_time(stack) > 500_000, what="half a simulated second")
         os.kill(rows["doubler"]["pid"], signal.SIGKILL)
         stack.wait_for(r"process pair \(doubler, summer\) failed with exit code -9")
