@@ -379,8 +379,6 @@ class FastMember:
         self._incarnation_word = region.slot_word(me, S_INCARNATION)
         self.topology_seen = -1
         self.coordinator_fd = -1
-        self.beside_coordinator = False
-        """In the coordinator's process, which looks at the counters once its group has run: no wake-up needed."""
         self._others: list[tuple[int, int, int]] = []  # (started, finished, ticks) words of the other members
 
     def wait(self) -> None:
@@ -395,7 +393,7 @@ class FastMember:
     def on_topology(self, topo: Topology) -> None:
         self.topology_seen = topo.generation
         c = topo.coordinator()
-        self.coordinator_fd = c.eventfd if c is not None and not self.beside_coordinator else -1
+        self.coordinator_fd = c.eventfd if c is not None else -1
         cw = self.region.counter_word
         self._others = [
             (cw(p.slot, C_STARTED), cw(p.slot, C_FINISHED), cw(p.slot, C_TICKS))

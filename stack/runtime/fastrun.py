@@ -24,7 +24,7 @@ from stack.fastpath.layout import (
     S_READ_TIME,
 )
 from stack.fastpath.lockstep import FastCoordinator, FastMember, drain
-from stack.fastpath.ring import RecordHeader, RingReader, wake_all
+from stack.fastpath.ring import RecordHeader, RingReader, RingWriter, wake_all
 from stack.fastpath.topology import Topology
 from stack.runtime.module import Timer, Trigger
 from stack.runtime.pacing import Pacer
@@ -62,6 +62,8 @@ class FastDriver:
         )
         self.wake: Callable[[set[int]], None] = wake_all
         """Wakes the members this process's records trigger (a process group runs its own members directly)."""
+        self.report_done: Callable[[list[RingWriter]], None] = self.member.done
+        """Says a batch of runs is over, with the writers it used (a process group says so once per pass)."""
 
     # -- topology ----------------------------------------------------------------------------------
 
@@ -141,8 +143,7 @@ class FastDriver:
         )
         if group is not None:
             self.wake = group.wake
-            for d in others:
-                d.member.beside_coordinator = True
+            group.beside_coordinator = True
         try:
             rt.state = "waiting for modules"
             coordinator.start()
@@ -236,7 +237,7 @@ class FastDriver:
 
     def _done(self) -> None:
         touched = self.rt.node.touched
-        self.member.done(fast_writers(touched))
+        self.report_done(fast_writers(touched))
         touched.clear()
 
     def _drop_outside_triggers(self, trigger: FastInput) -> None:
@@ -273,18 +274,27 @@ class ProcessGroup:
     its slot, topics, parameters and heartbeat.
 
     One thread serves them all: it sleeps until any of their eventfds is written, then runs the members woken,
-    in the profile's order, until none is left. A member woken by another of the group is marked, not sent
-    a wake-up, and runs in the same pass; the coordinator, when it is in the group, runs them while it waits
-    for the step to end.
+    in the profile's order, until none is left, and then tells the coordinator once that the step may be over.
+    A member woken by another of the group is marked, not sent a wake-up, and runs in the same pass; the
+    coordinator, when it is in the group, runs them while it waits for the step to end.
     """
 
     def __init__(self, drivers: Sequence[FastDriver]) -> None:
         self.drivers = list(drivers)
         self.eventfds = [d.att.eventfd for d in self.drivers]
+        self.beside_coordinator = False
+        """The coordinator shares the process: it reads the counters itself once the group has run."""
         self._local = frozenset(self.eventfds)
         self._pending: set[int] = set()
+        self._ran = False
+        self._writers: list[RingWriter] = []
         for d in self.drivers:
             d.wake = self.wake
+            d.report_done = self._collect
+
+    def _collect(self, writers: list[RingWriter]) -> None:
+        self._ran = True
+        self._writers.extend(writers)
 
     def mark(self, fd: int) -> None:
         """Wake a member of the group: it runs in the next pass."""
@@ -308,6 +318,11 @@ class ProcessGroup:
                 if fd in pending:
                     pending.discard(fd)
                     d.work()
+        if self._ran:
+            # The pass is over, every member idle: the step may be over (see FastMember.done), said once.
+            writers, self._ran, self._writers = self._writers, False, []
+            if not self.beside_coordinator:
+                self.drivers[0].member.done(writers)
 
     def serve(self) -> None:
         poll = select.poll()
