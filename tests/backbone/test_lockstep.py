@@ -13,7 +13,15 @@ import sys
 import pytest
 
 from stack.runtime.lockstep import CLOCK_QUEUE
-from tests.support.harness import REPO, RunningStack, chain_profile, eventually, stack_env, wait_no_processes
+from tests.support.harness import (
+    REPO,
+    RunningStack,
+    chain_profile,
+    eventually,
+    stack_env,
+    traced_chain,
+    wait_no_processes,
+)
 
 STEPS = 3000
 TRANSPORTS = ("shm", "zenoh")
@@ -21,15 +29,7 @@ TRANSPORTS = ("shm", "zenoh")
 
 def run_chain(tmp_path, name: str, seed: int = 7, load: bool = False, transport: str = "shm") -> list:
     home = tmp_path / f"home-{name}"
-    trace = tmp_path / f"{name}.json"
-    probe = tmp_path / f"{name}-probe.json"
-    profile = chain_profile(
-        tmp_path / f"{name}.toml",
-        seed=seed,
-        tick_args=f'trace = "{trace}", steps = {STEPS}',
-        extra=f'[[module]]\nmodule = "tests.support.modules:Probe"\nargs = {{ out = "{probe}" }}\n',
-        transport=transport,
-    )
+    profile, trace, probe = traced_chain(tmp_path, name, STEPS, seed=seed, transport=transport)
     hogs = [subprocess.Popen([sys.executable, "-c", "while True: pass"]) for _ in range(2)] if load else []
     try:
         stack = RunningStack(home, profile)

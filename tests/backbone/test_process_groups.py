@@ -18,6 +18,7 @@ from tests.support.harness import (
     RunningStack,
     chain_profile,
     eventually,
+    traced_chain,
     wait_no_processes,
     write_profile,
 )
@@ -35,13 +36,7 @@ RESTARTS = 'restart = "on-failure"\nmax_restarts = 2'
 def run_chain(tmp_path, name: str, processes: dict[str, str] | None) -> tuple[list, list, str]:
     """The chain's lockstep trace and probe, and the stack's output; ``processes``: chain_profile's entries."""
     home = tmp_path / f"home-{name}"
-    trace, probe = tmp_path / f"{name}.json", tmp_path / f"{name}-probe.json"
-    profile = chain_profile(
-        tmp_path / f"{name}.toml",
-        tick_args=f'trace = "{trace}", steps = {STEPS}',
-        extra=f'[[module]]\nmodule = "tests.support.modules:Probe"\nargs = {{ out = "{probe}" }}\n',
-        entries=processes,
-    )
+    profile, trace, probe = traced_chain(tmp_path, name, STEPS, entries=processes)
     stack = RunningStack(home, profile)
     code = stack.wait(timeout=300)
     assert code == 0, stack.output

@@ -22,21 +22,14 @@ from stack.runtime.inprocess import InProcessRuntime, InProcessStack
 from stack.runtime.membus import MemoryBus
 from stack.supervisor.profile import load_profile
 from tests.runtime.same_time_modules import SameTimeProbe
-from tests.support.harness import RunningStack, chain_profile, wait_no_processes
+from tests.support.harness import RunningStack, traced_chain, wait_no_processes
 
 STEPS = 3000
 
 
 def chain(tmp_path: Path, name: str, extra: str = "", transport: str = "shm") -> tuple[Path, Path, Path]:
     """The chain's profile (stopping after STEPS steps), with where its trace and probe go."""
-    trace, probe = tmp_path / f"{name}-trace.json", tmp_path / f"{name}-probe.json"
-    profile = chain_profile(
-        tmp_path / f"{name}.toml",
-        tick_args=f'trace = "{trace}", steps = {STEPS}',
-        extra=f'[[module]]\nmodule = "tests.support.modules:Probe"\nargs = {{ out = "{probe}" }}\n{extra}',
-        transport=transport,
-    )
-    return profile, trace, probe
+    return traced_chain(tmp_path, name, STEPS, extra=extra, transport=transport)
 
 
 def in_process(tmp_path: Path, name: str, wire: bool = True) -> tuple[list, list]:

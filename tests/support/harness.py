@@ -303,6 +303,30 @@ module = "tests.support.modules:Pacer"
     )
 
 
+def traced_chain(
+    tmp_path: Path,
+    name: str,
+    steps: int,
+    *,
+    seed: int = 7,
+    extra: str = "",
+    transport: str = "shm",
+    entries: dict[str, str] | None = None,
+) -> tuple[Path, Path, Path]:
+    """The test chain stopping after ``steps`` steps, with the tick source tracing each step and a probe module
+    noting what it saw (see tests.support.modules): its profile, and where the trace and the probe's notes go."""
+    trace, probe = tmp_path / f"{name}-trace.json", tmp_path / f"{name}-probe.json"
+    profile = chain_profile(
+        tmp_path / f"{name}.toml",
+        seed=seed,
+        tick_args=f'trace = "{trace}", steps = {steps}',
+        extra=f'[[module]]\nmodule = "tests.support.modules:Probe"\nargs = {{ out = "{probe}" }}\n{extra}',
+        transport=transport,
+        entries=entries,
+    )
+    return profile, trace, probe
+
+
 AUTONOMY_MODULES = ("local_position_estimator", "mc_hover_thrust_estimator", "flight_mode_manager", "mc_pos_control")
 
 
