@@ -20,8 +20,9 @@ import logging
 import os
 import select
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Iterable
 from dataclasses import dataclass
+from typing import Protocol
 
 from stack.fastpath.attach import Attachment
 from stack.fastpath.layout import (
@@ -78,6 +79,18 @@ def drain(fd: int) -> None:
     os.eventfd_read(fd)
 
 
+class Beside(Protocol):
+    """Members sharing the coordinator's process (stack.runtime.fastrun.ProcessGroup)."""
+
+    eventfds: list[int]
+
+    def mark(self, fd: int) -> None:
+        """Give the member of eventfd ``fd`` work without a system call (it runs at the next pump)."""
+
+    def pump(self, woken: Iterable[int] = ()) -> None:
+        """Run the members woken (their eventfds ``woken`` and those marked) until none is left."""
+
+
 @dataclass
 class _Watched:
     name: str
@@ -95,12 +108,9 @@ class FastCoordinator:
         att: Attachment,
         period_us: int,
         stall_timeout_s: float,
-        pump: Callable[[list[int]], None] | None = None,
-        pump_fds: Sequence[int] = (),
-        mark: Callable[[int], None] | None = None,
+        beside: Beside | None = None,
     ) -> None:
-        """``pump`` runs members sharing the coordinator's process (their eventfds ``pump_fds``) while it waits;
-        ``mark`` gives such a member its tick without a system call."""
+        """``beside``: the members sharing the coordinator's process, run while it waits."""
         self.att = att
         self.region = region = att.region
         self.w = region.words
@@ -110,9 +120,8 @@ class FastCoordinator:
         self.steps = 0
         self._poll = select.poll()
         self._poll.register(att.eventfd, select.POLLIN)
-        self._pump = pump
-        self._pump_fds = frozenset(pump_fds)
-        self._mark = mark
+        self._beside = beside
+        self._pump_fds = frozenset(beside.eventfds if beside is not None else ())
         for fd in self._pump_fds:
             self._poll.register(fd, select.POLLIN)
         self._watched: dict[int, _Watched] = {}
@@ -163,14 +172,14 @@ class FastCoordinator:
         w[H_STEP] = self.steps
         last_fire = self._last_fire
         counters = self.region.counters_word
-        members, local, mark = self._members, self._pump_fds, self._mark
+        members, local, beside = self._members, self._pump_fds, self._beside
         for timed in self._ledger.timed:
             m = members[timed.key]
             if timer_due(t, last_fire[m.slot], m.period_us):
                 last_fire[m.slot] = t
                 w[counters + timed.ticks] += 1
-                if mark is not None and m.eventfd in local:
-                    mark(m.eventfd)
+                if beside is not None and m.eventfd in local:
+                    beside.mark(m.eventfd)
                 else:
                     os.eventfd_write(m.eventfd, 1)
         return t
@@ -346,8 +355,8 @@ class FastCoordinator:
                 woken.append(fd)
             elif (slot := self._pidfd_slot.get(fd)) is not None:
                 self._drop(slot, "left")
-        if woken and self._pump is not None:
-            self._pump(woken)
+        if woken and self._beside is not None:
+            self._beside.pump(woken)
         return bool(events)
 
     def close(self) -> None:

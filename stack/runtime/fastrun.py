@@ -133,14 +133,7 @@ class FastDriver:
         """Drive the run's steps; ``others`` are members sharing this process, run while the coordinator waits."""
         rt = self.rt
         group = ProcessGroup(others) if others else None
-        coordinator = FastCoordinator(
-            self.att,
-            rt.module.step_period_us(),
-            rt.spec.stall_timeout_s,
-            group.pump if group is not None else None,
-            group.eventfds if group is not None else (),
-            group.mark if group is not None else None,
-        )
+        coordinator = FastCoordinator(self.att, rt.module.step_period_us(), rt.spec.stall_timeout_s, group)
         if group is not None:
             self.wake = group.wake
             group.beside_coordinator = True
