@@ -78,7 +78,7 @@ def test_lockstep_flight_plotted_live_recorded_and_exported_with_the_same_layout
     if overruns.group(1) == overruns.group(2) == "0":
         assert fifty.rows(estimate) == buckets
     else:  # a machine so loaded that the passive bridge was lapped: what it lost, it said
-        assert 0 < fifty.rows(estimate) < buckets
+        assert 0 < fifty.rows(estimate) <= buckets  # lapped between buckets, it can still fill each one
 
     # A bridge that cannot keep up drops its oldest samples and says so; the flight is not slowed.
     assert re.search(r"\[tiny\] WARNING vehicle_\w+: ring buffer of 16 full, oldest samples dropped", output)
