@@ -298,3 +298,23 @@ class RingReader:
             self.taken = floor - 1
             return floor
         return first
+
+
+def next_trigger(readers: list[RingReader]) -> tuple[RingReader, int, RecordHeader] | None:
+    """The earliest trigger record not taken yet, by (time, publisher id, sequence): its reader, number and header."""
+    best: tuple[RingReader, int, RecordHeader] | None = None
+    best_key = None
+    for r in readers:
+        count = r.words[r.count_word]
+        n = r.taken + 1
+        while n <= count:
+            head = r.header(n)
+            if head is not None:
+                key = (head.time_us, r.publisher_id, head.seq)
+                if best_key is None or key < best_key:
+                    best, best_key = (r, n, head), key
+                break
+            r.lost += 1
+            r.taken = n
+            n += 1
+    return best

@@ -10,6 +10,7 @@ from typing import TYPE_CHECKING, Any
 import msgspec
 
 from stack.bus.topics import Received
+from stack.fastpath.bridge import BridgedMember, ZenohBridge
 from stack.fastpath.inputs import FastInput
 from stack.fastpath.layout import (
     FLAG_LOSSLESS,
@@ -24,7 +25,7 @@ from stack.fastpath.layout import (
     S_READ_TIME,
 )
 from stack.fastpath.lockstep import FastCoordinator, FastMember, drain
-from stack.fastpath.ring import RecordHeader, RingReader, RingWriter, wake_all
+from stack.fastpath.ring import RingWriter, next_trigger, wake_all
 from stack.fastpath.topology import Topology
 from stack.runtime.module import Timer, Trigger
 from stack.runtime.pacing import Pacer
@@ -130,15 +131,21 @@ class FastDriver:
             self._serve()
 
     def run_coordinator(self, others: Sequence[FastDriver] = ()) -> None:
-        """Drive the run's steps; ``others`` are members sharing this process, run while the coordinator waits."""
+        """Drive the run's steps; ``others`` are members sharing this process, run while the coordinator waits, as
+        are the slots of the members over Zenoh (:mod:`stack.fastpath.bridge`)."""
         rt = self.rt
-        group = ProcessGroup(others) if others else None
+        bridged, stall_s = rt.spec.bridged, rt.spec.stall_timeout_s
+        bridge = ZenohBridge(rt.node, self.region, bridged, stall_s) if bridged else None
+        beside = [*others, *(bridge.members if bridge is not None else ())]
+        group = ProcessGroup(beside) if beside else None
         coordinator = FastCoordinator(self.att, rt.module.step_period_us(), rt.spec.stall_timeout_s, group)
         if group is not None:
             self.wake = group.wake
             group.beside_coordinator = True
         try:
             rt.state = "waiting for modules"
+            if bridge is not None:
+                bridge.join()
             coordinator.start()
             rt.state = "running"
             wakes = self.att.wakes
@@ -157,6 +164,8 @@ class FastDriver:
                 coordinator.finish_step()
         finally:
             coordinator.close()
+            if bridge is not None:
+                bridge.close()
 
     def _serve(self) -> None:
         """A member's process: sleep until woken, then do what there is to do."""
@@ -272,7 +281,7 @@ class ProcessGroup:
     coordinator, when it is in the group, runs them while it waits for the step to end.
     """
 
-    def __init__(self, drivers: Sequence[FastDriver]) -> None:
+    def __init__(self, drivers: Sequence[FastDriver | BridgedMember]) -> None:
         self.drivers = list(drivers)
         self.eventfds = [d.att.eventfd for d in self.drivers]
         self.beside_coordinator = False
@@ -340,26 +349,6 @@ def serve_group(drivers: Sequence[FastDriver]) -> None:
         coordinator.run_coordinator(members)
     else:
         ProcessGroup(members).serve()
-
-
-def next_trigger(readers: list[RingReader]) -> tuple[RingReader, int, RecordHeader] | None:
-    """The earliest trigger record not taken yet, by (time, publisher id, sequence): its reader, number and header."""
-    best: tuple[RingReader, int, RecordHeader] | None = None
-    best_key = None
-    for r in readers:
-        count = r.words[r.count_word]
-        n = r.taken + 1
-        while n <= count:
-            head = r.header(n)
-            if head is not None:
-                key = (head.time_us, r.publisher_id, head.seq)
-                if best_key is None or key < best_key:
-                    best, best_key = (r, n, head), key
-                break
-            r.lost += 1
-            r.taken = n
-            n += 1
-    return best
 
 
 def fast_writers(touched: set[Any]) -> list[Any]:

@@ -46,13 +46,17 @@ class InputBuffer:
         "members",
         "open_while",
         "queue_mode",
+        "repeats",
         "sub",
         "unauthorized",
     )
 
-    def __init__(self, sub: TopicSubscriber, queue_mode: bool) -> None:
+    def __init__(self, sub: TopicSubscriber, queue_mode: bool, repeats: bool = True) -> None:
         self.sub = sub
         self.queue_mode = queue_mode
+        self.repeats = repeats
+        """Whether a message may arrive twice (a lockstep publisher's topic indices only grow: one that does not is
+        the same message again, put by its publisher and relayed, see stack.fastpath.bridge)."""
         self.latest: Any = None
         self._latest_key: tuple[int, int, int] = (-1, 0, 0)
         self._new = False
@@ -119,11 +123,14 @@ class InputBuffer:
         """Move everything Zenoh has delivered into the pending list."""
         poll = self.sub.poll
         last = self.last_index
+        repeats = self.repeats
         item = poll()
         while item is not None:
-            self._pending.append(item)
             if item.index > last.get(item.publisher, 0):
                 last[item.publisher] = item.index
+                self._pending.append(item)
+            elif repeats or item.time_us < 0:
+                self._pending.append(item)
             item = poll()
 
     def promote_all(self) -> None:

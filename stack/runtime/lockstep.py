@@ -299,7 +299,9 @@ class LockstepMember:
 
 
 @dataclass
-class _Member:
+class MemberToken:
+    """What a member's lockstep token says of it (and, at the coordinator, when its timer last fired)."""
+
     name: str
     publisher_id: int
     trigger: str | None
@@ -315,7 +317,7 @@ class LockstepCoordinator:
         self._stall = StallWatch(stall_timeout_s)
         self.now = 0
         self.step = 0
-        self.members: dict[int, _Member] = {}
+        self.members: dict[int, MemberToken] = {}
         self.barrier = Barrier(own_inputs)
         self._triggered_by: dict[str, list[int]] = {}
         self._totals: dict[tuple[int, str], int] = {}
@@ -326,7 +328,7 @@ class LockstepCoordinator:
         self._bases: dict[tuple[int, int, str], int] = {}  # (member, publisher, topic) → count at admission
         self._ledger = StepLedger()
         self._tick_pubs: dict[int, zenoh.Publisher] = {}
-        self._events: list[tuple[str, _Member]] = []
+        self._events: list[tuple[str, MemberToken]] = []
         self._events_lock = threading.Lock()
         self._waiting_since: float | None = None
         self._closed = threading.Event()
@@ -351,7 +353,7 @@ class LockstepCoordinator:
     # -- membership ---------------------------------------------------------------------------
 
     def _on_member_token(self, sample: zenoh.Sample) -> None:
-        member = _parse_member(str(sample.key_expr))
+        member = parse_member(str(sample.key_expr))
         if member is None:
             return
         kind = "join" if sample.kind == zenoh.SampleKind.PUT else "leave"
@@ -383,7 +385,7 @@ class LockstepCoordinator:
                 self._drop(m.publisher_id, f"lockstep member {m.name} left at t={self.now / 1e6:.3f} s")
                 self._departures.left(m.name, time.monotonic())
 
-    def _admit(self, m: _Member) -> None:
+    def _admit(self, m: MemberToken) -> None:
         """A (re)started member: its runs count from zero, and neither it nor its subscribers wait for messages
         written before it came."""
         me = m.publisher_id
@@ -499,7 +501,7 @@ class LockstepCoordinator:
                     pass
         return {}
 
-    def _tick_publisher(self, m: _Member) -> zenoh.Publisher:
+    def _tick_publisher(self, m: MemberToken) -> zenoh.Publisher:
         pub = self._tick_pubs.get(m.publisher_id)
         if pub is None:
             pub = self.node.session.declare_publisher(
@@ -596,15 +598,15 @@ def supervisor_word(state: str) -> Word:
     return Word.NONE
 
 
-def _parse_member(key: str) -> _Member | None:
+def parse_member(key: str) -> MemberToken | None:
     """``stack/<v>/@lockstep/member/<name>/<publisher_id>/topic/<topic>/<inst>`` or ``.../timer/<us>``."""
     parts = key.split("/")
     try:
         name, publisher_id, kind = parts[4], int(parts[5]), parts[6]
         if kind == "topic":
-            return _Member(name, publisher_id, f"{parts[7]}/{int(parts[8])}", None)
+            return MemberToken(name, publisher_id, f"{parts[7]}/{int(parts[8])}", None)
         if kind == "timer":
-            return _Member(name, publisher_id, None, int(parts[7]))
+            return MemberToken(name, publisher_id, None, int(parts[7]))
     except (IndexError, ValueError):
         pass
     log.warning("ignoring malformed lockstep member token %s", key)

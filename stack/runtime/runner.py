@@ -161,7 +161,7 @@ class Runtime:
         else:
             # Real time: the last few messages only; the newest is all a latest-value input needs.
             sub = self.node.subscriber(topic, instance, capacity=LATEST_RING, keep_last=True)
-        self.inputs[(topic, instance)] = self.guard(InputBuffer(sub, queue), topic)
+        self.inputs[(topic, instance)] = self.guard(InputBuffer(sub, queue, repeats=not self.lockstep), topic)
 
     def guard(self, buf: InputBuffer, topic: str) -> InputBuffer:
         """Tell ``buf`` whom it hears (:mod:`stack.bus.access`); an Offboard topic reads the control mode too."""
@@ -247,7 +247,7 @@ class Runtime:
             member = lockstep_part if isinstance(lockstep_part, LockstepMember) else None
             coordinator = lockstep_part if isinstance(lockstep_part, LockstepCoordinator) else None
             announce = coordinator.announce if coordinator is not None else None
-            startup.sync(node, self.inputs.values(), member, self.spec.late_join, announce)
+            startup.sync(node, self.inputs.values(), member, self.spec.late_join, announce, spec.sync_with)
         self.state = "running"
         log.info("%s ready (%s)", self.name, self.describe_trigger())
         if on_ready is not None:
@@ -395,6 +395,8 @@ class Runtime:
             if item.time_us < 0:
                 self._ignore_outside_trigger(suffix)
                 continue
+            if item.index <= buf.last_index.get(item.publisher, 0):
+                continue  # the same message again (put by its publisher and relayed: stack.fastpath.bridge)
             member.advance_to(item.time_us)
             member.barrier.wait()
             self.run_at(item.time_us, member.members, item)

@@ -174,6 +174,12 @@ class ModuleSpec:
     # anyone beyond those open to tools. No names: a module outside any profile hears everyone.
     peers: list[str] = field(default_factory=list)
     open_topics: list[str] = field(default_factory=list)
+    # A shared-memory run's members over Zenoh (a profile's transport = "zenoh"), whose places in the run the
+    # coordinator's process serves (stack.fastpath.bridge): given to the coordinator.
+    bridged: list[str] = field(default_factory=list)
+    # A member over Zenoh in a shared-memory run: the modules whose start-up sync it waits for (the others do
+    # not sync over Zenoh). None: every module of the roster.
+    sync_with: list[str] | None = None
 
     def to_json(self) -> str:
         d = asdict(self)

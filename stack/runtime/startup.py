@@ -73,10 +73,12 @@ def sync(
     member: LockstepMember | None,
     late_join: bool,
     announce: Callable[[], None] | None = None,
+    sync_with: Iterable[str] | None = None,
 ) -> None:
     """Block until this module may take part in the lockstep (see the module docstring).
 
-    The coordinator passes ``announce``, which sends its pre-start clocks: the members wait for them.
+    The coordinator passes ``announce``, which sends its pre-start clocks: the members wait for them. A member
+    over Zenoh in a shared-memory run waits for the sync of ``sync_with`` only (the others do not sync).
     """
     inputs = list(inputs)
     deadline = time.monotonic() + SYNC_TIMEOUT_S
@@ -116,7 +118,8 @@ def sync(
                     node.declare_token(keys.synced_token(node.vehicle, node.name))
                     declared = True
             if declared:
-                pending = sorted(others - synced_modules(node.session, node.vehicle))
+                syncing = others if sync_with is None else set(sync_with) - {node.name}
+                pending = sorted(syncing - synced_modules(node.session, node.vehicle))
                 if late_join or not pending:
                     return
                 problem = f"waiting for {', '.join(pending)} to sync"

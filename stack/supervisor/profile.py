@@ -18,6 +18,10 @@ the simulator, keeps the process down: a crash of any module of it is then that 
 lockstep modules can share a process, and only in a shared-memory lockstep run; otherwise (``--realtime``,
 lockstep over Zenoh) each module runs in its own process.
 
+A lockstep member given ``transport = "zenoh"`` takes part in a shared-memory lockstep run over Zenoh, as a
+module on another host must: it keeps its place in the run, which the simulator's process serves for it
+(:mod:`stack.fastpath.bridge`), and the flight is the same, message for message.
+
 A ``[[process]]`` is a supervised program that is not a module (no bus, no heartbeat), such as the
 simulated Pixhawk ``stack pixhawk-sim``: the processes start first, in order, each ready once it has run
 ``ready_after_s`` without exiting; they stop last; their death is noticed and handled as a module's
@@ -77,6 +81,8 @@ class ModuleEntry:
     critical: bool
     process: str = ""
     """The process it shares with the other modules of the same ``process`` name; empty: a process of its own."""
+    transport: str = "shm"
+    """How it takes part in a shared-memory lockstep run: through the shared memory, or over Zenoh."""
 
 
 @dataclass
@@ -415,7 +421,18 @@ class _Loader:
         self._only(
             entry,
             where,
-            {"name", "module", "params", "args", "condition", "restart", "max_restarts", "critical", "process"},
+            {
+                "name",
+                "module",
+                "params",
+                "args",
+                "condition",
+                "restart",
+                "max_restarts",
+                "critical",
+                "process",
+                "transport",
+            },
         )
         ref = self._get(entry, where, "module", str, None)
         if ref is None:
@@ -463,6 +480,15 @@ class _Loader:
                 raise self.fail(
                     f"{where}.process", f"{name} {kind}; only lockstep modules can share a process (leave it its own)"
                 )
+        transport = self._get(entry, where, "transport", str, "shm")
+        if transport not in LOCKSTEP_TRANSPORTS:
+            raise self.fail(f"{where}.transport", f"'{transport}' is not one of {', '.join(LOCKSTEP_TRANSPORTS)}")
+        if transport == "zenoh":
+            if cls.PASSIVE or cls.OUTSIDE_LOCKSTEP or cls.LOCKSTEP_COORDINATOR:
+                kind = "the lockstep's coordinator" if cls.LOCKSTEP_COORDINATOR else "not a lockstep member"
+                raise self.fail(f"{where}.transport", f"{name} is {kind}; only lockstep members take part over Zenoh")
+            if process:
+                raise self.fail(f"{where}.transport", f"{name} over Zenoh runs in its own process (drop 'process')")
         return ModuleEntry(
             name=name,
             module=ref,
@@ -474,6 +500,7 @@ class _Loader:
             max_restarts=max_restarts,
             critical=self._get(entry, where, "critical", bool, False),
             process=process,
+            transport=transport,
         )
 
     def _process(self, i: int, entry: object, shared: dict[str, object], variables: dict[str, object]) -> ProcessEntry:

@@ -113,8 +113,12 @@ class Supervisor:
         self.run_dir = run_dir
         self.vehicle = profile.vehicle
         self._set_port(profile.port or free_port())
-        # Modules share a process only in a shared-memory lockstep run (see stack.supervisor.profile).
+        # Modules share a process only in a shared-memory lockstep run (see stack.supervisor.profile), where a
+        # member may also take part over Zenoh (stack.fastpath.bridge).
         self.grouping = profile.lockstep and profile.lockstep_transport == "shm"
+        self.bridged = [e.name for e in profile.modules if e.transport == "zenoh"] if self.grouping else []
+        coordinator = next((e.name for e in profile.modules if e.cls.LOCKSTEP_COORDINATOR), None)
+        self.coordinator = coordinator if self.bridged else None
         self.modules = []
         for e in profile.modules:
             process = e.process if e.process and self.grouping else e.name
@@ -250,6 +254,8 @@ class Supervisor:
         if not self.grouping and any(m.entry.process for m in self.modules):
             how = "--realtime" if not self.profile.lockstep else "lockstep over Zenoh"
             self._say(f"{how}: each module in its own process (modules share one only in a shared-memory lockstep)")
+        if self.bridged:
+            self._say(f"over Zenoh in the shared-memory lockstep: {', '.join(self.bridged)}")
 
     def _say_links(self) -> None:
         """The links modules gave the user (Module.show_link), last, where they are seen: even with --quiet."""
@@ -319,6 +325,7 @@ class Supervisor:
 
     def _spec(self, m: ModuleProcess) -> ModuleSpec:
         e = m.entry
+        bridged = e.name in self.bridged
         args = {**e.args, **self.options.extra_args.get(e.name, {})}
         args = {k: expand_placeholders(v, self.placeholders) if isinstance(v, str) else v for k, v in args.items()}
         return ModuleSpec(
@@ -337,9 +344,11 @@ class Supervisor:
             run_dir=str(self.run_dir),
             late_join=m.restarts > 0,
             run_id=self.run_id,
-            fastpath_fd=self.fast.region.fd if self.fast is not None else -1,
+            fastpath_fd=self.fast.region.fd if self.fast is not None and not bridged else -1,
             peers=[r.entry.name for r in self.modules],
             open_topics=list(self.profile.open_topics),
+            bridged=self.bridged if e.name == self.coordinator else [],
+            sync_with=[*self.bridged, self.coordinator] if bridged and self.coordinator else None,
         )
 
     def _environment(self) -> dict[str, str]:
@@ -366,7 +375,7 @@ class Supervisor:
             stderr=subprocess.STDOUT,
             env=env,
             process_group=0,
-            pass_fds=self.fast.pass_fds() if self.fast is not None else (),
+            pass_fds=self.fast.pass_fds() if self.fast is not None and m.entry.name not in self.bridged else (),
         )
         log_file = m.log_path.open("a")
         reader = threading.Thread(target=self._pump, args=(m.process, proc.stdout, log_file), daemon=True)

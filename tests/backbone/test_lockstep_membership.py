@@ -6,7 +6,7 @@ from types import SimpleNamespace
 
 from stack.msg.internal import LockstepAck
 from stack.runtime.ledger import Departures
-from stack.runtime.lockstep import TIMER, LockstepCoordinator, _Member, _parse_member
+from stack.runtime.lockstep import TIMER, LockstepCoordinator, MemberToken, parse_member
 
 TOKEN = "stack/v1/@lockstep/member/{name}/{pid}/topic/vehicle_local_position/0"
 TOPIC = "vehicle_local_position/0"
@@ -31,9 +31,9 @@ def test_a_token_reported_twice_counts_its_member_once():
     # A liveliness subscriber with history may report a token both from its history and live; a
     # member counted twice would make the coordinator wait for an acknowledgement that never comes.
     c = coordinator_without_bus()
-    member = _parse_member(TOKEN.format(name="flight_mode_manager", pid=7))
-    again = _parse_member(TOKEN.format(name="flight_mode_manager", pid=7))
-    other = _parse_member(TOKEN.format(name="mc_pos_control", pid=8))
+    member = parse_member(TOKEN.format(name="flight_mode_manager", pid=7))
+    again = parse_member(TOKEN.format(name="flight_mode_manager", pid=7))
+    other = parse_member(TOKEN.format(name="mc_pos_control", pid=8))
     c._events = [("join", member), ("join", other)]
     c._apply_membership()
     c._events = [("join", again)]
@@ -42,12 +42,12 @@ def test_a_token_reported_twice_counts_its_member_once():
     assert sorted(c.members) == [7, 8]
 
 
-def commander_and_position_control() -> tuple[LockstepCoordinator, _Member]:
+def commander_and_position_control() -> tuple[LockstepCoordinator, MemberToken]:
     """A coordinator with a timed commander (5), which publishes vehicle_local_position/0, and mc_pos_control (8),
     which that topic triggers; and mc_pos_control's member."""
     c = coordinator_without_bus()
-    commander = _parse_member("stack/v1/@lockstep/member/commander/5/timer/20000")
-    pos = _parse_member(TOKEN.format(name="mc_pos_control", pid=8))
+    commander = parse_member("stack/v1/@lockstep/member/commander/5/timer/20000")
+    pos = parse_member(TOKEN.format(name="mc_pos_control", pid=8))
     assert commander is not None and pos is not None
     c._events = [("join", commander), ("join", pos)]
     c._apply_membership()

@@ -1,8 +1,9 @@
-"""Lockstep flights are deterministic: the same seed gives the same flight, bit for bit, on either transport
-and however the modules share processes.
+"""Lockstep flights are deterministic: the same seed gives the same flight, bit for bit, on either transport,
+on both at once, and however the modules share processes.
 
 ``stack fly attitude_step --seed 3`` runs, on the shared-memory fast path with every module its own process,
-with the lockstep over Zenoh, and with the modules in two processes (sitl_quad_grouped), are compared through
+with the lockstep over Zenoh, with the modules in two processes (sitl_quad_grouped), and with the position
+chain taking part over Zenoh beside the shared memory (sitl_quad_mixed), are compared through
 their recordings (read with the stack's RecordingReader):
 every message any module published up to the scenario's last tick, with its bus header and every
 field, must be identical, and none may be missing. A different seed draws different sensor noise, so
@@ -46,7 +47,11 @@ def every_message(flight: Flight, until_us: int) -> list[tuple[str, int, int, in
     return sorted(messages)
 
 
-@pytest.mark.parametrize("other", [{"transport": "zenoh"}, {"profile": "sitl_quad_grouped"}], ids=["zenoh", "grouped"])
+@pytest.mark.parametrize(
+    "other",
+    [{"transport": "zenoh"}, {"profile": "sitl_quad_grouped"}, {"profile": "sitl_quad_mixed"}],
+    ids=["zenoh", "grouped", "mixed"],
+)
 def test_same_seed_gives_the_same_flight_whatever_carries_it(fly: Fly, other: dict[str, str]) -> None:
     a, b = fly(3, 0), fly(3, 0, **other)
     end = a.scenario_end_us()

@@ -1,0 +1,574 @@
+"""Members of a fast-path run that take part over Zenoh: one lockstep, two transports.
+
+A module a profile gives ``transport = "zenoh"`` (as a module on another host must) keeps a slot in the
+run's region like every member, but its process never maps the region: it is a Zenoh lockstep member
+(:class:`stack.runtime.lockstep.LockstepMember`), unchanged. The coordinator's process serves its slot
+(:class:`BridgedMember`, run beside the coordinator as the members of its process group are), so the
+coordinator, the step ledger and every other member see one more member of the fast path:
+
+- when the slot is ticked, or one of its trigger records is due, the bridge puts on Zenoh, in order of
+  publication, every record of the fast path's modules that the member subscribes to and has not been
+  sent yet (with the publisher's own header: its id, sequence number, topic index and time); then a
+  :class:`~stack.msg.internal.LockstepClock` whose counts are what was sent, so the member's barrier
+  waits for exactly those; a trigger reaches the member as it would over Zenoh alone, as one of them;
+- the member runs, publishes on Zenoh (where tools and members over Zenoh read it) and acknowledges;
+  the bridge writes the publications the acknowledgement counts into the slot's rings, waking the fast
+  members they trigger, and only then counts the run finished.
+
+The visibility rule is the same on both sides (:func:`stack.runtime.inputs.visible`), so a run mixing the
+transports publishes the same messages, bit for bit, as the run on one transport. At start-up the bridge
+plays the part the fast path's modules do not play over Zenoh: it sends the pre-start clocks and the
+probes of the fast publishers whose topics a member reads, waits for the member's own probes, and says
+the coordinator is synced once every slot is ready. A member that leaves (its lockstep token goes) is
+named; time waits while the supervisor restarts it, as for any member, and its runs are skipped while it
+is gone for good. One that stops acknowledging for the stall timeout stops the run, named.
+"""
+
+from __future__ import annotations
+
+import heapq
+import logging
+import threading
+import time
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass, field
+
+import msgspec
+import zenoh
+
+from stack.bus import keys
+from stack.bus.graph import read_graph
+from stack.bus.node import Node, stable_publisher_id
+from stack.bus.topics import FLAG_LOCKSTEP_TIME, FLAG_PROBE, HEADER
+from stack.fastpath.attach import Attachment
+from stack.fastpath.layout import (
+    H_NOW,
+    H_STEP,
+    H_TOPOLOGY,
+    P_FINGERPRINT,
+    ROLE_TIMED,
+    ROLE_TRIGGERED,
+    S_EXITS,
+    S_RESTART,
+    SUB_TRIGGER,
+    Region,
+    topic_hash,
+)
+from stack.fastpath.lockstep import FastMember
+from stack.fastpath.ring import RingReader, RingWriter, next_trigger, wake_all
+from stack.fastpath.topology import Topology
+from stack.msg.internal import LockstepAck, LockstepClock
+from stack.msg.registry import UnknownTopic, message_type
+from stack.runtime.ledger import SLOW_WAIT_S, VERDICT_TIMEOUT_S, LockstepError, Word
+from stack.runtime.lockstep import TIMER, ProtocolDecoder, parse_member
+
+log = logging.getLogger("stack.lockstep")
+
+START_TIMEOUT_S = 60.0
+RESTART_POLL_S = 0.05
+WAKE_CHECK_S = 0.05
+"""How often a wait for a member over Zenoh looks again whether it left or stalled."""
+REJOIN_SETTLE_S = 0.5
+"""A member back after a restart: how long its subscriptions are given to reach the bridge's session."""
+_encoder = msgspec.msgpack.Encoder()
+
+
+@dataclass(order=True)
+class _Relayed:
+    """A fast-path record on its way to the members over Zenoh, in order of publication."""
+
+    time_us: int
+    publisher_id: int
+    seq: int
+    index: int = field(compare=False)
+    suffix: str = field(compare=False)
+    fingerprint: int = field(compare=False)
+    payload: bytes = field(compare=False)
+
+
+@dataclass
+class _Sample:
+    index: int
+    time_us: int
+    seq: int
+    payload: bytes
+
+
+class BridgedMember:
+    """One member over Zenoh, as a slot of the fast path served in the coordinator's process (the shape of a
+    :class:`stack.runtime.fastrun.FastDriver` to a process group: ``att``, ``member``, ``wake``, ``report_done``,
+    ``work``)."""
+
+    def __init__(self, bridge: ZenohBridge, name: str) -> None:
+        self.bridge = bridge
+        self.name = name
+        self.publisher_id = stable_publisher_id(bridge.vehicle, name)
+        self.att = Attachment(bridge.region, name, self.publisher_id)
+        self.member = FastMember(self.att)
+        self.w = bridge.region.words
+        self.wake: Callable[[set[int]], None] = wake_all
+        self.report_done: Callable[[list[RingWriter]], None] = self.member.done
+        self.trigger = ""
+        """``topic/instance`` of its trigger, empty for a timed member."""
+        self.period_us = 0
+        self.subs: list[str] = []
+        self.writers: dict[str, RingWriter] = {}
+        self._samples: dict[str, list[_Sample]] = {}
+        self._raw: list[zenoh.Subscriber] = []
+        self._probed: set[str] = set()
+        self._cond = bridge.cond
+        self.declared = False
+        self.ready = False
+        self.present = False
+        self._left: tuple[float, int] | None = None  # when it left (monotonic s), the supervisor's exits then
+        self._back_at = 0.0
+        self._acks: dict[tuple[int, int], LockstepAck] = {}
+        self._ticks_acked: list[LockstepAck] = []
+        self._readers: list[RingReader] = []
+        self._topology_seen = -1
+        self.rejected = 0
+
+    # -- start-up ----------------------------------------------------------------------------------
+
+    def declare(self, trigger: str | None, period_us: int | None, pubs: dict[str, int], subs: list[str]) -> None:
+        """Fill the slot with what the member's tokens say: its trigger or timer, publications and subscriptions."""
+        session, vehicle = self.bridge.session, self.bridge.vehicle
+        self.trigger, self.period_us = trigger or "", period_us or 0
+        for suffix, fp in pubs.items():
+            topic, _, instance = suffix.partition("/")
+            try:
+                sample = len(_encoder.encode(message_type(topic)()))
+            except UnknownTopic:
+                sample = 256
+            self.writers[suffix] = self.att.publication(suffix, fp, sample)
+            self._samples[suffix] = []
+            key = keys.topic_key(vehicle, topic, int(instance))
+            self._raw.append(session.declare_subscriber(key, lambda s, suffix=suffix: self._on_sample(suffix, s)))
+        for suffix in subs:
+            self.att.subscription(suffix, SUB_TRIGGER if suffix == self.trigger else 0)
+        self.subs = subs
+        self.declared = True
+
+    def probes_seen(self) -> bool:
+        with self._cond:
+            return self._probed >= set(self.writers)
+
+    def take_role(self) -> None:
+        if self.trigger:
+            self.att.ready(ROLE_TRIGGERED, trigger=self.trigger)
+        else:
+            self.att.ready(ROLE_TIMED, period_us=self.period_us)
+        self.ready = self.present = True
+
+    def _on_sample(self, suffix: str, sample: zenoh.Sample) -> None:
+        """Zenoh's thread: keep the member's own publications of this run (anything else is counted)."""
+        attachment = sample.attachment
+        raw = attachment.to_bytes() if attachment is not None else b""
+        if len(raw) != HEADER.size:
+            return  # not from a stack publisher: never the member's
+        _, pub_id, seq, index, pub_time, flags, run = HEADER.unpack(raw)
+        if pub_id != self.publisher_id:
+            return  # another publisher of the topic (the fast path's own, a tool's)
+        if run != self.bridge.run_id:
+            self.rejected += 1
+            return
+        with self._cond:
+            if flags & FLAG_PROBE:
+                self._probed.add(suffix)
+            elif flags & FLAG_LOCKSTEP_TIME:
+                self._samples[suffix].append(_Sample(index, pub_time, seq, sample.payload.to_bytes()))
+                self._cond.notify_all()
+
+    # -- membership --------------------------------------------------------------------------------
+
+    def left(self) -> None:
+        """Its lockstep token went: the process died or stopped (Zenoh's thread)."""
+        if not self.present:
+            return
+        with self._cond:
+            self.present = False
+            self._cond.notify_all()
+        self._left = (time.monotonic(), int(self.w[self.bridge.region.slot_word(self.att.slot, S_EXITS)]))
+        log.info("lockstep member %s (over Zenoh) left at t=%.3f s", self.name, self.w[H_NOW] / 1e6)
+
+    def back(self) -> None:
+        if self.present or not self.ready:
+            return
+        self.present = True
+        self._left = None
+        self._back_at = time.monotonic()
+        with self._cond:
+            self._acks.clear()
+            self._ticks_acked.clear()
+            for samples in self._samples.values():
+                samples.clear()
+        log.info("lockstep member %s (over Zenoh) is back at t=%.3f s", self.name, self.w[H_NOW] / 1e6)
+
+    def _word(self) -> Word:
+        """The supervisor's word on the member that left: restarting, gone, or none yet."""
+        assert self._left is not None
+        region = self.bridge.region
+        if self.w[region.slot_word(self.att.slot, S_EXITS)] <= self._left[1]:
+            return Word.NONE
+        return Word.RESTARTING if self.w[region.slot_word(self.att.slot, S_RESTART)] else Word.GONE
+
+    def _await_return(self) -> bool:
+        """A run due while the member is gone: wait while the supervisor restarts it; True once it is back."""
+        logged = False
+        while not self.present:
+            assert self._left is not None
+            word = self._word()
+            waited = time.monotonic() - self._left[0]
+            if word is Word.GONE or (word is Word.NONE and waited > VERDICT_TIMEOUT_S):
+                return False
+            if not logged and waited > SLOW_WAIT_S:
+                logged = True
+                log.warning("lockstep time waits at t=%.3f s for %s to restart", self.w[H_NOW] / 1e6, self.name)
+            time.sleep(RESTART_POLL_S)
+        return True
+
+    # -- runs --------------------------------------------------------------------------------------
+
+    def refresh_topology(self) -> None:
+        region, w = self.bridge.region, self.w
+        generation = w[H_TOPOLOGY]
+        if generation == self._topology_seen:
+            return
+        self._topology_seen = int(generation)
+        topo = Topology(region)
+        me = self.att.slot
+        for suffix, writer in self.writers.items():
+            writer.wake = topo.woken_by(topic_hash(suffix), me)
+        if self.trigger:
+            known = {(r.slot, r.entry): r for r in self._readers}
+            readers = []
+            for source in topo.sources(topic_hash(self.trigger), me):
+                r = RingReader(region, source.slot, source.publication, source.publisher_id)
+                old = known.get((r.slot, r.entry))
+                consumed = int(w[self.member.consumed_word(r.slot)])
+                r.taken = max(old.taken if old is not None else 0, consumed, self.member.base(r.slot))
+                readers.append(r)
+            self._readers = readers
+        self.member.on_topology(topo)
+
+    def work(self) -> None:
+        """Forward the runs due to the member and take in what it published (blocks until it acknowledged)."""
+        if self.w[H_TOPOLOGY] != self._topology_seen:
+            self.refresh_topology()
+        if not self.member.admitted():
+            return
+        w, member = self.w, self.member
+        started, finished = member.started, member.finished
+        ran = False
+        if not self.trigger:
+            while w[member.ticks] > w[started]:
+                ran = True
+                w[started] += 1
+                self._forward(int(w[H_NOW]), None)
+                w[finished] += 1
+        else:
+            while (found := next_trigger(self._readers)) is not None:
+                ran = True
+                reader, n, head = found
+                w[started] += 1
+                w[member.consumed_word(reader.slot)] = n
+                reader.taken = n
+                self._forward(head.time_us, (reader.publisher_id, head.index))
+                w[finished] += 1
+        if ran:
+            self.report_done([writer for writer in self.writers.values() if writer.wake])
+
+    def _forward(self, t: int, trigger: tuple[int, int] | None) -> None:
+        if not self.present and not self._await_return():
+            return  # gone: the run is skipped (its trigger is taken, nothing is published)
+        if time.monotonic() - self._back_at < REJOIN_SETTLE_S:
+            time.sleep(max(0.0, REJOIN_SETTLE_S - (time.monotonic() - self._back_at)))
+        bridge = self.bridge
+        bridge.send_clock(t, None if self.trigger else self.name)
+        ack = self._await_ack(t, trigger)
+        if ack is not None:
+            self._take_publications(ack)
+
+    def _await_ack(self, t: int, trigger: tuple[int, int] | None) -> LockstepAck | None:
+        """The member's acknowledgement of this run, or None if it left before giving it."""
+        timeout = self.bridge.stall_timeout_s
+        started = time.monotonic()
+        logged = False
+        with self._cond:
+            while True:
+                if trigger is None:
+                    ack = self._ticks_acked.pop(0) if self._ticks_acked else None
+                else:
+                    ack = self._acks.pop(trigger, None)
+                if ack is not None:
+                    return ack
+                if not self.present:
+                    return None
+                waited = time.monotonic() - started
+                if waited > timeout:
+                    what = "its tick" if trigger is None else f"trigger #{trigger[1]} of publisher {trigger[0]:08x}"
+                    raise LockstepError(
+                        f"lockstep stalled at t={t / 1e6:.3f} s: {self.name} (over Zenoh) has not acknowledged "
+                        f"{what} for {timeout:.0f} s"
+                    )
+                if not logged and waited > SLOW_WAIT_S:
+                    logged = True
+                    log.warning("lockstep: waiting for %s (over Zenoh) at t=%.3f s", self.name, t / 1e6)
+                self._cond.wait(WAKE_CHECK_S)
+
+    def on_ack(self, ack: LockstepAck) -> None:
+        """Zenoh's thread."""
+        with self._cond:
+            if ack.trigger_topic == TIMER:
+                self._ticks_acked.append(ack)
+            else:
+                self._acks[(ack.trigger_publisher, ack.trigger_index)] = ack
+            self._cond.notify_all()
+
+    def _take_publications(self, ack: LockstepAck) -> None:
+        """Write into the slot's rings the messages the acknowledgement counts (waiting for the last to arrive)."""
+        started = time.monotonic()
+        for suffix, total in ack.published:
+            writer = self.writers.get(suffix)
+            if writer is None or not isinstance(total, int):
+                continue
+            with self._cond:
+                while True:
+                    samples = self._samples[suffix]
+                    if samples and samples[-1].index >= total:
+                        self._samples[suffix] = []
+                        break
+                    if not self.present or time.monotonic() - started > self.bridge.stall_timeout_s:
+                        raise LockstepError(
+                            f"{self.name} (over Zenoh): {suffix} #{total} acknowledged but never received"
+                        )
+                    self._cond.wait(WAKE_CHECK_S)
+            for s in samples:
+                writer.write(s.payload, s.index, s.time_us, s.seq)
+                self.bridge.published[(self.publisher_id, suffix)] = s.index
+        wakes = self.att.wakes
+        if wakes:
+            self.wake(wakes)
+
+    def close(self) -> None:
+        for sub in self._raw:
+            sub.undeclare()
+
+
+class ZenohBridge:
+    """The members over Zenoh of a fast-path run, served in the coordinator's process on its session."""
+
+    def __init__(self, node: Node, region: Region, names: Iterable[str], stall_timeout_s: float) -> None:
+        self.node = node
+        self.session = node.session
+        self.vehicle = node.vehicle
+        self.run_id = node.run_id
+        self.region = region
+        self.stall_timeout_s = stall_timeout_s
+        self.cond = threading.Condition()
+        self.members = [BridgedMember(self, name) for name in names]
+        self._by_id = {m.publisher_id: m for m in self.members}
+        self._by_name = {m.name: m for m in self.members}
+        self.published: dict[tuple[int, str], int] = {}
+        """(publisher id, ``topic/instance``) → the last index sent to the members or taken from them."""
+        self._relays: dict[str, zenoh.Publisher] = {}
+        self._readers: list[tuple[RingReader, str]] = []
+        self._topology_seen = -1
+        self._clock_step = -1
+        self._clock_pub = self.session.declare_publisher(
+            keys.lockstep_clock_key(self.vehicle), congestion_control=zenoh.CongestionControl.BLOCK, express=True
+        )
+        self._tick_pubs = {
+            m.name: self.session.declare_publisher(
+                keys.lockstep_tick_key(self.vehicle, m.name),
+                congestion_control=zenoh.CongestionControl.BLOCK,
+                express=True,
+            )
+            for m in self.members
+        }
+        self._acks = ProtocolDecoder(LockstepAck, self.run_id, keys.lockstep_ack_key(self.vehicle))
+        self._ack_sub = self.session.declare_subscriber(keys.lockstep_ack_key(self.vehicle), self._on_ack)
+        self._member_sub = self.session.liveliness().declare_subscriber(
+            keys.lockstep_member_query(self.vehicle), self._on_member_token, history=True
+        )
+        self._synced = False
+
+    @property
+    def rejected(self) -> int:
+        return self._acks.rejected + sum(m.rejected for m in self.members)
+
+    # -- start-up ----------------------------------------------------------------------------------
+
+    def join(self) -> None:
+        """Block until every member over Zenoh has a ready slot and has synced (see the module docstring)."""
+        deadline = time.monotonic() + START_TIMEOUT_S
+        step0 = _encoder.encode(LockstepClock(timestamp=0, run=self.run_id, step=0, counts=[], members=[]))
+        while True:
+            self._clock_pub.put(step0)
+            for pub in self._tick_pubs.values():
+                pub.put(step0)
+            graph = read_graph(self.session, self.vehicle, timeout=0.5)
+            tokens = {
+                parsed.name: parsed
+                for r in self.session.liveliness().get(keys.lockstep_member_query(self.vehicle), timeout=0.5)
+                if r.ok is not None and (parsed := parse_member(str(r.ok.key_expr))) is not None
+            }
+            for m in self.members:
+                token = tokens.get(m.name)
+                if m.declared or token is None or token.publisher_id != m.publisher_id:
+                    continue
+                pubs = {
+                    f"{topic}/{inst}": int(min(node.fingerprints), 16)
+                    for (topic, inst), node in graph.items()
+                    if m.name in node.publishers and node.fingerprints
+                }
+                subs = [f"{topic}/{inst}" for (topic, inst), node in graph.items() if m.name in node.subscribers]
+                m.declare(token.trigger, token.period_us, pubs, subs)
+                for suffix in subs:
+                    self._relay(suffix)
+            self._probe(graph)
+            for m in self.members:
+                if m.declared and not m.ready and m.probes_seen():
+                    m.take_role()
+            waiting = [m.name for m in self.members if not m.ready]
+            if not waiting:
+                if not self._synced:
+                    self.node.declare_token(keys.synced_token(self.vehicle, self.node.name))  # the node undeclares it
+                    self._synced = True
+                synced = {
+                    str(r.ok.key_expr).rsplit("/", 1)[-1]
+                    for r in self.session.liveliness().get(keys.synced_query(self.vehicle), timeout=0.5)
+                    if r.ok is not None
+                }
+                waiting = [m.name for m in self.members if m.name not in synced]
+                if not waiting:
+                    log.info("lockstep members over Zenoh: %s", ", ".join(m.name for m in self.members))
+                    return
+            if time.monotonic() > deadline:
+                raise LockstepError(f"lockstep start timed out waiting for {', '.join(waiting)} (over Zenoh)")
+            time.sleep(0.02)
+
+    def _relay(self, suffix: str) -> None:
+        if suffix not in self._relays:
+            topic, _, instance = suffix.partition("/")
+            self._relays[suffix] = self.session.declare_publisher(
+                keys.topic_key(self.vehicle, topic, int(instance)),
+                congestion_control=zenoh.CongestionControl.BLOCK,
+                express=True,
+            )
+
+    def _probe(self, graph: dict) -> None:
+        """Probes of the fast path's publishers of what the members read: their messages reach the members through
+        this session, which the probes show they can (:mod:`stack.runtime.startup`)."""
+        bridged = set(self._by_name)
+        for suffix, relay in self._relays.items():
+            topic, _, instance = suffix.partition("/")
+            node = graph.get((topic, int(instance)))
+            if node is None or not node.fingerprints:
+                continue
+            fp = int(min(node.fingerprints), 16)
+            for publisher in node.publishers:
+                if publisher not in bridged:
+                    pid = stable_publisher_id(self.vehicle, publisher)
+                    relay.put(b"", attachment=HEADER.pack(fp, pid, 0, 0, 0, FLAG_PROBE, self.run_id))
+
+    def _on_member_token(self, sample: zenoh.Sample) -> None:
+        parsed = parse_member(str(sample.key_expr))
+        m = self._by_name.get(parsed.name) if parsed is not None else None
+        if m is None or parsed is None or parsed.publisher_id != m.publisher_id:
+            return
+        if sample.kind == zenoh.SampleKind.PUT:
+            m.back()
+        else:
+            m.left()
+
+    # -- runs --------------------------------------------------------------------------------------
+
+    def send_clock(self, t: int, tick: str | None) -> None:
+        """Put on Zenoh what the members read and has not been sent, then the clock of ``t`` counting it: on a timed
+        member's tick key (``tick``), or on the clock key once per step."""
+        self._relay_records()
+        step = int(self.region.words[H_STEP])
+        if tick is None and step == self._clock_step:
+            return
+        clock = _encoder.encode(
+            LockstepClock(
+                timestamp=t,
+                run=self.run_id,
+                step=step,
+                counts=[(pub, suffix, total) for (pub, suffix), total in self.published.items()],
+                members=sorted(Topology(self.region).publisher_ids),
+            )
+        )
+        if tick is None:
+            self._clock_step = step
+            self._clock_pub.put(clock)
+        else:
+            self._tick_pubs[tick].put(clock)
+
+    def _refresh_readers(self) -> None:
+        w = self.region.words
+        if w[H_TOPOLOGY] == self._topology_seen:
+            return
+        self._topology_seen = int(w[H_TOPOLOGY])
+        topo = Topology(self.region)
+        known = {(r.slot, r.entry): r for r, _ in self._readers}
+        bridged = {m.att.slot for m in self.members}
+        readers = []
+        for suffix in self._relays:
+            for source in topo.sources(topic_hash(suffix)):
+                if source.slot in bridged:
+                    continue  # a member over Zenoh publishes there itself
+                r = RingReader(self.region, source.slot, source.publication, source.publisher_id)
+                old = known.get((r.slot, r.entry))
+                r.taken = old.taken if old is not None else 0
+                readers.append((r, suffix))
+        self._readers = readers
+
+    def _relay_records(self) -> None:
+        """Every record of the fast path's modules a member reads and not yet sent, in order of publication."""
+        self._refresh_readers()
+        batch: list[_Relayed] = []
+        for r, suffix in self._readers:
+            count = r.count
+            if count <= r.taken:
+                continue
+            fp = int(self.region.words[r.entry + P_FINGERPRINT])
+            n = max(r.taken + 1, r.oldest_readable(count))
+            while n <= count:
+                head = r.header(n)
+                if head is not None:
+                    payload = bytes(r.payload(head.offset))
+                    if r.still(n, head.offset):
+                        batch.append(_Relayed(head.time_us, r.publisher_id, head.seq, head.index, suffix, fp, payload))
+                    else:
+                        r.lost += 1
+                else:
+                    r.lost += 1
+                r.taken = n
+                n += 1
+        heapq.heapify(batch)
+        published, relays, run = self.published, self._relays, self.run_id
+        while batch:
+            rec = heapq.heappop(batch)
+            header = HEADER.pack(
+                rec.fingerprint, rec.publisher_id, rec.seq, rec.index, rec.time_us, FLAG_LOCKSTEP_TIME, run
+            )
+            relays[rec.suffix].put(rec.payload, attachment=header)
+            published[(rec.publisher_id, rec.suffix)] = rec.index
+
+    def _on_ack(self, sample: zenoh.Sample) -> None:
+        """Zenoh's thread: hand an acknowledgement to its member."""
+        ack = self._acks.decode(sample)
+        m = self._by_id.get(ack.publisher_id) if ack is not None else None
+        if ack is not None and m is not None and ack.member == m.name:
+            m.on_ack(ack)
+
+    def close(self) -> None:
+        for m in self.members:
+            m.close()
+        self._member_sub.undeclare()
+        self._ack_sub.undeclare()
+        self._clock_pub.undeclare()
+        for pub in (*self._tick_pubs.values(), *self._relays.values()):
+            pub.undeclare()
