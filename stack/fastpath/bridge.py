@@ -60,7 +60,7 @@ from stack.fastpath.topology import Topology
 from stack.msg.internal import LockstepAck, LockstepClock
 from stack.msg.registry import UnknownTopic, message_type
 from stack.runtime.ledger import SLOW_WAIT_S, VERDICT_TIMEOUT_S, LockstepError, Word
-from stack.runtime.lockstep import TIMER, ProtocolDecoder, parse_member
+from stack.runtime.lockstep import TIMER, ProtocolDecoder, parse_member, supervisor_states, supervisor_word
 
 log = logging.getLogger("stack.lockstep")
 
@@ -120,8 +120,15 @@ class BridgedMember:
         self.declared = False
         self.ready = False
         self.present = False
-        self._left: tuple[float, int] | None = None  # when it left (monotonic s), the supervisor's exits then
+        self._left_at: float | None = None
+        """When it left (monotonic seconds), while it is gone."""
+        self._given_up = False
+        """Gone and not waited for any more: its runs are skipped until it is back."""
+        self._exits = 0
+        """The supervisor's count of the module's exits when it was admitted (its word is a higher count)."""
         self._back_at = 0.0
+        self._missed: dict[tuple[int, str], int] = {}
+        """What was sent before it came back, which its new process never received: those triggers are skipped."""
         self._acks: dict[tuple[int, int], LockstepAck] = {}
         self._ticks_acked: list[LockstepAck] = []
         self._readers: list[RingReader] = []
@@ -154,6 +161,7 @@ class BridgedMember:
             return self._probed >= set(self.writers)
 
     def take_role(self) -> None:
+        self._exits = self._exits_now()
         if self.trigger:
             self.att.ready(ROLE_TRIGGERED, trigger=self.trigger)
         else:
@@ -188,40 +196,61 @@ class BridgedMember:
         with self._cond:
             self.present = False
             self._cond.notify_all()
-        self._left = (time.monotonic(), int(self.w[self.bridge.region.slot_word(self.att.slot, S_EXITS)]))
-        log.info("lockstep member %s (over Zenoh) left at t=%.3f s", self.name, self.w[H_NOW] / 1e6)
+        self._left_at = time.monotonic()
+        self._given_up = False
+        log.info("lockstep member %s left at t=%.3f s (over Zenoh)", self.name, self.w[H_NOW] / 1e6)
 
     def back(self) -> None:
         if self.present or not self.ready:
             return
+        self._exits = self._exits_now()
+        self._missed = dict(self.bridge.published)
         self.present = True
-        self._left = None
+        self._left_at = None
         self._back_at = time.monotonic()
         with self._cond:
             self._acks.clear()
             self._ticks_acked.clear()
             for samples in self._samples.values():
                 samples.clear()
-        log.info("lockstep member %s (over Zenoh) is back at t=%.3f s", self.name, self.w[H_NOW] / 1e6)
+        log.info("lockstep member %s joined at t=%.3f s (over Zenoh)", self.name, self.w[H_NOW] / 1e6)
+
+    def _exits_now(self) -> int:
+        return int(self.w[self.bridge.region.slot_word(self.att.slot, S_EXITS)])
 
     def _word(self) -> Word:
         """The supervisor's word on the member that left: restarting, gone, or none yet."""
-        assert self._left is not None
         region = self.bridge.region
-        if self.w[region.slot_word(self.att.slot, S_EXITS)] <= self._left[1]:
+        if self._exits_now() <= self._exits:
             return Word.NONE
         return Word.RESTARTING if self.w[region.slot_word(self.att.slot, S_RESTART)] else Word.GONE
 
     def _await_return(self) -> bool:
-        """A run due while the member is gone: wait while the supervisor restarts it; True once it is back."""
+        """A run due while the member is gone: wait while the supervisor restarts it; True once it is back.
+
+        The region's word that no restart is pending comes both when the restarts were given up and when the new
+        process is up but has not joined yet (over Zenoh it syncs first): the supervisor's status tells which,
+        and time waits at most VERDICT_TIMEOUT_S more for the member's token."""
         logged = False
+        over_at: float | None = None
         while not self.present:
-            assert self._left is not None
+            left_at = self._left_at
+            if left_at is None or self._given_up:
+                return self.present
             word = self._word()
-            waited = time.monotonic() - self._left[0]
-            if word is Word.GONE or (word is Word.NONE and waited > VERDICT_TIMEOUT_S):
+            now = time.monotonic()
+            if word is Word.GONE and over_at is None:
+                over_at = now
+                state = supervisor_states(self.bridge.session, self.bridge.vehicle).get(self.name, "")
+                if supervisor_word(state) is Word.GONE:
+                    over_at = -VERDICT_TIMEOUT_S  # it failed or exited for good
+            if (over_at is not None and now - over_at > VERDICT_TIMEOUT_S) or (
+                word is Word.NONE and now - left_at > VERDICT_TIMEOUT_S
+            ):
+                self._given_up = True
+                log.warning("lockstep time goes on at t=%.3f s without %s", self.w[H_NOW] / 1e6, self.name)
                 return False
-            if not logged and waited > SLOW_WAIT_S:
+            if not logged and now - left_at > SLOW_WAIT_S:
                 logged = True
                 log.warning("lockstep time waits at t=%.3f s for %s to restart", self.w[H_NOW] / 1e6, self.name)
             time.sleep(RESTART_POLL_S)
@@ -281,6 +310,8 @@ class BridgedMember:
     def _forward(self, t: int, trigger: tuple[int, int] | None) -> None:
         if not self.present and not self._await_return():
             return  # gone: the run is skipped (its trigger is taken, nothing is published)
+        if trigger is not None and trigger[1] <= self._missed.get((trigger[0], self.trigger), 0):
+            return  # sent before its new process came: never received, so skipped
         if time.monotonic() - self._back_at < REJOIN_SETTLE_S:
             time.sleep(max(0.0, REJOIN_SETTLE_S - (time.monotonic() - self._back_at)))
         bridge = self.bridge
@@ -306,10 +337,9 @@ class BridgedMember:
                     return None
                 waited = time.monotonic() - started
                 if waited > timeout:
-                    what = "its tick" if trigger is None else f"trigger #{trigger[1]} of publisher {trigger[0]:08x}"
                     raise LockstepError(
-                        f"lockstep stalled at t={t / 1e6:.3f} s: {self.name} (over Zenoh) has not acknowledged "
-                        f"{what} for {timeout:.0f} s"
+                        f"lockstep stalled at t={t / 1e6:.3f} s: no progress for {timeout:.0f} s, waiting for "
+                        f"{self.name} ({self.trigger or TIMER}, over Zenoh)"
                     )
                 if not logged and waited > SLOW_WAIT_S:
                     logged = True

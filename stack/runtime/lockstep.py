@@ -477,7 +477,7 @@ class LockstepCoordinator:
         started = time.monotonic()
         logged = False
         while self._departures:
-            states = self._supervisor_states()
+            states = supervisor_states(self.node.session, self.node.vehicle)
             words = {name: supervisor_word(state) for name, state in states.items()}
             waiting = self._departures.awaited(lambda d, said=words: said.get(d.name, Word.NONE), time.monotonic())
             for name in self._departures.silent:
@@ -489,17 +489,6 @@ class LockstepCoordinator:
                 log.warning("lockstep time waits at t=%.3f s for %s", self.now / 1e6, ", ".join(waiting))
             time.sleep(0.05)
             self._apply_membership()
-
-    def _supervisor_states(self) -> dict[str, str]:
-        """Module name → state, from the supervisor's status."""
-        for reply in self.node.session.get(keys.supervisor_key(self.node.vehicle, "status"), timeout=1.0):
-            if reply.ok is not None:
-                try:
-                    rows = json.loads(reply.ok.payload.to_string())["modules"]
-                    return {str(r["module"]): str(r["state"]) for r in rows}
-                except (ValueError, KeyError, TypeError):
-                    pass
-        return {}
 
     def _tick_publisher(self, m: MemberToken) -> zenoh.Publisher:
         pub = self._tick_pubs.get(m.publisher_id)
@@ -586,6 +575,18 @@ class LockstepCoordinator:
         self._member_sub.undeclare()
         self._ack_sub.undeclare()
         self._clock_pub.undeclare()
+
+
+def supervisor_states(session: zenoh.Session, vehicle: str) -> dict[str, str]:
+    """Module name → state, from the supervisor's status."""
+    for reply in session.get(keys.supervisor_key(vehicle, "status"), timeout=1.0):
+        if reply.ok is not None:
+            try:
+                rows = json.loads(reply.ok.payload.to_string())["modules"]
+                return {str(r["module"]): str(r["state"]) for r in rows}
+            except (ValueError, KeyError, TypeError):
+                pass
+    return {}
 
 
 def supervisor_word(state: str) -> Word:

@@ -1,6 +1,7 @@
 """Lockstep: time advances only when triggered work is done; runs are deterministic; stalls are named.
 
-Each behaviour holds on both transports: the same-host shared-memory fast path (the default) and Zenoh.
+Each behaviour holds on both transports, the same-host shared-memory fast path (the default) and Zenoh, and on
+both at once (members taking part over Zenoh in a shared-memory run, as modules on another host do).
 """
 
 import json
@@ -24,7 +25,7 @@ from tests.support.harness import (
 )
 
 STEPS = 3000
-TRANSPORTS = ("shm", "zenoh")
+TRANSPORTS = ("shm", "zenoh", "mixed")
 
 
 def run_chain(tmp_path, name: str, seed: int = 7, load: bool = False, transport: str = "shm") -> list:
@@ -48,9 +49,10 @@ def test_lockstep_is_deterministic_whatever_the_scheduling_and_the_transport(tmp
     trace_a, probe_a = run_chain(tmp_path, "a")
     trace_b, probe_b = run_chain(tmp_path, "b", load=True)
     trace_z, probe_z = run_chain(tmp_path, "z", load=True, transport="zenoh")
+    trace_m, probe_m = run_chain(tmp_path, "m", transport="mixed")
     assert len(trace_a) == STEPS - 1
-    assert trace_a == trace_b == trace_z
-    assert probe_a[: STEPS - 1] == probe_b[: STEPS - 1] == probe_z[: STEPS - 1]
+    assert trace_a == trace_b == trace_z == trace_m
+    assert probe_a[: STEPS - 1] == probe_b[: STEPS - 1] == probe_z[: STEPS - 1] == probe_m[: STEPS - 1]
     trace_c, _ = run_chain(tmp_path, "c", seed=8)
     assert trace_c != trace_a
 
@@ -122,16 +124,17 @@ def test_a_restarted_member_rejoins_at_the_step_it_left_and_time_waits_for_it(tm
 @pytest.mark.parametrize("transport", TRANSPORTS)
 def test_a_stalled_member_is_named_and_the_stack_stops(tmp_path, transport):
     home = tmp_path / "home"
+    over_zenoh = 'transport = "zenoh"\n' if transport == "mixed" else ""
     profile = chain_profile(
         tmp_path / "chain.toml",
-        extra='[[module]]\nmodule = "tests.support.modules:Staller"\nargs = { stall_at = 300 }\n',
+        extra=f'[[module]]\nmodule = "tests.support.modules:Staller"\nargs = {{ stall_at = 300 }}\n{over_zenoh}',
         transport=transport,
     )
     stack = RunningStack(home, profile)
     code = stack.wait(timeout=120)
     assert code == 1
     stack_line = stack.wait_for(r"lockstep stalled at t=([\d.]+) s: no progress for 4 s, waiting for (.*)$")
-    assert stack_line.group(2) == "staller (sensor_gyro/0)"
+    assert stack_line.group(2) == ("staller (sensor_gyro/0, over Zenoh)" if over_zenoh else "staller (sensor_gyro/0)")
     assert abs(float(stack_line.group(1)) - 300 * 0.004) < 1e-6
     assert "critical module tick_source failed" in stack.output
     assert not wait_no_processes(home)
@@ -167,7 +170,7 @@ def test_nothing_sent_on_the_bus_stops_the_lockstep(tmp_path, transport):
     assert not wait_no_processes(home)
 
 
-@pytest.mark.parametrize("transport", TRANSPORTS)
+@pytest.mark.parametrize("transport", TRANSPORTS[:2])
 def test_a_member_that_is_never_triggered_never_holds_up_the_clock(tmp_path, transport):
     """It reads no clock for more steps than its clock queue holds: the clocks must not pile up until they block
     the coordinator's (an idle `stack up` on the Zenoh transport froze after 88 s that way, its allocator never

@@ -268,9 +268,14 @@ def chain_profile(
     entries: dict[str, str] | None = None,
 ) -> Path:
     """The test processing chain: a tick source, a doubler, a summer and a timer module, with lockstep
-    traffic over ``transport`` (shm or zenoh); ``entries`` adds lines to modules' entries, by class name
-    (TickSource, Doubler, Summer, Pacer), e.g. a restart policy or ``process = "NAME"``."""
-    more = entries or {}
+    traffic over ``transport`` (shm, zenoh, or mixed: shared memory with the doubler and the pacer taking part
+    over Zenoh); ``entries`` adds lines to modules' entries, by class name (TickSource, Doubler, Summer, Pacer),
+    e.g. a restart policy or ``process = "NAME"``."""
+    more = dict(entries or {})
+    if transport == "mixed":
+        transport = "shm"
+        for name in ("Doubler", "Pacer"):
+            more[name] = f'{more.get(name, "")}\ntransport = "zenoh"'.strip()
     return write_profile(
         path,
         f"""
