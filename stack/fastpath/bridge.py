@@ -11,9 +11,10 @@ coordinator, the step ledger and every other member see one more member of the f
   sent yet (with the publisher's own header: its id, sequence number, topic index and time); then a
   :class:`~stack.msg.internal.LockstepClock` whose counts are what was sent, so the member's barrier
   waits for exactly those; a trigger reaches the member as it would over Zenoh alone, as one of them;
-- the member runs, publishes on Zenoh (where tools and members over Zenoh read it) and acknowledges;
-  the bridge writes the publications the acknowledgement counts into the slot's rings, waking the fast
-  members they trigger, and only then counts the run finished.
+- the member runs, publishes on Zenoh (where tools and members over Zenoh read it) and acknowledges; the
+  acknowledgement wakes the slot, and the bridge writes the publications it counts into the slot's rings,
+  waking the fast members they trigger, and only then counts the run finished. The coordinator's process
+  never waits on one member: members over Zenoh run side by side, as processes of the fast path do.
 
 The visibility rule is the same on both sides (:func:`stack.runtime.inputs.visible`), so a run mixing the
 transports publishes the same messages, bit for bit, as the run on one transport. At start-up the bridge
@@ -21,13 +22,15 @@ plays the part the fast path's modules do not play over Zenoh: it sends the pre-
 probes of the fast publishers whose topics a member reads, waits for the member's own probes, and says
 the coordinator is synced once every slot is ready. A member that leaves (its lockstep token goes) is
 named; time waits while the supervisor restarts it, as for any member, and its runs are skipped while it
-is gone for good. One that stops acknowledging for the stall timeout stops the run, named.
+is gone for good. One that stops acknowledging is a member whose run does not end: the coordinator's stall
+verdict names it.
 """
 
 from __future__ import annotations
 
 import heapq
 import logging
+import os
 import threading
 import time
 from collections.abc import Callable, Iterable
@@ -37,7 +40,6 @@ import msgspec
 import zenoh
 
 from stack.bus import keys
-from stack.bus.graph import read_graph
 from stack.bus.node import Node, stable_publisher_id
 from stack.bus.topics import FLAG_LOCKSTEP_TIME, FLAG_PROBE, HEADER
 from stack.fastpath.attach import Attachment
@@ -60,7 +62,14 @@ from stack.fastpath.topology import Topology
 from stack.msg.internal import LockstepAck, LockstepClock
 from stack.msg.registry import UnknownTopic, message_type
 from stack.runtime.ledger import SLOW_WAIT_S, VERDICT_TIMEOUT_S, LockstepError, Word
-from stack.runtime.lockstep import TIMER, ProtocolDecoder, parse_member, supervisor_states, supervisor_word
+from stack.runtime.lockstep import (
+    TIMER,
+    MemberToken,
+    ProtocolDecoder,
+    parse_member,
+    supervisor_states,
+    supervisor_word,
+)
 
 log = logging.getLogger("stack.lockstep")
 
@@ -117,6 +126,8 @@ class BridgedMember:
         self._raw: list[zenoh.Subscriber] = []
         self._probed: set[str] = set()
         self._cond = bridge.cond
+        self.token: MemberToken | None = None
+        """What its lockstep token says, once it is in (Zenoh's thread)."""
         self.declared = False
         self.ready = False
         self.present = False
@@ -133,6 +144,8 @@ class BridgedMember:
         self._ticks_acked: list[LockstepAck] = []
         self._readers: list[RingReader] = []
         self._topology_seen = -1
+        self._running: tuple[int, tuple[int, int] | None] | None = None
+        """The run forwarded and not acknowledged yet: its time, and its trigger (publisher id, index) or None."""
         self.rejected = 0
 
     # -- start-up ----------------------------------------------------------------------------------
@@ -195,10 +208,10 @@ class BridgedMember:
             return
         with self._cond:
             self.present = False
-            self._cond.notify_all()
         self._left_at = time.monotonic()
         self._given_up = False
         log.info("lockstep member %s left at t=%.3f s (over Zenoh)", self.name, self.w[H_NOW] / 1e6)
+        os.eventfd_write(self.att.eventfd, 1)
 
     def back(self) -> None:
         if self.present or not self.ready:
@@ -281,86 +294,87 @@ class BridgedMember:
         self.member.on_topology(topo)
 
     def work(self) -> None:
-        """Forward the runs due to the member and take in what it published (blocks until it acknowledged)."""
+        """Finish the run the member has acknowledged, then forward the next one due (never blocks on the member:
+        its acknowledgement, or its leaving, writes the slot's eventfd, and the coordinator's process calls this
+        again)."""
         if self.w[H_TOPOLOGY] != self._topology_seen:
             self.refresh_topology()
         if not self.member.admitted():
             return
         w, member = self.w, self.member
-        started, finished = member.started, member.finished
         ran = False
-        if not self.trigger:
-            while w[member.ticks] > w[started]:
+        while True:
+            if self._running is not None:
+                if not self._finish():
+                    break
                 ran = True
-                w[started] += 1
-                self._forward(int(w[H_NOW]), None)
-                w[finished] += 1
-        else:
-            while (found := next_trigger(self._readers)) is not None:
-                ran = True
+            t, trigger = 0, None
+            if not self.trigger:
+                if w[member.ticks] <= w[member.started]:
+                    break
+                t = int(w[H_NOW])
+            else:
+                found = next_trigger(self._readers)
+                if found is None:
+                    break
                 reader, n, head = found
-                w[started] += 1
                 w[member.consumed_word(reader.slot)] = n
                 reader.taken = n
-                self._forward(head.time_us, (reader.publisher_id, head.index))
-                w[finished] += 1
+                t, trigger = head.time_us, (reader.publisher_id, head.index)
+            w[member.started] += 1
+            self._running = (t, trigger)
+            if not self._forward(t, trigger):
+                self._running = None
+                w[member.finished] += 1
+                ran = True
         if ran:
             self.report_done([writer for writer in self.writers.values() if writer.wake])
 
-    def _forward(self, t: int, trigger: tuple[int, int] | None) -> None:
+    def _forward(self, t: int, trigger: tuple[int, int] | None) -> bool:
+        """Send the member what it reads and the clock of this run; False if the run is skipped."""
         if not self.present and not self._await_return():
-            return  # gone: the run is skipped (its trigger is taken, nothing is published)
+            return False  # gone: the run is skipped (its trigger is taken, nothing is published)
         if trigger is not None and trigger[1] <= self._missed.get((trigger[0], self.trigger), 0):
-            return  # sent before its new process came: never received, so skipped
+            return False  # sent before its new process came: never received
         if time.monotonic() - self._back_at < REJOIN_SETTLE_S:
             time.sleep(max(0.0, REJOIN_SETTLE_S - (time.monotonic() - self._back_at)))
-        bridge = self.bridge
-        bridge.send_clock(t, None if self.trigger else self.name)
-        ack = self._await_ack(t, trigger)
+        self.bridge.send_clock(t, None if self.trigger else self.name)
+        return True
+
+    def _finish(self) -> bool:
+        """End the run in progress if the member acknowledged it (writing what it published) or left."""
+        assert self._running is not None
+        _, trigger = self._running
+        with self._cond:
+            if trigger is None:
+                ack = self._ticks_acked.pop(0) if self._ticks_acked else None
+            else:
+                ack = self._acks.pop(trigger, None)
+            if ack is None and self.present:
+                return False
         if ack is not None:
             self._take_publications(ack)
-
-    def _await_ack(self, t: int, trigger: tuple[int, int] | None) -> LockstepAck | None:
-        """The member's acknowledgement of this run, or None if it left before giving it."""
-        timeout = self.bridge.stall_timeout_s
-        started = time.monotonic()
-        logged = False
-        with self._cond:
-            while True:
-                if trigger is None:
-                    ack = self._ticks_acked.pop(0) if self._ticks_acked else None
-                else:
-                    ack = self._acks.pop(trigger, None)
-                if ack is not None:
-                    return ack
-                if not self.present:
-                    return None
-                waited = time.monotonic() - started
-                if waited > timeout:
-                    raise LockstepError(
-                        f"lockstep stalled at t={t / 1e6:.3f} s: no progress for {timeout:.0f} s, waiting for "
-                        f"{self.name} ({self.trigger or TIMER}, over Zenoh)"
-                    )
-                if not logged and waited > SLOW_WAIT_S:
-                    logged = True
-                    log.warning("lockstep: waiting for %s (over Zenoh) at t=%.3f s", self.name, t / 1e6)
-                self._cond.wait(WAKE_CHECK_S)
+        self._running = None
+        self.w[self.member.finished] += 1
+        return True
 
     def on_ack(self, ack: LockstepAck) -> None:
-        """Zenoh's thread."""
+        """Zenoh's thread: keep the acknowledgement and wake the slot."""
         with self._cond:
             if ack.trigger_topic == TIMER:
                 self._ticks_acked.append(ack)
             else:
                 self._acks[(ack.trigger_publisher, ack.trigger_index)] = ack
-            self._cond.notify_all()
+        os.eventfd_write(self.att.eventfd, 1)
 
     def _take_publications(self, ack: LockstepAck) -> None:
         """Write into the slot's rings the messages the acknowledgement counts (waiting for the last to arrive)."""
         started = time.monotonic()
         for suffix, total in ack.published:
             writer = self.writers.get(suffix)
-            if writer is None or not isinstance(total, int):
+            if writer is None:
+                raise LockstepError(f"{self.name} (over Zenoh) published {suffix}, which it had not declared")
+            if not isinstance(total, int):
                 continue
             with self._cond:
                 while True:
@@ -418,6 +432,11 @@ class ZenohBridge:
         }
         self._acks = ProtocolDecoder(LockstepAck, self.run_id, keys.lockstep_ack_key(self.vehicle))
         self._ack_sub = self.session.declare_subscriber(keys.lockstep_ack_key(self.vehicle), self._on_ack)
+        self._graph: dict[tuple[str, str, str], int] = {}
+        """(module, ``pub`` or ``sub``, ``topic/instance``) → schema fingerprint, from the topic graph's tokens."""
+        self._graph_sub = self.session.liveliness().declare_subscriber(
+            keys.graph_query(self.vehicle), self._on_graph_token, history=True
+        )
         self._member_sub = self.session.liveliness().declare_subscriber(
             keys.lockstep_member_query(self.vehicle), self._on_member_token, history=True
         )
@@ -437,26 +456,18 @@ class ZenohBridge:
             self._clock_pub.put(step0)
             for pub in self._tick_pubs.values():
                 pub.put(step0)
-            graph = read_graph(self.session, self.vehicle, timeout=0.5)
-            tokens = {
-                parsed.name: parsed
-                for r in self.session.liveliness().get(keys.lockstep_member_query(self.vehicle), timeout=0.5)
-                if r.ok is not None and (parsed := parse_member(str(r.ok.key_expr))) is not None
-            }
             for m in self.members:
-                token = tokens.get(m.name)
-                if m.declared or token is None or token.publisher_id != m.publisher_id:
+                with self.cond:
+                    token = m.token
+                    mine = {(role, suffix): fp for (who, role, suffix), fp in self._graph.items() if who == m.name}
+                if m.declared or token is None:
                     continue
-                pubs = {
-                    f"{topic}/{inst}": int(min(node.fingerprints), 16)
-                    for (topic, inst), node in graph.items()
-                    if m.name in node.publishers and node.fingerprints
-                }
-                subs = [f"{topic}/{inst}" for (topic, inst), node in graph.items() if m.name in node.subscribers]
+                pubs = {suffix: fp for (role, suffix), fp in mine.items() if role == "pub"}
+                subs = sorted(suffix for role, suffix in mine if role == "sub")
                 m.declare(token.trigger, token.period_us, pubs, subs)
                 for suffix in subs:
                     self._relay(suffix)
-            self._probe(graph)
+            self._probe()
             for m in self.members:
                 if m.declared and not m.ready and m.probes_seen():
                     m.take_role()
@@ -487,30 +498,46 @@ class ZenohBridge:
                 express=True,
             )
 
-    def _probe(self, graph: dict) -> None:
+    def _probe(self) -> None:
         """Probes of the fast path's publishers of what the members read: their messages reach the members through
         this session, which the probes show they can (:mod:`stack.runtime.startup`)."""
-        bridged = set(self._by_name)
-        for suffix, relay in self._relays.items():
-            topic, _, instance = suffix.partition("/")
-            node = graph.get((topic, int(instance)))
-            if node is None or not node.fingerprints:
-                continue
-            fp = int(min(node.fingerprints), 16)
-            for publisher in node.publishers:
-                if publisher not in bridged:
-                    pid = stable_publisher_id(self.vehicle, publisher)
-                    relay.put(b"", attachment=HEADER.pack(fp, pid, 0, 0, 0, FLAG_PROBE, self.run_id))
+        with self.cond:
+            publishers = [(m, s, fp) for (m, role, s), fp in self._graph.items() if role == "pub" and s in self._relays]
+        for module, suffix, fp in publishers:
+            if module not in self._by_name:
+                pid = stable_publisher_id(self.vehicle, module)
+                self._relays[suffix].put(b"", attachment=HEADER.pack(fp, pid, 0, 0, 0, FLAG_PROBE, self.run_id))
+
+    def _on_graph_token(self, sample: zenoh.Sample) -> None:
+        """Zenoh's thread: ``stack/<vehicle>/@graph/<module>/<role>/<topic>/<instance>/<Type>/<fingerprint>``.
+
+        A member's graph tokens are declared before its lockstep token, on one session, and arrive here in that
+        order: once its lockstep token is in, so are its publications and subscriptions."""
+        parts = str(sample.key_expr).split("/")
+        if len(parts) != 9 or parts[4] not in ("pub", "sub"):
+            return
+        try:
+            key, fp = (parts[3], parts[4], f"{parts[5]}/{int(parts[6])}"), int(parts[8], 16)
+        except ValueError:
+            return
+        with self.cond:
+            if sample.kind == zenoh.SampleKind.PUT:
+                self._graph[key] = fp
+            else:
+                self._graph.pop(key, None)
 
     def _on_member_token(self, sample: zenoh.Sample) -> None:
         parsed = parse_member(str(sample.key_expr))
         m = self._by_name.get(parsed.name) if parsed is not None else None
         if m is None or parsed is None or parsed.publisher_id != m.publisher_id:
             return
-        if sample.kind == zenoh.SampleKind.PUT:
+        if sample.kind != zenoh.SampleKind.PUT:
+            m.left()
+        elif m.ready:
             m.back()
         else:
-            m.left()
+            with self.cond:
+                m.token = parsed
 
     # -- runs --------------------------------------------------------------------------------------
 
@@ -598,6 +625,7 @@ class ZenohBridge:
         for m in self.members:
             m.close()
         self._member_sub.undeclare()
+        self._graph_sub.undeclare()
         self._ack_sub.undeclare()
         self._clock_pub.undeclare()
         for pub in (*self._tick_pubs.values(), *self._relays.values()):
