@@ -17,6 +17,8 @@ interleaved, ``--runs`` times:
   control, allocation) in one process and the rest each in its own; those two and the position chain in
   another; every lockstep module in one process. Each also runs as ``stack up --speed 1``, disarmed, for
   its resident and unique memory (all the stack's processes) and idle CPU;
+- ``mixed``: the fast flight with the position chain (flight mode manager, position controller, hover thrust
+  estimator) taking part over Zenoh (``transport = "zenoh"``, as modules on another host do);
 - ``ceiling``: the same scenario and seed flown by :class:`stack.runtime.inprocess.InProcessStack`, the
   same modules chained in this one process with no bus (what the algorithms cost by themselves).
 
@@ -69,6 +71,8 @@ RATIO_TARGET = 0.7
 # The modules of the simulator's 250 Hz loop: gyro to attitude estimate, attitude and rate control, allocation.
 INNER_LOOP = ("simulator", "attitude_estimator_q", "mc_att_control", "mc_rate_control", "control_allocator")
 GROUPINGS = ("inner", "two", "one")
+# The modules the ``mixed`` kind runs over Zenoh (launch/sitl_quad_mixed.toml's).
+POSITION_CHAIN = ("flight_mode_manager", "mc_pos_control", "mc_hover_thrust_estimator")
 
 
 def grouped_profile(base: str, grouping: str, directory: Path) -> Path:
@@ -85,6 +89,19 @@ def grouped_profile(base: str, grouping: str, directory: Path) -> Path:
             lines += ["[[module]]", f"name = {json.dumps(m.name)}", f"module = {json.dumps(m.module)}"]
             lines.append(f'process = "{process}"')
     path = directory / f"{prof.name}_{grouping}.toml"
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+def mixed_profile(base: str, directory: Path) -> Path:
+    """A profile that extends ``base`` with its position chain taking part in the lockstep over Zenoh."""
+    prof = load_profile(base)
+    lines = [f"extends = {json.dumps(str(prof.path))}"]
+    for m in prof.modules:
+        if m.name in POSITION_CHAIN:
+            lines += ["[[module]]", f"name = {json.dumps(m.name)}", f"module = {json.dumps(m.module)}"]
+            lines.append('transport = "zenoh"')
+    path = directory / f"{prof.name}_mixed.toml"
     path.write_text("\n".join(lines) + "\n")
     return path
 
@@ -311,15 +328,17 @@ def main() -> None:
     load_profile(args.profile)  # refused here, in one line, if broken
     load = os.getloadavg()
     print(f"load average {load[0]:.2f} {load[1]:.2f} {load[2]:.2f} on {os.cpu_count()} CPUs; profile {args.profile}")
-    kinds = ["fast", "zenoh", "observed", "up", "paced", *GROUPINGS, *(f"paced {g}" for g in GROUPINGS)]
+    kinds = ["fast", "zenoh", "mixed", "observed", "up", "paced", *GROUPINGS, *(f"paced {g}" for g in GROUPINGS)]
     runs: dict[str, list[Run]] = {kind: [] for kind in kinds}
     with tempfile.TemporaryDirectory(prefix="bench_lockstep") as tmp:
         home = Path(tmp)
         os.environ["STACK_HOME"] = str(home)  # connect() finds the stack through it
         grouped = {g: str(grouped_profile(args.profile, g, home)) for g in GROUPINGS}
+        mixed = str(mixed_profile(args.profile, home))
         for i in range(args.runs):
             runs["fast"].append(fly("fast", args, home, []))
             runs["zenoh"].append(fly("zenoh", args, home, ["--lockstep-transport", "zenoh"]))
+            runs["mixed"].append(fly("mixed", args, home, [], mixed))
             observers = ["--record", str(home / "flight.mcap"), "--save", str(home / "flight.rrd")]
             runs["observed"].append(fly("observed", args, home, observers))
             up_args = ["--duration", str(args.duration), "-q"]
@@ -343,6 +362,7 @@ def main() -> None:
         )
     print_modules("fast path, flying", runs["fast"])
     print_modules("Zenoh, flying", runs["zenoh"])
+    print_modules("fast path with the position chain over Zenoh, flying", runs["mixed"])
     for g in GROUPINGS:
         print_modules(f"fast path, flying, grouped {g}", runs[g])
     print("\ntargets (idle 2-core machine):")
