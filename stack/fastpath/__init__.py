@@ -23,6 +23,9 @@ dies is noticed within milliseconds. Modules sharing a process (a profile's ``pr
 slot each; one thread serves them, running a member another of them woke without an eventfd
 (:class:`stack.runtime.fastrun.ProcessGroup`).
 
+A member a profile gives ``transport = "zenoh"`` (as a module on another host must) keeps a slot too, which
+the coordinator's process serves for it over Zenoh (:mod:`stack.fastpath.bridge`): one run, both transports.
+
 A topic is also put on Zenoh while something outside the fast path subscribes to it (the supervisor
 watches the topic graph and sets a flag per publication), so ``stack topic``, ground stations and
 modules on other hosts see every topic as before; messages from outside the run (a CLI command)
