@@ -24,8 +24,6 @@ import psutil
 UP = "up"
 FLY = "fly"
 REPLAY = "replay"
-# psutil derives a process's start time from the boot time and clock ticks: the same value on every read.
-CREATE_TIME_TOLERANCE_S = 0.05
 
 
 def stack_home() -> Path:
@@ -62,9 +60,21 @@ def stack_name(state: dict[str, object]) -> str:
     return vehicle if kind == UP else f"{vehicle}-{kind}-{state['pid']}"
 
 
+def start_ticks(pid: int) -> int:
+    """When process ``pid`` started, in clock ticks since boot (``/proc/<pid>/stat`` field 22, proc(5)).
+
+    Not psutil's ``create_time()``: that adds the boot time, which Linux derives from the wall clock and reports
+    in whole seconds, so a clock adjustment moves it by a second and a live supervisor would look like another
+    program that took its pid. Raises OSError if there is no such process."""
+    with open(f"/proc/{pid}/stat", "rb") as f:
+        stat = f.read()
+    return int(stat[stat.rindex(b")") + 2 :].split()[19])
+
+
 def process_identity() -> dict[str, object]:
     """This process's pid and start time, for a state record (see :func:`is_alive`)."""
-    return {"pid": os.getpid(), "pid_created": psutil.Process().create_time()}
+    pid = os.getpid()
+    return {"pid": pid, "pid_started": start_ticks(pid)}
 
 
 def is_alive(state: dict[str, object]) -> bool:
@@ -74,12 +84,11 @@ def is_alive(state: dict[str, object]) -> bool:
     if not isinstance(pid, int):
         return False
     try:
-        proc = psutil.Process(pid)
-        if proc.status() == psutil.STATUS_ZOMBIE:
+        if psutil.Process(pid).status() == psutil.STATUS_ZOMBIE:
             return False
-        created = state.get("pid_created")
-        return not isinstance(created, float) or abs(proc.create_time() - created) <= CREATE_TIME_TOLERANCE_S
-    except psutil.Error:
+        started = state.get("pid_started")
+        return not isinstance(started, int) or start_ticks(pid) == started
+    except (psutil.Error, OSError, ValueError, IndexError):
         return False
 
 

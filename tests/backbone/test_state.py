@@ -86,7 +86,7 @@ def test_a_state_whose_pid_is_a_zombie_or_another_program_is_removed(home):
     run_state.write_state("v1", me)
     assert run_state.addressed_stacks(None) == [me]
     # The pid now belongs to a program started after the supervisor that wrote the state.
-    run_state.write_state("v1", me | {"pid_created": me["pid_created"] - 100.0})
+    run_state.write_state("v1", me | {"pid_started": me["pid_started"] - 100})
     zombie = subprocess.Popen(["sleep", "0"])
     while psutil.Process(zombie.pid).status() != psutil.STATUS_ZOMBIE:
         pass
