@@ -50,7 +50,7 @@ def set_params(prof: Profile, params: dict[str, object]) -> None:
 
 
 def windy_limits(checks: tuple[Check, ...], limits: dict[str, object]) -> dict[str, object]:
-    """The numeric upper limits doubled (the issue's rule for flights in wind), others unchanged."""
+    """The numeric upper limits doubled (`stack fly --wind`'s rule for flights in wind), others unchanged."""
     out = dict(limits)
     for check in checks:
         limit = out.get(check.metric, check.limit)

@@ -5,7 +5,7 @@ NAV_LOITER_RAD at the takeoff altitude. Once the aircraft is on the circle, thre
 ground truth: the radius error (RMS), the altitude error and the true-airspeed error against TECS' setpoint. In
 wind a guidance that ignores the wind (L1) flies an egg-shaped circle; NPFG, fed the airspeed selector's wind
 estimate, should hold it better.
-Then Return and a landing on the runway. The limits are the calm limits doubled (the issue's rule for wind). The
+Then Return and a landing on the runway. The limits are the calm limits doubled (`stack fly --wind`'s rule). The
 touchdown's sink rate is reported, not judged here (plane_mission judges the touchdown).
 """
 

@@ -78,6 +78,6 @@ def test_meets_the_issue_target(fly_here: FlyHere, metric: str, seed: int) -> No
     assert 0.0 <= value <= TARGETS[metric], f"{metric} = {value:.4g}, target {TARGETS[metric]}"
     if metric.endswith("_rise_time_s"):
         assert value > 0.0
-    # The profile judges the flight by the issue's limits, not relaxed ones.
+    # The profile judges the flight by the scenario's own limits, not relaxed ones.
     limit = next(c["limit"] for c in report["checks"] if c["name"] == metric)
     assert limit == TARGETS[metric]

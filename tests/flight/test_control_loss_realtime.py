@@ -1,4 +1,4 @@
-"""Issue 12: in real time a control module killed in flight is a failsafe, and never a flyaway (one flight).
+"""In real time a control module killed in flight is a failsafe, and never a flyaway (one flight).
 
 In real time the vehicle flies on without the dead module until the supervisor restarts it (0.5 s and more), so
 the commander acts: a dead rate controller is a loss of attitude control (flight termination: the motors stop and

@@ -1,4 +1,4 @@
-"""Issue 12: every control module killed in turn during a lockstep hover; restarted, the flight goes on.
+"""Every control module killed in turn during a lockstep hover; restarted, the flight goes on.
 
 Simulated time waits while the supervisor restarts a dead module, so after each restart the vehicle must still
 be armed, in Hold, where it was (the commander resumes from its kept state; mc_pos_control resumes flying, not

@@ -1,8 +1,8 @@
-"""Issue 10: the whole stack flown through the pixhawk module against the simulated Pixhawk, in real time.
+"""The whole stack flown through the pixhawk module against the simulated Pixhawk, in real time.
 
 ``stack fly`` with the pixhawk_sim profiles: the supervisor starts ``stack pixhawk-sim`` as a process of its
 own, linked to the adapter over 127.0.0.1 UDP or a 921600-baud pseudo-terminal. Every flight runs on the
-wall clock, so the issue's limits are checked with the seeds varied across the cases: takeoff_land on the
+wall clock, so the scenarios' limits are checked with the seeds varied across the cases: takeoff_land on the
 Pixhawk's own estimate over the pseudo-terminal losing 5 % of its packets in both directions; mission_box over
 the pseudo-terminal (the lockstep flight tests fly it on more seeds); and a
 hold with its link cut for 2 s (``link_loss``, over UDP). A flight that fails
