@@ -76,7 +76,7 @@ def sim_time(stack: RunningStack) -> int:
     return max(m.get("sim_time_us", 0) for m in stack.status()["modules"])  # none before a first heartbeat
 
 
-@pytest.mark.parametrize("transport", TRANSPORTS)
+@pytest.mark.parametrize("transport", TRANSPORTS[:2])  # a member over Zenoh that leaves: the restart test below
 def test_a_member_that_dies_is_named_and_the_rest_go_on(tmp_path, transport):
     home = tmp_path / "home"
     stack = RunningStack(home, chain_profile(tmp_path / "chain.toml", transport=transport))
