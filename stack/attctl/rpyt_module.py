@@ -38,7 +38,7 @@ from stack.attctl.stabilized import rattitude_uses_rate_control
 from stack.attctl.stick_attitude import StickAttitudeSetpoint
 from stack.mathlib.quaternion import Quat
 from stack.mathlib.vector import Vec3
-from stack.msg.actuators import ActuatorMotors, ActuatorOutputs
+from stack.msg.actuators import MOTOR_SLOTS, OUTPUT_SLOTS, ActuatorMotors, ActuatorOutputs, pad
 from stack.msg.estimation import VehicleAttitude
 from stack.msg.setpoints import VehicleThrustSetpoint
 from stack.msg.system import VehicleControlMode
@@ -49,12 +49,6 @@ from stack.sim.vehicle import load_vehicle
 
 _NO_MODE = VehicleControlMode()
 _NO_RATES: Vec3 = (math.nan, math.nan, math.nan)
-MOTOR_SLOTS = 12
-OUTPUTS = 16
-
-
-def _pad(values: tuple[float, ...], size: int, fill: float) -> tuple[float, ...]:
-    return values + (fill,) * (size - len(values))
 
 
 class RollPitchYawrateThrustController(Module):
@@ -111,10 +105,10 @@ class RollPitchYawrateThrustController(Module):
         n = self.control.num_rotors
         if armed is not None and armed.armed and not (armed.lockdown or armed.kill or armed.termination):
             motors = self.control.motors(att.q, body_rates)
-            control, sim = _pad(motors, MOTOR_SLOTS, math.nan), _pad(motors, OUTPUTS, 0.0)
+            control, sim = pad(motors, MOTOR_SLOTS, math.nan), pad(motors, OUTPUT_SLOTS, 0.0)
         else:
             self.control.reset()
-            control, sim = _pad((), MOTOR_SLOTS, math.nan), _pad((), OUTPUTS, 0.0)
+            control, sim = pad((), MOTOR_SLOTS, math.nan), pad((), OUTPUT_SLOTS, 0.0)
         t = att.timestamp_sample
         thrust = (0.0, 0.0, -self.control.thrust / self.control.max_thrust)
         self.publish("vehicle_thrust_setpoint", VehicleThrustSetpoint(timestamp_sample=t, xyz=thrust))

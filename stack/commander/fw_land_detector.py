@@ -33,6 +33,7 @@ from dataclasses import dataclass
 from stack.commander.hysteresis import Hysteresis
 from stack.commander.land_detector import LandDetectorState
 from stack.mathlib.vector import ZERO3, Vec3
+from stack.msg.fixedwing import AIRSPEED_TIMEOUT_US
 from stack.params import catalogue
 from stack.params.param import Param
 
@@ -42,7 +43,6 @@ PARAMS: tuple[Param, ...] = catalogue.params(
 DEFAULTS: dict[str, object] = {p.name: p.default for p in PARAMS}
 
 POSITION_TIMEOUT_US = 1_000_000
-AIRSPEED_TIMEOUT_US = 1_000_000
 NO_AIRSPEED_XY_FACTOR = 0.7
 """The ground-speed limit is tightened by this factor when there is no airspeed."""
 AT_REST_RATE = math.radians(3.0)

@@ -25,6 +25,7 @@ from stack.mathlib import quaternion as quat
 from stack.mathlib.scalar import constrain
 from stack.mathlib.vector import Vec3
 from stack.msg.estimation import VehicleAttitude
+from stack.msg.fixedwing import AIRSPEED_TIMEOUT_US
 from stack.msg.setpoints import (
     ManualControlSetpoint,
     RateCtrlStatus,
@@ -36,9 +37,6 @@ from stack.msg.setpoints import (
 from stack.msg.system import VehicleControlMode
 from stack.runtime.module import Module, Trigger
 from stack.runtime.priority import NAV_AND_CONTROLLERS
-
-AIRSPEED_TIMEOUT_US = 1_000_000
-"""An airspeed older than this is not valid (FixedwingAttitudeControl ``get_airspeed_and_update_scaling``)."""
 
 _NO_MODE = VehicleControlMode()
 _ZERO = (0.0, 0.0, 0.0)

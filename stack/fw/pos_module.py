@@ -17,14 +17,12 @@ from stack.fw.pos_control import PARAMS, FwPosInputs
 from stack.fw.pos_control import FixedwingPositionControl as PositionController
 from stack.mathlib import quaternion as quat
 from stack.msg.estimation import VehicleLocalPosition
-from stack.msg.fixedwing import PositionControllerStatus
+from stack.msg.fixedwing import AIRSPEED_TIMEOUT_US, PositionControllerStatus
 from stack.msg.setpoints import VehicleAttitudeSetpoint
 from stack.runtime.module import Module, Trigger
 from stack.runtime.priority import NAV_AND_CONTROLLERS
 
 NAN = math.nan
-AIRSPEED_TIMEOUT_US = 1_000_000
-"""An airspeed or wind estimate older than this is not used."""
 
 
 class FixedwingPositionControl(Module):

@@ -20,20 +20,12 @@ from stack.mixer import allocation, effectiveness, fixedwing, output
 from stack.mixer.allocation import ControlAllocator
 from stack.mixer.fixedwing import FixedWingAllocator
 from stack.mixer.output import MotorOutput, servo_outputs
-from stack.msg.actuators import ActuatorMotors, ActuatorOutputs, ControlAllocatorStatus
-from stack.msg.fixedwing import ActuatorServos
+from stack.msg.actuators import MOTOR_SLOTS, OUTPUT_SLOTS, ActuatorMotors, ActuatorOutputs, ControlAllocatorStatus, pad
+from stack.msg.fixedwing import SERVO_SLOTS, ActuatorServos
 from stack.msg.setpoints import VehicleTorqueSetpoint
 from stack.params import ca
 from stack.runtime.module import Module, Trigger
 from stack.runtime.priority import RATE_CTRL
-
-OUTPUTS = 16
-MOTOR_SLOTS = 12
-SERVO_SLOTS = 8
-
-
-def _pad(values: tuple[float, ...], size: int, fill: float) -> tuple[float, ...]:
-    return values[:size] + (fill,) * (size - len(values))
 
 
 class ControlAllocatorModule(Module):
@@ -61,8 +53,8 @@ class ControlAllocatorModule(Module):
         self.plane: FixedWingAllocator | None = None
         if int(values["CA_AIRFRAME"]) == ca.AIRFRAME_FIXED_WING:
             self.plane = FixedWingAllocator.from_params(values)
-            if self.plane.num_motors + self.plane.num_surfaces > OUTPUTS:
-                raise ValueError(f"CA_ROTOR_COUNT + CA_SV_CS_COUNT exceeds the {OUTPUTS} outputs")
+            if self.plane.num_motors + self.plane.num_surfaces > OUTPUT_SLOTS:
+                raise ValueError(f"CA_ROTOR_COUNT + CA_SV_CS_COUNT exceeds the {OUTPUT_SLOTS} outputs")
             self.outputs = MotorOutput(self.plane.num_motors, values, idle=False)
             self.log.info("fixed-wing allocation: %d motors, %d control surfaces",
                           self.plane.num_motors, self.plane.num_surfaces)
@@ -91,10 +83,10 @@ class ControlAllocatorModule(Module):
         t = torque_sp.timestamp_sample
         self.publish(
             "actuator_motors",
-            ActuatorMotors(timestamp_sample=t, control=_pad(out.actuator_motors, MOTOR_SLOTS, math.nan)),
+            ActuatorMotors(timestamp_sample=t, control=pad(out.actuator_motors, MOTOR_SLOTS, math.nan)),
         )
-        self.publish("actuator_outputs", ActuatorOutputs(noutputs=n, output=_pad(out.pwm, OUTPUTS, 0.0)))
-        self.publish("actuator_outputs_sim", ActuatorOutputs(noutputs=n, output=_pad(out.sim, OUTPUTS, 0.0)))
+        self.publish("actuator_outputs", ActuatorOutputs(noutputs=n, output=pad(out.pwm, OUTPUT_SLOTS, 0.0)))
+        self.publish("actuator_outputs_sim", ActuatorOutputs(noutputs=n, output=pad(out.sim, OUTPUT_SLOTS, 0.0)))
         self.publish(
             "control_allocator_status",
             ControlAllocatorStatus(
@@ -102,7 +94,7 @@ class ControlAllocatorModule(Module):
                 unallocated_torque=result.unallocated_torque,
                 thrust_setpoint_achieved=result.thrust_achieved,
                 unallocated_thrust=result.unallocated_thrust,
-                actuator_saturation=_pad(result.actuator_saturation, OUTPUTS, 0),
+                actuator_saturation=pad(result.actuator_saturation, OUTPUT_SLOTS, 0),
             ),
         )
 
@@ -114,15 +106,15 @@ class ControlAllocatorModule(Module):
         n = plane.num_motors + plane.num_surfaces
         self.publish(
             "actuator_motors",
-            ActuatorMotors(timestamp_sample=t, control=_pad(motors.actuator_motors, MOTOR_SLOTS, math.nan)),
+            ActuatorMotors(timestamp_sample=t, control=pad(motors.actuator_motors, MOTOR_SLOTS, math.nan)),
         )
         self.publish(
             "actuator_servos",
-            ActuatorServos(timestamp_sample=t, control=_pad(servos.actuator_servos, SERVO_SLOTS, math.nan)),
+            ActuatorServos(timestamp_sample=t, control=pad(servos.actuator_servos, SERVO_SLOTS, math.nan)),
         )
-        pwm = _pad(motors.pwm + servos.pwm, OUTPUTS, 0.0)
+        pwm = pad(motors.pwm + servos.pwm, OUTPUT_SLOTS, 0.0)
         self.publish("actuator_outputs", ActuatorOutputs(noutputs=n, output=pwm))
-        sim = _pad(motors.sim + servos.sim, OUTPUTS, 0.0)
+        sim = pad(motors.sim + servos.sim, OUTPUT_SLOTS, 0.0)
         self.publish("actuator_outputs_sim", ActuatorOutputs(noutputs=n, output=sim))
         self.publish(
             "control_allocator_status",
@@ -131,6 +123,6 @@ class ControlAllocatorModule(Module):
                 unallocated_torque=result.unallocated_torque,
                 thrust_setpoint_achieved=result.thrust_achieved,
                 unallocated_thrust=result.unallocated_thrust,
-                actuator_saturation=_pad(result.actuator_saturation, OUTPUTS, 0),
+                actuator_saturation=pad(result.actuator_saturation, OUTPUT_SLOTS, 0),
             ),
         )

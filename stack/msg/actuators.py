@@ -4,6 +4,16 @@ from __future__ import annotations
 
 from stack.msg.base import F3, F12, F16, I16, NAN12, ZERO3, ZERO16, ZERO16_INT, Message
 
+MOTOR_SLOTS = 12
+"""Motors an ``ActuatorMotors`` carries (PX4 ``actuator_motors.msg`` NUM_CONTROLS)."""
+OUTPUT_SLOTS = 16
+"""Outputs an ``ActuatorOutputs`` carries (PX4 ``actuator_outputs.msg`` NUM_ACTUATOR_OUTPUTS)."""
+
+
+def pad(values: tuple[float, ...], size: int, fill: float) -> tuple[float, ...]:
+    """``values`` cut or filled with ``fill`` to ``size``: a message's fixed-length array."""
+    return values[:size] + (fill,) * (size - len(values))
+
 
 class ActuatorMotors(Message):
     """Motor commands in [−1, 1] (non-reversible motors use [0, 1]); NaN means stopped/disarmed."""

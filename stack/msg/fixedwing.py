@@ -16,6 +16,8 @@ from stack.msg.base import NAN, Message
 
 F8 = Annotated[tuple[float, ...], msgspec.Meta(min_length=8, max_length=8)]
 NAN8: tuple[float, ...] = (NAN,) * 8
+SERVO_SLOTS = 8
+"""Control surfaces an ``ActuatorServos`` carries (PX4 ``actuator_servos.msg`` NUM_CONTROLS)."""
 
 
 class Airspeed(Message):
@@ -28,6 +30,11 @@ class Airspeed(Message):
     differential_pressure_pa: float = NAN
     air_temperature_celsius: float = NAN
     confidence: float = 0.0
+
+
+AIRSPEED_TIMEOUT_US = 1_000_000
+"""An ``airspeed_validated`` older than this is not used (PX4 FixedwingAttitudeControl
+``get_airspeed_and_update_scaling``)."""
 
 
 class AirspeedValidated(Message):

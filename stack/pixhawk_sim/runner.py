@@ -30,10 +30,8 @@ from stack.pixhawk_sim.protocol import Px4Protocol
 from stack.pixhawk_sim.telemetry import Message
 from stack.pixhawk_sim.vehicle import SimulatedPixhawk
 from stack.pixhawk_sim.wire import PhysicalLink, PtyUart, UdpLink, Wire
+from stack.sim.simulator import MAX_CATCH_UP_STEPS
 from stack.sim.vehicle import VehicleModel
-
-MAX_CATCH_UP_STEPS = 25
-"""Up to 100 ms late the missed steps are run back to back; later than that the missed time is skipped."""
 
 
 @dataclass

@@ -28,15 +28,13 @@ from stack.sim import battery
 from stack.sim.airspeed_sensor import AirspeedSample
 from stack.sim.battery import BatteryModel
 from stack.sim.sensors import BaroSample, GpsSample, ImuSample, MagSample
-from stack.sim.simulator import Simulator
+from stack.sim.simulator import MAX_CATCH_UP_STEPS, Simulator
 from stack.sim.vehicle import FixedwingModel, VehicleModel, load_vehicle
 from stack.sim.wind import WindParams
 
 # Device ids as PX4's simulated drivers report them (SIH's IMU id; the others distinct).
 IMU_DEVICE_ID = 1310988
 BATTERY_PERIOD_US = 100_000
-MAX_CATCH_UP_STEPS = 25
-"""Up to 100 ms late (at 250 Hz) the missed steps run back to back; later, the missed time is skipped."""
 MAG_DEVICE_ID = 197388
 BARO_DEVICE_ID = 6620172
 GPS_DEVICE_ID = 11469064

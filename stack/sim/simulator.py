@@ -93,6 +93,11 @@ def _period_us(rate_hz: float, what: str) -> int:
     return period
 
 
+MAX_CATCH_UP_STEPS = 25
+"""On the wall clock a simulation running late runs the steps it missed back to back, up to this many (100 ms at
+250 Hz); later than that the missed time is skipped (and counted)."""
+
+
 class Simulator:
     """A seeded simulation: physics, wind, IMU, magnetometer, barometer, GPS, and a plane's airspeed.
 

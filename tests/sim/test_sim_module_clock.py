@@ -6,7 +6,8 @@ from __future__ import annotations
 
 import itertools
 
-from stack.sim.module import MAX_CATCH_UP_STEPS, SimulatorModule
+from stack.sim.module import SimulatorModule
+from stack.sim.simulator import MAX_CATCH_UP_STEPS
 from tests.support.bench import ModuleBench
 
 PERIOD_S = 0.004
