@@ -29,6 +29,7 @@ from dataclasses import dataclass
 
 from stack.mathlib.scalar import FLT_EPSILON
 from stack.mathlib.vector import Vec3
+from stack.params import catalogue
 from stack.posctl.l1_guidance import line_crossing_point
 from stack.posctl.velocity_smoothing import TrajectoryPoint, VelocitySmoothing3D
 
@@ -78,34 +79,39 @@ def _angle_at_corner(ux: float, uy: float, wx: float, wy: float) -> float:
     return min(alpha, math.pi - FLT_EPSILON)
 
 
+def _default(name: str) -> float:
+    return float(catalogue.get(name).default)
+
+
 @dataclass(slots=True)
 class PositionSmoothingParams:
-    """Tunables of ``PositionSmoothing`` under their PX4 names (defaults and ranges from PX4 main)."""
+    """Tunables of ``PositionSmoothing`` under their PX4 names; defaults and ranges are the catalogue's
+    (:mod:`stack.params.catalogue`)."""
 
-    mpc_xy_cruise: float = 5.0
-    """MPC_XY_CRUISE, horizontal cruise speed [m/s], 3–20."""
-    mpc_xy_vel_max: float = 12.0
-    """MPC_XY_VEL_MAX, per-axis horizontal speed limit of the profiles [m/s], 0–20."""
-    mpc_z_v_auto_up: float = 3.0
-    """MPC_Z_V_AUTO_UP, climb speed [m/s], 0.5–8."""
-    mpc_z_v_auto_dn: float = 1.5
-    """MPC_Z_V_AUTO_DN, descent speed [m/s], 0.5–4."""
-    mpc_acc_hor: float = 3.0
-    """MPC_ACC_HOR, horizontal acceleration [m/s²], 2–15."""
-    mpc_acc_up_max: float = 4.0
-    """MPC_ACC_UP_MAX, vertical acceleration while climbing [m/s²], 2–15."""
-    mpc_acc_down_max: float = 3.0
-    """MPC_ACC_DOWN_MAX, vertical acceleration while descending [m/s²], 2–15."""
-    mpc_jerk_auto: float = 4.0
-    """MPC_JERK_AUTO, jerk limit [m/s³], 1–80."""
-    mpc_xy_err_max: float = 2.0
-    """MPC_XY_ERR_MAX, horizontal lag at which the trajectory stops [m], 0.1–10."""
-    mpc_xy_traj_p: float = 0.5
-    """MPC_XY_TRAJ_P, share of MPC_ACC_HOR used as lateral acceleration in turns [-], 0.1–1."""
-    nav_acc_rad: float = 10.0
-    """NAV_ACC_RAD, horizontal waypoint acceptance radius [m], 0.05–200."""
-    nav_mc_alt_rad: float = 0.8
-    """NAV_MC_ALT_RAD, vertical waypoint acceptance radius [m], 0.05–200."""
+    mpc_xy_cruise: float = _default("MPC_XY_CRUISE")
+    """Horizontal cruise speed [m/s]."""
+    mpc_xy_vel_max: float = _default("MPC_XY_VEL_MAX")
+    """Per-axis horizontal speed limit of the profiles [m/s]."""
+    mpc_z_v_auto_up: float = _default("MPC_Z_V_AUTO_UP")
+    """Climb speed [m/s]."""
+    mpc_z_v_auto_dn: float = _default("MPC_Z_V_AUTO_DN")
+    """Descent speed [m/s]."""
+    mpc_acc_hor: float = _default("MPC_ACC_HOR")
+    """Horizontal acceleration [m/s²]."""
+    mpc_acc_up_max: float = _default("MPC_ACC_UP_MAX")
+    """Vertical acceleration while climbing [m/s²]."""
+    mpc_acc_down_max: float = _default("MPC_ACC_DOWN_MAX")
+    """Vertical acceleration while descending [m/s²]."""
+    mpc_jerk_auto: float = _default("MPC_JERK_AUTO")
+    """Jerk limit [m/s³]."""
+    mpc_xy_err_max: float = _default("MPC_XY_ERR_MAX")
+    """Horizontal lag at which the trajectory stops [m]."""
+    mpc_xy_traj_p: float = _default("MPC_XY_TRAJ_P")
+    """Share of MPC_ACC_HOR used as lateral acceleration in turns [-]."""
+    nav_acc_rad: float = _default("NAV_ACC_RAD")
+    """Horizontal waypoint acceptance radius [m] (the navigator's: a mission item's own radius when it has one)."""
+    nav_mc_alt_rad: float = _default("NAV_MC_ALT_RAD")
+    """Vertical waypoint acceptance radius [m]."""
 
 
 class PositionSmoothing:

@@ -186,3 +186,14 @@ def test_a_target_not_yet_reached_holds_the_trajectory_at_it():
     assert beyond < 0.2
     assert math.dist(ps.point().position, target) < 0.01
     assert math.hypot(*ps.point().velocity[:2]) < 0.01
+
+
+def test_its_parameters_default_to_the_catalogues():
+    """One definition: a default restated here once drifted (NAV_ACC_RAD 10 m against the catalogue's 2 m)."""
+    from dataclasses import fields
+
+    from stack.params import catalogue
+
+    defaults = PositionSmoothingParams()
+    for f in fields(PositionSmoothingParams):
+        assert getattr(defaults, f.name) == catalogue.get(f.name.upper()).default, f.name
