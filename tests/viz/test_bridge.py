@@ -63,8 +63,8 @@ def test_lockstep_flight_plotted_live_recorded_and_exported_with_the_same_layout
         assert live.times(estimate) == every_step  # every step, in order
         assert live.rows(lay.TORQUE) == STEPS
     else:  # a machine so loaded that the passive bridge was lapped: it said how much it lost, the rest is in order
-        times = live.times(estimate)
-        assert times == sorted(set(times)) and set(times) < set(every_step) and STEPS - len(times) <= lost
+        times = live.times(estimate)  # what was lost may have been other topics' samples only
+        assert times == sorted(set(times)) and set(times) <= set(every_step) and STEPS - len(times) <= lost
         assert re.search(r"\[plots\] WARNING fell behind the flight: \d+ samples lost before they were read", output)
     if lost == 0:
         assert live.rows(lay.rates_path("yaw", lay.SETPOINT)) == STEPS // 5 + 1  # the 50 Hz pacer
