@@ -15,7 +15,8 @@ from collections import deque
 from stack.estimator.acceleration import VelocityDerivative
 from stack.estimator.angular_velocity import AngularVelocityFilter
 from stack.estimator.attitude_q import AttitudeEstimatorQ
-from stack.msg.estimation import EstimatorStatus, VehicleAngularVelocity, VehicleAttitude, VehicleImuStatus
+from stack.estimator.imu_summary import STATUS_INTERVAL_US, ImuSummary
+from stack.msg.estimation import EstimatorStatus, VehicleAngularVelocity, VehicleAttitude
 from stack.msg.sensors import SensorAccel, SensorGyro
 from stack.params import catalogue
 from stack.params.param import Param
@@ -26,58 +27,7 @@ ATTITUDE_PARAMS = catalogue.params(
     "ATT_W_ACC", "ATT_W_MAG", "ATT_W_GYRO_BIAS", "ATT_BIAS_MAX", "ATT_MAG_DECL", "ATT_ACC_COMP",
 )
 COMPENSATION_PARAMS = catalogue.params("ATT_ACC_COMP_LP")
-STATUS_INTERVAL_US = 100_000
 GYRO_PARAMS = catalogue.params("IMU_GYRO_CUTOFF", "IMU_DGYRO_CUTOFF")
-
-
-class ImuSummary:
-    """Means and extremes of the IMU between two ``vehicle_imu_status`` messages."""
-
-    def __init__(self) -> None:
-        self.start_us = 0
-        self._reset(0)
-
-    def _reset(self, start_us: int) -> None:
-        self.start_us = start_us
-        self.n = 0
-        self.gyro_sum = [0.0, 0.0, 0.0]
-        self.accel_sum = [0.0, 0.0, 0.0]
-        self.max_gyro = 0.0
-        self.min_accel = math.inf
-        self.accel_n = 0
-
-    def add(self, t: int, gyro: tuple[float, float, float], accel: SensorAccel | None) -> None:
-        if self.n == 0 and self.start_us == 0:
-            self.start_us = t
-        self.n += 1
-        for i in range(3):
-            self.gyro_sum[i] += gyro[i]
-        self.max_gyro = max(self.max_gyro, math.sqrt(gyro[0] ** 2 + gyro[1] ** 2 + gyro[2] ** 2))
-        if accel is not None:
-            a = (accel.x, accel.y, accel.z)
-            self.accel_n += 1
-            for i in range(3):
-                self.accel_sum[i] += a[i]
-            self.min_accel = min(self.min_accel, math.sqrt(a[0] ** 2 + a[1] ** 2 + a[2] ** 2))
-
-    def status(self, gyro_msg: SensorGyro) -> VehicleImuStatus:
-        span = max(gyro_msg.timestamp_sample - self.start_us, 1) * 1e-6
-        n, na = max(self.n, 1), max(self.accel_n, 1)
-        status = VehicleImuStatus(
-            timestamp_sample=gyro_msg.timestamp_sample,
-            accel_device_id=gyro_msg.device_id,
-            gyro_device_id=gyro_msg.device_id,
-            gyro_error_count=gyro_msg.error_count,
-            accel_rate_hz=self.accel_n / span,
-            gyro_rate_hz=self.n / span,
-            mean_accel=tuple(v / na for v in self.accel_sum),
-            mean_gyro=tuple(v / n for v in self.gyro_sum),
-            max_gyro_norm=self.max_gyro,
-            min_accel_norm=self.min_accel if self.accel_n else 0.0,
-            temperature_gyro=gyro_msg.temperature,
-        )
-        self._reset(gyro_msg.timestamp_sample)
-        return status
 
 
 class AttitudeEstimatorModule(Module):

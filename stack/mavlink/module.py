@@ -26,7 +26,7 @@ import msgspec
 from pymavlink.dialects.v20 import common as mavlink2
 
 from stack.bus.topics import TopicSubscriber
-from stack.estimator.attitude_module import STATUS_INTERVAL_US, ImuSummary
+from stack.estimator.imu_summary import STATUS_INTERVAL_US, ImuSummary
 from stack.mavlink import convert, plant, px4_modes
 from stack.mavlink.endpoint import parse_endpoint
 from stack.mavlink.link import MavlinkLink, monotonic_us
