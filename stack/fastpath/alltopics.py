@@ -82,24 +82,8 @@ class AllTopicsReader:
         return taken
 
     def _take(self, r: RingReader, suffix: str, horizon: int) -> list[RingRecord]:
-        count = r.count
-        if count <= r.taken:
+        taken = r.take_new(horizon)
+        if not taken:
             return []
         fingerprint = int(self.region.words[r.entry + P_FINGERPRINT])
-        records = []
-        n = r.oldest_readable(count)
-        while n <= count:
-            head = r.header(n)
-            if head is not None:
-                if head.time_us >= horizon:
-                    break
-                payload = bytes(r.payload(head.offset))
-                if r.still(n, head.offset):
-                    records.append(RingRecord(suffix, fingerprint, r.publisher_id, head.index, head.time_us, payload))
-                else:
-                    r.lost += 1
-            else:
-                r.lost += 1
-            r.taken = n
-            n += 1
-        return records
+        return [RingRecord(suffix, fingerprint, r.publisher_id, h.index, h.time_us, payload) for h, payload in taken]

@@ -587,23 +587,10 @@ class ZenohBridge:
         self._refresh_readers()
         batch: list[_Relayed] = []
         for r, suffix in self._readers:
-            count = r.count
-            if count <= r.taken:
-                continue
-            fp = int(self.region.words[r.entry + P_FINGERPRINT])
-            n = max(r.taken + 1, r.oldest_readable(count))
-            while n <= count:
-                head = r.header(n)
-                if head is not None:
-                    payload = bytes(r.payload(head.offset))
-                    if r.still(n, head.offset):
-                        batch.append(_Relayed(head.time_us, r.publisher_id, head.seq, head.index, suffix, fp, payload))
-                    else:
-                        r.lost += 1
-                else:
-                    r.lost += 1
-                r.taken = n
-                n += 1
+            taken = r.take_new()
+            if taken:
+                fp = int(self.region.words[r.entry + P_FINGERPRINT])
+                batch.extend(_Relayed(h.time_us, r.publisher_id, h.seq, h.index, suffix, fp, p) for h, p in taken)
         heapq.heapify(batch)
         published, relays, run = self.published, self._relays, self.run_id
         while batch:

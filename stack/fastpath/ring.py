@@ -299,6 +299,30 @@ class RingReader:
             return floor
         return first
 
+    def take_new(self, horizon: int = 1 << 63) -> list[tuple[RecordHeader, bytes]]:
+        """Every record not taken yet and published before ``horizon``, copied out with its header; records
+        overwritten before they could be read count as lost."""
+        count = self.count
+        if count <= self.taken:
+            return []
+        taken: list[tuple[RecordHeader, bytes]] = []
+        n = self.oldest_readable(count)
+        while n <= count:
+            head = self.header(n)
+            if head is not None:
+                if head.time_us >= horizon:
+                    break
+                payload = bytes(self.payload(head.offset))
+                if self.still(n, head.offset):
+                    taken.append((head, payload))
+                else:
+                    self.lost += 1
+            else:
+                self.lost += 1
+            self.taken = n
+            n += 1
+        return taken
+
 
 def next_trigger(readers: list[RingReader]) -> tuple[RingReader, int, RecordHeader] | None:
     """The earliest trigger record not taken yet, by (time, publisher id, sequence): its reader, number and header."""

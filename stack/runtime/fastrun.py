@@ -135,7 +135,7 @@ class FastDriver:
         are the slots of the members over Zenoh (:mod:`stack.fastpath.bridge`)."""
         rt = self.rt
         bridged, stall_s = rt.spec.bridged, rt.spec.stall_timeout_s
-        bridge = ZenohBridge(rt.node, self.region, bridged, stall_s) if bridged else None
+        bridge = rt.bridge = ZenohBridge(rt.node, self.region, bridged, stall_s) if bridged else None
         beside = [*others, *(bridge.members if bridge is not None else ())]
         group = ProcessGroup(beside) if beside else None
         coordinator = FastCoordinator(self.att, rt.module.step_period_us(), rt.spec.stall_timeout_s, group)

@@ -22,6 +22,7 @@ from stack.bus.alive import AliveTokens
 from stack.bus.node import Node, wall_clock_us
 from stack.bus.topics import FLAG_LOCKSTEP_TIME, Received, TopicPublisher
 from stack.fastpath.attach import Attachment
+from stack.fastpath.bridge import ZenohBridge
 from stack.fastpath.inputs import FastInput
 from stack.fastpath.layout import SUB_QUEUE, SUB_TRIGGER, Region
 from stack.msg.registry import fingerprint
@@ -117,6 +118,8 @@ class Runtime:
         self.trigger_input: FastInput | None = None
         self.reads_all_topics = False
         self._lockstep: LockstepMember | LockstepCoordinator | None = None
+        self.bridge: ZenohBridge | None = None
+        """A fast-path coordinator's members over Zenoh (stack.fastpath.bridge), whose rejected messages it counts."""
         self._region: Region | None = None
         self._services: list[ParamService | Heartbeat] = []
         self.node: Node
@@ -546,7 +549,10 @@ class Runtime:
             "foreign": foreign,
             "invalid": sum(buf.invalid for buf in self.inputs.values()),
             "unauthorized": sum(buf.unauthorized for buf in self.inputs.values()),
-            "rejected": self.rejected + self.errors + (self._lockstep.rejected if self._lockstep else 0),
+            "rejected": self.rejected
+            + self.errors
+            + (self._lockstep.rejected if self._lockstep else 0)
+            + (self.bridge.rejected if self.bridge else 0),
             "loop_avg_us": avg,
             "loop_max_us": self._loop_max * 1e6,
             "trigger_rate_hz": runs / span,
