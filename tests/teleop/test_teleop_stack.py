@@ -142,7 +142,7 @@ def test_a_flight_by_gamepad(stack: RunningStack, sticks: SticksOnTheBus, teleop
         os.write(device, JS_EVENT.pack(0, 9, 0, 0)[:5])  # half a record, and a record of no known type
         os.write(device, JS_EVENT.pack(0, 9, 0, 0)[5:] + JS_EVENT.pack(0, 1, 0x40, 3))
         half = (16384 / 32767 - 0.05) / 0.95  # past joy_node's dead zone
-        arrived = sticks.wait_for(lambda m: m["throttle"] > 0.0)
+        arrived = sticks.wait_for(lambda m: m["throttle"] > 0.0 and m["yaw"] > 0.0)  # the events are read one by one
         assert arrived["throttle"] == pytest.approx(half) and arrived["yaw"] == pytest.approx(half)
         assert (arrived["roll"], arrived["pitch"], arrived["valid"]) == (0.0, 0.0, True)
         wait_altitude(t, lambda a: a > 1.5, 30.0)
