@@ -25,6 +25,7 @@ from stack.mathlib import quaternion as quat
 from stack.mathlib.scalar import wrap_pi
 from stack.mixer.effectiveness import collective_thrust_max
 from stack.msg.estimation import VehicleAttitude
+from stack.msg.registry import ORB_ID
 from stack.msg.setpoints import RollPitchYawrateThrustSetpoint, VehicleAttitudeSetpoint, VehicleRatesSetpoint
 from stack.msg.system import VehicleControlMode
 from stack.params import ca, catalogue
@@ -47,7 +48,7 @@ class MulticopterAttitudeControl(Module):
     NAME = "mc_att_control"
     WORK_QUEUE = NAV_AND_CONTROLLERS
     DESCRIPTION = "Attitude controller (PX4 mc_att_control): attitude setpoint → body-rate setpoint"
-    TRIGGER = Trigger("vehicle_attitude")
+    TRIGGER = Trigger(ORB_ID.vehicle_attitude)
     DT_RANGE = (0.0002, 0.02)
     PARAMS = _unique(
         attitude_control.PARAMS,
@@ -62,16 +63,16 @@ class MulticopterAttitudeControl(Module):
     def __init__(self, rt) -> None:
         super().__init__(rt)
         for topic in (
-            "vehicle_attitude_setpoint",
-            "vehicle_control_mode",
-            "manual_control_setpoint",
-            "vehicle_angular_velocity",
-            "vehicle_land_detected",
+            ORB_ID.vehicle_attitude_setpoint,
+            ORB_ID.vehicle_control_mode,
+            ORB_ID.manual_control_setpoint,
+            ORB_ID.vehicle_angular_velocity,
+            ORB_ID.vehicle_land_detected,
         ):
             self.subscribe(topic)
-        self.advertise("vehicle_rates_setpoint")
-        self.advertise("vehicle_attitude_setpoint")
-        self.advertise("roll_pitch_yawrate_thrust_setpoint")
+        self.advertise(ORB_ID.vehicle_rates_setpoint)
+        self.advertise(ORB_ID.vehicle_attitude_setpoint)
+        self.advertise(ORB_ID.roll_pitch_yawrate_thrust_setpoint)
         values = self.params.values()
         self.control = AttitudeControl(values)
         self.shaping = AttitudeSetpointShaping(values, bool(values["MC_INPUT_SHAPING"]))
@@ -99,9 +100,9 @@ class MulticopterAttitudeControl(Module):
             self.control.adapt_to_reset(att.delta_q_reset)
             self.shaping.adapt_to_reset(att.delta_q_reset)
             self._rotors_heading = None
-        mode = self.latest("vehicle_control_mode") or _NO_MODE
-        sticks = self.latest("manual_control_setpoint")
-        land = self.latest("vehicle_land_detected")
+        mode = self.latest(ORB_ID.vehicle_control_mode) or _NO_MODE
+        sticks = self.latest(ORB_ID.manual_control_setpoint)
+        land = self.latest(ORB_ID.vehicle_land_detected)
         stick_setpoint = self.sticks.update(q, mode, sticks, land is not None and land.landed, dt, self.now_us())
         attitude_enabled = mode.flag_control_attitude_enabled
         if (
@@ -117,7 +118,7 @@ class MulticopterAttitudeControl(Module):
             rates = self.acro.rates(sticks.roll, sticks.pitch, sticks.yaw)
             thrust = AcroStickMapping.thrust_body(sticks.throttle)
             self.publish(
-                "vehicle_rates_setpoint",
+                ORB_ID.vehicle_rates_setpoint,
                 VehicleRatesSetpoint(roll=rates[0], pitch=rates[1], yaw=rates[2], thrust_body=thrust),
             )
         else:
@@ -134,18 +135,18 @@ class MulticopterAttitudeControl(Module):
         """Rates from the attitude setpoint: Stabilized's from the sticks (``setpoint``), the RotorS mode's, or the
         one on the bus."""
         if setpoint is not None:
-            self.publish("vehicle_attitude_setpoint", setpoint)
+            self.publish(ORB_ID.vehicle_attitude_setpoint, setpoint)
         elif mode.flag_control_rpyt_enabled and sticks is not None:
             setpoint = self._rotors(q, sticks, mode.flag_armed, dt)
         else:
-            setpoint = self.latest("vehicle_attitude_setpoint")
+            setpoint = self.latest(ORB_ID.vehicle_attitude_setpoint)
         if not mode.flag_control_rpyt_enabled:
             self._rotors_heading = None
         if setpoint is None or not quat.is_finite(setpoint.q_d):
             return
         rates = self.shaping.rates(self.control, setpoint.q_d, setpoint.yaw_sp_move_rate, q, self._body_rates(), dt)
         self.publish(
-            "vehicle_rates_setpoint",
+            ORB_ID.vehicle_rates_setpoint,
             VehicleRatesSetpoint(roll=rates[0], pitch=rates[1], yaw=rates[2], thrust_body=setpoint.thrust_body),
         )
 
@@ -156,7 +157,7 @@ class MulticopterAttitudeControl(Module):
         heading = self._rotors_heading
         self._rotors_heading = quat.yaw(q) if heading is None or not armed else wrap_pi(heading + command.yaw_rate * dt)
         self.publish(
-            "roll_pitch_yawrate_thrust_setpoint",
+            ORB_ID.roll_pitch_yawrate_thrust_setpoint,
             RollPitchYawrateThrustSetpoint(
                 timestamp_sample=sticks.timestamp_sample,
                 roll=command.roll,
@@ -167,10 +168,10 @@ class MulticopterAttitudeControl(Module):
         )
         sp = rotors_attitude_setpoint(self._rotors_heading, command, self._thrust_max)
         setpoint = VehicleAttitudeSetpoint(yaw_sp_move_rate=sp.yaw_sp_move_rate, q_d=sp.q_d, thrust_body=sp.thrust_body)
-        self.publish("vehicle_attitude_setpoint", setpoint)
+        self.publish(ORB_ID.vehicle_attitude_setpoint, setpoint)
         return setpoint
 
     def _body_rates(self) -> tuple[float, float, float]:
         """Measured body rates: at large tilt errors the shaper's yaw demand blends toward the yaw rate."""
-        rates = self.latest("vehicle_angular_velocity")
+        rates = self.latest(ORB_ID.vehicle_angular_velocity)
         return (0.0, 0.0, 0.0) if rates is None else rates.xyz

@@ -12,6 +12,7 @@ from __future__ import annotations
 from stack.attctl import rate_control
 from stack.attctl.rate_control import RateControl, YawTorqueLowPass, saturation_from_allocator
 from stack.msg.estimation import VehicleAngularVelocity
+from stack.msg.registry import ORB_ID
 from stack.msg.setpoints import RateCtrlStatus, VehicleThrustSetpoint, VehicleTorqueSetpoint
 from stack.runtime.module import Module, Trigger
 from stack.runtime.priority import RATE_CTRL
@@ -21,22 +22,22 @@ class MulticopterRateControl(Module):
     NAME = "mc_rate_control"
     WORK_QUEUE = RATE_CTRL
     DESCRIPTION = "Body-rate controller (PX4 mc_rate_control): rate setpoint → torque and thrust setpoints"
-    TRIGGER = Trigger("vehicle_angular_velocity")
+    TRIGGER = Trigger(ORB_ID.vehicle_angular_velocity)
     DT_RANGE = (0.000125, 0.02)
     PARAMS = rate_control.PARAMS
 
     def __init__(self, rt) -> None:
         super().__init__(rt)
         for topic in (
-            "vehicle_rates_setpoint",
-            "control_allocator_status",
-            "vehicle_control_mode",
-            "vehicle_land_detected",
+            ORB_ID.vehicle_rates_setpoint,
+            ORB_ID.control_allocator_status,
+            ORB_ID.vehicle_control_mode,
+            ORB_ID.vehicle_land_detected,
         ):
             self.subscribe(topic)
-        self.advertise("vehicle_thrust_setpoint")
-        self.advertise("vehicle_torque_setpoint")
-        self.advertise("rate_ctrl_status")
+        self.advertise(ORB_ID.vehicle_thrust_setpoint)
+        self.advertise(ORB_ID.vehicle_torque_setpoint)
+        self.advertise(ORB_ID.rate_ctrl_status)
         self.control = RateControl(self.params.values())
         self.yaw_filter = YawTorqueLowPass(float(self.params["MC_YAW_TQ_CUTOFF"]))
 
@@ -45,10 +46,10 @@ class MulticopterRateControl(Module):
         self.yaw_filter.set_cutoff(float(self.params["MC_YAW_TQ_CUTOFF"]))
 
     def run(self, rates: VehicleAngularVelocity, dt: float) -> None:
-        mode = self.latest("vehicle_control_mode")
+        mode = self.latest(ORB_ID.vehicle_control_mode)
         if mode is None or not mode.flag_control_rates_enabled:
             return
-        status = self.update("control_allocator_status")
+        status = self.update(ORB_ID.control_allocator_status)
         if status is not None:
             self.control.set_saturation_status(
                 *saturation_from_allocator(status.torque_setpoint_achieved, status.unallocated_torque)
@@ -56,9 +57,9 @@ class MulticopterRateControl(Module):
         if not mode.flag_armed:
             self.control.reset_integral()
             self.yaw_filter.reset()
-        land = self.latest("vehicle_land_detected")
+        land = self.latest(ORB_ID.vehicle_land_detected)
         landed = land is not None and (land.landed or land.maybe_landed)
-        sp = self.latest("vehicle_rates_setpoint")
+        sp = self.latest(ORB_ID.vehicle_rates_setpoint)
         if sp is None:
             return
         if sp.reset_integral:
@@ -67,9 +68,9 @@ class MulticopterRateControl(Module):
         torque = (torque[0], torque[1], self.yaw_filter.update(torque[2], dt))
         thrust = tuple(t if t == t else 0.0 for t in sp.thrust_body)
         t = rates.timestamp_sample
-        self.publish("vehicle_thrust_setpoint", VehicleThrustSetpoint(timestamp_sample=t, xyz=thrust))
-        self.publish("vehicle_torque_setpoint", VehicleTorqueSetpoint(timestamp_sample=t, xyz=torque))
+        self.publish(ORB_ID.vehicle_thrust_setpoint, VehicleThrustSetpoint(timestamp_sample=t, xyz=thrust))
+        self.publish(ORB_ID.vehicle_torque_setpoint, VehicleTorqueSetpoint(timestamp_sample=t, xyz=torque))
         i = self.control.integral
         self.publish(
-            "rate_ctrl_status", RateCtrlStatus(rollspeed_integ=i[0], pitchspeed_integ=i[1], yawspeed_integ=i[2])
+            ORB_ID.rate_ctrl_status, RateCtrlStatus(rollspeed_integ=i[0], pitchspeed_integ=i[1], yawspeed_integ=i[2])
         )

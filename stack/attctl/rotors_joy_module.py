@@ -13,6 +13,7 @@ from __future__ import annotations
 
 from stack.attctl import rotors_joy
 from stack.attctl.rotors_joy import JoyMapping
+from stack.msg.registry import ORB_ID
 from stack.msg.setpoints import RollPitchYawrateThrustSetpoint
 from stack.runtime.module import Module, Timer
 from stack.runtime.priority import HP_DEFAULT
@@ -30,21 +31,21 @@ class RotorsJoyInterface(Module):
 
     def __init__(self, rt) -> None:
         super().__init__(rt)
-        self.subscribe("manual_control_setpoint")
-        self.subscribe("vehicle_control_mode")
-        self.advertise("roll_pitch_yawrate_thrust_setpoint")
+        self.subscribe(ORB_ID.manual_control_setpoint)
+        self.subscribe(ORB_ID.vehicle_control_mode)
+        self.advertise(ORB_ID.roll_pitch_yawrate_thrust_setpoint)
         self.joy = JoyMapping(self.params.values())
 
     def on_params_changed(self, changed: set[str]) -> None:
         self.joy.set_params(self.params.values())
 
     def run(self, msg: None, dt: float) -> None:
-        mode = self.latest("vehicle_control_mode")
-        sticks = self.latest("manual_control_setpoint")
+        mode = self.latest(ORB_ID.vehicle_control_mode)
+        sticks = self.latest(ORB_ID.manual_control_setpoint)
         if mode is None or not mode.flag_control_rpyt_enabled or sticks is None or not sticks.valid:
             return
         command = self.joy.command(sticks.roll, sticks.pitch, sticks.yaw, sticks.throttle)
         self.publish(
-            "roll_pitch_yawrate_thrust_setpoint",
+            ORB_ID.roll_pitch_yawrate_thrust_setpoint,
             RollPitchYawrateThrustSetpoint(timestamp_sample=sticks.timestamp_sample, **command._asdict()),
         )

@@ -40,6 +40,7 @@ from stack.mathlib.quaternion import Quat
 from stack.mathlib.vector import Vec3
 from stack.msg.actuators import MOTOR_SLOTS, OUTPUT_SLOTS, ActuatorMotors, ActuatorOutputs, pad
 from stack.msg.estimation import VehicleAttitude
+from stack.msg.registry import ORB_ID
 from stack.msg.setpoints import VehicleThrustSetpoint
 from stack.msg.system import VehicleControlMode
 from stack.params import catalogue
@@ -55,7 +56,7 @@ class RollPitchYawrateThrustController(Module):
     NAME = "roll_pitch_yawrate_thrust_controller"
     WORK_QUEUE = RATE_CTRL
     DESCRIPTION = "RotorS roll-pitch-yawrate-thrust controller: attitude law and rotor allocation → motor commands"
-    TRIGGER = Trigger("vehicle_attitude")
+    TRIGGER = Trigger(ORB_ID.vehicle_attitude)
     DT_RANGE = (0.0002, 0.02)
     PARAMS = (
         *rpyt_control.PARAMS,
@@ -71,19 +72,19 @@ class RollPitchYawrateThrustController(Module):
             raise ValueError("no vehicle model: set the module's args.vehicle (e.g. \"firefly\")")
         vehicle = load_vehicle(str(self.args["vehicle"]))
         for topic in (
-            "vehicle_angular_velocity",
-            "vehicle_control_mode",
-            "actuator_armed",
-            "roll_pitch_yawrate_thrust_setpoint",
-            "vehicle_attitude_setpoint",
-            "vehicle_rates_setpoint",
-            "manual_control_setpoint",
-            "vehicle_land_detected",
+            ORB_ID.vehicle_angular_velocity,
+            ORB_ID.vehicle_control_mode,
+            ORB_ID.actuator_armed,
+            ORB_ID.roll_pitch_yawrate_thrust_setpoint,
+            ORB_ID.vehicle_attitude_setpoint,
+            ORB_ID.vehicle_rates_setpoint,
+            ORB_ID.manual_control_setpoint,
+            ORB_ID.vehicle_land_detected,
         ):
             self.subscribe(topic)
-        for topic in ("actuator_motors", "actuator_outputs_sim", "vehicle_thrust_setpoint"):
+        for topic in (ORB_ID.actuator_motors, ORB_ID.actuator_outputs_sim, ORB_ID.vehicle_thrust_setpoint):
             self.advertise(topic)
-        self.advertise("vehicle_attitude_setpoint")
+        self.advertise(ORB_ID.vehicle_attitude_setpoint)
         values = self.params.values()
         self.control = RollPitchYawrateThrustControl(vehicle, values)
         self.sticks = StickAttitudeSetpoint(values)
@@ -98,10 +99,10 @@ class RollPitchYawrateThrustController(Module):
         self.acro.set_params(values)
 
     def run(self, att: VehicleAttitude, dt: float) -> None:
-        rates = self.latest("vehicle_angular_velocity")
+        rates = self.latest(ORB_ID.vehicle_angular_velocity)
         body_rates = rates.xyz if rates is not None else _NO_RATES
-        self._follow(att.q, self.latest("vehicle_control_mode") or _NO_MODE, dt)
-        armed = self.latest("actuator_armed")
+        self._follow(att.q, self.latest(ORB_ID.vehicle_control_mode) or _NO_MODE, dt)
+        armed = self.latest(ORB_ID.actuator_armed)
         n = self.control.num_rotors
         if armed is not None and armed.armed and not (armed.lockdown or armed.kill or armed.termination):
             motors = self.control.motors(att.q, body_rates)
@@ -111,15 +112,15 @@ class RollPitchYawrateThrustController(Module):
             control, sim = pad((), MOTOR_SLOTS, math.nan), pad((), OUTPUT_SLOTS, 0.0)
         t = att.timestamp_sample
         thrust = (0.0, 0.0, -self.control.thrust / self.control.max_thrust)
-        self.publish("vehicle_thrust_setpoint", VehicleThrustSetpoint(timestamp_sample=t, xyz=thrust))
-        self.publish("actuator_motors", ActuatorMotors(timestamp_sample=t, control=control))
-        self.publish("actuator_outputs_sim", ActuatorOutputs(noutputs=n, output=sim))
+        self.publish(ORB_ID.vehicle_thrust_setpoint, VehicleThrustSetpoint(timestamp_sample=t, xyz=thrust))
+        self.publish(ORB_ID.actuator_motors, ActuatorMotors(timestamp_sample=t, control=control))
+        self.publish(ORB_ID.actuator_outputs_sim, ActuatorOutputs(noutputs=n, output=sim))
 
     def _follow(self, q: Quat, mode: VehicleControlMode, dt: float) -> None:
         """Give the controller this cycle's command for the control mode (see the module docstring)."""
-        rotors_setpoint = self.update("roll_pitch_yawrate_thrust_setpoint")
-        sticks = self.latest("manual_control_setpoint")
-        land = self.latest("vehicle_land_detected")
+        rotors_setpoint = self.update(ORB_ID.roll_pitch_yawrate_thrust_setpoint)
+        sticks = self.latest(ORB_ID.manual_control_setpoint)
+        land = self.latest(ORB_ID.vehicle_land_detected)
         stick_setpoint = self.sticks.update(q, mode, sticks, land is not None and land.landed, dt, self.now_us())
         attitude = mode.flag_control_attitude_enabled and not (
             mode.flag_control_rattitude_enabled
@@ -136,9 +137,9 @@ class RollPitchYawrateThrustController(Module):
         elif attitude:
             setpoint = stick_setpoint
             if setpoint is not None:
-                self.publish("vehicle_attitude_setpoint", setpoint)
+                self.publish(ORB_ID.vehicle_attitude_setpoint, setpoint)
             else:
-                setpoint = self.latest("vehicle_attitude_setpoint")
+                setpoint = self.latest(ORB_ID.vehicle_attitude_setpoint)
             if setpoint is not None:
                 command = command_from_attitude(
                     q, setpoint.q_d, setpoint.yaw_sp_move_rate, setpoint.thrust_body,
@@ -150,7 +151,7 @@ class RollPitchYawrateThrustController(Module):
                 rates = self.acro.rates(sticks.roll, sticks.pitch, sticks.yaw)
                 thrust = thrust_newtons(AcroStickMapping.thrust_body(sticks.throttle), max_thrust)
                 self._command(self.control.set_rates_command(rates, thrust), sticks)
-            elif (rates_setpoint := self.latest("vehicle_rates_setpoint")) is not None:
+            elif (rates_setpoint := self.latest(ORB_ID.vehicle_rates_setpoint)) is not None:
                 rates = (rates_setpoint.roll, rates_setpoint.pitch, rates_setpoint.yaw)
                 thrust = thrust_newtons(rates_setpoint.thrust_body, max_thrust)
                 self._command(self.control.set_rates_command(rates, thrust), rates_setpoint)

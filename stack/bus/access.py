@@ -19,26 +19,11 @@ from collections.abc import Iterable
 from dataclasses import dataclass
 
 from stack.bus.node import stable_publisher_id
+from stack.msg.registry import TOPICS
+from stack.msg.topic import FromTools
 
-COMMAND_TOPICS = frozenset({"vehicle_command", "manual_control_setpoint", "mission"})
-"""What any program on the bus may send, in any mode: as a ground station sends COMMAND_LONG, sticks and
-missions."""
-
-OFFBOARD_TOPICS = frozenset(
-    {
-        "offboard_control_mode",
-        "trajectory_setpoint",
-        "vehicle_attitude_setpoint",
-        "vehicle_rates_setpoint",
-        "vehicle_torque_setpoint",
-        "vehicle_thrust_setpoint",
-        "actuator_motors",
-    }
-)
-"""What an offboard program may send; heard from it only in Offboard (``offboard_control_mode`` always: the
-commander needs it before switching to Offboard)."""
-
-OPEN_TO_TOOLS = COMMAND_TOPICS | OFFBOARD_TOPICS
+OPEN_TO_TOOLS = frozenset(name for name, topic in TOPICS.items() if topic.from_tools is not FromTools.NEVER)
+"""The topics a program that is not a module of the profile may publish (each topic's ``from_tools``)."""
 
 
 @dataclass(frozen=True)
@@ -55,11 +40,10 @@ class Access:
 
     def rule(self, topic: str) -> str:
         """How a topic is heard: ``members`` only, ``anyone``, or ``offboard`` (anyone while in Offboard)."""
-        if topic in self.open_topics or topic in COMMAND_TOPICS or topic == "offboard_control_mode":
-            return "anyone"
-        if topic in OFFBOARD_TOPICS:
-            return "offboard"
-        return "members"
+        if topic in self.open_topics:
+            return FromTools.ALWAYS.value
+        known = TOPICS.get(topic)
+        return FromTools.NEVER.value if known is None else known.from_tools.value
 
 
 def tool_may_publish(topic: str, open_topics: Iterable[str] = ()) -> bool:

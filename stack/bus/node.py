@@ -15,8 +15,8 @@ import zenoh
 from stack.bus import keys
 from stack.bus.config import LOOPBACK_ANY_PORT, BusConfig
 from stack.bus.ports import port_taken
-from stack.bus.topics import TELEMETRY_TOPICS, TopicPublisher, TopicSubscriber
-from stack.msg.registry import fingerprint, message_type
+from stack.bus.topics import TopicPublisher, TopicSubscriber
+from stack.msg.registry import TOPICS, fingerprint, message_type
 
 
 def wall_clock_us() -> int:
@@ -75,7 +75,7 @@ class Node:
     ) -> TopicPublisher:
         msg_type = message_type(topic)
         if reliable is None:
-            reliable = topic not in TELEMETRY_TOPICS
+            reliable = not TOPICS[topic].telemetry
         pub = TopicPublisher(self, topic, instance, msg_type, reliable)
         self.publishers.append(pub)
         if announce:

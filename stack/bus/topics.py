@@ -54,13 +54,6 @@ log = logging.getLogger("stack.bus")
 # How long a blocking receive waits between looks at its queue (a signal handler runs in between).
 RECV_WAKE_S = 0.5
 
-# Diagnostics that nothing in the control path consumes: in real time these may be dropped under
-# load rather than stall their publisher. Everything else (commands and state) blocks.
-TELEMETRY_TOPICS = frozenset(
-    {"rate_ctrl_status", "vehicle_local_position_setpoint", "sim_groundtruth", "actuator_outputs", "parameter_update"}
-)
-
-
 class Received(msgspec.Struct, frozen=True, gc=False):
     """One message as a subscription delivers it, with what the lockstep needs to know of its publication."""
 

@@ -97,7 +97,7 @@ def list_topics(
     for topic, inst in sorted(names):
         g = graph.get((topic, inst))
         tr = traffic.get((topic, inst), _Traffic())
-        type_name = g.type_name if g else (TOPICS[topic].__name__ if topic in TOPICS else "?")
+        type_name = g.type_name if g else (TOPICS[topic].type.__name__ if topic in TOPICS else "?")
         rows.append(
             {
                 "topic": topic,

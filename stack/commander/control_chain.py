@@ -40,7 +40,9 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from enum import IntEnum
 
+from stack.msg.registry import ORB_ID
 from stack.msg.system import VehicleControlMode
+from stack.msg.topic import Topic
 
 SILENCE_US = 90_000
 """In lockstep, an output this much older than the newest output of the chain, while its loop should run, names
@@ -72,7 +74,7 @@ class Loss(IntEnum):
 @dataclass(frozen=True)
 class ChainLink:
     module: str
-    output: str
+    output: Topic
     loss: Loss
     runs: Callable[[VehicleControlMode], bool]
     """Whether the control mode runs this module's loop (it is only watched while armed)."""
@@ -120,31 +122,31 @@ def _navigation(mode: VehicleControlMode) -> bool:
 
 
 CHAIN: tuple[ChainLink, ...] = (
-    ChainLink("attitude_estimator_q", "vehicle_attitude", Loss.ATTITUDE_CONTROL, _always),
-    ChainLink("local_position_estimator", "vehicle_local_position", Loss.POSITION_CONTROL, _always),
-    ChainLink("flight_mode_manager", "trajectory_setpoint", Loss.POSITION_CONTROL, _position_control),
-    ChainLink("mc_pos_control", "vehicle_attitude_setpoint", Loss.POSITION_CONTROL, _position_control),
-    ChainLink("mc_att_control", "vehicle_rates_setpoint", Loss.ATTITUDE_CONTROL, _attitude_control),
-    ChainLink("mc_rate_control", "vehicle_torque_setpoint", Loss.ATTITUDE_CONTROL, _rate_control),
-    ChainLink("control_allocator", "actuator_motors", Loss.ATTITUDE_CONTROL, _allocation),
-    ChainLink("roll_pitch_yawrate_thrust_controller", "actuator_motors", Loss.ATTITUDE_CONTROL, _allocation),
-    ChainLink("rotors_joy_interface", "roll_pitch_yawrate_thrust_setpoint", Loss.ATTITUDE_CONTROL, _rotors_sticks),
+    ChainLink("attitude_estimator_q", ORB_ID.vehicle_attitude, Loss.ATTITUDE_CONTROL, _always),
+    ChainLink("local_position_estimator", ORB_ID.vehicle_local_position, Loss.POSITION_CONTROL, _always),
+    ChainLink("flight_mode_manager", ORB_ID.trajectory_setpoint, Loss.POSITION_CONTROL, _position_control),
+    ChainLink("mc_pos_control", ORB_ID.vehicle_attitude_setpoint, Loss.POSITION_CONTROL, _position_control),
+    ChainLink("mc_att_control", ORB_ID.vehicle_rates_setpoint, Loss.ATTITUDE_CONTROL, _attitude_control),
+    ChainLink("mc_rate_control", ORB_ID.vehicle_torque_setpoint, Loss.ATTITUDE_CONTROL, _rate_control),
+    ChainLink("control_allocator", ORB_ID.actuator_motors, Loss.ATTITUDE_CONTROL, _allocation),
+    ChainLink("roll_pitch_yawrate_thrust_controller", ORB_ID.actuator_motors, Loss.ATTITUDE_CONTROL, _allocation),
+    ChainLink("rotors_joy_interface", ORB_ID.roll_pitch_yawrate_thrust_setpoint, Loss.ATTITUDE_CONTROL, _rotors_sticks),
 )
 NAVIGATOR_PERIOD_US = 50_000
 """PX4's navigator runs at 20 Hz."""
 AIRSPEED_SELECTOR_PERIOD_US = 100_000
 """PX4's airspeed_selector runs at 10 Hz."""
 FW_CHAIN: tuple[ChainLink, ...] = (
-    ChainLink("attitude_estimator_q", "vehicle_attitude", Loss.ATTITUDE_CONTROL, _always),
-    ChainLink("local_position_estimator", "vehicle_local_position", Loss.POSITION_CONTROL, _always),
-    ChainLink("airspeed_selector", "airspeed_validated", Loss.AIRSPEED, _always, AIRSPEED_SELECTOR_PERIOD_US),
-    ChainLink("navigator", "position_setpoint_triplet", Loss.POSITION_CONTROL, _navigation, NAVIGATOR_PERIOD_US),
-    ChainLink("fw_pos_control", "vehicle_attitude_setpoint", Loss.POSITION_CONTROL, _fw_position_control),
-    ChainLink("fw_att_control", "vehicle_torque_setpoint", Loss.ATTITUDE_CONTROL, _rate_control),
-    ChainLink("control_allocator", "actuator_motors", Loss.ATTITUDE_CONTROL, _allocation),
+    ChainLink("attitude_estimator_q", ORB_ID.vehicle_attitude, Loss.ATTITUDE_CONTROL, _always),
+    ChainLink("local_position_estimator", ORB_ID.vehicle_local_position, Loss.POSITION_CONTROL, _always),
+    ChainLink("airspeed_selector", ORB_ID.airspeed_validated, Loss.AIRSPEED, _always, AIRSPEED_SELECTOR_PERIOD_US),
+    ChainLink("navigator", ORB_ID.position_setpoint_triplet, Loss.POSITION_CONTROL, _navigation, NAVIGATOR_PERIOD_US),
+    ChainLink("fw_pos_control", ORB_ID.vehicle_attitude_setpoint, Loss.POSITION_CONTROL, _fw_position_control),
+    ChainLink("fw_att_control", ORB_ID.vehicle_torque_setpoint, Loss.ATTITUDE_CONTROL, _rate_control),
+    ChainLink("control_allocator", ORB_ID.actuator_motors, Loss.ATTITUDE_CONTROL, _allocation),
 )
 """A fixed-wing vehicle's chain."""
-OUTPUTS: tuple[str, ...] = tuple(dict.fromkeys(link.output for link in CHAIN + FW_CHAIN))
+OUTPUTS: tuple[Topic, ...] = tuple(dict.fromkeys(link.output for link in CHAIN + FW_CHAIN))
 """Every output either chain watches (the commander's glue reports their arrivals)."""
 
 
@@ -171,7 +173,7 @@ class ControlChainMonitor:
 
     def __init__(self, chain: tuple[ChainLink, ...] = CHAIN, silence_us: int = SILENCE_US) -> None:
         self.silence_us = silence_us
-        self._seen: dict[str, int] = {}
+        self._seen: dict[Topic, int] = {}
         """Each output's last arrival on the commander's clock (outputs never seen are absent)."""
         self._watch_since: dict[str, int] = {}
         """When each watched module's watch began."""
@@ -195,7 +197,7 @@ class ControlChainMonitor:
         """Modules whose output an earlier module of the chain also publishes."""
         self._watch_since.clear()
 
-    def output_seen(self, topic: str, now_us: int) -> None:
+    def output_seen(self, topic: Topic, now_us: int) -> None:
         self._seen[topic] = now_us
 
     def module_died(self, module: str) -> None:

@@ -36,6 +36,7 @@ from stack.commander.state_machine import PARAMS as COMMANDER_PARAMS
 from stack.commander.state_machine import Commander
 from stack.commander.state_machine import NavigationRequest as Navigation
 from stack.msg.navigation import NavigationRequest
+from stack.msg.registry import ORB_ID
 from stack.msg.system import (
     HomePosition,
     MavlinkLog,
@@ -105,36 +106,41 @@ class CommanderModule(Module):
 
     def __init__(self, rt) -> None:
         super().__init__(rt)
-        self.subscribe("vehicle_command", queue=True)
+        self.subscribe(ORB_ID.vehicle_command, queue=True)
         for topic in (
-            "estimator_status",
-            "vehicle_imu_status",
-            "vehicle_local_position",
-            "sensor_baro",
-            "sensor_mag",
-            "sensor_gps",
-            "battery_status",
-            "telemetry_status",
-            "manual_control_setpoint",
-            "offboard_control_mode",
-            "vehicle_thrust_setpoint",
-            "trajectory_setpoint",
-            "hover_thrust_estimate",
-            "takeoff_status",
-            "mission_result",
-            "external_autopilot_status",
-            "airspeed",
+            ORB_ID.estimator_status,
+            ORB_ID.vehicle_imu_status,
+            ORB_ID.vehicle_local_position,
+            ORB_ID.sensor_baro,
+            ORB_ID.sensor_mag,
+            ORB_ID.sensor_gps,
+            ORB_ID.battery_status,
+            ORB_ID.telemetry_status,
+            ORB_ID.manual_control_setpoint,
+            ORB_ID.offboard_control_mode,
+            ORB_ID.vehicle_thrust_setpoint,
+            ORB_ID.trajectory_setpoint,
+            ORB_ID.hover_thrust_estimate,
+            ORB_ID.takeoff_status,
+            ORB_ID.mission_result,
+            ORB_ID.external_autopilot_status,
+            ORB_ID.airspeed,
         ):
             self.subscribe(topic)
         for topic in control_chain.OUTPUTS:
-            if topic not in ("vehicle_local_position", "trajectory_setpoint"):
+            if topic not in (ORB_ID.vehicle_local_position, ORB_ID.trajectory_setpoint):
                 self.subscribe(topic)
-        for topic in ("actuator_armed", "vehicle_status", "vehicle_control_mode", "vehicle_command_ack"):
+        for topic in (
+            ORB_ID.actuator_armed,
+            ORB_ID.vehicle_status,
+            ORB_ID.vehicle_control_mode,
+            ORB_ID.vehicle_command_ack,
+        ):
             self.advertise(topic)
-        self.advertise("home_position")
-        self.advertise("vehicle_land_detected")
-        self.advertise("navigation_request")
-        self.advertise("mavlink_log")
+        self.advertise(ORB_ID.home_position)
+        self.advertise(ORB_ID.vehicle_land_detected)
+        self.advertise(ORB_ID.navigation_request)
+        self.advertise(ORB_ID.mavlink_log)
         self.commander = Commander(self.params.values())
         self.land_detector = self._new_land_detector()
         self._land_due = 0
@@ -199,7 +205,7 @@ class CommanderModule(Module):
             self._land_due = now - now % LAND_DETECTOR_PERIOD_US + LAND_DETECTOR_PERIOD_US
             self._detect_landing(now)
         inputs = self._inputs(now)
-        commands = self.take("vehicle_command")
+        commands = self.take(ORB_ID.vehicle_command)
         if commands:
             self.commander.set_inputs(now, inputs)
             for cmd in commands:
@@ -213,7 +219,7 @@ class CommanderModule(Module):
         changed = out.changed
         if self.commander.nav_state == NS.NAVIGATION_STATE_OFFBOARD:
             flags = offboard.control_flags_now(
-                self.latest("offboard_control_mode"), now, float(self.params["COM_OF_LOSS_T"])
+                self.latest(ORB_ID.offboard_control_mode), now, float(self.params["COM_OF_LOSS_T"])
             )
             if flags != self._offboard_flags:
                 changed = True
@@ -238,12 +244,14 @@ class CommanderModule(Module):
             self.keep_state(self.commander.kept_state())
             self._navigation = navigation
             # PX4 publishes actuator_armed before vehicle_status; the navigator reads its request with the mode.
-            self.publish("actuator_armed", msgspec.structs.replace(out.actuator_armed, timestamp=now))
-            self.publish("navigation_request", msgspec.structs.replace(navigation_request(navigation), timestamp=now))
-            self.publish("vehicle_status", msgspec.structs.replace(out.vehicle_status, timestamp=now))
-            self.publish("vehicle_control_mode", msgspec.structs.replace(control, timestamp=now))
+            self.publish(ORB_ID.actuator_armed, msgspec.structs.replace(out.actuator_armed, timestamp=now))
+            self.publish(
+                ORB_ID.navigation_request, msgspec.structs.replace(navigation_request(navigation), timestamp=now)
+            )
+            self.publish(ORB_ID.vehicle_status, msgspec.structs.replace(out.vehicle_status, timestamp=now))
+            self.publish(ORB_ID.vehicle_control_mode, msgspec.structs.replace(control, timestamp=now))
             if self._home is not None:
-                self.publish("home_position", home_position_message(self._home, self._home_count, now))
+                self.publish(ORB_ID.home_position, home_position_message(self._home, self._home_count, now))
 
     def status(self) -> dict[str, float | int | str | bool]:
         """The failsafe in force and why, for `stack status` (PX4's `commander status`)."""
@@ -271,13 +279,13 @@ class CommanderModule(Module):
         if key != self._land_published or now - self._land_published_at >= LAND_DETECTED_REPUBLISH_US:
             self._land_published = key
             self._land_published_at = now
-            self.publish("vehicle_land_detected", VehicleLandDetected(timestamp=now, **state._asdict()))
+            self.publish(ORB_ID.vehicle_land_detected, VehicleLandDetected(timestamp=now, **state._asdict()))
 
     def _handle(self, cmd: VehicleCommand, now: int) -> None:
         if not self.commander.addressed_to_me(cmd):
             self.commander.ignored_commands += 1
             return
-        ack = offboard.refusal(cmd, self.latest("offboard_control_mode"), now, float(self.params["COM_OF_LOSS_T"]))
+        ack = offboard.refusal(cmd, self.latest(ORB_ID.offboard_control_mode), now, float(self.params["COM_OF_LOSS_T"]))
         if ack is None:
             ack = self.commander.handle_command(cmd, now)
         if ack is not None:
@@ -288,7 +296,7 @@ class CommanderModule(Module):
             self.log.warning("command %s refused: %s", command_label(ack.command), ack.reason)
             if ack.reason:
                 self._refusals.append(ack.reason)
-        self.publish("vehicle_command_ack", ack)
+        self.publish(ORB_ID.vehicle_command_ack, ack)
 
     def _tell_operator(self, events: tuple[str, ...], now: int) -> None:
         """Each event, and each refusal's reason (most are events too), once on ``mavlink_log``."""
@@ -297,36 +305,36 @@ class CommanderModule(Module):
             self.log.info("%s", event)
         for text in (*events, *(r for r in dict.fromkeys(refusals) if r not in events)):
             severity = event_severity(text, text in refusals)
-            self.publish("mavlink_log", MavlinkLog(timestamp=now, text=text, severity=severity))
+            self.publish(ORB_ID.mavlink_log, MavlinkLog(timestamp=now, text=text, severity=severity))
 
     def _inputs(self, now: int) -> CommanderInputs:
         latest = self.latest
-        est = latest("estimator_status")
-        imu = latest("vehicle_imu_status")
-        baro = latest("sensor_baro")
-        mag = latest("sensor_mag")
-        gps = latest("sensor_gps")
-        battery = latest("battery_status")
-        telemetry = latest("telemetry_status")
-        mission = latest("mission_result")
+        est = latest(ORB_ID.estimator_status)
+        imu = latest(ORB_ID.vehicle_imu_status)
+        baro = latest(ORB_ID.sensor_baro)
+        mag = latest(ORB_ID.sensor_mag)
+        gps = latest(ORB_ID.sensor_gps)
+        battery = latest(ORB_ID.battery_status)
+        telemetry = latest(ORB_ID.telemetry_status)
+        mission = latest(ORB_ID.mission_result)
         land = self.land_detector.state
         if telemetry is not None and telemetry.heartbeat_type_gcs:
             # Only a ground station's heartbeat is the data link (PX4 Commander::dataLinkCheck); an onboard
             # controller's is not, and its going never calls for NAV_DLL_ACT.
             self._last_gcs = max(self._last_gcs, telemetry.timestamp)
-        fresh_sticks = self.update("manual_control_setpoint")
+        fresh_sticks = self.update(ORB_ID.manual_control_setpoint)
         if fresh_sticks is not None and fresh_sticks.valid:
             # their age from when they came, on this clock: a source outside the lockstep (a ground station)
             # stamps them with the latest simulated time it saw, which lags
             self._last_manual_control = now
-        sticks = latest("manual_control_setpoint")
-        airspeed = latest("airspeed")
-        validated = latest("airspeed_validated")
+        sticks = latest(ORB_ID.manual_control_setpoint)
+        airspeed = latest(ORB_ID.airspeed)
+        validated = latest(ORB_ID.airspeed_validated)
         return CommanderInputs(
             attitude_timestamp_us=est.attitude_timestamp if est is not None and est.attitude_valid else 0,
             attitude_q=est.q if est is not None else (1.0, 0.0, 0.0, 0.0),
             angular_velocity_timestamp_us=est.angular_velocity_timestamp if est is not None else 0,
-            local_position=latest("vehicle_local_position"),
+            local_position=latest(ORB_ID.vehicle_local_position),
             gyro_timestamp_us=imu.timestamp if imu is not None and imu.gyro_rate_hz > 0.0 else 0,
             accel_timestamp_us=imu.timestamp if imu is not None and imu.accel_rate_hz > 0.0 else 0,
             baro_timestamp_us=baro.timestamp if baro is not None else 0,
@@ -341,7 +349,7 @@ class CommanderModule(Module):
             manual_control_valid=sticks is not None and sticks.valid,
             mission_count=mission.seq_total if mission is not None and mission.valid else 0,
             mission_finished=mission is not None and mission.valid and mission.finished,
-            external_autopilot=latest("external_autopilot_status"),
+            external_autopilot=latest(ORB_ID.external_autopilot_status),
             airspeed_timestamp_us=airspeed.timestamp if airspeed is not None else 0,
             airspeed_validated_timestamp_us=validated.timestamp if validated is not None else 0,
             calibrated_airspeed=validated.calibrated_airspeed_m_s if validated is not None else math.nan,
@@ -351,17 +359,17 @@ class CommanderModule(Module):
         latest = self.latest
         inp = LandDetectorInputs()
         inp.armed = self.commander.armed
-        lpos = latest("vehicle_local_position")
+        lpos = latest(ORB_ID.vehicle_local_position)
         if lpos is not None:
             inp.local_position_timestamp_us = lpos.timestamp
             inp.z_valid, inp.v_xy_valid, inp.v_z_valid = lpos.z_valid, lpos.v_xy_valid, lpos.v_z_valid
             inp.vx, inp.vy, inp.vz, inp.z_deriv = lpos.vx, lpos.vy, lpos.vz, lpos.z_deriv
             inp.dist_bottom_valid, inp.dist_bottom = lpos.dist_bottom_valid, lpos.dist_bottom
-        imu = latest("vehicle_imu_status")
+        imu = latest(ORB_ID.vehicle_imu_status)
         if imu is not None:
             inp.angular_velocity = imu.mean_gyro
             inp.acceleration = imu.mean_accel
-        thrust = latest("vehicle_thrust_setpoint")
+        thrust = latest(ORB_ID.vehicle_thrust_setpoint)
         if thrust is not None:
             inp.throttle = -thrust.xyz[2]
         mode = self.commander.nav_state
@@ -375,12 +383,12 @@ class CommanderModule(Module):
             NS.NAVIGATION_STATE_OFFBOARD,
             NS.NAVIGATION_STATE_TERMINATION,  # no loop runs, nothing commands a descent
         )
-        trajectory = latest("trajectory_setpoint")
+        trajectory = latest(ORB_ID.trajectory_setpoint)
         inp.velocity_setpoint_z = trajectory.velocity[2] if trajectory is not None else math.nan
-        hover = latest("hover_thrust_estimate")
+        hover = latest(ORB_ID.hover_thrust_estimate)
         if hover is not None and hover.valid:
             inp.hover_thrust, inp.hover_thrust_timestamp_us = hover.hover_thrust, hover.timestamp
-        takeoff = latest("takeoff_status")
+        takeoff = latest(ORB_ID.takeoff_status)
         state = land_detector.takeoff_state(takeoff.takeoff_state) if takeoff is not None else None
         if state is not None:
             inp.takeoff_state = state
@@ -389,18 +397,18 @@ class CommanderModule(Module):
     def _fw_land_inputs(self) -> FixedwingLandDetectorInputs:
         latest = self.latest
         inp = FixedwingLandDetectorInputs(armed=self.commander.armed)
-        lpos = latest("vehicle_local_position")
+        lpos = latest(ORB_ID.vehicle_local_position)
         if lpos is not None:
             inp.local_position_timestamp_us = lpos.timestamp
             inp.v_xy_valid, inp.vx, inp.vy, inp.vz = lpos.v_xy_valid, lpos.vx, lpos.vy, lpos.vz
-        validated = latest("airspeed_validated")
+        validated = latest(ORB_ID.airspeed_validated)
         if validated is not None:
             inp.airspeed_timestamp_us, inp.true_airspeed = validated.timestamp, validated.true_airspeed_m_s
-        imu = latest("vehicle_imu_status")
+        imu = latest(ORB_ID.vehicle_imu_status)
         if imu is not None:
             inp.angular_velocity = imu.mean_gyro
             inp.acceleration = imu.mean_accel
-        thrust = latest("vehicle_thrust_setpoint")
+        thrust = latest(ORB_ID.vehicle_thrust_setpoint)
         if thrust is not None:
             inp.throttle = thrust.xyz[0]
         if self.commander.nav_state == NS.NAVIGATION_STATE_TERMINATION:

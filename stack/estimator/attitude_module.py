@@ -17,6 +17,7 @@ from stack.estimator.angular_velocity import AngularVelocityFilter
 from stack.estimator.attitude_q import AttitudeEstimatorQ
 from stack.estimator.imu_summary import STATUS_INTERVAL_US, ImuSummary
 from stack.msg.estimation import EstimatorStatus, VehicleAngularVelocity, VehicleAttitude
+from stack.msg.registry import ORB_ID
 from stack.msg.sensors import SensorAccel, SensorGyro
 from stack.params import catalogue
 from stack.params.param import Param
@@ -34,20 +35,20 @@ class AttitudeEstimatorModule(Module):
     NAME = "attitude_estimator_q"
     WORK_QUEUE = INS
     DESCRIPTION = "Quaternion complementary filter (PX4 attitude_estimator_q) and gyro filtering"
-    TRIGGER = Trigger("sensor_gyro", every=True)
+    TRIGGER = Trigger(ORB_ID.sensor_gyro, every=True)
     DT_RANGE = (0.00001, 0.02)
     PARAMS = ATTITUDE_PARAMS + GYRO_PARAMS + COMPENSATION_PARAMS
 
     def __init__(self, rt) -> None:
         super().__init__(rt)
-        self.subscribe("sensor_accel", queue=True)
-        self.subscribe("sensor_mag")
-        self.subscribe("vehicle_local_position")
-        self.subscribe("sensor_gps")
-        self.advertise("vehicle_angular_velocity")
-        self.advertise("vehicle_attitude")
-        self.advertise("vehicle_imu_status")
-        self.advertise("estimator_status")
+        self.subscribe(ORB_ID.sensor_accel, queue=True)
+        self.subscribe(ORB_ID.sensor_mag)
+        self.subscribe(ORB_ID.vehicle_local_position)
+        self.subscribe(ORB_ID.sensor_gps)
+        self.advertise(ORB_ID.vehicle_angular_velocity)
+        self.advertise(ORB_ID.vehicle_attitude)
+        self.advertise(ORB_ID.vehicle_imu_status)
+        self.advertise(ORB_ID.estimator_status)
         self.imu = ImuSummary()
         self._attitude_time = 0
         self.estimator = AttitudeEstimatorQ(**self._values(ATTITUDE_PARAMS))
@@ -85,7 +86,7 @@ class AttitudeEstimatorModule(Module):
         t = gyro_msg.timestamp_sample
         gyro = (gyro_msg.x, gyro_msg.y, gyro_msg.z)
         accel_msg = self._accel_at(t)
-        mag_msg = self.update("sensor_mag")
+        mag_msg = self.update(ORB_ID.sensor_mag)
         mag = (mag_msg.x, mag_msg.y, mag_msg.z) if mag_msg is not None else None
         if accel_msg is not None:
             accel = (accel_msg.x, accel_msg.y, accel_msg.z)
@@ -95,10 +96,10 @@ class AttitudeEstimatorModule(Module):
         if self.behind():
             return  # a busy machine left a backlog of gyro samples: integrate each, publish the newest only
         self.publish(
-            "vehicle_angular_velocity", VehicleAngularVelocity(timestamp_sample=t, xyz=xyz, xyz_derivative=xyz_dot)
+            ORB_ID.vehicle_angular_velocity, VehicleAngularVelocity(timestamp_sample=t, xyz=xyz, xyz_derivative=xyz_dot)
         )
         if self.estimator.initialised:
-            self.publish("vehicle_attitude", VehicleAttitude(timestamp_sample=t, q=self.estimator.q))
+            self.publish(ORB_ID.vehicle_attitude, VehicleAttitude(timestamp_sample=t, q=self.estimator.q))
             self._attitude_time = self.now_us()
             if self.keep_due():
                 self.keep_state({"q": list(self.estimator.q), "gyro_bias": list(self.estimator.gyro_bias)})
@@ -110,16 +111,16 @@ class AttitudeEstimatorModule(Module):
         it. Every gyro sample is integrated: a real-time run working off a backlog of gyro samples (a busy
         machine) meets each with its own accelerometer sample, not the newest one."""
         accels = self._accels
-        accels.extend(self.take("sensor_accel"))
+        accels.extend(self.take(ORB_ID.sensor_accel))
         while len(accels) > 1 and accels[1].timestamp_sample <= t:
             accels.popleft()
         return accels[0] if accels else None
 
     def _publish_status(self, gyro_msg: SensorGyro) -> None:
         now = self.now_us()
-        self.publish("vehicle_imu_status", self.imu.status(gyro_msg))
+        self.publish(ORB_ID.vehicle_imu_status, self.imu.status(gyro_msg))
         self.publish(
-            "estimator_status",
+            ORB_ID.estimator_status,
             EstimatorStatus(
                 attitude_valid=self.estimator.initialised,
                 q=self.estimator.q,
@@ -133,13 +134,13 @@ class AttitudeEstimatorModule(Module):
         """NED acceleration from the local-position velocity, or the GPS velocity without one (ATT_ACC_COMP)."""
         if not self.params["ATT_ACC_COMP"]:
             return None
-        lpos = self.latest("vehicle_local_position")
+        lpos = self.latest(ORB_ID.vehicle_local_position)
         if lpos is not None and lpos.v_xy_valid and lpos.v_z_valid:
             if lpos.timestamp_sample > self._velocity_time:
                 self._velocity_time = lpos.timestamp_sample
                 self.acceleration.update(lpos.timestamp_sample, (lpos.vx, lpos.vy, lpos.vz))
             return self.acceleration.acceleration
-        gps = self.latest("sensor_gps")
+        gps = self.latest(ORB_ID.sensor_gps)
         if gps is not None and gps.vel_ned_valid and gps.timestamp_sample > self._velocity_time:
             self._velocity_time = gps.timestamp_sample
             self.acceleration.update(gps.timestamp_sample, (gps.vel_n_m_s, gps.vel_e_m_s, gps.vel_d_m_s))

@@ -21,6 +21,7 @@ from stack.estimator.position_kf import LocalPositionEstimate, LocalPositionKF
 from stack.mathlib.atmosphere import isa_altitude_m
 from stack.mathlib.quaternion import yaw
 from stack.msg.estimation import VehicleGlobalPosition, VehicleLocalPosition
+from stack.msg.registry import ORB_ID
 from stack.runtime.module import Module, Timer
 from stack.runtime.priority import INS
 
@@ -101,15 +102,15 @@ class LocalPositionEstimatorModule(Module):
 
     def __init__(self, rt) -> None:
         super().__init__(rt)
-        self.subscribe("sensor_accel", queue=True)
-        self.subscribe("sensor_baro", queue=True)
-        self.subscribe("sensor_gps", queue=True)
-        self.subscribe("vehicle_attitude")
-        self.subscribe("vehicle_land_detected")
-        self.subscribe("airspeed_validated")
-        self.subscribe("wind")
-        self.advertise("vehicle_local_position")
-        self.advertise("vehicle_global_position")
+        self.subscribe(ORB_ID.sensor_accel, queue=True)
+        self.subscribe(ORB_ID.sensor_baro, queue=True)
+        self.subscribe(ORB_ID.sensor_gps, queue=True)
+        self.subscribe(ORB_ID.vehicle_attitude)
+        self.subscribe(ORB_ID.vehicle_land_detected)
+        self.subscribe(ORB_ID.airspeed_validated)
+        self.subscribe(ORB_ID.wind)
+        self.advertise(ORB_ID.vehicle_local_position)
+        self.advertise(ORB_ID.vehicle_global_position)
         self.kf = LocalPositionKF(**self._kf_params())
         kept = self.kept_state()
         if kept is not None:
@@ -127,35 +128,35 @@ class LocalPositionEstimatorModule(Module):
         self.kf.set_params(**self._kf_params())
 
     def run(self, msg: None, dt: float) -> None:
-        attitude = self.latest("vehicle_attitude")
-        samples = self.take("sensor_accel")
+        attitude = self.latest(ORB_ID.vehicle_attitude)
+        samples = self.take(ORB_ID.sensor_accel)
         if attitude is None or not samples:
-            for topic in ("sensor_baro", "sensor_gps"):
+            for topic in (ORB_ID.sensor_baro, ORB_ID.sensor_gps):
                 self.take(topic)
             return
         n = len(samples)
         mean = (sum(s.x for s in samples) / n, sum(s.y for s in samples) / n, sum(s.z for s in samples) / n)
         if not self.kf.predict(samples[-1].timestamp_sample, mean, attitude.q):
             self.reject("accelerometer sample not usable for prediction (non-finite, out of range or not advancing)")
-        for baro in self.take("sensor_baro"):
+        for baro in self.take(ORB_ID.sensor_baro):
             if baro.pressure > 0.0:
                 self.kf.fuse_baro(isa_altitude_m(baro.pressure))
-        for gps in self.take("sensor_gps"):
+        for gps in self.take(ORB_ID.sensor_gps):
             self.kf.fuse_gps(gps)
         self._fuse_airspeed(attitude.q)
-        land = self.latest("vehicle_land_detected")
+        land = self.latest(ORB_ID.vehicle_land_detected)
         if land is not None and land.landed and land.at_rest:
             self.kf.fuse_land()
         est = self.kf.estimate()
         now = self.now_us()
         if self.keep_due():
             self.keep_state(self.kf.snapshot())
-        self.publish("vehicle_local_position", local_position_message(est, yaw(attitude.q), now))
-        self.publish("vehicle_global_position", global_position_message(est, now))
+        self.publish(ORB_ID.vehicle_local_position, local_position_message(est, yaw(attitude.q), now))
+        self.publish(ORB_ID.vehicle_global_position, global_position_message(est, now))
 
     def _fuse_airspeed(self, q) -> None:
-        airspeed = self.update("airspeed_validated")
-        wind = self.latest("wind")
+        airspeed = self.update(ORB_ID.airspeed_validated)
+        wind = self.latest(ORB_ID.wind)
         if airspeed is None or wind is None or not airspeed.airspeed_sensor_measurement_valid:
             return
         self.kf.fuse_airspeed(

@@ -19,6 +19,7 @@ from stack.fw.airspeed_validator import APPLIED_SCALE, AirspeedValidator, Airspe
 from stack.mathlib.quaternion import IDENTITY, is_finite, rotate_inv
 from stack.mathlib.scalar import CONSTANTS_ONE_G
 from stack.msg.fixedwing import AirspeedValidated, PositionSetpoint, Wind
+from stack.msg.registry import ORB_ID
 from stack.params import catalogue
 from stack.runtime.module import Module, Timer
 from stack.runtime.priority import NAV_AND_CONTROLLERS
@@ -42,15 +43,15 @@ class AirspeedSelectorModule(Module):
     def __init__(self, rt) -> None:
         super().__init__(rt)
         for topic in (
-            "airspeed",
-            "vehicle_local_position",
-            "vehicle_attitude",
-            "vehicle_land_detected",
-            "position_setpoint_triplet",
+            ORB_ID.airspeed,
+            ORB_ID.vehicle_local_position,
+            ORB_ID.vehicle_attitude,
+            ORB_ID.vehicle_land_detected,
+            ORB_ID.position_setpoint_triplet,
         ):
             self.subscribe(topic)
-        self.advertise("airspeed_validated")
-        self.advertise("wind")
+        self.advertise(ORB_ID.airspeed_validated)
+        self.advertise(ORB_ID.wind)
         self.validator = AirspeedValidator(AirspeedValidatorParams.from_params(self.params))
         self.in_takeoff_situation = True
 
@@ -59,8 +60,8 @@ class AirspeedSelectorModule(Module):
 
     def run(self, msg: object, dt: float) -> None:
         now = self.now_us()
-        lpos = self.latest("vehicle_local_position")
-        attitude = self.latest("vehicle_attitude")
+        lpos = self.latest(ORB_ID.vehicle_local_position)
+        attitude = self.latest(ORB_ID.vehicle_attitude)
         q = attitude.q if attitude is not None and is_finite(attitude.q) else IDENTITY
         velocity = None
         if (
@@ -71,7 +72,7 @@ class AirspeedSelectorModule(Module):
             and all(math.isfinite(v) for v in (lpos.vx, lpos.vy, lpos.vz))
         ):
             velocity = (lpos.vx, lpos.vy, lpos.vz)
-        sample = self.update("airspeed")
+        sample = self.update(ORB_ID.airspeed)
         if sample is not None:
             in_fixed_wing_flight = self._in_fixed_wing_flight(sample.indicated_airspeed_m_s)
             evh = lpos.evh if lpos is not None and math.isfinite(lpos.evh) else 1.0
@@ -89,8 +90,8 @@ class AirspeedSelectorModule(Module):
         self._publish(now, velocity)
 
     def _in_fixed_wing_flight(self, indicated_airspeed: float) -> bool:
-        land = self.latest("vehicle_land_detected")
-        triplet = self.latest("position_setpoint_triplet")
+        land = self.latest(ORB_ID.vehicle_land_detected)
+        triplet = self.latest(ORB_ID.position_setpoint_triplet)
         landing = (
             triplet is not None
             and triplet.current.valid
@@ -121,7 +122,7 @@ class AirspeedSelectorModule(Module):
             ground_minus_wind_tas = math.sqrt(air[0] ** 2 + air[1] ** 2 + air[2] ** 2)
         valid = validator.valid and math.isfinite(validator.indicated_airspeed)
         self.publish(
-            "airspeed_validated",
+            ORB_ID.airspeed_validated,
             AirspeedValidated(
                 timestamp_sample=now,
                 indicated_airspeed_m_s=validator.indicated_airspeed if valid else math.nan,
@@ -135,7 +136,7 @@ class AirspeedSelectorModule(Module):
         )
         var_n, var_e = estimator.wind_variance if wind_valid else (math.nan, math.nan)
         self.publish(
-            "wind",
+            ORB_ID.wind,
             Wind(
                 timestamp_sample=now,
                 windspeed_north=wind_n,

@@ -26,6 +26,7 @@ from stack.mathlib.scalar import constrain
 from stack.mathlib.vector import Vec3
 from stack.msg.estimation import VehicleAttitude
 from stack.msg.fixedwing import AIRSPEED_TIMEOUT_US
+from stack.msg.registry import ORB_ID
 from stack.msg.setpoints import (
     ManualControlSetpoint,
     RateCtrlStatus,
@@ -54,30 +55,30 @@ class FixedwingAttitudeControl(Module):
     NAME = "fw_att_control"
     WORK_QUEUE = NAV_AND_CONTROLLERS
     DESCRIPTION = "Fixed-wing attitude controller (PX4 fw_att_control): attitude → body rates → surfaces, throttle"
-    TRIGGER = Trigger("vehicle_attitude")
+    TRIGGER = Trigger(ORB_ID.vehicle_attitude)
     DT_RANGE = (0.002, 0.04)
     PARAMS = att_control.PARAMS
 
     def __init__(self, rt) -> None:
         super().__init__(rt)
         for topic in (
-            "vehicle_angular_velocity",
-            "vehicle_attitude_setpoint",
-            "vehicle_rates_setpoint",
-            "vehicle_control_mode",
-            "manual_control_setpoint",
-            "airspeed_validated",
-            "vehicle_land_detected",
-            "vehicle_local_position",
-            "actuator_armed",
+            ORB_ID.vehicle_angular_velocity,
+            ORB_ID.vehicle_attitude_setpoint,
+            ORB_ID.vehicle_rates_setpoint,
+            ORB_ID.vehicle_control_mode,
+            ORB_ID.manual_control_setpoint,
+            ORB_ID.airspeed_validated,
+            ORB_ID.vehicle_land_detected,
+            ORB_ID.vehicle_local_position,
+            ORB_ID.actuator_armed,
         ):
             self.subscribe(topic)
         for topic in (
-            "vehicle_attitude_setpoint",
-            "vehicle_rates_setpoint",
-            "vehicle_torque_setpoint",
-            "vehicle_thrust_setpoint",
-            "rate_ctrl_status",
+            ORB_ID.vehicle_attitude_setpoint,
+            ORB_ID.vehicle_rates_setpoint,
+            ORB_ID.vehicle_torque_setpoint,
+            ORB_ID.vehicle_thrust_setpoint,
+            ORB_ID.rate_ctrl_status,
         ):
             self.advertise(topic)
         values = self.params.values()
@@ -92,12 +93,12 @@ class FixedwingAttitudeControl(Module):
 
     def run(self, att: VehicleAttitude, dt: float) -> None:
         t = att.timestamp_sample
-        armed = self.latest("actuator_armed")
+        armed = self.latest(ORB_ID.actuator_armed)
         if armed is None or not armed.armed or armed.lockdown or armed.kill:
             self.control.reset_integrals()
             self._publish(t, _ZERO, 0.0)
             return
-        mode = self.latest("vehicle_control_mode") or _NO_MODE
+        mode = self.latest(ORB_ID.vehicle_control_mode) or _NO_MODE
         if not (mode.flag_control_rates_enabled or mode.flag_control_attitude_enabled
                 or mode.flag_control_manual_enabled):
             return
@@ -107,13 +108,13 @@ class FixedwingAttitudeControl(Module):
             self._publish(t, self.sticks.torque(sticks.roll, sticks.pitch, sticks.yaw),
                           StickMapping.throttle(sticks.throttle))
             return
-        rates_msg = self.latest("vehicle_angular_velocity")
+        rates_msg = self.latest(ORB_ID.vehicle_angular_velocity)
         if not mode.flag_control_rates_enabled or rates_msg is None:
             return
         if not quat.is_finite(att.q):
             self.reject("vehicle_attitude with a non-finite q")
             return
-        land = self.latest("vehicle_land_detected")
+        land = self.latest(ORB_ID.vehicle_land_detected)
         landed = land is None or land.landed  # PX4 starts landed until the land detector says otherwise
         pilot = sticks if stick_modes else None
         if mode.flag_control_attitude_enabled:
@@ -125,14 +126,14 @@ class FixedwingAttitudeControl(Module):
             return
         out, throttle = step
         self.publish(
-            "vehicle_rates_setpoint",
+            ORB_ID.vehicle_rates_setpoint,
             VehicleRatesSetpoint(roll=out.rates_sp[0], pitch=out.rates_sp[1], yaw=out.rates_sp[2],
                                  thrust_body=(throttle, 0.0, 0.0)),
         )
         self._publish(t, out.torque, throttle)
         integ = self.control.integrals
         self.publish(
-            "rate_ctrl_status",
+            ORB_ID.rate_ctrl_status,
             RateCtrlStatus(rollspeed_integ=integ[0], pitchspeed_integ=integ[1], yawspeed_integ=integ[2]),
         )
 
@@ -144,10 +145,10 @@ class FixedwingAttitudeControl(Module):
             target = self.sticks.attitude(sticks.roll, sticks.pitch, quat.yaw(att.q))
             throttle = StickMapping.throttle(sticks.throttle)
             q_d = quat.from_euler(target.roll, target.pitch, target.yaw)
-            self.publish("vehicle_attitude_setpoint",
+            self.publish(ORB_ID.vehicle_attitude_setpoint,
                          VehicleAttitudeSetpoint(q_d=q_d, thrust_body=(throttle, 0.0, 0.0)))
         else:
-            setpoint = self.latest("vehicle_attitude_setpoint")
+            setpoint = self.latest(ORB_ID.vehicle_attitude_setpoint)
             if setpoint is None:
                 return None
             if not quat.is_finite(setpoint.q_d):
@@ -175,7 +176,7 @@ class FixedwingAttitudeControl(Module):
             rates_sp = self.sticks.rates(sticks.roll, sticks.pitch, sticks.yaw)
             throttle = StickMapping.throttle(sticks.throttle)
         else:
-            external = self.latest("vehicle_rates_setpoint")
+            external = self.latest(ORB_ID.vehicle_rates_setpoint)
             if external is None:
                 return None
             rates_sp = (external.roll, external.pitch, external.yaw)
@@ -184,11 +185,14 @@ class FixedwingAttitudeControl(Module):
         return None if out is None else (out, throttle)
 
     def _publish(self, t: int, torque: tuple[float, float, float], throttle: float) -> None:
-        self.publish("vehicle_thrust_setpoint", VehicleThrustSetpoint(timestamp_sample=t, xyz=(throttle, 0.0, 0.0)))
-        self.publish("vehicle_torque_setpoint", VehicleTorqueSetpoint(timestamp_sample=t, xyz=_clamp_torque(torque)))
+        thrust = VehicleThrustSetpoint(timestamp_sample=t, xyz=(throttle, 0.0, 0.0))
+        self.publish(ORB_ID.vehicle_thrust_setpoint, thrust)
+        self.publish(
+            ORB_ID.vehicle_torque_setpoint, VehicleTorqueSetpoint(timestamp_sample=t, xyz=_clamp_torque(torque))
+        )
 
     def _sticks(self) -> ManualControlSetpoint | None:
-        sticks = self.latest("manual_control_setpoint")
+        sticks = self.latest(ORB_ID.manual_control_setpoint)
         if sticks is None or not sticks.valid:
             return None
         if not all(math.isfinite(v) for v in (sticks.roll, sticks.pitch, sticks.yaw, sticks.throttle)):
@@ -198,13 +202,13 @@ class FixedwingAttitudeControl(Module):
 
     def _airspeed(self) -> float:
         """The validated calibrated airspeed [m/s], NaN when there is none or it is over a second old."""
-        msg = self.latest("airspeed_validated")
+        msg = self.latest(ORB_ID.airspeed_validated)
         if msg is None or self.now_us() - msg.timestamp > AIRSPEED_TIMEOUT_US:
             return math.nan
         return msg.calibrated_airspeed_m_s
 
     def _groundspeed(self) -> float:
-        pos = self.latest("vehicle_local_position")
+        pos = self.latest(ORB_ID.vehicle_local_position)
         if pos is None or not pos.v_xy_valid:
             return math.nan
         return math.hypot(pos.vx, pos.vy)

@@ -17,6 +17,7 @@ from stack.commander.home import HomePosition
 from stack.fw.navigator import PARAMS, FixedwingNavigator, FwNavigatorInputs
 from stack.mission.store import MissionResultPublisher
 from stack.msg.estimation import VehicleLocalPosition
+from stack.msg.registry import ORB_ID
 from stack.runtime.module import Module, Trigger
 from stack.runtime.priority import HP_DEFAULT
 
@@ -27,23 +28,23 @@ class NavigatorModule(Module):
     NAME = "navigator"
     WORK_QUEUE = HP_DEFAULT
     DESCRIPTION = "Fixed-wing navigator: takeoff, hold, mission, return and land as a position-setpoint triplet"
-    TRIGGER = Trigger("vehicle_local_position")
+    TRIGGER = Trigger(ORB_ID.vehicle_local_position)
     DT_RANGE = (0.002, 0.05)
     PARAMS = PARAMS
 
     def __init__(self, rt) -> None:
         super().__init__(rt)
         for topic in (
-            "vehicle_status",
-            "navigation_request",
-            "home_position",
-            "vehicle_land_detected",
-            "position_controller_status",
+            ORB_ID.vehicle_status,
+            ORB_ID.navigation_request,
+            ORB_ID.home_position,
+            ORB_ID.vehicle_land_detected,
+            ORB_ID.position_controller_status,
         ):
             self.subscribe(topic)
-        self.subscribe("mission", queue=True, capacity=16)
-        self.advertise("position_setpoint_triplet")
-        self.advertise("mission_result")
+        self.subscribe(ORB_ID.mission, queue=True, capacity=16)
+        self.advertise(ORB_ID.position_setpoint_triplet)
+        self.advertise(ORB_ID.mission_result)
         self.navigator = FixedwingNavigator(self.params.values())
         store = self.navigator.missions
         self.results = MissionResultPublisher(
@@ -58,10 +59,10 @@ class NavigatorModule(Module):
     def run(self, lpos: VehicleLocalPosition, dt: float) -> None:
         now = self.now_us()
         self.results.take_uploads(self)
-        status = self.latest("vehicle_status")
-        land = self.latest("vehicle_land_detected")
-        home = self.latest("home_position")
-        guidance = self.latest("position_controller_status")
+        status = self.latest(ORB_ID.vehicle_status)
+        land = self.latest(ORB_ID.vehicle_land_detected)
+        home = self.latest(ORB_ID.home_position)
+        guidance = self.latest(ORB_ID.position_controller_status)
         triplet = self.navigator.update(
             FwNavigatorInputs(
                 now_us=lpos.timestamp_sample,
@@ -77,10 +78,10 @@ class NavigatorModule(Module):
                 home=HomePosition(home.x, home.y, home.z, home.yaw, home.lat, home.lon, home.alt)
                 if home is not None and home.valid_lpos
                 else None,
-                request=self.latest("navigation_request"),
+                request=self.latest(ORB_ID.navigation_request),
                 acceptance_radius=guidance.acceptance_radius if guidance is not None else NAN,
             )
         )
         if triplet is not None:
-            self.publish("position_setpoint_triplet", msgspec.structs.replace(triplet, timestamp=now))
+            self.publish(ORB_ID.position_setpoint_triplet, msgspec.structs.replace(triplet, timestamp=now))
         self.results.publish_result(self, now)

@@ -18,6 +18,7 @@ from stack.fw.pos_control import FixedwingPositionControl as PositionController
 from stack.mathlib import quaternion as quat
 from stack.msg.estimation import VehicleLocalPosition
 from stack.msg.fixedwing import AIRSPEED_TIMEOUT_US, PositionControllerStatus
+from stack.msg.registry import ORB_ID
 from stack.msg.setpoints import VehicleAttitudeSetpoint
 from stack.runtime.module import Module, Trigger
 from stack.runtime.priority import NAV_AND_CONTROLLERS
@@ -29,23 +30,23 @@ class FixedwingPositionControl(Module):
     NAME = "fw_pos_control"
     WORK_QUEUE = NAV_AND_CONTROLLERS
     DESCRIPTION = "Fixed-wing position control (PX4 fw_pos_control_l1): L1 or NPFG, TECS, runway takeoff, landing"
-    TRIGGER = Trigger("vehicle_local_position")
+    TRIGGER = Trigger(ORB_ID.vehicle_local_position)
     DT_RANGE = (0.002, 0.1)
     PARAMS = PARAMS
 
     def __init__(self, rt) -> None:
         super().__init__(rt)
         for topic in (
-            "vehicle_status",
-            "vehicle_attitude",
-            "airspeed_validated",
-            "wind",
-            "position_setpoint_triplet",
-            "manual_control_setpoint",
-            "vehicle_land_detected",
+            ORB_ID.vehicle_status,
+            ORB_ID.vehicle_attitude,
+            ORB_ID.airspeed_validated,
+            ORB_ID.wind,
+            ORB_ID.position_setpoint_triplet,
+            ORB_ID.manual_control_setpoint,
+            ORB_ID.vehicle_land_detected,
         ):
             self.subscribe(topic)
-        for topic in ("vehicle_attitude_setpoint", "tecs_status", "position_controller_status"):
+        for topic in (ORB_ID.vehicle_attitude_setpoint, ORB_ID.tecs_status, ORB_ID.position_controller_status):
             self.advertise(topic)
         self.control = PositionController(self.params.values())
 
@@ -54,22 +55,22 @@ class FixedwingPositionControl(Module):
 
     def run(self, lpos: VehicleLocalPosition, dt: float) -> None:
         now = self.now_us()
-        status = self.latest("vehicle_status")
-        attitude = self.latest("vehicle_attitude")
+        status = self.latest(ORB_ID.vehicle_status)
+        attitude = self.latest(ORB_ID.vehicle_attitude)
         if status is None or attitude is None or not quat.is_finite(attitude.q):
             return
         roll, pitch, yaw = quat.to_euler(attitude.q)
         airspeed, eas_to_tas = NAN, 1.0
-        measured = self.latest("airspeed_validated")
+        measured = self.latest(ORB_ID.airspeed_validated)
         if measured is not None and now - measured.timestamp <= AIRSPEED_TIMEOUT_US:
             airspeed = measured.calibrated_airspeed_m_s
             if measured.calibrated_airspeed_m_s > 0.0 and math.isfinite(measured.true_airspeed_m_s):
                 eas_to_tas = measured.true_airspeed_m_s / measured.calibrated_airspeed_m_s
-        wind = self.latest("wind")
+        wind = self.latest(ORB_ID.wind)
         wind_ne = (NAN, NAN)
         if wind is not None and now - wind.timestamp <= AIRSPEED_TIMEOUT_US:
             wind_ne = (wind.windspeed_north, wind.windspeed_east)
-        land = self.latest("vehicle_land_detected")
+        land = self.latest(ORB_ID.vehicle_land_detected)
         out = self.control.update(
             FwPosInputs(
                 now_us=lpos.timestamp_sample,
@@ -94,14 +95,14 @@ class FixedwingPositionControl(Module):
                 airspeed=airspeed,
                 eas_to_tas=eas_to_tas,
                 wind=wind_ne,
-                triplet=self.latest("position_setpoint_triplet"),
-                manual=self.latest("manual_control_setpoint"),
+                triplet=self.latest(ORB_ID.position_setpoint_triplet),
+                manual=self.latest(ORB_ID.manual_control_setpoint),
             )
         )
         if out is None:
             return
         self.publish(
-            "vehicle_attitude_setpoint",
+            ORB_ID.vehicle_attitude_setpoint,
             VehicleAttitudeSetpoint(
                 timestamp=now,
                 q_d=quat.from_euler(out.roll, out.pitch, out.yaw),
@@ -110,10 +111,10 @@ class FixedwingPositionControl(Module):
                 reset_integral=out.reset_integral,
             ),
         )
-        self.publish("tecs_status", msgspec.structs.replace(self.control.tecs.status(), timestamp=now))
+        self.publish(ORB_ID.tecs_status, msgspec.structs.replace(self.control.tecs.status(), timestamp=now))
         s = self.control.status
         self.publish(
-            "position_controller_status",
+            ORB_ID.position_controller_status,
             PositionControllerStatus(
                 timestamp=now,
                 nav_roll=s.nav_roll,

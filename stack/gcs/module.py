@@ -49,9 +49,10 @@ from stack.mission.items import GeoPoint, Mission
 from stack.mission.transfer import mission_from_message, mission_id_for, mission_message
 from stack.msg.navigation import Mission as MissionMsg
 from stack.msg.navigation import MissionResult
-from stack.msg.registry import fingerprint, message_type
+from stack.msg.registry import ORB_ID, fingerprint
 from stack.msg.system import TelemetryStatus, VehicleCommand, VehicleCommandAck
 from stack.msg.system import VehicleStatus as NS
+from stack.msg.topic import Topic
 from stack.params import catalogue
 from stack.params.param import ParamError
 from stack.runtime.module import Arg, Module, Timer
@@ -69,41 +70,41 @@ PARAM_VALUES_PER_S = 1000
 PARAM_VALUE_BYTES = 37
 ERROR_LOG_EVERY = 100
 BASE_TOPICS = (
-    "vehicle_status",
-    "vehicle_control_mode",
-    "vehicle_land_detected",
-    "home_position",
-    "vehicle_command_ack",
-    "mavlink_log",
-    "parameter_update",
-    "mission",
-    "mission_result",
+    ORB_ID.vehicle_status,
+    ORB_ID.vehicle_control_mode,
+    ORB_ID.vehicle_land_detected,
+    ORB_ID.home_position,
+    ORB_ID.vehicle_command_ack,
+    ORB_ID.mavlink_log,
+    ORB_ID.parameter_update,
+    ORB_ID.mission,
+    ORB_ID.mission_result,
 )
 """Read always: what the HEARTBEAT, the acknowledgements, the operator's messages and the missions need."""
 TELEMETRY_TOPICS = (
-    "vehicle_local_position",
-    "estimator_status",
-    "vehicle_imu_status",
-    "sensor_gps",
-    "battery_status",
-    "sensor_mag",
-    "sensor_baro",
+    ORB_ID.vehicle_local_position,
+    ORB_ID.estimator_status,
+    ORB_ID.vehicle_imu_status,
+    ORB_ID.sensor_gps,
+    ORB_ID.battery_status,
+    ORB_ID.sensor_mag,
+    ORB_ID.sensor_baro,
 )
 """Read while a peer uses the link."""
 VIEW_FIELDS = {
-    "vehicle_status": "status",
-    "vehicle_control_mode": "control_mode",
-    "vehicle_land_detected": "land",
-    "home_position": "home",
-    "vehicle_local_position": "local_position",
-    "estimator_status": "estimator",
-    "vehicle_imu_status": "imu",
-    "sensor_gps": "gps",
-    "battery_status": "battery",
-    "sensor_mag": "mag",
-    "sensor_baro": "baro",
+    ORB_ID.vehicle_status: "status",
+    ORB_ID.vehicle_control_mode: "control_mode",
+    ORB_ID.vehicle_land_detected: "land",
+    ORB_ID.home_position: "home",
+    ORB_ID.vehicle_local_position: "local_position",
+    ORB_ID.estimator_status: "estimator",
+    ORB_ID.vehicle_imu_status: "imu",
+    ORB_ID.sensor_gps: "gps",
+    ORB_ID.battery_status: "battery",
+    ORB_ID.sensor_mag: "mag",
+    ORB_ID.sensor_baro: "baro",
 }
-QUEUED_TOPICS = {"vehicle_command_ack": 64, "mavlink_log": 64, "mission": 8, "mission_result": 16}
+QUEUED_TOPICS = {ORB_ID.vehicle_command_ack: 64, ORB_ID.mavlink_log: 64, ORB_ID.mission: 8, ORB_ID.mission_result: 16}
 SUPPORTED_COMMANDS = Commander().supported_commands
 M = mavlink2
 _Answer = tuple[int, int, list[mavlink2.MAVLink_message]]
@@ -115,9 +116,9 @@ class _Subscriber(TopicSubscriber):
 
     __slots__ = ("_wake",)
 
-    def __init__(self, node: Node, topic: str, capacity: int, wake: Callable[[], None] | None) -> None:
+    def __init__(self, node: Node, topic: Topic, capacity: int, wake: Callable[[], None] | None) -> None:
         self._wake = wake
-        super().__init__(node, topic, 0, message_type(topic), capacity, callback=True)
+        super().__init__(node, topic.name, 0, topic.type, capacity, callback=True)
 
     def _on_sample(self, sample: Any) -> None:
         TopicSubscriber._on_sample(self, sample)
@@ -129,11 +130,11 @@ class _Subscription:
     """A subscription this module declares and withdraws while it runs, announced in the topic graph (so that a
     fast-path run puts the topic on Zenoh for it only while it is there)."""
 
-    def __init__(self, node: Node, topic: str, capacity: int, wake: Callable[[], None] | None = None) -> None:
-        msg_type = message_type(topic)
+    def __init__(self, node: Node, topic: Topic, capacity: int, wake: Callable[[], None] | None = None) -> None:
         self.topic = topic
         self.sub = _Subscriber(node, topic, capacity, wake)
-        key = keys.graph_token(node.vehicle, node.name, "sub", topic, 0, msg_type.__name__, fingerprint(msg_type))
+        kind = topic.type
+        key = keys.graph_token(node.vehicle, node.name, "sub", topic.name, 0, kind.__name__, fingerprint(kind))
         self.token = node.session.liveliness().declare_token(key)
 
     def close(self) -> None:
@@ -193,11 +194,11 @@ class MavlinkModule(Module):
         self.own = (int(self.params["MAV_SYS_ID"]), int(self.params["MAV_COMP_ID"]))
         self.clock = StampClock(rt.spec.lockstep, wall_clock_us)
         for topic in (
-            "vehicle_command",
-            "telemetry_status",
-            "mission",
-            "manual_control_setpoint",
-            "offboard_control_mode",
+            ORB_ID.vehicle_command,
+            ORB_ID.telemetry_status,
+            ORB_ID.mission,
+            ORB_ID.manual_control_setpoint,
+            ORB_ID.offboard_control_mode,
             *offboard.SETPOINT_TOPICS.values(),
         ):
             self.advertise(topic)
@@ -258,7 +259,7 @@ class MavlinkModule(Module):
                 rt.node,
                 topic,
                 QUEUED_TOPICS.get(topic, 4),
-                self._wake if topic == "vehicle_command_ack" else None,
+                self._wake if topic == ORB_ID.vehicle_command_ack else None,
             )
             for topic in BASE_TOPICS
         }
@@ -323,7 +324,7 @@ class MavlinkModule(Module):
         for msg in self.texts.messages(severity, text):
             self._send(msg)
 
-    def _publish(self, topic: str, msg: Any) -> None:
+    def _publish(self, topic: Topic, msg: Any) -> None:
         """Publish stamped with the stack's time; in lockstep nothing goes out before any time was seen."""
         stamp = self.clock.now()
         if stamp <= 0:
@@ -401,11 +402,11 @@ class MavlinkModule(Module):
         ]
 
     _bus_handlers: ClassVar[dict[str, Callable[[MavlinkModule, Any], None]]] = {
-        "vehicle_command_ack": _on_ack,
-        "mavlink_log": _on_log,
-        "parameter_update": _on_parameter_update,
-        "mission": _on_mission,
-        "mission_result": _on_mission_result,
+        ORB_ID.vehicle_command_ack: _on_ack,
+        ORB_ID.mavlink_log: _on_log,
+        ORB_ID.parameter_update: _on_parameter_update,
+        ORB_ID.mission: _on_mission,
+        ORB_ID.mission_result: _on_mission_result,
     }
 
     # -- the link -------------------------------------------------------------------------------------
@@ -459,7 +460,7 @@ class MavlinkModule(Module):
             self.counts["command_duplicates"] += 1
             return
         self.counts["commands"] += 1
-        self._publish("vehicle_command", cmd)
+        self._publish(ORB_ID.vehicle_command, cmd)
 
     def _set_message_interval(self, msg_id: float, interval_us: float) -> _Answer:
         result = self.streams.set_interval(msg_id, interval_us)
@@ -495,7 +496,7 @@ class MavlinkModule(Module):
     def _on_set_mode(self, msg: Any, source: tuple[int, int], now: int) -> None:
         if msg.target_system == self.own[0]:
             self.counts["commands"] += 1
-            self._publish("vehicle_command", commands.from_set_mode(msg, source, self.own))
+            self._publish(ORB_ID.vehicle_command, commands.from_set_mode(msg, source, self.own))
 
     def _on_param_request_list(self, msg: Any, source: tuple[int, int], now: int) -> None:
         self.parameters.on_request_list(msg)
@@ -521,7 +522,7 @@ class MavlinkModule(Module):
             self._refuse(str(e))
             return
         self.manual.on_sticks(sticks, now)
-        self._publish("manual_control_setpoint", sticks)
+        self._publish(ORB_ID.manual_control_setpoint, sticks)
 
     def _on_setpoint(self, msg: Any, source: tuple[int, int], now: int) -> None:
         if msg.target_system != self.own[0]:
@@ -594,7 +595,7 @@ class MavlinkModule(Module):
                 heartbeat_type_gcs=flags[0],
                 heartbeat_type_onboard_controller=flags[1],
             )
-            self._publish("telemetry_status", status)
+            self._publish(ORB_ID.telemetry_status, status)
         if self._active:
             for msg_id in self.streams.due(now):
                 message = self._builders[msg_id]()
@@ -612,7 +613,7 @@ class MavlinkModule(Module):
                 self.publish(topic, msg)
             sticks = self.manual.due(now, stamp)
             if sticks is not None:
-                self.publish("manual_control_setpoint", sticks)
+                self.publish(ORB_ID.manual_control_setpoint, sticks)
 
     def _missions(self, now: int) -> None:
         self.transfer.tick(now)
@@ -624,7 +625,7 @@ class MavlinkModule(Module):
                 self._upload(action.items)
             elif isinstance(action, Clear):
                 self._verdict_id = None
-                self._publish("mission", mission_message(Mission(()), None, mission_id_for(Mission(()))))
+                self._publish(ORB_ID.mission, mission_message(Mission(()), None, mission_id_for(Mission(()))))
             elif isinstance(action, Refused):
                 self._say(M.MAV_SEVERITY_CRITICAL, f"Mission rejected: {action.reason}")
             elif isinstance(action, SetCurrent):
@@ -636,7 +637,7 @@ class MavlinkModule(Module):
                     source_system=action.source[0],
                     source_component=action.source[1],
                 )
-                self._publish("vehicle_command", cmd)
+                self._publish(ORB_ID.vehicle_command, cmd)
         out, _ = self.transfer.take()  # a verdict given while converting
         for msg in out:
             self._send(msg)
@@ -662,7 +663,7 @@ class MavlinkModule(Module):
             return
         mission = Mission(converted, home, source=f"mavlink:{self.rt.name}")
         self._verdict_id = mission_id_for(mission)
-        self._publish("mission", mission_message(mission, home, self._verdict_id))
+        self._publish(ORB_ID.mission, mission_message(mission, home, self._verdict_id))
 
     def _parameters(self, now: int) -> None:
         for job in self.parameters.take_jobs():

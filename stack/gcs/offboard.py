@@ -26,8 +26,10 @@ from typing import Any
 from pymavlink.dialects.v20 import common as mavlink2
 
 from stack.mathlib import quaternion as quat
+from stack.msg.registry import ORB_ID
 from stack.msg.setpoints import TrajectorySetpoint, VehicleAttitudeSetpoint, VehicleRatesSetpoint
 from stack.msg.system import OffboardControlMode
+from stack.msg.topic import Topic
 
 NAN = math.nan
 PROOF_OF_LIFE_US = 500_000
@@ -140,10 +142,10 @@ def attitude_target(
     return setpoint, OffboardControlMode(timestamp=now_us, body_rate=True)
 
 
-SETPOINT_TOPICS: dict[type, str] = {
-    TrajectorySetpoint: "trajectory_setpoint",
-    VehicleAttitudeSetpoint: "vehicle_attitude_setpoint",
-    VehicleRatesSetpoint: "vehicle_rates_setpoint",
+SETPOINT_TOPICS: dict[type, Topic] = {
+    TrajectorySetpoint: ORB_ID.trajectory_setpoint,
+    VehicleAttitudeSetpoint: ORB_ID.vehicle_attitude_setpoint,
+    VehicleRatesSetpoint: ORB_ID.vehicle_rates_setpoint,
 }
 
 
@@ -164,14 +166,14 @@ class OffboardRelay:
     def alive(self, now_wall_us: int) -> bool:
         return self._setpoint is not None and now_wall_us - self._received_us <= PROOF_OF_LIFE_US
 
-    def due(self, now_wall_us: int, stamp_us: int, in_offboard: bool) -> list[tuple[str, Any]]:
+    def due(self, now_wall_us: int, stamp_us: int, in_offboard: bool) -> list[tuple[Topic, Any]]:
         """(topic, message) to publish now, stamped ``stamp_us``: the proof of life, and the setpoint in Offboard."""
         if not self.alive(now_wall_us) or now_wall_us - self._sent_us < REPUBLISH_US:
             return []
         assert self._setpoint is not None and self._mode is not None
         self._sent_us = now_wall_us
         self._mode.timestamp = stamp_us
-        out: list[tuple[str, Any]] = [("offboard_control_mode", self._mode)]
+        out: list[tuple[Topic, Any]] = [(ORB_ID.offboard_control_mode, self._mode)]
         if in_offboard:
             self._setpoint.timestamp = stamp_us
             out.append((SETPOINT_TOPICS[type(self._setpoint)], self._setpoint))

@@ -28,10 +28,12 @@ from stack.mathlib.geo import MapProjection
 from stack.mathlib.scalar import CONSTANTS_ONE_G
 from stack.msg.base import Message
 from stack.msg.estimation import VehicleAngularVelocity, VehicleAttitude, VehicleLocalPosition
+from stack.msg.registry import ORB_ID
 from stack.msg.sensors import SensorAccel, SensorBaro, SensorGps, SensorGyro, SensorMag
 from stack.msg.setpoints import VehicleAttitudeSetpoint, VehicleRatesSetpoint
 from stack.msg.simulation import SimGroundtruth
 from stack.msg.system import BatteryStatus
+from stack.msg.topic import Topic
 
 # HIGHRES_IMU_UPDATED_FLAGS
 GYRO_UPDATED = (
@@ -99,12 +101,12 @@ def is_unix_time(time_usec: int) -> bool:
 # -- inbound: sensors ----------------------------------------------------------------------------------
 
 
-def highres_imu(msg: Any, sample_us: int, device_id: int) -> tuple[list[tuple[str, Message]], list[str]]:
+def highres_imu(msg: Any, sample_us: int, device_id: int) -> tuple[list[tuple[Topic, Message]], list[str]]:
     """HIGHRES_IMU → ``sensor_accel``, ``sensor_gyro``, ``sensor_mag``, ``sensor_baro``: only the sensors
     ``fields_updated`` marks as new, in the order the attitude estimator wants them (accelerometer before
     its trigger, the gyro). Returns the messages and the reasons any part was refused."""
     updated = msg.fields_updated
-    out: list[tuple[str, Message]] = []
+    out: list[tuple[Topic, Message]] = []
     refused: list[str] = []
     temperature = math.nan
     if updated & TEMPERATURE_UPDATED:
@@ -115,7 +117,7 @@ def highres_imu(msg: Any, sample_us: int, device_id: int) -> tuple[list[tuple[st
             _within("HIGHRES_IMU acceleration", ACCEL_MAX_M_S2, msg.xacc, msg.yacc, msg.zacc)
             out.append(
                 (
-                    "sensor_accel",
+                    ORB_ID.sensor_accel,
                     SensorAccel(
                         timestamp_sample=sample_us,
                         device_id=device_id,
@@ -133,7 +135,7 @@ def highres_imu(msg: Any, sample_us: int, device_id: int) -> tuple[list[tuple[st
             _within("HIGHRES_IMU angular rate", GYRO_MAX_RAD_S, msg.xgyro, msg.ygyro, msg.zgyro)
             out.append(
                 (
-                    "sensor_gyro",
+                    ORB_ID.sensor_gyro,
                     SensorGyro(
                         timestamp_sample=sample_us,
                         device_id=device_id,
@@ -151,7 +153,7 @@ def highres_imu(msg: Any, sample_us: int, device_id: int) -> tuple[list[tuple[st
             _within("HIGHRES_IMU magnetic field", MAG_MAX_GAUSS, msg.xmag, msg.ymag, msg.zmag)
             out.append(
                 (
-                    "sensor_mag",
+                    ORB_ID.sensor_mag,
                     SensorMag(timestamp_sample=sample_us, device_id=device_id, x=msg.xmag, y=msg.ymag, z=msg.zmag),
                 )
             )
@@ -163,7 +165,7 @@ def highres_imu(msg: Any, sample_us: int, device_id: int) -> tuple[list[tuple[st
         if math.isfinite(pressure) and lo <= pressure <= hi:
             out.append(
                 (
-                    "sensor_baro",
+                    ORB_ID.sensor_baro,
                     SensorBaro(
                         timestamp_sample=sample_us, device_id=device_id, pressure=pressure, temperature=temperature
                     ),

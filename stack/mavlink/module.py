@@ -31,9 +31,10 @@ from stack.mavlink import convert, plant, px4_modes
 from stack.mavlink.endpoint import parse_endpoint
 from stack.mavlink.link import MavlinkLink, monotonic_us
 from stack.msg.estimation import EstimatorStatus
-from stack.msg.registry import message_type
+from stack.msg.registry import ORB_ID
 from stack.msg.setpoints import VehicleThrustSetpoint
 from stack.msg.system import ExternalAutopilotStatus, VehicleCommand, VehicleCommandAck
+from stack.msg.topic import Topic
 from stack.params import catalogue
 from stack.runtime.module import Arg, Module, Timer
 
@@ -90,11 +91,11 @@ class _WakingSubscriber(TopicSubscriber):
 
     __slots__ = ("_wake",)
 
-    def __init__(self, node: Node, topic: str, wake: Callable[[], None]) -> None:
+    def __init__(self, node: Node, topic: Topic, wake: Callable[[], None]) -> None:
         self._wake = wake
-        super().__init__(node, topic, 0, message_type(topic), capacity=8, callback=True)
+        super().__init__(node, topic.name, 0, topic.type, capacity=8, callback=True)
         node.subscribers.append(self)
-        node.announce("sub", topic, 0)
+        node.announce("sub", topic.name, 0)
 
     def _on_sample(self, sample: Any) -> None:
         TopicSubscriber._on_sample(self, sample)
@@ -125,25 +126,32 @@ class PixhawkAdapterModule(Module):
         self.estimate_instance = 0 if self.own_estimate else 1
         self.streams = plant.stream_plan(endpoint.baud or None, self.own_estimate, float(a["imu_rate_hz"]))
         self.baud = endpoint.baud or None
-        self.subscribe("actuator_armed")
-        self.subscribe("vehicle_command_ack", queue=True)
-        self.advertise("external_autopilot_status")
-        for topic in ("sensor_accel", "sensor_gyro", "sensor_mag", "sensor_baro", "sensor_gps", "battery_status"):
+        self.subscribe(ORB_ID.actuator_armed)
+        self.subscribe(ORB_ID.vehicle_command_ack, queue=True)
+        self.advertise(ORB_ID.external_autopilot_status)
+        for topic in (
+            ORB_ID.sensor_accel,
+            ORB_ID.sensor_gyro,
+            ORB_ID.sensor_mag,
+            ORB_ID.sensor_baro,
+            ORB_ID.sensor_gps,
+            ORB_ID.battery_status,
+        ):
             self.advertise(topic)
-        self.advertise("sim_groundtruth")
-        self.advertise("vehicle_thrust_setpoint")
-        self.advertise("vehicle_attitude", self.estimate_instance)
-        self.advertise("vehicle_local_position", self.estimate_instance)
+        self.advertise(ORB_ID.sim_groundtruth)
+        self.advertise(ORB_ID.vehicle_thrust_setpoint)
+        self.advertise(ORB_ID.vehicle_attitude, self.estimate_instance)
+        self.advertise(ORB_ID.vehicle_local_position, self.estimate_instance)
         if self.own_estimate:
-            for topic in ("vehicle_angular_velocity", "vehicle_imu_status", "estimator_status"):
+            for topic in (ORB_ID.vehicle_angular_velocity, ORB_ID.vehicle_imu_status, ORB_ID.estimator_status):
                 self.advertise(topic)
         self._lock = threading.Lock()
         self._stop = threading.Event()
         self._wake_r, self._wake_w = os.pipe2(os.O_NONBLOCK | os.O_CLOEXEC)
-        setpoint = "vehicle_attitude_setpoint" if attitude_setpoints else "vehicle_rates_setpoint"
+        setpoint = ORB_ID.vehicle_attitude_setpoint if attitude_setpoints else ORB_ID.vehicle_rates_setpoint
         self.to_target = convert.attitude_target if attitude_setpoints else convert.rates_target
         self.setpoints = _WakingSubscriber(rt.node, setpoint, self._wake)
-        self.estimates = rt.node.subscriber("vehicle_attitude", capacity=4, callback=True)
+        self.estimates = rt.node.subscriber(ORB_ID.vehicle_attitude.name, capacity=4, callback=True)
         self.link = MavlinkLink(
             endpoint,
             system_id=int(a["system_id"]),
@@ -239,7 +247,7 @@ class PixhawkAdapterModule(Module):
             return
         self._send_target(target, now)
         self.publish(
-            "vehicle_thrust_setpoint", VehicleThrustSetpoint(timestamp_sample=now, xyz=(0.0, 0.0, -target.thrust))
+            ORB_ID.vehicle_thrust_setpoint, VehicleThrustSetpoint(timestamp_sample=now, xyz=(0.0, 0.0, -target.thrust))
         )
         if self._estimate_sample_us:
             self.latency.add(monotonic_us() - self._estimate_sample_us)
@@ -306,37 +314,37 @@ class PixhawkAdapterModule(Module):
             self._refuse(why)
         for topic, m in out:
             self.publish(topic, m)
-            if self.own_estimate and topic == "sensor_gyro":
+            if self.own_estimate and topic == ORB_ID.sensor_gyro:
                 self._summarise_imu(m, out)
 
-    def _summarise_imu(self, gyro: Any, out: list[tuple[str, Any]]) -> None:
-        accel = next((m for topic, m in out if topic == "sensor_accel"), None)
+    def _summarise_imu(self, gyro: Any, out: list[tuple[Topic, Any]]) -> None:
+        accel = next((m for topic, m in out if topic == ORB_ID.sensor_accel), None)
         self.imu.add(gyro.timestamp_sample, (gyro.x, gyro.y, gyro.z), accel)
         if gyro.timestamp_sample - self.imu.start_us >= STATUS_INTERVAL_US:
-            self.publish("vehicle_imu_status", self.imu.status(gyro))
+            self.publish(ORB_ID.vehicle_imu_status, self.imu.status(gyro))
 
     def _on_gps(self, msg: Any, now: int) -> None:
-        self.publish("sensor_gps", convert.gps_raw_int(msg, self._sample_us(msg.time_usec, now), self.device_id))
+        self.publish(ORB_ID.sensor_gps, convert.gps_raw_int(msg, self._sample_us(msg.time_usec, now), self.device_id))
 
     def _on_battery(self, msg: Any, now: int) -> None:
         self._battery_status_us = now
-        self.publish("battery_status", convert.battery_status(msg))
+        self.publish(ORB_ID.battery_status, convert.battery_status(msg))
 
     def _on_sys_status(self, msg: Any, now: int) -> None:
         self.handoff.on_sys_status(convert.prearm_ok(msg))
         if now - self._battery_status_us > SYS_STATUS_BATTERY_AFTER_US:
-            self.publish("battery_status", convert.sys_status_battery(msg))
+            self.publish(ORB_ID.battery_status, convert.sys_status_battery(msg))
 
     def _on_attitude(self, msg: Any, now: int) -> None:
         t = self._sample_us(msg.time_boot_ms * 1000, now)
         attitude, rates = convert.attitude_quaternion(msg, t)
         if self.own_estimate:
-            self.publish("vehicle_angular_velocity", rates)
-        self.publish("vehicle_attitude", attitude, self.estimate_instance)
+            self.publish(ORB_ID.vehicle_angular_velocity, rates)
+        self.publish(ORB_ID.vehicle_attitude, attitude, self.estimate_instance)
         if self.own_estimate and now - self._estimator_status_us >= STATUS_INTERVAL_US:
             self._estimator_status_us = now
             self.publish(
-                "estimator_status",
+                ORB_ID.estimator_status,
                 EstimatorStatus(
                     attitude_valid=True, q=attitude.q, attitude_timestamp=now, angular_velocity_timestamp=now
                 ),
@@ -344,17 +352,17 @@ class PixhawkAdapterModule(Module):
 
     def _on_local_position(self, msg: Any, now: int) -> None:
         lpos = convert.local_position_ned(msg, self._sample_us(msg.time_boot_ms * 1000, now), self.origin)
-        self.publish("vehicle_local_position", lpos, self.estimate_instance)
+        self.publish(ORB_ID.vehicle_local_position, lpos, self.estimate_instance)
 
     def _on_odometry(self, msg: Any, now: int) -> None:
         _, lpos = convert.odometry(msg, self._sample_us(msg.time_usec, now), self.origin)
-        self.publish("vehicle_local_position", lpos, self.estimate_instance)
+        self.publish(ORB_ID.vehicle_local_position, lpos, self.estimate_instance)
 
     def _on_origin(self, msg: Any, now: int) -> None:
         self.origin = convert.gps_global_origin(msg)
 
     def _on_sim_state(self, msg: Any, now: int) -> None:
-        self.publish("sim_groundtruth", self.truth.convert(msg, now))
+        self.publish(ORB_ID.sim_groundtruth, self.truth.convert(msg, now))
 
     def _on_statustext(self, msg: Any, now: int) -> None:
         text = self.statustext.add(msg.text, getattr(msg, "id", 0), getattr(msg, "chunk_seq", 0))
@@ -389,10 +397,10 @@ class PixhawkAdapterModule(Module):
     # -- the 50 Hz run: hand-off, proof of life, streams, status ----------------------------------------
 
     def run(self, msg: None, dt: float) -> None:
-        armed = self.latest("actuator_armed")
+        armed = self.latest(ORB_ID.actuator_armed)
         mode_set = any(
             ack.command in MODE_COMMANDS and ack.result == VehicleCommandAck.VEHICLE_CMD_RESULT_ACCEPTED
-            for ack in self.take("vehicle_command_ack")
+            for ack in self.take(ORB_ID.vehicle_command_ack)
         )
         with self._lock:
             now = monotonic_us()
@@ -413,7 +421,7 @@ class PixhawkAdapterModule(Module):
         if status != self._published_status or now - self._status_us >= STATUS_PERIOD_US:
             self._published_status = status
             self._status_us = now
-            self.publish("external_autopilot_status", status)
+            self.publish(ORB_ID.external_autopilot_status, status)
 
     def _send_command(self, c: plant.CommandLong) -> None:
         peer = self._autopilot or (0, 0)

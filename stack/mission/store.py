@@ -18,6 +18,7 @@ from stack.mission.items import GeoPoint, Mission, about_home
 from stack.mission.tracker import MissionProgress, MissionTracker
 from stack.mission.transfer import mission_from_message
 from stack.msg import navigation
+from stack.msg.registry import ORB_ID
 
 if TYPE_CHECKING:
     from stack.runtime.module import Module
@@ -110,7 +111,7 @@ class MissionResultPublisher:
 
     def take_uploads(self, module: Module) -> None:
         """Load every upload the module received on ``mission``, logging each verdict."""
-        for upload in module.take("mission"):
+        for upload in module.take(ORB_ID.mission):
             problem = self.upload(upload)
             if problem:
                 module.reject(f"mission {upload.mission_id}: {problem}")
@@ -120,7 +121,7 @@ class MissionResultPublisher:
     def publish_result(self, module: Module, now_us: int) -> None:
         result = self.result(now_us)
         if result is not None:
-            module.publish("mission_result", result)
+            module.publish(ORB_ID.mission_result, result)
 
     def upload(self, upload: navigation.Mission) -> str:
         """Load one ``mission`` message; returns the refusal ("" when accepted)."""

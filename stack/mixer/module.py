@@ -22,6 +22,7 @@ from stack.mixer.fixedwing import FixedWingAllocator
 from stack.mixer.output import MotorOutput, servo_outputs
 from stack.msg.actuators import MOTOR_SLOTS, OUTPUT_SLOTS, ActuatorMotors, ActuatorOutputs, ControlAllocatorStatus, pad
 from stack.msg.fixedwing import SERVO_SLOTS, ActuatorServos
+from stack.msg.registry import ORB_ID
 from stack.msg.setpoints import VehicleTorqueSetpoint
 from stack.params import ca
 from stack.runtime.module import Module, Trigger
@@ -32,18 +33,23 @@ class ControlAllocatorModule(Module):
     NAME = "control_allocator"
     WORK_QUEUE = RATE_CTRL
     DESCRIPTION = "Control allocation (PX4 control_allocator) and motor and servo outputs"
-    TRIGGER = Trigger("vehicle_torque_setpoint")
+    TRIGGER = Trigger(ORB_ID.vehicle_torque_setpoint)
     DT_RANGE = (0.0002, 0.02)
     PARAMS = effectiveness.PARAMS + allocation.PARAMS + output.PARAMS + ca.AIRFRAME_PARAMS + fixedwing.PARAMS
 
     def __init__(self, rt) -> None:
         super().__init__(rt)
-        self.subscribe("vehicle_thrust_setpoint")
-        self.subscribe("actuator_armed")
-        self.subscribe("vehicle_land_detected")
-        for topic in ("actuator_motors", "actuator_outputs", "actuator_outputs_sim", "control_allocator_status"):
+        self.subscribe(ORB_ID.vehicle_thrust_setpoint)
+        self.subscribe(ORB_ID.actuator_armed)
+        self.subscribe(ORB_ID.vehicle_land_detected)
+        for topic in (
+            ORB_ID.actuator_motors,
+            ORB_ID.actuator_outputs,
+            ORB_ID.actuator_outputs_sim,
+            ORB_ID.control_allocator_status,
+        ):
             self.advertise(topic)
-        self.advertise("actuator_servos")
+        self.advertise(ORB_ID.actuator_servos)
         self._build()
 
     def _build(self) -> None:
@@ -56,8 +62,9 @@ class ControlAllocatorModule(Module):
             if self.plane.num_motors + self.plane.num_surfaces > OUTPUT_SLOTS:
                 raise ValueError(f"CA_ROTOR_COUNT + CA_SV_CS_COUNT exceeds the {OUTPUT_SLOTS} outputs")
             self.outputs = MotorOutput(self.plane.num_motors, values, idle=False)
-            self.log.info("fixed-wing allocation: %d motors, %d control surfaces",
-                          self.plane.num_motors, self.plane.num_surfaces)
+            self.log.info(
+                "fixed-wing allocation: %d motors, %d control surfaces", self.plane.num_motors, self.plane.num_surfaces
+            )
             return
         self.allocator = ControlAllocator.from_params(values)
         self.outputs = MotorOutput(self.allocator.num_motors, values)
@@ -67,28 +74,28 @@ class ControlAllocatorModule(Module):
         self._build()
 
     def run(self, torque_sp: VehicleTorqueSetpoint, dt: float) -> None:
-        thrust_sp = self.latest("vehicle_thrust_setpoint")
+        thrust_sp = self.latest(ORB_ID.vehicle_thrust_setpoint)
         thrust = thrust_sp.xyz if thrust_sp is not None else (0.0, 0.0, 0.0)
         torque = tuple(v if math.isfinite(v) else 0.0 for v in torque_sp.xyz)
         thrust = tuple(v if math.isfinite(v) else 0.0 for v in thrust)
-        armed_msg = self.latest("actuator_armed")
+        armed_msg = self.latest(ORB_ID.actuator_armed)
         armed = armed_msg is not None and armed_msg.armed and not armed_msg.lockdown and not armed_msg.kill
         if self.plane is not None:
             self._run_fixed_wing(self.plane, torque_sp.timestamp_sample, torque, thrust, armed, dt)
             return
-        priority = allocation.thrust_has_priority(self.latest("vehicle_land_detected"))
+        priority = allocation.thrust_has_priority(self.latest(ORB_ID.vehicle_land_detected))
         result = self.allocator.allocate(torque, thrust, priority)
         out = self.outputs.update(result.motors, armed, dt)
         n = self.allocator.num_motors
         t = torque_sp.timestamp_sample
         self.publish(
-            "actuator_motors",
+            ORB_ID.actuator_motors,
             ActuatorMotors(timestamp_sample=t, control=pad(out.actuator_motors, MOTOR_SLOTS, math.nan)),
         )
-        self.publish("actuator_outputs", ActuatorOutputs(noutputs=n, output=pad(out.pwm, OUTPUT_SLOTS, 0.0)))
-        self.publish("actuator_outputs_sim", ActuatorOutputs(noutputs=n, output=pad(out.sim, OUTPUT_SLOTS, 0.0)))
+        self.publish(ORB_ID.actuator_outputs, ActuatorOutputs(noutputs=n, output=pad(out.pwm, OUTPUT_SLOTS, 0.0)))
+        self.publish(ORB_ID.actuator_outputs_sim, ActuatorOutputs(noutputs=n, output=pad(out.sim, OUTPUT_SLOTS, 0.0)))
         self.publish(
-            "control_allocator_status",
+            ORB_ID.control_allocator_status,
             ControlAllocatorStatus(
                 torque_setpoint_achieved=result.torque_achieved,
                 unallocated_torque=result.unallocated_torque,
@@ -98,26 +105,27 @@ class ControlAllocatorModule(Module):
             ),
         )
 
-    def _run_fixed_wing(self, plane: FixedWingAllocator, t: int, torque: Vec3, thrust: Vec3, armed: bool,
-                        dt: float) -> None:
+    def _run_fixed_wing(
+        self, plane: FixedWingAllocator, t: int, torque: Vec3, thrust: Vec3, armed: bool, dt: float
+    ) -> None:
         result = plane.allocate(torque, thrust)
         motors = self.outputs.update(result.motors, armed, dt)
         servos = servo_outputs(result.servos, armed)
         n = plane.num_motors + plane.num_surfaces
         self.publish(
-            "actuator_motors",
+            ORB_ID.actuator_motors,
             ActuatorMotors(timestamp_sample=t, control=pad(motors.actuator_motors, MOTOR_SLOTS, math.nan)),
         )
         self.publish(
-            "actuator_servos",
+            ORB_ID.actuator_servos,
             ActuatorServos(timestamp_sample=t, control=pad(servos.actuator_servos, SERVO_SLOTS, math.nan)),
         )
         pwm = pad(motors.pwm + servos.pwm, OUTPUT_SLOTS, 0.0)
-        self.publish("actuator_outputs", ActuatorOutputs(noutputs=n, output=pwm))
+        self.publish(ORB_ID.actuator_outputs, ActuatorOutputs(noutputs=n, output=pwm))
         sim = pad(motors.sim + servos.sim, OUTPUT_SLOTS, 0.0)
-        self.publish("actuator_outputs_sim", ActuatorOutputs(noutputs=n, output=sim))
+        self.publish(ORB_ID.actuator_outputs_sim, ActuatorOutputs(noutputs=n, output=sim))
         self.publish(
-            "control_allocator_status",
+            ORB_ID.control_allocator_status,
             ControlAllocatorStatus(
                 torque_setpoint_achieved=result.torque_achieved,
                 unallocated_torque=result.unallocated_torque,

@@ -1,4 +1,4 @@
-"""The topic catalogue: topic names (PX4's) → message types, and each type's schema fingerprint."""
+"""The topic catalogue (PX4's topic names, each with its message type) and each type's schema fingerprint."""
 
 from __future__ import annotations
 
@@ -57,62 +57,69 @@ from stack.msg.system import (
     VehicleLandDetected,
     VehicleStatus,
 )
+from stack.msg.topic import FromTools, Topic
 from stack.names import suggestion
 
-# Like PX4's "# TOPICS" lines, one type may serve several topics.
-TOPICS: dict[str, type[Message]] = {
-    "sensor_gyro": SensorGyro,
-    "sensor_accel": SensorAccel,
-    "sensor_mag": SensorMag,
-    "sensor_baro": SensorBaro,
-    "sensor_gps": SensorGps,
-    "vehicle_gps_position": SensorGps,
-    "vehicle_angular_velocity": VehicleAngularVelocity,
-    "vehicle_attitude": VehicleAttitude,
-    "vehicle_local_position": VehicleLocalPosition,
-    "vehicle_global_position": VehicleGlobalPosition,
-    "vehicle_imu_status": VehicleImuStatus,
-    "estimator_status": EstimatorStatus,
-    "trajectory_setpoint": TrajectorySetpoint,
-    "vehicle_local_position_setpoint": VehicleLocalPositionSetpoint,
-    "vehicle_attitude_setpoint": VehicleAttitudeSetpoint,
-    "vehicle_rates_setpoint": VehicleRatesSetpoint,
-    "roll_pitch_yawrate_thrust_setpoint": RollPitchYawrateThrustSetpoint,
-    "vehicle_torque_setpoint": VehicleTorqueSetpoint,
-    "vehicle_thrust_setpoint": VehicleThrustSetpoint,
-    "rate_ctrl_status": RateCtrlStatus,
-    "manual_control_setpoint": ManualControlSetpoint,
-    "actuator_motors": ActuatorMotors,
-    "actuator_outputs": ActuatorOutputs,
-    "actuator_outputs_sim": ActuatorOutputs,
-    "control_allocator_status": ControlAllocatorStatus,
-    "vehicle_control_mode": VehicleControlMode,
-    "vehicle_status": VehicleStatus,
-    "actuator_armed": ActuatorArmed,
-    "vehicle_land_detected": VehicleLandDetected,
-    "offboard_control_mode": OffboardControlMode,
-    "telemetry_status": TelemetryStatus,
-    "mavlink_log": MavlinkLog,
-    "battery_status": BatteryStatus,
-    "home_position": HomePosition,
-    "hover_thrust_estimate": HoverThrustEstimate,
-    "takeoff_status": TakeoffStatus,
-    "vehicle_command": VehicleCommand,
-    "vehicle_command_ack": VehicleCommandAck,
-    "parameter_update": ParameterUpdate,
-    "sim_groundtruth": SimGroundtruth,
-    "mission": Mission,
-    "mission_result": MissionResult,
-    "navigation_request": NavigationRequest,
-    "external_autopilot_status": ExternalAutopilotStatus,
-    "airspeed": Airspeed,
-    "airspeed_validated": AirspeedValidated,
-    "wind": Wind,
-    "actuator_servos": ActuatorServos,
-    "position_setpoint_triplet": PositionSetpointTriplet,
-    "tecs_status": TecsStatus,
-    "position_controller_status": PositionControllerStatus,
-}
+
+class ORB_ID:
+    """The catalogue: every topic (PX4's names) with its message type. As PX4's ``# TOPICS`` lines, one type may
+    serve several topics."""
+
+    sensor_gyro = Topic(SensorGyro)
+    sensor_accel = Topic(SensorAccel)
+    sensor_mag = Topic(SensorMag)
+    sensor_baro = Topic(SensorBaro)
+    sensor_gps = Topic(SensorGps)
+    vehicle_gps_position = Topic(SensorGps)
+    vehicle_angular_velocity = Topic(VehicleAngularVelocity)
+    vehicle_attitude = Topic(VehicleAttitude)
+    vehicle_local_position = Topic(VehicleLocalPosition)
+    vehicle_global_position = Topic(VehicleGlobalPosition)
+    vehicle_imu_status = Topic(VehicleImuStatus)
+    estimator_status = Topic(EstimatorStatus)
+    trajectory_setpoint = Topic(TrajectorySetpoint, from_tools=FromTools.IN_OFFBOARD)
+    vehicle_local_position_setpoint = Topic(VehicleLocalPositionSetpoint, telemetry=True)
+    vehicle_attitude_setpoint = Topic(VehicleAttitudeSetpoint, from_tools=FromTools.IN_OFFBOARD)
+    vehicle_rates_setpoint = Topic(VehicleRatesSetpoint, from_tools=FromTools.IN_OFFBOARD)
+    roll_pitch_yawrate_thrust_setpoint = Topic(RollPitchYawrateThrustSetpoint)
+    vehicle_torque_setpoint = Topic(VehicleTorqueSetpoint, from_tools=FromTools.IN_OFFBOARD)
+    vehicle_thrust_setpoint = Topic(VehicleThrustSetpoint, from_tools=FromTools.IN_OFFBOARD)
+    rate_ctrl_status = Topic(RateCtrlStatus, telemetry=True)
+    manual_control_setpoint = Topic(ManualControlSetpoint, from_tools=FromTools.ALWAYS)
+    actuator_motors = Topic(ActuatorMotors, from_tools=FromTools.IN_OFFBOARD)
+    actuator_outputs = Topic(ActuatorOutputs, telemetry=True)
+    actuator_outputs_sim = Topic(ActuatorOutputs)
+    control_allocator_status = Topic(ControlAllocatorStatus)
+    vehicle_control_mode = Topic(VehicleControlMode)
+    vehicle_status = Topic(VehicleStatus)
+    actuator_armed = Topic(ActuatorArmed)
+    vehicle_land_detected = Topic(VehicleLandDetected)
+    offboard_control_mode = Topic(OffboardControlMode, from_tools=FromTools.ALWAYS)
+    telemetry_status = Topic(TelemetryStatus)
+    mavlink_log = Topic(MavlinkLog)
+    battery_status = Topic(BatteryStatus)
+    home_position = Topic(HomePosition)
+    hover_thrust_estimate = Topic(HoverThrustEstimate)
+    takeoff_status = Topic(TakeoffStatus)
+    vehicle_command = Topic(VehicleCommand, from_tools=FromTools.ALWAYS)
+    vehicle_command_ack = Topic(VehicleCommandAck)
+    parameter_update = Topic(ParameterUpdate, telemetry=True)
+    sim_groundtruth = Topic(SimGroundtruth, telemetry=True)
+    mission = Topic(Mission, from_tools=FromTools.ALWAYS)
+    mission_result = Topic(MissionResult)
+    navigation_request = Topic(NavigationRequest)
+    external_autopilot_status = Topic(ExternalAutopilotStatus)
+    airspeed = Topic(Airspeed)
+    airspeed_validated = Topic(AirspeedValidated)
+    wind = Topic(Wind)
+    actuator_servos = Topic(ActuatorServos)
+    position_setpoint_triplet = Topic(PositionSetpointTriplet)
+    tecs_status = Topic(TecsStatus)
+    position_controller_status = Topic(PositionControllerStatus)
+
+
+TOPICS: dict[str, Topic] = {t.name: t for t in vars(ORB_ID).values() if isinstance(t, Topic)}
+"""The catalogue by name, for the edges: keys, recordings, the CLI."""
 
 
 class UnknownTopic(KeyError):
@@ -123,24 +130,9 @@ class UnknownTopic(KeyError):
 
 def message_type(topic: str) -> type[Message]:
     try:
-        return TOPICS[topic]
+        return TOPICS[topic].type
     except KeyError:
         raise UnknownTopic(topic) from None
-
-
-def register_topic(topic: str, msg_type: type[Message]) -> None:
-    """Add a topic to the catalogue (for topics defined outside this package)."""
-    existing = TOPICS.get(topic)
-    if existing is not None and existing is not msg_type:
-        raise ValueError(f"topic '{topic}' is already registered with type {existing.__name__}")
-    TOPICS[topic] = msg_type
-
-
-def type_by_name(name: str) -> type[Message]:
-    for t in TOPICS.values():
-        if t.__name__ == name:
-            return t
-    raise KeyError(name)
 
 
 def _type_text(t: msgspec.inspect.Type) -> str:

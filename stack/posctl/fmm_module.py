@@ -14,6 +14,7 @@ import math
 from stack.commander.home import HomePosition
 from stack.mission.store import MissionResultPublisher
 from stack.msg.estimation import VehicleLocalPosition
+from stack.msg.registry import ORB_ID
 from stack.msg.setpoints import TakeoffStatus, TrajectorySetpoint
 from stack.posctl.flight_mode_manager import PARAMS, FlightModeManager, NavigatorInputs
 from stack.posctl.flight_task import VehicleState
@@ -42,24 +43,24 @@ class FlightModeManagerModule(Module):
     NAME = "flight_mode_manager"
     WORK_QUEUE = NAV_AND_CONTROLLERS
     DESCRIPTION = "Takeoff, hold, go-to, mission, return and land as smooth trajectories (PX4 navigator + FMM)"
-    TRIGGER = Trigger("vehicle_local_position")
+    TRIGGER = Trigger(ORB_ID.vehicle_local_position)
     DT_RANGE = (0.002, 0.05)
     PARAMS = PARAMS
 
     def __init__(self, rt) -> None:
         super().__init__(rt)
         for topic in (
-            "vehicle_status",
-            "navigation_request",
-            "home_position",
-            "takeoff_status",
-            "vehicle_land_detected",
-            "manual_control_setpoint",
+            ORB_ID.vehicle_status,
+            ORB_ID.navigation_request,
+            ORB_ID.home_position,
+            ORB_ID.takeoff_status,
+            ORB_ID.vehicle_land_detected,
+            ORB_ID.manual_control_setpoint,
         ):
             self.subscribe(topic)
-        self.subscribe("mission", queue=True, capacity=16)
-        self.advertise("trajectory_setpoint")
-        self.advertise("mission_result")
+        self.subscribe(ORB_ID.mission, queue=True, capacity=16)
+        self.advertise(ORB_ID.trajectory_setpoint)
+        self.advertise(ORB_ID.mission_result)
         self.manager = FlightModeManager(self.params.values())
         m = self.manager
         self.results = MissionResultPublisher(m.load_mission, m.load_mission_refused, m.mission_status)
@@ -70,10 +71,10 @@ class FlightModeManagerModule(Module):
     def run(self, lpos: VehicleLocalPosition, dt: float) -> None:
         now = self.now_us()
         self.results.take_uploads(self)
-        status = self.latest("vehicle_status")
-        land = self.latest("vehicle_land_detected")
-        takeoff = self.latest("takeoff_status")
-        home = self.latest("home_position")
+        status = self.latest(ORB_ID.vehicle_status)
+        land = self.latest(ORB_ID.vehicle_land_detected)
+        takeoff = self.latest(ORB_ID.takeoff_status)
+        home = self.latest(ORB_ID.home_position)
         inputs = NavigatorInputs(
             state=vehicle_state(
                 lpos,
@@ -85,13 +86,13 @@ class FlightModeManagerModule(Module):
             home=HomePosition(home.x, home.y, home.z, home.yaw, home.lat, home.lon, home.alt)
             if home is not None and home.valid_lpos
             else None,
-            request=self.latest("navigation_request"),
-            manual=self.latest("manual_control_setpoint"),
+            request=self.latest(ORB_ID.navigation_request),
+            manual=self.latest(ORB_ID.manual_control_setpoint),
         )
         command = self.manager.update(inputs, dt)
         if command is not None:
             self.publish(
-                "trajectory_setpoint",
+                ORB_ID.trajectory_setpoint,
                 TrajectorySetpoint(
                     timestamp=now,
                     position=command.position,

@@ -8,6 +8,7 @@ altitude whatever its mass.
 
 from __future__ import annotations
 
+from stack.msg.registry import ORB_ID
 from stack.msg.setpoints import HoverThrustEstimate
 from stack.params import catalogue
 from stack.posctl.hover_thrust_estimator import HoverThrustEstimator, HoverThrustEstimatorParams
@@ -24,16 +25,16 @@ class HoverThrustEstimatorModule(Module):
     NAME = "mc_hover_thrust_estimator"
     WORK_QUEUE = NAV_AND_CONTROLLERS
     DESCRIPTION = "Hover thrust estimation from vertical acceleration and thrust (PX4 mc_hover_thrust_estimator)"
-    TRIGGER = Trigger("vehicle_local_position")
+    TRIGGER = Trigger(ORB_ID.vehicle_local_position)
     DT_RANGE = (0.002, 0.1)
     PARAMS = PARAMS
 
     def __init__(self, rt) -> None:
         super().__init__(rt)
-        self.subscribe("vehicle_local_position_setpoint")
-        self.subscribe("vehicle_land_detected")
-        self.subscribe("actuator_armed")
-        self.advertise("hover_thrust_estimate")
+        self.subscribe(ORB_ID.vehicle_local_position_setpoint)
+        self.subscribe(ORB_ID.vehicle_land_detected)
+        self.subscribe(ORB_ID.actuator_armed)
+        self.advertise(ORB_ID.hover_thrust_estimate)
         self.estimator = HoverThrustEstimator(self._estimator_params())
 
     def _estimator_params(self) -> HoverThrustEstimatorParams:
@@ -52,9 +53,9 @@ class HoverThrustEstimatorModule(Module):
         self.estimator.set_params(self._estimator_params())
 
     def run(self, lpos, dt: float) -> None:
-        armed = self.latest("actuator_armed")
-        land = self.latest("vehicle_land_detected")
-        setpoint = self.latest("vehicle_local_position_setpoint")
+        armed = self.latest(ORB_ID.actuator_armed)
+        land = self.latest(ORB_ID.vehicle_land_detected)
+        setpoint = self.latest(ORB_ID.vehicle_local_position_setpoint)
         thrust_z = setpoint.thrust[2] if setpoint is not None else float("nan")
         estimate = self.estimator.update(
             lpos.timestamp_sample,
@@ -65,6 +66,6 @@ class HoverThrustEstimatorModule(Module):
             thrust_z=thrust_z,
         )
         self.publish(
-            "hover_thrust_estimate",
+            ORB_ID.hover_thrust_estimate,
             HoverThrustEstimate(timestamp_sample=lpos.timestamp_sample, **estimate._asdict()),
         )

@@ -16,6 +16,7 @@ import math
 
 from stack.estimator.acceleration import VelocityDerivative
 from stack.msg.estimation import VehicleLocalPosition
+from stack.msg.registry import ORB_ID
 from stack.msg.setpoints import TakeoffState, TakeoffStatus, VehicleAttitudeSetpoint, VehicleLocalPositionSetpoint
 from stack.params import catalogue
 from stack.posctl.position_control import PositionControl, PositionControlParams, failsafe_setpoint
@@ -76,17 +77,22 @@ class MulticopterPositionControl(Module):
     NAME = "mc_pos_control"
     WORK_QUEUE = NAV_AND_CONTROLLERS
     DESCRIPTION = "Multicopter position and velocity control with smooth takeoff (PX4 mc_pos_control)"
-    TRIGGER = Trigger("vehicle_local_position")
+    TRIGGER = Trigger(ORB_ID.vehicle_local_position)
     DT_RANGE = (0.002, 0.04)
     PARAMS = PARAMS
 
     def __init__(self, rt) -> None:
         super().__init__(rt)
-        for topic in ("trajectory_setpoint", "vehicle_control_mode", "vehicle_land_detected", "hover_thrust_estimate"):
+        for topic in (
+            ORB_ID.trajectory_setpoint,
+            ORB_ID.vehicle_control_mode,
+            ORB_ID.vehicle_land_detected,
+            ORB_ID.hover_thrust_estimate,
+        ):
             self.subscribe(topic)
-        self.advertise("vehicle_attitude_setpoint")
-        self.advertise("vehicle_local_position_setpoint")
-        self.advertise("takeoff_status")
+        self.advertise(ORB_ID.vehicle_attitude_setpoint)
+        self.advertise(ORB_ID.vehicle_local_position_setpoint)
+        self.advertise(ORB_ID.takeoff_status)
         self.control = PositionControl(control_params(self.params))
         self.takeoff = Takeoff(takeoff_params(self.params))
         self.velocity_derivative = VelocityDerivative(float(self.params["MPC_VELD_LP"]))
@@ -106,8 +112,8 @@ class MulticopterPositionControl(Module):
 
     def run(self, lpos: VehicleLocalPosition, dt: float) -> None:
         now = self.now_us()
-        mode = self.latest("vehicle_control_mode")
-        land = self.latest("vehicle_land_detected")
+        mode = self.latest(ORB_ID.vehicle_control_mode)
+        land = self.latest(ORB_ID.vehicle_land_detected)
         armed = mode is not None and mode.flag_armed
         landed = land is None or land.landed
         vel_dot = self.velocity_derivative.update(lpos.timestamp_sample, (lpos.vx, lpos.vy, lpos.vz))
@@ -198,7 +204,7 @@ class MulticopterPositionControl(Module):
             self.keep_state({"velocity_integral": list(self.control.velocity_integral)})
 
     def _fresh_setpoint(self, now: int):
-        sp = self.latest("trajectory_setpoint")
+        sp = self.latest(ORB_ID.trajectory_setpoint)
         if sp is None or sp.timestamp < self._enabled_since_us or now - sp.timestamp > SETPOINT_TIMEOUT_US:
             return None
         return sp
@@ -206,7 +212,7 @@ class MulticopterPositionControl(Module):
     def _adopt_hover_thrust_estimate(self) -> None:
         if not self.params["MPC_USE_HTE"]:
             return
-        hte = self.latest("hover_thrust_estimate")
+        hte = self.latest(ORB_ID.hover_thrust_estimate)
         if (
             hte is not None
             and hte.valid
@@ -232,12 +238,12 @@ class MulticopterPositionControl(Module):
     def _publish_setpoints(self, sample_us: int, now: int) -> None:
         q_d, thrust_body, yaw_rate = self.control.attitude_setpoint()
         self.publish(
-            "vehicle_attitude_setpoint",
+            ORB_ID.vehicle_attitude_setpoint,
             VehicleAttitudeSetpoint(timestamp=now, yaw_sp_move_rate=yaw_rate, q_d=q_d, thrust_body=thrust_body),
         )
         sp = self.control.local_position_setpoint()
         self.publish(
-            "vehicle_local_position_setpoint",
+            ORB_ID.vehicle_local_position_setpoint,
             VehicleLocalPositionSetpoint(
                 timestamp=now,
                 x=sp.position[0],
@@ -258,4 +264,6 @@ class MulticopterPositionControl(Module):
         if status != self._takeoff_published or now - self._takeoff_published_us >= TAKEOFF_STATUS_REPUBLISH_US:
             self._takeoff_published = status
             self._takeoff_published_us = now
-            self.publish("takeoff_status", TakeoffStatus(takeoff_state=status[0], tilt_limit=self.takeoff.tilt_limit))
+            self.publish(
+                ORB_ID.takeoff_status, TakeoffStatus(takeoff_state=status[0], tilt_limit=self.takeoff.tilt_limit)
+            )

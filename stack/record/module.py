@@ -66,7 +66,8 @@ class _Route:
     def __init__(self, topic: str, instance: int) -> None:
         self.topic = topic
         self.instance = instance
-        msg_type = TOPICS.get(topic)
+        known = TOPICS.get(topic)
+        msg_type = known.type if known is not None else None
         self.decoder = msgspec.msgpack.Decoder(msg_type) if msg_type is not None else None
         self.fingerprint = fingerprint(msg_type) if msg_type is not None else None
         self.type_name = msg_type.__name__ if msg_type is not None else ""

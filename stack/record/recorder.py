@@ -318,7 +318,7 @@ class RecordingWriter:
     def _open_raw_channel(self, key: tuple) -> tuple[int, None]:
         _, topic, instance, fp, publisher_id, flags, epoch, reason = key
         known = TOPICS.get(topic)
-        type_name = known.__name__ if known is not None and fingerprint(known) == fp else ""
+        type_name = known.type.__name__ if known is not None and fingerprint(known.type) == fp else ""
         metadata = _channel_metadata(topic, instance, type_name, fp, "", publisher_id, flags)
         metadata[fmt.INDEX_EPOCH] = str(epoch)
         metadata[fmt.RAW_REASON] = reason
@@ -446,7 +446,7 @@ class ChannelInfo:
     def decodable(self) -> bool:
         """Whether its messages decode into this build's Struct (else ``fields`` or ``payload``)."""
         known = TOPICS.get(self.topic)
-        return self.encoding == fmt.JSON_ENCODING and known is not None and fingerprint(known) == self.fingerprint
+        return self.encoding == fmt.JSON_ENCODING and known is not None and fingerprint(known.type) == self.fingerprint
 
 
 @dataclass(frozen=True)
@@ -479,7 +479,7 @@ class _ChannelReader:
         self._codec: JsonMessageCodec | None = None
         self._decode_fields = None
         if info.decodable:
-            self._codec = codec_for(TOPICS[info.topic])
+            self._codec = codec_for(TOPICS[info.topic].type)
         elif info.encoding == fmt.JSON_ENCODING:
             self._decode_fields = schema_decoder(info.schema or b"{}")
 

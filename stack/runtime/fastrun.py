@@ -104,7 +104,7 @@ class FastDriver:
             flags = (FLAG_LOSSLESS if cls.LOSSLESS else 0) | (FLAG_READS_ALL if self.rt.reads_all_topics else 0)
             self.att.ready(ROLE_PASSIVE, flags=flags)
         elif isinstance(cls.TRIGGER, Trigger):
-            self.att.ready(ROLE_TRIGGERED, trigger=f"{cls.TRIGGER.topic}/{cls.TRIGGER.instance}")
+            self.att.ready(ROLE_TRIGGERED, trigger=f"{cls.TRIGGER.name}/{cls.TRIGGER.instance}")
         elif isinstance(cls.TRIGGER, Timer):
             self.att.ready(ROLE_TIMED, period_us=cls.TRIGGER.period_us)
         else:

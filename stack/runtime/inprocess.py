@@ -33,6 +33,7 @@ from collections.abc import Callable
 
 from stack.bus.node import stable_publisher_id
 from stack.bus.topics import Received
+from stack.msg.registry import ORB_ID
 from stack.runtime.inputs import InputBuffer
 from stack.runtime.ledger import timer_due
 from stack.runtime.membus import MemoryBus, MemorySubscription, PublishedMessage
@@ -57,7 +58,7 @@ class InProcessRuntime(Runtime):
         self.trigger_sub: MemorySubscription | None = None
         self._declare_trigger()
         self.module = self.module_cls(self)
-        self._param_pub = bus.publisher(self, "parameter_update", 0)
+        self._param_pub = bus.publisher(self, ORB_ID.parameter_update.name, 0)
         self.data = self._data_inputs()
 
     def watch_modules(self, on_change: Callable[[str, int, bool], None]) -> None:
@@ -74,9 +75,9 @@ class InProcessRuntime(Runtime):
     def _declare_trigger(self) -> None:
         trigger = self.module_cls.TRIGGER
         if isinstance(trigger, Trigger) and not self.module_cls.LOCKSTEP_COORDINATOR:
-            self.trigger_sub = self.bus.subscribe(self, trigger.topic, trigger.instance)
-            self._trigger_buf = self.guard(InputBuffer(self.trigger_sub, False), trigger.topic)
-            self.inputs[(trigger.topic, trigger.instance)] = self._trigger_buf
+            self.trigger_sub = self.bus.subscribe(self, trigger.name, trigger.instance)
+            self._trigger_buf = self.guard(InputBuffer(self.trigger_sub, False), trigger.name)
+            self.inputs[(trigger.name, trigger.instance)] = self._trigger_buf
 
 
 def module_spec(profile: Profile, entry: ModuleEntry) -> ModuleSpec:

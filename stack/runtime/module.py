@@ -5,22 +5,24 @@ it takes; the runtime does the rest (session, lockstep, parameters service, hear
 
     class MulticopterRateControl(Module):
         NAME = "mc_rate_control"
-        TRIGGER = Trigger("vehicle_angular_velocity")
+        TRIGGER = Trigger(ORB_ID.vehicle_angular_velocity)
         DT_RANGE = (0.000125, 0.02)
         PARAMS = catalogue.params("MC_ROLLRATE_P", ...)   # definitions from stack.params.catalogue
 
         def __init__(self, ctx):
             super().__init__(ctx)
-            self.subscribe("vehicle_rates_setpoint")
-            self.advertise("vehicle_torque_setpoint")
+            self.subscribe(ORB_ID.vehicle_rates_setpoint)
+            self.advertise(ORB_ID.vehicle_torque_setpoint)
             self.control = RateControl(...)          # the plain algorithm class
 
         def run(self, msg, dt):
-            sp = self.latest("vehicle_rates_setpoint")
+            sp = self.latest(ORB_ID.vehicle_rates_setpoint)   # a VehicleRatesSetpoint, or None
             ...
-            self.publish("vehicle_torque_setpoint", VehicleTorqueSetpoint(...))
+            self.publish(ORB_ID.vehicle_torque_setpoint, VehicleTorqueSetpoint(...))
 
-The algorithm itself is a plain class with no Zenoh in it; the module is thin glue.
+The algorithm itself is a plain class with no Zenoh in it; the module is thin glue. Topics are named by their
+handles (:class:`stack.msg.registry.ORB_ID`), which carry their message types: a topic's name is a string only
+where it meets the outside (bus keys, recordings, the CLI).
 """
 
 from __future__ import annotations
@@ -32,8 +34,10 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar, TypeVar
 
+from stack.msg.base import Message
+from stack.msg.topic import Topic, topic_name
 from stack.params.param import Param, ParamError, ParamValue, convert
 from stack.runtime.priority import WorkQueue
 
@@ -42,6 +46,8 @@ LINK_SUFFIX = ".link"
 
 if TYPE_CHECKING:
     from stack.runtime.runner import Runtime
+
+M = TypeVar("M", bound=Message)
 
 
 TRIGGER_BACKLOG = 256
@@ -64,9 +70,16 @@ class Trigger:
     leave the publishing to the newest.
     """
 
-    topic: str
+    topic: Topic
     instance: int = 0
     every: bool = False
+
+    def __post_init__(self) -> None:
+        topic_name(self.topic)
+
+    @property
+    def name(self) -> str:
+        return self.topic.name
 
 
 @dataclass(frozen=True)
@@ -134,29 +147,29 @@ class Module:
 
     # -- declarations (call from __init__) -------------------------------------------------------
 
-    def subscribe(self, topic: str, instance: int = 0, *, queue: bool = False, capacity: int = 256) -> None:
+    def subscribe(self, topic: Topic, instance: int = 0, *, queue: bool = False, capacity: int = 256) -> None:
         """Read a topic: the latest value, or with ``queue=True`` every message (for commands)."""
-        self.rt.add_input(topic, instance, queue, capacity)
+        self.rt.add_input(topic_name(topic), instance, queue, capacity)
 
-    def advertise(self, topic: str, instance: int = 0, *, reliable: bool | None = None) -> None:
-        self.rt.add_output(topic, instance, reliable)
+    def advertise(self, topic: Topic, instance: int = 0, *, reliable: bool | None = None) -> None:
+        self.rt.add_output(topic_name(topic), instance, reliable)
 
     # -- use (from run) ----------------------------------------------------------------------------
 
-    def latest(self, topic: str, instance: int = 0) -> Any:
+    def latest(self, topic: Topic[M], instance: int = 0) -> M | None:
         """The newest message visible now, or None if none has been received."""
-        return self.rt.inputs[(topic, instance)].latest
+        return self.rt.inputs[(topic.name, instance)].latest
 
-    def update(self, topic: str, instance: int = 0) -> Any:
+    def update(self, topic: Topic[M], instance: int = 0) -> M | None:
         """The newest message if it arrived since the previous call, else None."""
-        return self.rt.inputs[(topic, instance)].update()
+        return self.rt.inputs[(topic.name, instance)].update()
 
-    def take(self, topic: str, instance: int = 0) -> list[Any]:
+    def take(self, topic: Topic[M], instance: int = 0) -> list[M]:
         """Every message that arrived since the previous call, oldest first (``queue=True`` inputs)."""
-        return self.rt.inputs[(topic, instance)].take()
+        return self.rt.inputs[(topic.name, instance)].take()
 
-    def publish(self, topic: str, msg: Any, instance: int = 0) -> None:
-        self.rt.outputs[(topic, instance)].publish(msg, self.rt.now_us())
+    def publish(self, topic: Topic[M], msg: M, instance: int = 0) -> None:
+        self.rt.outputs[(topic.name, instance)].publish(msg, self.rt.now_us())
 
     def now_us(self) -> int:
         return self.rt.now_us()

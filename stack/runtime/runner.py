@@ -25,7 +25,7 @@ from stack.fastpath.attach import Attachment
 from stack.fastpath.bridge import ZenohBridge
 from stack.fastpath.inputs import FastInput
 from stack.fastpath.layout import SUB_QUEUE, SUB_TRIGGER, Region
-from stack.msg.registry import fingerprint
+from stack.msg.registry import ORB_ID, fingerprint
 from stack.msg.system import ParameterUpdate
 from stack.params.store import ParamStore
 from stack.runtime import startup
@@ -172,8 +172,8 @@ class Runtime:
             return buf
         buf.members = self.access.members
         if rule == "offboard":
-            self.add_input("vehicle_control_mode", 0, False, 1)
-            mode = self.inputs[("vehicle_control_mode", 0)]
+            self.add_input(ORB_ID.vehicle_control_mode.name, 0, False, 1)
+            mode = self.inputs[(ORB_ID.vehicle_control_mode.name, 0)]
             buf.open_while = lambda: mode.latest is not None and mode.latest.flag_control_offboard_enabled
         return buf
 
@@ -227,7 +227,7 @@ class Runtime:
         self._declare_trigger()
         self.module = self.module_cls(self)
         self.data = self._data_inputs()
-        self._param_pub = node.publisher("parameter_update", reliable=self.lockstep)
+        self._param_pub = node.publisher(ORB_ID.parameter_update.name, reliable=self.lockstep)
         self._services.append(ParamService(node.session, node.vehicle, self.name, self.params))
         self._services.append(Heartbeat(node.session, node.vehicle, self.name, self.snapshot))
 
@@ -289,7 +289,7 @@ class Runtime:
         if self.module_cls.LOCKSTEP_COORDINATOR:
             return "lockstep coordinator" if self.lockstep else "real-time clock"
         if isinstance(trigger, Trigger):
-            return f"on {trigger.topic}"
+            return f"on {trigger.name}"
         if isinstance(trigger, Timer):
             return f"every {trigger.period_us} us"
         return "no trigger"
@@ -299,19 +299,19 @@ class Runtime:
         if not isinstance(trigger, Trigger):
             return
         if self.fast is not None:
-            sub = self.node.subscriber(trigger.topic, trigger.instance, capacity=OUTSIDE_QUEUE, callback=True)
+            sub = self.node.subscriber(trigger.name, trigger.instance, capacity=OUTSIDE_QUEUE, callback=True)
             self.fast.subscription(sub.suffix, SUB_TRIGGER)
             self.trigger_input = FastInput(self.fast.region, sub, False)
-            self._trigger_buf = self.guard(self.trigger_input, trigger.topic)
-            self.inputs[(trigger.topic, trigger.instance)] = self._trigger_buf
+            self._trigger_buf = self.guard(self.trigger_input, trigger.name)
+            self.inputs[(trigger.name, trigger.instance)] = self._trigger_buf
             return
         if self.lockstep:
-            sub = self.node.subscriber(trigger.topic, trigger.instance, capacity=LOCKSTEP_QUEUE)
+            sub = self.node.subscriber(trigger.name, trigger.instance, capacity=LOCKSTEP_QUEUE)
         else:
             backlog = TRIGGER_BACKLOG if trigger.every else 4
-            sub = self.node.subscriber(trigger.topic, trigger.instance, capacity=backlog, keep_last=True)
-        self._trigger_buf = self.guard(InputBuffer(sub, False), trigger.topic)
-        self.inputs[(trigger.topic, trigger.instance)] = self._trigger_buf
+            sub = self.node.subscriber(trigger.name, trigger.instance, capacity=backlog, keep_last=True)
+        self._trigger_buf = self.guard(InputBuffer(sub, False), trigger.name)
+        self.inputs[(trigger.name, trigger.instance)] = self._trigger_buf
 
     def _data_inputs(self) -> list[InputBuffer]:
         return [buf for buf in self.inputs.values() if buf is not self._trigger_buf]
@@ -331,7 +331,7 @@ class Runtime:
         trigger = cls.TRIGGER
         if isinstance(trigger, Trigger):
             return LockstepMember(
-                self.node, self._data_inputs(), f"topic/{trigger.topic}/{trigger.instance}", timed=False
+                self.node, self._data_inputs(), f"topic/{trigger.name}/{trigger.instance}", timed=False
             )
         if isinstance(trigger, Timer):
             return LockstepMember(self.node, self._data_inputs(), f"timer/{trigger.period_us}", timed=True)

@@ -16,6 +16,7 @@ from stack.commander.modes import MAV_MODE_FLAG_CUSTOM_MODE_ENABLED
 from stack.mathlib import quaternion as quat
 from stack.mathlib.scalar import constrain
 from stack.mavlink.px4_modes import MainMode
+from stack.msg.registry import ORB_ID
 from stack.msg.setpoints import VehicleAttitudeSetpoint
 from stack.msg.system import OffboardControlMode, TelemetryStatus, VehicleCommand
 from stack.scenario.catalogue import Check, Scenario
@@ -46,10 +47,10 @@ class AttitudeStep:
         control) and a ground-station heartbeat, at 10 Hz.
         """
         if self.ticks % 10 == 0:
-            self.ctx.publish("offboard_control_mode", OffboardControlMode(attitude=True))
-            self.ctx.publish("telemetry_status", TelemetryStatus(heartbeat_type_gcs=True))
+            self.ctx.publish(ORB_ID.offboard_control_mode, OffboardControlMode(attitude=True))
+            self.ctx.publish(ORB_ID.telemetry_status, TelemetryStatus(heartbeat_type_gcs=True))
         self.ticks += 1
-        truth = self.ctx.latest.get("sim_groundtruth")
+        truth = self.ctx.latest.get(ORB_ID.sim_groundtruth)
         thrust = 0.5
         if truth is not None:
             z, vz = truth.position[2], truth.velocity[2]
@@ -59,13 +60,15 @@ class AttitudeStep:
             tilt = math.cos(self.euler[0]) * math.cos(self.euler[1])
             thrust = constrain((0.5 + self.thrust_integral + 0.3 * error) / tilt, 0.1, 0.9)
         q = quat.from_euler(self.euler[0], self.euler[1], self.yaw0 + self.euler[2])
-        self.ctx.publish("vehicle_attitude_setpoint", VehicleAttitudeSetpoint(q_d=q, thrust_body=(0.0, 0.0, -thrust)))
+        self.ctx.publish(
+            ORB_ID.vehicle_attitude_setpoint, VehicleAttitudeSetpoint(q_d=q, thrust_body=(0.0, 0.0, -thrust))
+        )
 
     def run(self) -> Generator[Wait, None, None]:
         ctx = self.ctx
-        yield ctx.until(lambda: "vehicle_attitude" in ctx.latest, 10.0, "an attitude estimate")
+        yield ctx.until(lambda: ORB_ID.vehicle_attitude in ctx.latest, 10.0, "an attitude estimate")
         yield ctx.wait(1.0)
-        self.yaw0 = quat.yaw(ctx.latest["vehicle_attitude"].q)
+        self.yaw0 = quat.yaw(ctx.latest[ORB_ID.vehicle_attitude].q)
         yield from ctx.command(
             VehicleCommand.VEHICLE_CMD_DO_SET_MODE,
             param1=MAV_MODE_FLAG_CUSTOM_MODE_ENABLED,
@@ -74,7 +77,9 @@ class AttitudeStep:
         yield from ctx.command(VehicleCommand.VEHICLE_CMD_COMPONENT_ARM_DISARM, param1=1.0)
         ctx.log("armed: climbing")
         yield ctx.until(
-            lambda: ctx.latest["sim_groundtruth"].position[2] < -CLIMB_TO_M + 0.3, 20.0, f"a climb to {CLIMB_TO_M} m"
+            lambda: ctx.latest[ORB_ID.sim_groundtruth].position[2] < -CLIMB_TO_M + 0.3,
+            20.0,
+            f"a climb to {CLIMB_TO_M} m",
         )
         yield ctx.wait(2.0)
         for axis, name in enumerate(("roll", "pitch", "yaw")):
@@ -94,7 +99,7 @@ def script(ctx: ScriptContext) -> Generator[Wait, None, None]:
 
 
 def evaluate(ctx: ScriptContext) -> dict[str, Any]:
-    truth = ctx.series.get("sim_groundtruth")
+    truth = ctx.series.get(ORB_ID.sim_groundtruth)
     if truth is None or not truth.times:
         raise ScenarioError("no ground truth was received")
     steps: dict[str, list[float]] = ctx.state["steps"]
@@ -112,7 +117,7 @@ def evaluate(ctx: ScriptContext) -> dict[str, Any]:
         metrics[f"{name}_rise_time_s"] = worst_rise
         metrics[f"{name}_overshoot_pct"] = worst_overshoot
     metrics["attitude_est_error_rms_deg"] = _estimate_error(ctx, steps["roll"][0] - 2.0)
-    rates = ctx.series.get("vehicle_rates_setpoint")
+    rates = ctx.series.get(ORB_ID.vehicle_rates_setpoint)
     metrics["max_rate_sp_dps"] = (
         max((max(abs(m.roll), abs(m.pitch), abs(m.yaw)) for m in rates.values), default=0.0) * 180.0 / math.pi
         if rates
@@ -122,8 +127,8 @@ def evaluate(ctx: ScriptContext) -> dict[str, Any]:
 
 
 def _estimate_error(ctx: ScriptContext, since: float) -> float:
-    truth = ctx.series["sim_groundtruth"]
-    estimates = ctx.series.get("vehicle_attitude")
+    truth = ctx.series[ORB_ID.sim_groundtruth]
+    estimates = ctx.series.get(ORB_ID.vehicle_attitude)
     if estimates is None:
         return math.nan
     by_sample = {m.timestamp_sample: m.q for m in truth.values}
@@ -151,7 +156,7 @@ SCENARIO = Scenario(
         Check("yaw_overshoot_pct", 10.0),
         Check("attitude_est_error_rms_deg", 1.0),
     ),
-    record=("sim_groundtruth", "vehicle_attitude", "vehicle_rates_setpoint"),
-    publish=("vehicle_attitude_setpoint", "offboard_control_mode", "telemetry_status"),
+    record=(ORB_ID.sim_groundtruth, ORB_ID.vehicle_attitude, ORB_ID.vehicle_rates_setpoint),
+    publish=(ORB_ID.vehicle_attitude_setpoint, ORB_ID.offboard_control_mode, ORB_ID.telemetry_status),
     timeout_s=60.0,
 )

@@ -25,6 +25,7 @@ from typing import Any
 from stack.mathlib import quaternion as quat
 from stack.mathlib.geo import MapProjection
 from stack.mathlib.vector import Vec3
+from stack.msg.registry import ORB_ID
 from stack.msg.system import VehicleCommand, VehicleStatus
 from stack.scenario.metrics import value_at
 from stack.scenario.script import ScenarioError, ScriptContext, Series, Wait
@@ -36,22 +37,30 @@ GPS_SETTLE_S = 10.0
 """Time on the ground after the position estimate turns valid, as EKF2 wants 10 s of good GPS before it
 uses it: the origin is one GPS fix, and the estimate needs some fixes to average its noise out."""
 # Topics every autonomous scenario records (all samples) and watches (latest value).
-RECORD = ("sim_groundtruth", "vehicle_local_position", "trajectory_setpoint", "vehicle_status", "home_position")
-WATCH = ("vehicle_land_detected", "mission_result")
+RECORD = (
+    ORB_ID.sim_groundtruth,
+    ORB_ID.vehicle_local_position,
+    ORB_ID.trajectory_setpoint,
+    ORB_ID.vehicle_status,
+    ORB_ID.home_position,
+)
+WATCH = (ORB_ID.vehicle_land_detected, ORB_ID.mission_result)
 
 
 def position_ready(ctx: ScriptContext) -> bool:
-    lpos = ctx.latest.get("vehicle_local_position")
-    return lpos is not None and lpos.xy_valid and lpos.z_valid and lpos.v_xy_valid and "home_position" in ctx.latest
+    lpos = ctx.latest.get(ORB_ID.vehicle_local_position)
+    return (
+        lpos is not None and lpos.xy_valid and lpos.z_valid and lpos.v_xy_valid and ORB_ID.home_position in ctx.latest
+    )
 
 
 def nav_state(ctx: ScriptContext) -> int:
-    status = ctx.latest.get("vehicle_status")
+    status = ctx.latest.get(ORB_ID.vehicle_status)
     return status.nav_state if status is not None else -1
 
 
 def armed(ctx: ScriptContext) -> bool:
-    status = ctx.latest.get("vehicle_status")
+    status = ctx.latest.get(ORB_ID.vehicle_status)
     return status is not None and status.arming_state == NS.ARMING_STATE_ARMED
 
 
@@ -72,7 +81,7 @@ def take_off(ctx: ScriptContext, altitude: float) -> Generator[Wait, None, None]
 
 def settled(ctx: ScriptContext, target_z: float, tolerance: float = 0.05) -> bool:
     """The trajectory setpoint has arrived at ``target_z`` (local NED) and stopped."""
-    sp = ctx.latest.get("trajectory_setpoint")
+    sp = ctx.latest.get(ORB_ID.trajectory_setpoint)
     return (
         sp is not None
         and abs(sp.position[2] - target_z) < tolerance
@@ -92,8 +101,8 @@ def wait_disarmed(ctx: ScriptContext, timeout: float) -> Generator[Wait, None, N
 
 
 def landed_and_disarmed(ctx: ScriptContext) -> bool:
-    land = ctx.latest.get("vehicle_land_detected")
-    truth = ctx.latest.get("sim_groundtruth")
+    land = ctx.latest.get(ORB_ID.vehicle_land_detected)
+    truth = ctx.latest.get(ORB_ID.sim_groundtruth)
     return not armed(ctx) and land is not None and land.landed and truth is not None and truth.on_ground
 
 
@@ -101,21 +110,23 @@ class Frames:
     """Ground truth and estimate/setpoints about home (see the module docstring)."""
 
     def __init__(self, ctx: ScriptContext) -> None:
-        home = ctx.latest.get("home_position")
-        truth = ctx.series.get("sim_groundtruth")
+        home = ctx.latest.get(ORB_ID.home_position)
+        truth = ctx.series.get(ORB_ID.sim_groundtruth)
         if home is None or truth is None or not truth.times:
             raise ScenarioError("no home position or no ground truth was received")
         self.truth = truth
         self.home: Vec3 = (home.x, home.y, home.z)
         armed = truth_at(truth, ctx.state.get("armed_at", truth.times[0]))
         self.projection: MapProjection | None = None
-        lpos = ctx.latest.get("vehicle_local_position")
+        lpos = ctx.latest.get(ORB_ID.vehicle_local_position)
         if lpos is not None and lpos.xy_global and math.isfinite(armed.lat) and math.isfinite(armed.lon):
             self.projection = MapProjection(lpos.ref_lat, lpos.ref_lon)
             north, east = self.projection.project(armed.lat, armed.lon)
             # Where home truly is, in the simulator's frame: the vehicle at arming, less its true offset from home.
             self.truth_home: Vec3 = (
-                armed.position[0] - (north - home.x), armed.position[1] - (east - home.y), armed.position[2]
+                armed.position[0] - (north - home.x),
+                armed.position[1] - (east - home.y),
+                armed.position[2],
             )
         else:
             self.truth_home = armed.position
@@ -165,7 +176,7 @@ def estimate_errors(ctx: ScriptContext, frames: Frames, t0: float, t1: float) ->
 
     In simulation the truth has a sample at each estimate's sample time; a plant on the wall clock (a
     simulated Pixhawk) samples its truth at other times, between which it is interpolated."""
-    estimates = ctx.series.get("vehicle_local_position")
+    estimates = ctx.series.get(ORB_ID.vehicle_local_position)
     if estimates is None:
         raise ScenarioError("no position estimate was received")
     by_sample = {m.timestamp_sample: m.position for m in frames.truth.values}
@@ -193,7 +204,7 @@ def max_tilt_deg(frames: Frames, t0: float, t1: float) -> float:
 
 
 def setpoints_between(ctx: ScriptContext, t0: float, t1: float) -> list[tuple[float, Any]]:
-    series = ctx.series.get("trajectory_setpoint")
+    series = ctx.series.get(ORB_ID.trajectory_setpoint)
     if series is None:
         raise ScenarioError("no trajectory setpoint was received")
     return [(t, m) for t, m in zip(series.times, series.values, strict=True) if t0 <= t <= t1]

@@ -6,6 +6,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
+from stack.msg.topic import Topic
 from stack.names import suggestion
 from stack.scenario.script import Script, ScriptContext
 
@@ -35,9 +36,9 @@ class Scenario:
     script: Script
     evaluate: Evaluate
     checks: tuple[Check, ...]
-    record: tuple[str, ...] = ()
-    publish: tuple[str, ...] = ()
-    watch: tuple[str, ...] = ()
+    record: tuple[Topic, ...] = ()
+    publish: tuple[Topic, ...] = ()
+    watch: tuple[Topic, ...] = ()
     timeout_s: float = 300.0
     params: dict[str, Any] = field(default_factory=dict)
     profile: str | None = None

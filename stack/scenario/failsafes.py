@@ -25,6 +25,7 @@ from typing import Any
 
 from stack.commander.modes import MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, mode_name
 from stack.mavlink.px4_modes import MainMode
+from stack.msg.registry import ORB_ID
 from stack.msg.setpoints import TrajectorySetpoint
 from stack.msg.system import OffboardControlMode, TelemetryStatus
 from stack.scenario import autonomy
@@ -59,18 +60,18 @@ class GroundStation:
     def tick(self) -> None:
         ctx = self.ctx
         if self.link_up and self.ticks % 50 == 0:
-            ctx.publish("telemetry_status", TelemetryStatus(heartbeat_type_gcs=True))
+            ctx.publish(ORB_ID.telemetry_status, TelemetryStatus(heartbeat_type_gcs=True))
         if self.offboard_velocity is not None:
             if self.ticks % 10 == 0:
-                ctx.publish("offboard_control_mode", OffboardControlMode(velocity=True))
+                ctx.publish(ORB_ID.offboard_control_mode, OffboardControlMode(velocity=True))
             if autonomy.nav_state(ctx) == NS.NAVIGATION_STATE_OFFBOARD:
-                ctx.publish("trajectory_setpoint", TrajectorySetpoint(velocity=self.offboard_velocity))
+                ctx.publish(ORB_ID.trajectory_setpoint, TrajectorySetpoint(velocity=self.offboard_velocity))
         self.ticks += 1
 
 
 def failsafe_mode(ctx: ScriptContext) -> str | None:
     """The mode the commander switched to by failsafe, once it has (None while no failsafe acts)."""
-    status = ctx.latest.get("vehicle_status")
+    status = ctx.latest.get(ORB_ID.vehicle_status)
     if status is None or not status.failsafe or status.nav_state == NS.NAVIGATION_STATE_AUTO_LOITER:
         return None  # Hold is the grace period before the action
     return mode_name(status.nav_state)
@@ -83,7 +84,7 @@ def take_over(ctx: ScriptContext) -> Generator[Wait, None, None]:
 
 
 def distance_from_home(ctx: ScriptContext) -> float:
-    lpos, home = ctx.latest["vehicle_local_position"], ctx.latest["home_position"]
+    lpos, home = ctx.latest[ORB_ID.vehicle_local_position], ctx.latest[ORB_ID.home_position]
     return math.hypot(lpos.x - home.x, lpos.y - home.y)
 
 
@@ -92,7 +93,7 @@ def script(ctx: ScriptContext) -> Generator[Wait, None, None]:
     ctx.tick_hooks.append(gcs.tick)
     yield from autonomy.wait_ready(ctx)
     yield from autonomy.take_off(ctx, ALTITUDE_M)
-    home = ctx.latest["home_position"]
+    home = ctx.latest[ORB_ID.home_position]
     yield from ctx.command(CMD.VEHICLE_CMD_DO_REPOSITION_LOCAL, param5=home.x + AWAY_M, param6=home.y)
     yield ctx.until(lambda: distance_from_home(ctx) > AWAY_M - 0.5, 20.0, f"the go-to {AWAY_M:g} m north")
     yield ctx.wait(2.0)
@@ -158,9 +159,9 @@ SCENARIO = Scenario(
         Check("battery_emergency_action", "Land"),
         Check("landed_and_disarmed", True),
     ),
-    record=("vehicle_status", "home_position"),
-    watch=("vehicle_local_position", "vehicle_land_detected", "sim_groundtruth"),
-    publish=("telemetry_status", "offboard_control_mode", "trajectory_setpoint"),
+    record=(ORB_ID.vehicle_status, ORB_ID.home_position),
+    watch=(ORB_ID.vehicle_local_position, ORB_ID.vehicle_land_detected, ORB_ID.sim_groundtruth),
+    publish=(ORB_ID.telemetry_status, ORB_ID.offboard_control_mode, ORB_ID.trajectory_setpoint),
     timeout_s=300.0,
     params=PARAMS,
 )

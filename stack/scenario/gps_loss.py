@@ -14,6 +14,7 @@ from collections.abc import Generator
 from typing import Any
 
 from stack.commander.modes import mode_name
+from stack.msg.registry import ORB_ID
 from stack.scenario import autonomy
 from stack.scenario.catalogue import Check, Scenario
 from stack.scenario.script import ScriptContext, Wait
@@ -43,7 +44,7 @@ def gps_outage(ctx: ScriptContext, outage_s: float, after_s: float) -> Generator
 
 def watch_modes(ctx: ScriptContext) -> None:
     """Note the first failsafe mode the commander picks during and after the outage, and when."""
-    status = ctx.latest.get("vehicle_status")
+    status = ctx.latest.get(ORB_ID.vehicle_status)
     if "gps_off_at" in ctx.state and "failsafe_mode" not in ctx.state and status is not None and status.failsafe:
         ctx.state["failsafe_mode"] = mode_name(status.nav_state)
         ctx.state["failsafe_at"] = ctx.now
@@ -54,11 +55,11 @@ def script(ctx: ScriptContext) -> Generator[Wait, None, None]:
     ctx.tick_hooks.append(lambda: watch_modes(ctx))
     yield from autonomy.wait_ready(ctx)
     yield from autonomy.take_off(ctx, ALTITUDE_M)
-    home = ctx.latest["home_position"]
+    home = ctx.latest[ORB_ID.home_position]
     yield ctx.until(lambda: autonomy.settled(ctx, home.z - ALTITUDE_M), 30.0, "the climb to settle")
     yield ctx.wait(HOLD_BEFORE_S)
     yield from gps_outage(ctx, OUTAGE_S, AFTER_S)
-    lpos = ctx.latest["vehicle_local_position"]
+    lpos = ctx.latest[ORB_ID.vehicle_local_position]
     ctx.state["recovered"] = (
         autonomy.armed(ctx) and lpos.xy_valid and autonomy.nav_state(ctx) == (autonomy.NS.NAVIGATION_STATE_AUTO_LOITER)
     )

@@ -25,6 +25,7 @@ from typing import Any
 
 from stack.mavlink import px4_modes
 from stack.mavlink.px4_modes import Px4Mode
+from stack.msg.registry import ORB_ID
 from stack.scenario import autonomy
 from stack.scenario.catalogue import Check, Scenario
 from stack.scenario.script import ScenarioError, ScriptContext, Wait
@@ -59,7 +60,7 @@ def control_simulated_pixhawk(request: dict[str, object], timeout_s: float = 1.0
 
 
 def autopilot(ctx: ScriptContext) -> Any:
-    status = ctx.latest.get("external_autopilot_status")
+    status = ctx.latest.get(ORB_ID.external_autopilot_status)
     if status is None:
         raise ScenarioError("no external_autopilot_status: this scenario needs the pixhawk module")
     return status
@@ -68,10 +69,10 @@ def autopilot(ctx: ScriptContext) -> Any:
 def script(ctx: ScriptContext) -> Generator[Wait, None, None]:
     yield from autonomy.wait_ready(ctx)
     yield from autonomy.take_off(ctx, ALTITUDE_M)
-    home = ctx.latest["home_position"]
+    home = ctx.latest[ORB_ID.home_position]
     yield ctx.until(lambda: autonomy.settled(ctx, home.z - ALTITUDE_M), 30.0, "the climb to settle")
     yield ctx.wait(SETTLE_S)
-    ctx.state["hold_point"] = ctx.latest["sim_groundtruth"].position
+    ctx.state["hold_point"] = ctx.latest[ORB_ID.sim_groundtruth].position
     cut_at = ctx.state["cut_at"] = ctx.now
     control_simulated_pixhawk({"cut_s": CUT_S})
     ctx.log(f"link to the Pixhawk cut for {CUT_S:g} s")
@@ -102,7 +103,7 @@ def script(ctx: ScriptContext) -> Generator[Wait, None, None]:
 
 
 def evaluate(ctx: ScriptContext) -> dict[str, Any]:
-    truth = ctx.series.get("sim_groundtruth")
+    truth = ctx.series.get(ORB_ID.sim_groundtruth)
     if truth is None:
         raise ScenarioError("no ground truth was received")
     t0, t1 = ctx.state["cut_at"], ctx.state["landing_at"]
@@ -138,7 +139,7 @@ SCENARIO = Scenario(
         Check("drift_vertical_max_m", 1.0),
         Check("landed_and_disarmed", True),
     ),
-    record=(*autonomy.RECORD, "external_autopilot_status"),
+    record=(*autonomy.RECORD, ORB_ID.external_autopilot_status),
     watch=autonomy.WATCH,
     timeout_s=180.0,
     profile="pixhawk_sim",

@@ -17,6 +17,7 @@ from stack.launch_files import find_launch_file
 from stack.mission.items import MAV_CMD_NAV_WAYPOINT, GeoPoint, Mission
 from stack.mission.loader import load_mission
 from stack.mission.transfer import mission_id_for, mission_message
+from stack.msg.registry import ORB_ID
 from stack.scenario import autonomy
 from stack.scenario.catalogue import Check, Scenario
 from stack.scenario.metrics import value_at
@@ -29,14 +30,14 @@ Vec2 = tuple[float, float]
 def upload(ctx: ScriptContext, mission: Mission, home: GeoPoint | None) -> Generator[Wait, None, None]:
     """Publish the mission and wait for the navigator to accept it."""
     mission_id = mission_id_for(mission)
-    ctx.publish("mission", mission_message(mission, home, mission_id))
+    ctx.publish(ORB_ID.mission, mission_message(mission, home, mission_id))
 
     def answered() -> bool:
-        result = ctx.latest.get("mission_result")
+        result = ctx.latest.get(ORB_ID.mission_result)
         return result is not None and result.mission_id == mission_id
 
     yield ctx.until(answered, 5.0, "the navigator's answer to the mission upload")
-    result = ctx.latest["mission_result"]
+    result = ctx.latest[ORB_ID.mission_result]
     if not result.valid:
         raise ScenarioError(f"mission refused: {result.reason}")
     ctx.log(f"mission accepted: {result.seq_total} items")
@@ -44,7 +45,7 @@ def upload(ctx: ScriptContext, mission: Mission, home: GeoPoint | None) -> Gener
 
 def script(ctx: ScriptContext) -> Generator[Wait, None, None]:
     yield from autonomy.wait_ready(ctx)
-    home_msg = ctx.latest["home_position"]
+    home_msg = ctx.latest[ORB_ID.home_position]
     home = GeoPoint(home_msg.lat, home_msg.lon, home_msg.alt)
     mission = load_mission(find_launch_file(MISSION_FILE), home)
     ctx.state["mission"] = mission
@@ -66,7 +67,7 @@ def _segment_distance(p: tuple[float, float, float], a: tuple[float, ...], b: tu
 def evaluate(ctx: ScriptContext) -> dict[str, Any]:
     frames = autonomy.Frames(ctx)
     mission: Mission = ctx.state["mission"]
-    results = ctx.series.get("mission_result")
+    results = ctx.series.get(ORB_ID.mission_result)
     if results is None:
         raise ScenarioError("no mission_result was received")
     t0, t1 = ctx.state["armed_at"], ctx.state.get("disarmed_at", ctx.now)
@@ -112,8 +113,8 @@ SCENARIO = Scenario(
         Check("land_error_m", 0.5),
         Check("landed_and_disarmed", True),
     ),
-    record=(*autonomy.RECORD, "mission_result"),
-    watch=("vehicle_land_detected",),
-    publish=("mission",),
+    record=(*autonomy.RECORD, ORB_ID.mission_result),
+    watch=(ORB_ID.vehicle_land_detected,),
+    publish=(ORB_ID.mission,),
     timeout_s=300.0,
 )

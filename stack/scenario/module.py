@@ -12,6 +12,7 @@ import math
 import time
 from pathlib import Path
 
+from stack.msg.registry import ORB_ID
 from stack.runtime.module import Arg, Module, Timer
 from stack.scenario.catalogue import get_scenario
 from stack.scenario.script import ScenarioError, ScriptContext
@@ -34,8 +35,8 @@ class ScenarioModule(Module):
         self.limits = json.loads(str(self.args["limits"]))
         for topic in self.scenario.record + self.scenario.watch:
             self.subscribe(topic, queue=topic in self.scenario.record)
-        self.subscribe("vehicle_command_ack", queue=True)
-        for topic in ("vehicle_command", *self.scenario.publish):
+        self.subscribe(ORB_ID.vehicle_command_ack, queue=True)
+        for topic in (ORB_ID.vehicle_command, *self.scenario.publish):
             self.advertise(topic)
         self._pids: dict[str, int] = {}
         self.watch_modules(self._on_module)
@@ -79,7 +80,7 @@ class ScenarioModule(Module):
             m = self.latest(topic)
             if m is not None:
                 ctx.latest[topic] = m
-        ctx.take_acks(self.take("vehicle_command_ack"))
+        ctx.take_acks(self.take(ORB_ID.vehicle_command_ack))
         for t, text in ctx.events:
             self.log.info("t=%.2f s: %s", t, text)
         ctx.events.clear()

@@ -23,6 +23,7 @@ from typing import Any
 
 from stack.commander.control_chain import CHAIN
 from stack.commander.modes import mode_name
+from stack.msg.registry import ORB_ID
 from stack.scenario import autonomy
 from stack.scenario.catalogue import Check, Scenario
 from stack.scenario.script import ScriptContext, Wait
@@ -36,7 +37,7 @@ MODULES: tuple[str, ...] = (*(link.module for link in CHAIN), "commander")
 def script(ctx: ScriptContext) -> Generator[Wait, None, None]:
     yield from autonomy.wait_ready(ctx)
     yield from autonomy.take_off(ctx, ALTITUDE_M)
-    home = ctx.latest["home_position"]
+    home = ctx.latest[ORB_ID.home_position]
     yield ctx.until(lambda: autonomy.settled(ctx, home.z - ALTITUDE_M), 30.0, "the climb to settle")
     yield ctx.wait(2.0)
     kills: list[dict[str, Any]] = []
@@ -58,7 +59,7 @@ def script(ctx: ScriptContext) -> Generator[Wait, None, None]:
         yield ctx.until(lambda m=module, p=old_pid: ctx.pid(m) not in (None, p), RESTART_TIMEOUT_S, f"{module} back")
         back_at = ctx.now
         yield ctx.wait(HOLD_AFTER_S)
-        status = ctx.latest["vehicle_status"]
+        status = ctx.latest[ORB_ID.vehicle_status]
         kill = {
             "module": module,
             "killed_at": killed_at,

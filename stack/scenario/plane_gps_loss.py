@@ -16,6 +16,7 @@ from collections.abc import Generator
 from typing import Any
 
 from stack.commander.modes import mode_name
+from stack.msg.registry import ORB_ID
 from stack.scenario import autonomy, plane_metrics
 from stack.scenario.catalogue import Check, Scenario
 from stack.scenario.gps_loss import gps_outage, watch_modes
@@ -83,7 +84,7 @@ SCENARIO = Scenario(
         Check("landed_on_runway", True),
     ),
     record=RECORD,
-    watch=("vehicle_land_detected", "position_setpoint_triplet"),
+    watch=(ORB_ID.vehicle_land_detected, ORB_ID.position_setpoint_triplet),
     timeout_s=900.0,
     profile="sitl_plane",
 )

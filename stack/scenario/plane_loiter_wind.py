@@ -16,6 +16,7 @@ from collections.abc import Generator
 from typing import Any
 
 from stack.msg.fixedwing import PositionSetpoint
+from stack.msg.registry import ORB_ID
 from stack.scenario import autonomy, plane_metrics
 from stack.scenario.catalogue import Check, Scenario
 from stack.scenario.plane_mission import RECORD, flight_samples, landing, require_fixed_wing
@@ -28,7 +29,7 @@ CAPTURE_TIMEOUT_S = 120.0
 
 
 def _loiter_setpoint(ctx: ScriptContext) -> PositionSetpoint | None:
-    triplet = ctx.latest.get("position_setpoint_triplet")
+    triplet = ctx.latest.get(ORB_ID.position_setpoint_triplet)
     if triplet is None or triplet.current.type != PositionSetpoint.SETPOINT_TYPE_LOITER:
         return None
     return triplet.current
@@ -37,7 +38,7 @@ def _loiter_setpoint(ctx: ScriptContext) -> PositionSetpoint | None:
 def on_circle(ctx: ScriptContext) -> bool:
     """The estimate puts the vehicle on the Hold circle it was given (within a fifth of its radius)."""
     sp = _loiter_setpoint(ctx)
-    lpos = ctx.latest.get("vehicle_local_position")
+    lpos = ctx.latest.get(ORB_ID.vehicle_local_position)
     if sp is None or lpos is None:
         return False
     distance = math.hypot(lpos.x - sp.x, lpos.y - sp.y)
@@ -46,7 +47,7 @@ def on_circle(ctx: ScriptContext) -> bool:
 
 def circling_time(ctx: ScriptContext, radius: float, circles: float) -> float:
     """How long ``circles`` circles of ``radius`` take at the current ground speed [s]."""
-    lpos = ctx.latest["vehicle_local_position"]
+    lpos = ctx.latest[ORB_ID.vehicle_local_position]
     return circles * 2.0 * math.pi * radius / max(math.hypot(lpos.vx, lpos.vy), 1.0)
 
 
@@ -55,7 +56,7 @@ def record_loiter(ctx: ScriptContext) -> PositionSetpoint:
     sp = _loiter_setpoint(ctx)
     if sp is None:
         raise ScenarioError("no loiter setpoint")
-    home = ctx.latest["home_position"]
+    home = ctx.latest[ORB_ID.home_position]
     ctx.state["loiter"] = (sp.x - home.x, sp.y - home.y, home.z - sp.z, sp.loiter_radius)
     return sp
 
@@ -108,7 +109,7 @@ SCENARIO = Scenario(
         Check("landed_on_runway", True),
     ),
     record=RECORD,
-    watch=("vehicle_land_detected", "position_setpoint_triplet"),
+    watch=(ORB_ID.vehicle_land_detected, ORB_ID.position_setpoint_triplet),
     params={"SIM_WIND_SPD": WIND_SPEED_M_S, "SIM_WIND_DIR": 0.0, "SIM_WIND_GUST": 1.0},
     timeout_s=1200.0,
     profile="sitl_plane",

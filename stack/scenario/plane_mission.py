@@ -21,6 +21,7 @@ from stack.launch_files import find_mission
 from stack.mathlib import quaternion as quat
 from stack.mission.items import LOITER_COMMANDS, MAV_CMD_NAV_WAYPOINT, GeoPoint, Mission
 from stack.mission.loader import load_mission
+from stack.msg.registry import ORB_ID
 from stack.msg.system import VehicleStatus
 from stack.scenario import autonomy, plane_metrics
 from stack.scenario.catalogue import Check, Scenario
@@ -32,20 +33,20 @@ MISSION = "plane_rectangle"
 MISSION_TIMEOUT_S = 900.0
 TOUCHDOWN_SINK_MAX = 2.0
 """[m/s]: a firm landing; a stalled flare hits the runway at 3 m/s or more."""
-RECORD = (*autonomy.RECORD, "mission_result", "tecs_status", "position_setpoint_triplet")
+RECORD = (*autonomy.RECORD, ORB_ID.mission_result, ORB_ID.tecs_status, ORB_ID.position_setpoint_triplet)
 
 
 def require_fixed_wing(ctx: ScriptContext) -> Generator[Wait, None, None]:
     """Refuse, in one line, to fly a plane's scenario on another vehicle."""
-    yield ctx.until(lambda: "vehicle_status" in ctx.latest, autonomy.READY_TIMEOUT_S, "the vehicle's status")
-    if ctx.latest["vehicle_status"].vehicle_type != VehicleStatus.VEHICLE_TYPE_FIXED_WING:
+    yield ctx.until(lambda: ORB_ID.vehicle_status in ctx.latest, autonomy.READY_TIMEOUT_S, "the vehicle's status")
+    if ctx.latest[ORB_ID.vehicle_status].vehicle_type != VehicleStatus.VEHICLE_TYPE_FIXED_WING:
         raise ScenarioError("this scenario flies a fixed-wing profile (sitl_plane, sitl_plane_npfg, jsbsim_c172)")
 
 
 def script(ctx: ScriptContext) -> Generator[Wait, None, None]:
     yield from require_fixed_wing(ctx)
     yield from autonomy.wait_ready(ctx)
-    home_msg = ctx.latest["home_position"]
+    home_msg = ctx.latest[ORB_ID.home_position]
     home = GeoPoint(home_msg.lat, home_msg.lon, home_msg.alt)
     try:
         path = find_mission(ctx.options["mission"])
@@ -62,7 +63,7 @@ def script(ctx: ScriptContext) -> Generator[Wait, None, None]:
 
 def flight_samples(ctx: ScriptContext, frames: autonomy.Frames, t0: float, t1: float) -> list[plane_metrics.Sample]:
     """The truth about home with its true airspeed and TECS' airspeed setpoint, over [t0, t1]."""
-    tecs = ctx.series.get("tecs_status")
+    tecs = ctx.series.get(ORB_ID.tecs_status)
     out = []
     for t, truth in zip(frames.truth.times, frames.truth.values, strict=True):
         if not t0 <= t <= t1:
@@ -76,7 +77,7 @@ def flight_samples(ctx: ScriptContext, frames: autonomy.Frames, t0: float, t1: f
 
 def by_item(ctx: ScriptContext, samples: list[plane_metrics.Sample]) -> dict[int, list[plane_metrics.Sample]]:
     """The samples flown while each mission item was the current one."""
-    results = ctx.series.get("mission_result")
+    results = ctx.series.get(ORB_ID.mission_result)
     if results is None:
         raise ScenarioError("no mission_result was received")
     seqs = [m.seq_current for m in results.values]
@@ -88,7 +89,7 @@ def by_item(ctx: ScriptContext, samples: list[plane_metrics.Sample]) -> dict[int
 
 def loiter_radius(ctx: ScriptContext, t0: float, t1: float) -> float:
     """The radius the navigator gave the loiter setpoints between t0 and t1 (NaN: none)."""
-    triplets = ctx.series.get("position_setpoint_triplet")
+    triplets = ctx.series.get(ORB_ID.position_setpoint_triplet)
     if triplets is None:
         return math.nan
     radii = [m.current.loiter_radius for t, m in zip(triplets.times, triplets.values, strict=True) if t0 <= t <= t1]
@@ -175,8 +176,8 @@ SCENARIO = Scenario(
     evaluate=evaluate,
     checks=CHECKS,
     record=RECORD,
-    watch=("vehicle_land_detected",),
-    publish=("mission",),
+    watch=(ORB_ID.vehicle_land_detected,),
+    publish=(ORB_ID.mission,),
     timeout_s=MISSION_TIMEOUT_S + 120.0,
     profile="sitl_plane",
     options={"mission": MISSION},

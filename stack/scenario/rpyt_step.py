@@ -27,6 +27,7 @@ from stack.attctl.rpyt_control import zxy_angles
 from stack.commander.modes import MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, MODES
 from stack.mathlib import quaternion as quat
 from stack.mathlib.scalar import constrain
+from stack.msg.registry import ORB_ID
 from stack.msg.setpoints import ManualControlSetpoint
 from stack.msg.system import VehicleCommand, VehicleStatus
 from stack.scenario import autonomy
@@ -69,7 +70,7 @@ class RotorsPilot:
         """(axis, step name, time of the stick move, hold) per step."""
 
     def publish(self) -> None:
-        truth = self.ctx.latest.get("sim_groundtruth")
+        truth = self.ctx.latest.get(ORB_ID.sim_groundtruth)
         throttle = 0.0
         if self.hold_z is not None and truth is not None:
             vz_sp = constrain(HEIGHT_P * (self.hold_z - truth.position[2]), -1.0, 1.0)
@@ -78,7 +79,7 @@ class RotorsPilot:
             tilt_cos = max(quat.to_dcm(truth.q)[2][2], 0.5)
             throttle = constrain((1.0 + self.integral + THRUST_P * error) / tilt_cos - 1.0, -1.0, 1.0)
         self.ctx.publish(
-            "manual_control_setpoint",
+            ORB_ID.manual_control_setpoint,
             ManualControlSetpoint(
                 timestamp_sample=round(self.ctx.now * 1e6), valid=True, data_source=ManualControlSetpoint.SOURCE_RC,
                 throttle=throttle, **self.sticks,
@@ -89,10 +90,10 @@ class RotorsPilot:
         ctx = self.ctx
         yield from autonomy.wait_ready(ctx)
         yield from autonomy.take_off(ctx, ALTITUDE_M)
-        home = ctx.latest["home_position"]
+        home = ctx.latest[ORB_ID.home_position]
         yield ctx.until(lambda: autonomy.settled(ctx, home.z - ALTITUDE_M), 30.0, "the climb to settle")
         yield ctx.wait(SETTLE_S)
-        self.hold_z = ctx.latest["sim_groundtruth"].position[2]
+        self.hold_z = ctx.latest[ORB_ID.sim_groundtruth].position[2]
         main, sub = MODES[ROTORS].custom_mode
         yield from ctx.command(
             VehicleCommand.VEHICLE_CMD_DO_SET_MODE,
@@ -136,8 +137,8 @@ def _command(commands: Series, axis: str, t: float) -> float:
 
 
 def evaluate(ctx: ScriptContext) -> dict[str, Any]:
-    truth = ctx.series.get("sim_groundtruth")
-    commands = ctx.series.get("roll_pitch_yawrate_thrust_setpoint")
+    truth = ctx.series.get(ORB_ID.sim_groundtruth)
+    commands = ctx.series.get(ORB_ID.roll_pitch_yawrate_thrust_setpoint)
     if truth is None or not truth.times or commands is None or not commands.times:
         raise ScenarioError("no ground truth or no RotorS command was received")
     signals = _signals(truth)
@@ -200,8 +201,8 @@ SCENARIO = Scenario(
         Check("yaw_rate_ss_error_dps", 15.5),
         Check("landed_and_disarmed", True),
     ),
-    record=(*autonomy.RECORD, "roll_pitch_yawrate_thrust_setpoint"),
+    record=(*autonomy.RECORD, ORB_ID.roll_pitch_yawrate_thrust_setpoint),
     watch=autonomy.WATCH,
-    publish=("manual_control_setpoint",),
+    publish=(ORB_ID.manual_control_setpoint,),
     timeout_s=240.0,
 )

@@ -12,10 +12,14 @@ import os
 import signal
 from collections.abc import Callable, Generator
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, TypeVar
 
+from stack.msg.base import Message
+from stack.msg.registry import ORB_ID
 from stack.msg.system import RESULT_NAMES, VehicleCommand, VehicleCommandAck, command_label
+from stack.msg.topic import Topic
 
+M = TypeVar("M", bound=Message)
 Wait = Callable[[], bool]
 Script = Callable[["ScriptContext"], Generator[Wait, None, None]]
 
@@ -39,20 +43,40 @@ class Series:
         return [v for t, v in zip(self.times, self.values, strict=True) if t0 <= t <= t1]
 
 
+class LatestMessages:
+    """The newest message of each topic the scenario reads, by handle: ``latest[ORB_ID.vehicle_status]`` is a
+    ``VehicleStatus``."""
+
+    def __init__(self) -> None:
+        self._messages: dict[Topic, Any] = {}
+
+    def __contains__(self, topic: Topic) -> bool:
+        return topic in self._messages
+
+    def __getitem__(self, topic: Topic[M]) -> M:
+        return self._messages[topic]
+
+    def __setitem__(self, topic: Topic[M], msg: M) -> None:
+        self._messages[topic] = msg
+
+    def get(self, topic: Topic[M]) -> M | None:
+        return self._messages.get(topic)
+
+
 class ScriptContext:
     """The script's handle on the stack; the scenario module drives it once per tick."""
 
     def __init__(
         self,
-        publish: Callable[[str, Any], None],
+        publish: Callable[[Topic, Any], None],
         now_s: Callable[[], float],
         pids: Callable[[], dict[str, int]] = dict,
     ) -> None:
         self._publish = publish
         self._now_s = now_s
         self._pids = pids
-        self.latest: dict[str, Any] = {}
-        self.series: dict[str, Series] = {}
+        self.latest = LatestMessages()
+        self.series: dict[Topic, Series] = {}
         self.events: list[tuple[float, str]] = []
         self.tick_hooks: list[Callable[[], None]] = []
         self.state: dict[str, Any] = {}
@@ -88,8 +112,8 @@ class ScriptContext:
 
     # -- data --------------------------------------------------------------------------------------------
 
-    def record(self, name: str, t: float, value: Any) -> None:
-        self.series.setdefault(name, Series()).add(t, value)
+    def record(self, topic: Topic, t: float, value: Any) -> None:
+        self.series.setdefault(topic, Series()).add(t, value)
 
     def take_acks(self, acks: list[VehicleCommandAck]) -> None:
         self._acks.extend(acks)
@@ -111,7 +135,7 @@ class ScriptContext:
 
     # -- commands ----------------------------------------------------------------------------------------
 
-    def publish(self, topic: str, msg: Any) -> None:
+    def publish(self, topic: Topic[M], msg: M) -> None:
         self._publish(topic, msg)
 
     def command(self, command: int, timeout: float = 2.0, **params: float) -> Generator[Wait, None, VehicleCommandAck]:
@@ -119,7 +143,7 @@ class ScriptContext:
         self._acks.clear()
         # Floats as the fields say (an int in a float field would go on the wire as a MessagePack int).
         floats = {name: float(value) for name, value in params.items()}
-        self.publish("vehicle_command", VehicleCommand(command=command, from_external=True, **floats))
+        self.publish(ORB_ID.vehicle_command, VehicleCommand(command=command, from_external=True, **floats))
         label = command_label(command)
         yield self.until(lambda: any(a.command == command for a in self._acks), timeout, f"the ack of command {label}")
         ack = next(a for a in self._acks if a.command == command)

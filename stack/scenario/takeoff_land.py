@@ -11,6 +11,7 @@ import math
 from collections.abc import Generator
 from typing import Any
 
+from stack.msg.registry import ORB_ID
 from stack.scenario import autonomy
 from stack.scenario.catalogue import Check, Scenario
 from stack.scenario.metrics import rms
@@ -24,7 +25,7 @@ SETTLE_S = 3.0
 def script(ctx: ScriptContext) -> Generator[Wait, None, None]:
     yield from autonomy.wait_ready(ctx)
     yield from autonomy.take_off(ctx, ALTITUDE_M)
-    home = ctx.latest["home_position"]
+    home = ctx.latest[ORB_ID.home_position]
     yield ctx.until(lambda: autonomy.settled(ctx, home.z - ALTITUDE_M), 30.0, "the climb to settle")
     yield ctx.wait(SETTLE_S)
     ctx.state["hold"] = (ctx.now, ctx.now + HOLD_S)

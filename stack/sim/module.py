@@ -18,6 +18,7 @@ import math
 from stack.commander.command_checks import addressed_to
 from stack.mathlib.vector import Vec3
 from stack.msg.fixedwing import Airspeed
+from stack.msg.registry import ORB_ID
 from stack.msg.sensors import SensorAccel, SensorBaro, SensorGps, SensorGyro, SensorMag
 from stack.msg.simulation import SimGroundtruth
 from stack.msg.system import BatteryStatus, VehicleCommand
@@ -81,27 +82,43 @@ class SimulatorModule(Module):
         )
         self.sim.set_gps_enabled(int(p["SIM_GPS_USED"]) >= 4)
         self.input_count = model.input_count
-        self.subscribe("actuator_outputs_sim")
-        self.subscribe("actuator_armed")
-        self.subscribe("vehicle_command", queue=True)
-        for topic in ("sensor_accel", "sensor_gyro", "sensor_mag", "sensor_baro", "sensor_gps", "sim_groundtruth"):
+        self.subscribe(ORB_ID.actuator_outputs_sim)
+        self.subscribe(ORB_ID.actuator_armed)
+        self.subscribe(ORB_ID.vehicle_command, queue=True)
+        for topic in (
+            ORB_ID.sensor_accel,
+            ORB_ID.sensor_gyro,
+            ORB_ID.sensor_mag,
+            ORB_ID.sensor_baro,
+            ORB_ID.sensor_gps,
+            ORB_ID.sim_groundtruth,
+        ):
             self.advertise(topic)
         if not isinstance(model, VehicleModel):
-            self.advertise("airspeed")
-        self.advertise("battery_status")
+            self.advertise(ORB_ID.airspeed)
+        self.advertise(ORB_ID.battery_status)
         self.battery = BatteryModel(self.params.values())
         self._battery_due_us = 0
         self.epoch_us: int | None = None
         self.catch_up_steps = 0
         self.skipped_steps = 0
         if isinstance(model, FixedwingModel):
-            self.log.info("vehicle %s: fixed-wing, %.3f kg, %.1f N static thrust", model.name, model.mass,
-                          model.thruster.max_thrust)
+            self.log.info(
+                "vehicle %s: fixed-wing, %.3f kg, %.1f N static thrust",
+                model.name,
+                model.mass,
+                model.thruster.max_thrust,
+            )
         elif not isinstance(model, VehicleModel):
             self.log.info("vehicle %s: JSBSim %s, %.1f kg", model.name, model.aircraft, self.sim.mass)
         else:
-            self.log.info("vehicle %s: %d rotors, %.3f kg, hover thrust fraction %.3f", model.name,
-                          model.rotor_count, model.mass, model.hover_thrust_fraction)
+            self.log.info(
+                "vehicle %s: %d rotors, %.3f kg, hover thrust fraction %.3f",
+                model.name,
+                model.rotor_count,
+                model.mass,
+                model.hover_thrust_fraction,
+            )
 
     def _wind_params(self) -> WindParams:
         p = self.params
@@ -131,7 +148,7 @@ class SimulatorModule(Module):
 
     def _inject_failures(self) -> None:
         """PX4's ``failure`` command (MAV_CMD_INJECT_FAILURE) as the simulated sensors implement it: GPS off/ok."""
-        for cmd in self.take("vehicle_command"):
+        for cmd in self.take(ORB_ID.vehicle_command):
             if cmd.command != VehicleCommand.VEHICLE_CMD_INJECT_FAILURE or not addressed_to(
                 cmd, int(self.params["MAV_SYS_ID"]), int(self.params["MAV_COMP_ID"])
             ):
@@ -151,8 +168,8 @@ class SimulatorModule(Module):
             self.log.info("GPS %s (failure injection)", "restored" if enabled else "off")
 
     def motor_commands(self) -> tuple[float, ...]:
-        outputs = self.latest("actuator_outputs_sim")
-        armed = self.latest("actuator_armed")
+        outputs = self.latest(ORB_ID.actuator_outputs_sim)
+        armed = self.latest(ORB_ID.actuator_armed)
         # As PX4's output drivers do, the motors stop on disarm, lockdown, kill or termination whatever the last
         # output said: a dead allocator cannot keep them turning.
         stopped = armed is not None and (not armed.armed or armed.lockdown or armed.kill or armed.termination)
@@ -206,23 +223,24 @@ class SimulatorModule(Module):
         t = epoch + s.time_us
         a, g = s.accel, s.gyro
         self.publish(
-            "sensor_accel",
+            ORB_ID.sensor_accel,
             SensorAccel(timestamp_sample=t, device_id=IMU_DEVICE_ID, x=a[0], y=a[1], z=a[2], temperature=s.temperature),
         )
         self.publish(
-            "sensor_gyro",
+            ORB_ID.sensor_gyro,
             SensorGyro(timestamp_sample=t, device_id=IMU_DEVICE_ID, x=g[0], y=g[1], z=g[2], temperature=s.temperature),
         )
 
     def _publish_mag(self, s: MagSample, epoch: int) -> None:
         f = s.field
         self.publish(
-            "sensor_mag", SensorMag(timestamp_sample=epoch + s.time_us, device_id=MAG_DEVICE_ID, x=f[0], y=f[1], z=f[2])
+            ORB_ID.sensor_mag,
+            SensorMag(timestamp_sample=epoch + s.time_us, device_id=MAG_DEVICE_ID, x=f[0], y=f[1], z=f[2]),
         )
 
     def _publish_baro(self, s: BaroSample, epoch: int) -> None:
         self.publish(
-            "sensor_baro",
+            ORB_ID.sensor_baro,
             SensorBaro(
                 timestamp_sample=epoch + s.time_us,
                 device_id=BARO_DEVICE_ID,
@@ -234,7 +252,7 @@ class SimulatorModule(Module):
     def _publish_gps(self, s: GpsSample, epoch: int) -> None:
         vn, ve, vd = s.vel_ned
         self.publish(
-            "sensor_gps",
+            ORB_ID.sensor_gps,
             SensorGps(
                 timestamp_sample=epoch + s.time_us,
                 device_id=GPS_DEVICE_ID,
@@ -260,7 +278,7 @@ class SimulatorModule(Module):
 
     def _publish_airspeed(self, s: AirspeedSample, epoch: int) -> None:
         self.publish(
-            "airspeed",
+            ORB_ID.airspeed,
             Airspeed(
                 timestamp_sample=epoch + s.time_us,
                 device_id=AIRSPEED_DEVICE_ID,
@@ -273,15 +291,15 @@ class SimulatorModule(Module):
         )
 
     def _publish_battery(self, epoch: int) -> None:
-        armed = self.latest("actuator_armed")
+        armed = self.latest(ORB_ID.actuator_armed)
         state = self.battery.update(BATTERY_PERIOD_US * 1e-6, armed is not None and armed.armed)
-        self.publish("battery_status", BatteryStatus(**state._asdict()))
+        self.publish(ORB_ID.battery_status, BatteryStatus(**state._asdict()))
 
     def _publish_truth(self, epoch: int) -> None:
         t = self.sim.truth()
         wind: Vec3 = self.sim.wind
         self.publish(
-            "sim_groundtruth",
+            ORB_ID.sim_groundtruth,
             SimGroundtruth(
                 timestamp_sample=epoch + t.time_us,
                 position=t.position,

@@ -64,8 +64,9 @@ def export_rrd(
     from stack.viz.layout import default_blueprint
     from stack.viz.logger import TOPICS, FlightLogger, new_recording
 
+    topics = tuple(t.name for t in TOPICS)
     info = getattr(reader, "info", None)
-    total = _message_count(reader, TOPICS) if progress is not None else 0
+    total = _message_count(reader, topics) if progress is not None else 0
     out = Path(out_path)
     out.parent.mkdir(parents=True, exist_ok=True)
     vehicle = getattr(info, "vehicle", "") or "vehicle"
@@ -77,7 +78,7 @@ def export_rrd(
     first_t = last_t = 0
     count = 0
     try:
-        for m in reader.iter_messages(TOPICS):
+        for m in reader.iter_messages(topics):
             count += 1
             if m.msg is None:
                 continue

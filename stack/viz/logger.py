@@ -32,7 +32,9 @@ import rerun as rr
 
 from stack.mathlib.quaternion import angle_between, to_euler
 from stack.mathlib.vector import Vec3
+from stack.msg.registry import ORB_ID
 from stack.msg.system import RESULT_NAMES, VehicleCommandAck, VehicleStatus, command_label
+from stack.msg.topic import Topic
 from stack.viz import layout as lay
 from stack.viz.geometry import GENERIC_QUAD_X, disc_radius, rotor_disc
 
@@ -46,28 +48,28 @@ DEFAULT_FLUSH_PERIOD_S = 0.1
 
 # The topics the logger draws; ground truth first, so that at equal timestamps the truth an estimate
 # is compared with is already known when messages are fed in this order.
-TOPICS: tuple[str, ...] = (
-    "sim_groundtruth",
-    "vehicle_attitude",
-    "vehicle_attitude_setpoint",
-    "vehicle_angular_velocity",
-    "vehicle_rates_setpoint",
-    "vehicle_torque_setpoint",
-    "vehicle_thrust_setpoint",
-    "actuator_motors",
-    "actuator_outputs_sim",
-    "control_allocator_status",
-    "vehicle_local_position",
-    "vehicle_local_position_setpoint",
-    "trajectory_setpoint",
-    "sensor_gps",
-    "sensor_baro",
-    "vehicle_status",
-    "vehicle_command_ack",
-    "home_position",
-    "mission",
+TOPICS: tuple[Topic, ...] = (
+    ORB_ID.sim_groundtruth,
+    ORB_ID.vehicle_attitude,
+    ORB_ID.vehicle_attitude_setpoint,
+    ORB_ID.vehicle_angular_velocity,
+    ORB_ID.vehicle_rates_setpoint,
+    ORB_ID.vehicle_torque_setpoint,
+    ORB_ID.vehicle_thrust_setpoint,
+    ORB_ID.actuator_motors,
+    ORB_ID.actuator_outputs_sim,
+    ORB_ID.control_allocator_status,
+    ORB_ID.vehicle_local_position,
+    ORB_ID.vehicle_local_position_setpoint,
+    ORB_ID.trajectory_setpoint,
+    ORB_ID.sensor_gps,
+    ORB_ID.sensor_baro,
+    ORB_ID.vehicle_status,
+    ORB_ID.vehicle_command_ack,
+    ORB_ID.home_position,
+    ORB_ID.mission,
 )
-EVENT_TOPICS = frozenset({"vehicle_status", "vehicle_command_ack", "home_position", "mission"})
+EVENT_TOPICS = frozenset({ORB_ID.vehicle_status, ORB_ID.vehicle_command_ack, ORB_ID.home_position, ORB_ID.mission})
 
 
 def _names(cls: type, prefix: str) -> dict[int, str]:
@@ -265,8 +267,8 @@ class FlightLogger:
         self.flushes = 0
         self._topics: dict[str, _Topic] = {}
         for topic in TOPICS:
-            handler = getattr(self, "_on_" + topic)
-            self._topics[topic] = _Topic(handler, 0 if topic in EVENT_TOPICS else self._plot_period_us)
+            handler = getattr(self, "_on_" + topic.name)
+            self._topics[topic.name] = _Topic(handler, 0 if topic in EVENT_TOPICS else self._plot_period_us)
         self._build_batches()
         self.rotors: tuple[Vec3, ...] = ()
         self.set_rotors(rotors)
@@ -439,13 +441,13 @@ class FlightLogger:
         q = m.q
         roll, pitch, yaw = to_euler(q)
         self._att.rows.append((t, w, roll * DEG, pitch * DEG, yaw * DEG))
-        truth = self._latest.get("sim_groundtruth")
+        truth = self._latest.get(ORB_ID.sim_groundtruth.name)
         if truth is not None:
             self._att_error.rows.append((t, w, angle_between(q, truth.q) * DEG))
         bucket = t // self._pose_period_us
         if bucket != self._pose_bucket:
             self._pose_bucket = bucket
-            lpos = self._latest.get("vehicle_local_position")
+            lpos = self._latest.get(ORB_ID.vehicle_local_position.name)
             x, y, z = (lpos.x, lpos.y, lpos.z) if lpos is not None else (0.0, 0.0, 0.0)
             self._pose.rows.append((t, w, x, y, z, q[0], q[1], q[2], q[3]))
 
@@ -478,7 +480,7 @@ class FlightLogger:
     def _on_vehicle_local_position(self, m: Any, t: int, w: int | None) -> None:
         x, y, z, vx, vy, vz = m.x, m.y, m.z, m.vx, m.vy, m.vz
         self._lpos.rows.append((t, w, x, y, z, vx, vy, vz, (_finite_or_nan(m.eph), _finite_or_nan(m.epv))))
-        truth = self._latest.get("sim_groundtruth")
+        truth = self._latest.get(ORB_ID.sim_groundtruth.name)
         if truth is not None:
             p, v = truth.position, truth.velocity
             self._errors.rows.append((t, w, (x - p[0], y - p[1], z - p[2]), (vx - v[0], vy - v[1], vz - v[2])))

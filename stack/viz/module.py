@@ -142,10 +142,10 @@ class RerunBridgeModule(Module):
             if rt.fast is not None:
                 self.subscribe(topic, queue=True, capacity=self.capacity)
                 # The rings are read directly: skip what the logger would drop without decoding it.
-                rt.inputs[(topic, 0)].every_us = self.logger.period_us(topic)
+                rt.inputs[(topic.name, 0)].every_us = self.logger.period_us(topic.name)
             else:
-                sub = node.subscriber(topic, capacity=self.capacity, keep_last=True)
-                rt.inputs[(topic, 0)] = InputBuffer(sub, True)
+                sub = node.subscriber(topic.name, capacity=self.capacity, keep_last=True)
+                rt.inputs[(topic.name, 0)] = InputBuffer(sub, True)
         self._ticks = 0
         # Asked beside the plotting (the answer can take a second; the flight's data must not wait).
         self._asking = threading.Thread(target=self._ask_rotors, name="rotor-query", daemon=True)
@@ -169,7 +169,7 @@ class RerunBridgeModule(Module):
     def _feed(self) -> None:
         """Log everything taken from the buffers since the last tick, oldest first."""
         pending: list[tuple[int, str, Any]] = []
-        lost = sum(self.rt.inputs[(topic, 0)].lost for topic in self.topics)
+        lost = sum(self.rt.inputs[(topic.name, 0)].lost for topic in self.topics)
         if lost > self.lost:
             self.log.warning("fell behind the flight: %d samples lost before they were read", lost - self.lost)
             self.lost = lost
@@ -182,11 +182,11 @@ class RerunBridgeModule(Module):
                 if self.overruns % OVERRUN_LOG_EVERY == 1:
                     self.log.warning(
                         "%s: ring buffer of %d full, oldest samples dropped (%d overruns so far)",
-                        topic,
+                        topic.name,
                         self.capacity,
                         self.overruns,
                     )
-            pending.extend((m.timestamp, topic, m) for m in msgs)
+            pending.extend((m.timestamp, topic.name, m) for m in msgs)
         pending.sort(key=itemgetter(0))
         wall = wall_time_us()
         log_message = self.logger.log_message
@@ -196,7 +196,7 @@ class RerunBridgeModule(Module):
     def close(self) -> None:
         if self.logger is not None:
             for topic in self.topics:
-                self.rt.inputs[(topic, 0)].take_in_everything()
+                self.rt.inputs[(topic.name, 0)].take_in_everything()
             self._feed()
             self.logger.flush()
             lg = self.logger

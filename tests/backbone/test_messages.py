@@ -46,7 +46,7 @@ def test_catalogue_has_the_px4_topics():
 
 @pytest.mark.parametrize("topic", sorted(TOPICS))
 def test_every_message_starts_with_timestamp_and_round_trips(topic):
-    msg_type = TOPICS[topic]
+    msg_type = TOPICS[topic].type
     assert msg_type.__struct_fields__[0] == "timestamp"
     msg = msg_type(timestamp=123)
     data = msgspec.msgpack.encode(msg)
@@ -70,7 +70,7 @@ def test_fingerprints_are_stable_and_distinct():
         "VehicleAttitude(timestamp:int,timestamp_sample:int,q:tuple[float,float,float,float],"
         "delta_q_reset:tuple[float,float,float,float],quat_reset_counter:int)"
     )
-    types = set(TOPICS.values())
+    types = {t.type for t in TOPICS.values()}
     assert len({fingerprint(t) for t in types}) == len(types)
 
 

@@ -9,6 +9,7 @@ import msgspec
 
 from stack.msg.estimation import VehicleLocalPosition
 from stack.msg.navigation import Mission, MissionResult
+from stack.msg.registry import ORB_ID
 from stack.runtime.module import Arg, Module, Timer
 
 
@@ -23,14 +24,14 @@ class MissionResponder(Module):
 
     def __init__(self, rt) -> None:
         super().__init__(rt)
-        self.subscribe("mission", queue=True)
-        self.advertise("mission_result")
+        self.subscribe(ORB_ID.mission, queue=True)
+        self.advertise(ORB_ID.mission_result)
 
     def run(self, msg: None, dt: float) -> None:
-        for mission in self.take("mission"):
+        for mission in self.take(ORB_ID.mission):
             self._record(mission)
             self.publish(
-                "mission_result",
+                ORB_ID.mission_result,
                 MissionResult(
                     mission_id=mission.mission_id,
                     seq_total=len(mission.items),
@@ -54,11 +55,11 @@ class FixedPosition(Module):
 
     def __init__(self, rt) -> None:
         super().__init__(rt)
-        self.advertise("vehicle_local_position")
+        self.advertise(ORB_ID.vehicle_local_position)
 
     def run(self, msg: None, dt: float) -> None:
         self.publish(
-            "vehicle_local_position",
+            ORB_ID.vehicle_local_position,
             VehicleLocalPosition(
                 timestamp_sample=self.now_us(),
                 xy_valid=True,

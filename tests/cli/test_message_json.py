@@ -14,8 +14,8 @@ from stack.msg.registry import TOPICS
 
 def example(topic: str) -> str:
     """A JSON example for the topic: its defaults, with one item in each list of structs."""
-    data = as_dict(TOPICS[topic]())
-    for name, f in zip(TOPICS[topic].__struct_fields__, msgspec.structs.fields(TOPICS[topic]), strict=True):
+    data = as_dict(TOPICS[topic].type())
+    for name, f in zip(TOPICS[topic].type.__struct_fields__, msgspec.structs.fields(TOPICS[topic].type), strict=True):
         args = getattr(f.type, "__args__", ())
         if isinstance(data[name], list) and args and isinstance(args[0], type) and issubclass(args[0], msgspec.Struct):
             data[name] = [as_dict(args[0]())]
@@ -31,10 +31,10 @@ def same(a: object, b: object) -> bool:
 def test_every_topic_takes_its_generated_example(topic):
     text = example(topic)
     msg = parse_message(topic, text)
-    assert type(msg) is TOPICS[topic]
+    assert type(msg) is TOPICS[topic].type
     assert same(as_dict(msg), json.loads(text))
     # It goes on the wire and back as the real type.
-    assert same(msgspec.msgpack.decode(msgspec.msgpack.encode(msg), type=TOPICS[topic]), msg)
+    assert same(msgspec.msgpack.decode(msgspec.msgpack.encode(msg), type=TOPICS[topic].type), msg)
 
 
 def test_a_mission_with_items_by_field_name():
@@ -72,7 +72,7 @@ def test_field_paths_reach_into_nested_fields_and_lists():
     data = as_dict(parse_message("mission", '{"mission_id": 3, "items": [{"north": -5}]}'))
     assert parse_field_paths(["a,b", " c ", "d.0"]) == ["a", "b", "c", "d.0"]
     assert pick(data, "mission_id") == 3 and pick(data, "items.0.north") == -5.0
-    assert pick(as_dict(TOPICS["vehicle_attitude"]()), "q.0") == 1.0
+    assert pick(as_dict(TOPICS["vehicle_attitude"].type()), "q.0") == 1.0
     for path, why in (
         ("items.1.north", "'items.1': index must be 0…0"),
         ("items.x", "'items.x': index must be 0…0"),

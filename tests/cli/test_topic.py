@@ -101,9 +101,9 @@ PUB_TOPICS = ("vehicle_command", "actuator_motors", "mission")
 @pytest.mark.parametrize("topic", sorted(TOPICS))
 def test_every_topics_schema_is_json(topic):
     """`stack topic info --json` shows each field's default, a required field's as null."""
-    rows = schema_rows(TOPICS[topic])
+    rows = schema_rows(TOPICS[topic].type)
     assert json.loads(json.dumps(rows, allow_nan=False)) == rows
-    assert [row["name"] for row in rows] == list(TOPICS[topic].__struct_fields__)
+    assert [row["name"] for row in rows] == list(TOPICS[topic].type.__struct_fields__)
 
 
 def test_pub_runs_on_a_live_stack(stack):

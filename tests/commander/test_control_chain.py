@@ -7,6 +7,7 @@ from stack.commander.control_chain import CHAIN, OUTPUTS, SILENCE_US, STALE_US, 
 from stack.commander.land_detector import MulticopterLandDetector
 from stack.commander.modes import control_mode
 from stack.commander.state_machine import Commander
+from stack.msg.registry import ORB_ID
 from stack.msg.system import VehicleStatus as NS
 from tests.commander.helpers import Clock, healthy, make_clock
 
@@ -24,7 +25,7 @@ def test_a_module_is_silent_once_its_output_is_older_than_the_silence_limit():
     assert monitor.update(0, True, HOLD) == []
     assert monitor.update(SILENCE_US, True, HOLD) == []
     for topic in OUTPUTS:
-        if topic != "vehicle_torque_setpoint":
+        if topic != ORB_ID.vehicle_torque_setpoint:
             monitor.output_seen(topic, SILENCE_US + 1)
     faults = monitor.update(SILENCE_US + 1, True, HOLD)
     assert [(f.module, f.loss, f.dead) for f in faults] == [("mc_rate_control", Loss.ATTITUDE_CONTROL, False)]
@@ -49,7 +50,12 @@ def test_nothing_is_watched_disarmed_never_seen_or_outside_its_loop():
     assert monitor.update(10 * SILENCE_US, False, HOLD) == []
     acro = control_mode(NS.NAVIGATION_STATE_ACRO, True)  # no attitude or position loop in Acro
     later = 20 * SILENCE_US
-    for topic in ("vehicle_attitude", "vehicle_local_position", "vehicle_torque_setpoint", "actuator_motors"):
+    for topic in (
+        ORB_ID.vehicle_attitude,
+        ORB_ID.vehicle_local_position,
+        ORB_ID.vehicle_torque_setpoint,
+        ORB_ID.actuator_motors,
+    ):
         monitor.output_seen(topic, later)
     assert monitor.update(later, True, acro) == []
 
@@ -69,7 +75,12 @@ def test_a_loop_switched_on_gets_the_silence_limit_to_speak():
     for topic in OUTPUTS:
         monitor.output_seen(topic, t)
     monitor.update(t, True, acro)
-    live = ("vehicle_attitude", "vehicle_local_position", "vehicle_torque_setpoint", "actuator_motors")
+    live = (
+        ORB_ID.vehicle_attitude,
+        ORB_ID.vehicle_local_position,
+        ORB_ID.vehicle_torque_setpoint,
+        ORB_ID.actuator_motors,
+    )
     for topic in live:
         monitor.output_seen(topic, t + SILENCE_US)
     assert monitor.update(t + SILENCE_US, True, HOLD) == []  # Hold turns position and attitude control on
@@ -89,7 +100,7 @@ def test_offboard_watches_only_the_estimators_rate_control_and_allocation():
     offboard.flag_control_attitude_enabled = offboard.flag_multicopter_position_control_enabled = True
     _all_seen(monitor, 0)
     monitor.update(0, True, offboard)
-    monitor.output_seen("vehicle_attitude", 10 * SILENCE_US)
+    monitor.output_seen(ORB_ID.vehicle_attitude, 10 * SILENCE_US)
     modules = {f.module for f in monitor.update(10 * SILENCE_US, True, offboard)}
     assert modules == {"local_position_estimator", "mc_rate_control", "control_allocator"}
 

@@ -5,6 +5,7 @@ import pytest
 from stack.commander import commands as C
 from stack.commander.control_chain import FW_CHAIN, SILENCE_US, ControlChainMonitor, Loss
 from stack.commander.modes import control_mode
+from stack.msg.registry import ORB_ID
 from stack.msg.system import VehicleStatus as NS
 from tests.commander.plane_helpers import flying_plane, plane_clock
 
@@ -70,7 +71,7 @@ def test_which_modules_each_mode_watches(nav_state, watched):
         monitor.output_seen(link.output, 0)
     monitor.update(0, True, mode)
     late = 10 * 450_000
-    monitor.output_seen("vehicle_attitude", late)  # the attitude estimator alone goes on: every other is silent
+    monitor.output_seen(ORB_ID.vehicle_attitude, late)  # the attitude estimator alone goes on: every other is silent
     assert {f.module for f in monitor.update(late, True, mode)} == (watched | always) - {"attitude_estimator_q"}
 
 

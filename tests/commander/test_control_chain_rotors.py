@@ -3,6 +3,7 @@ PX4's attitude loop, rate loop and allocator, whose outputs they share or leave 
 
 from stack.commander.control_chain import OUTPUTS, SILENCE_US, ControlChainMonitor, Loss
 from stack.commander.modes import control_mode
+from stack.msg.registry import ORB_ID
 from stack.msg.system import VehicleStatus as NS
 
 HOLD = control_mode(NS.NAVIGATION_STATE_AUTO_LOITER, True)
@@ -34,11 +35,11 @@ def _silent(monitor: ControlChainMonitor, topic: str, t: int, mode) -> set[tuple
 def test_the_shared_output_names_the_controller_the_profile_runs():
     monitor = _running(ROTORS_PROFILE)
     assert monitor.update(0, True, HOLD) == []
-    faults = _silent(monitor, "actuator_motors", SILENCE_US + 1, HOLD)
+    faults = _silent(monitor, ORB_ID.actuator_motors, SILENCE_US + 1, HOLD)
     assert faults == {("roll_pitch_yawrate_thrust_controller", Loss.ATTITUDE_CONTROL, False)}
     monitor = _running(PX4_PROFILE)
     monitor.update(0, True, HOLD)
-    faults = _silent(monitor, "actuator_motors", SILENCE_US + 1, HOLD)
+    faults = _silent(monitor, ORB_ID.actuator_motors, SILENCE_US + 1, HOLD)
     assert faults == {("control_allocator", Loss.ATTITUDE_CONTROL, False)}
 
 
@@ -46,15 +47,15 @@ def test_a_module_the_profile_does_not_run_is_not_watched_whatever_published_its
     """An Offboard rate setpoint is mc_att_control's output; on a RotorS profile it never comes back in Hold."""
     monitor = _running(ROTORS_PROFILE)
     monitor.update(0, True, HOLD)
-    assert _silent(monitor, "vehicle_rates_setpoint", 10 * SILENCE_US, HOLD) == set()
+    assert _silent(monitor, ORB_ID.vehicle_rates_setpoint, 10 * SILENCE_US, HOLD) == set()
 
 
 def test_the_joystick_interface_is_watched_in_the_rotors_mode_only():
     monitor = _running(ROTORS_PROFILE)
     monitor.update(0, True, ROTORS_MODE)
-    assert _silent(monitor, "roll_pitch_yawrate_thrust_setpoint", 10 * SILENCE_US, HOLD) == set()
+    assert _silent(monitor, ORB_ID.roll_pitch_yawrate_thrust_setpoint, 10 * SILENCE_US, HOLD) == set()
     monitor.update(10 * SILENCE_US, True, ROTORS_MODE)
-    faults = _silent(monitor, "roll_pitch_yawrate_thrust_setpoint", 11 * SILENCE_US + 1, ROTORS_MODE)
+    faults = _silent(monitor, ORB_ID.roll_pitch_yawrate_thrust_setpoint, 11 * SILENCE_US + 1, ROTORS_MODE)
     assert faults == {("rotors_joy_interface", Loss.ATTITUDE_CONTROL, False)}
 
 

@@ -5,6 +5,7 @@ from stack.commander.failsafe import FailsafeAction, mode_fallback, runnable_act
 from stack.commander.modes import Requirement
 from stack.commander.module import CommanderModule
 from stack.commander.state_machine import ArmDisarmReason
+from stack.msg.registry import ORB_ID
 from stack.msg.system import BatteryWarning, TelemetryStatus
 from stack.msg.system import VehicleCommandAck as ACK
 from stack.msg.system import VehicleStatus as NS
@@ -142,10 +143,10 @@ def test_a_return_in_force_stays_when_the_link_comes_back():
 def test_only_a_ground_stations_heartbeat_is_the_data_link():
     bench = ModuleBench(CommanderModule)
     bench.now = 5_000_000
-    bench.put("telemetry_status", TelemetryStatus(heartbeat_type_onboard_controller=True))
+    bench.put(ORB_ID.telemetry_status, TelemetryStatus(heartbeat_type_onboard_controller=True))
     assert bench.module._inputs(bench.now).last_gcs_heartbeat_us == 0
     bench.now = 6_000_000
-    bench.put("telemetry_status", TelemetryStatus(heartbeat_type_gcs=True))
+    bench.put(ORB_ID.telemetry_status, TelemetryStatus(heartbeat_type_gcs=True))
     assert bench.module._inputs(bench.now).last_gcs_heartbeat_us == 6_000_000
 
 

@@ -7,6 +7,7 @@ import pytest
 
 from stack.mathlib.geo import MapProjection
 from stack.msg.estimation import VehicleLocalPosition
+from stack.msg.registry import ORB_ID
 from stack.msg.simulation import SimGroundtruth
 from stack.msg.system import HomePosition
 from stack.scenario.autonomy import Frames
@@ -41,7 +42,7 @@ def test_a_setpoint_is_judged_against_the_place_it_names_not_against_homes_estim
     place = frames.truth_about_home(truth(5.0, 0.0, -5.0).position)
     # The same place in the estimator's frame, about home: home's own error shows, as it would for a setpoint.
     north, east = MapProjection(*REF).project(*MapProjection(*SIM_ORIGIN).reproject(5.0, 0.0))
-    home = ctx.latest["home_position"]
+    home = ctx.latest[ORB_ID.home_position]
     assert place == pytest.approx((north - home.x, east - home.y, -5.0), abs=1e-6)
     assert frames.place_about_home(*MapProjection(*SIM_ORIGIN).reproject(5.0, 0.0), 0.0, 0.0) == pytest.approx(
         place[:2], abs=1e-6

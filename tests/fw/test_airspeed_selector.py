@@ -15,6 +15,7 @@ from stack.mathlib.quaternion import from_euler, rotate_inv
 from stack.mathlib.scalar import CONSTANTS_ONE_G as G
 from stack.msg.estimation import VehicleAttitude, VehicleLocalPosition
 from stack.msg.fixedwing import Airspeed
+from stack.msg.registry import ORB_ID
 from stack.msg.system import VehicleLandDetected
 from stack.params import catalogue
 from stack.runtime.inprocess import InProcessStack
@@ -128,10 +129,15 @@ class CircleFlight(Module):
 
     def __init__(self, rt) -> None:
         super().__init__(rt)
-        for topic in ("airspeed", "vehicle_local_position", "vehicle_attitude", "vehicle_land_detected"):
+        for topic in (
+            ORB_ID.airspeed,
+            ORB_ID.vehicle_local_position,
+            ORB_ID.vehicle_attitude,
+            ORB_ID.vehicle_land_detected,
+        ):
             self.advertise(topic)
-        self.subscribe("airspeed_validated")
-        self.subscribe("wind")
+        self.subscribe(ORB_ID.airspeed_validated)
+        self.subscribe(ORB_ID.wind)
         self.rng = random.Random(rt.spec.seed)
         self.step = 0
         self.received: list[tuple[float, object, object]] = []
@@ -145,20 +151,30 @@ class CircleFlight(Module):
         t = now * 1e-6
         velocity, accel, q = circle(t)
         self.publish(
-            "vehicle_local_position",
+            ORB_ID.vehicle_local_position,
             VehicleLocalPosition(
-                timestamp_sample=now, v_xy_valid=True, v_z_valid=True, vx=velocity[0], vy=velocity[1],
-                vz=velocity[2], ax=accel[0], ay=accel[1], az=accel[2], evh=0.2, evv=0.2,
+                timestamp_sample=now,
+                v_xy_valid=True,
+                v_z_valid=True,
+                vx=velocity[0],
+                vy=velocity[1],
+                vz=velocity[2],
+                ax=accel[0],
+                ay=accel[1],
+                az=accel[2],
+                evh=0.2,
+                evv=0.2,
             ),
         )
-        self.publish("vehicle_attitude", VehicleAttitude(timestamp_sample=now, q=q))
-        self.publish("vehicle_land_detected", VehicleLandDetected(landed=False, maybe_landed=False))
+        self.publish(ORB_ID.vehicle_attitude, VehicleAttitude(timestamp_sample=now, q=q))
+        self.publish(ORB_ID.vehicle_land_detected, VehicleLandDetected(landed=False, maybe_landed=False))
         if self.step % 3 == 0 and t < float(self.args["dropout_s"]):
             # Below the stall speed until takeoff_s: the takeoff run, no wind estimation yet.
             ias = AIRSPEED if t >= float(self.args["takeoff_s"]) else 5.0
             ias += self.rng.gauss(0.0, 0.2)
-            self.publish("airspeed", Airspeed(timestamp_sample=now, indicated_airspeed_m_s=ias, true_airspeed_m_s=ias))
-        self.received.append((t, self.latest("airspeed_validated"), self.latest("wind")))
+            measured = Airspeed(timestamp_sample=now, indicated_airspeed_m_s=ias, true_airspeed_m_s=ias)
+            self.publish(ORB_ID.airspeed, measured)
+        self.received.append((t, self.latest(ORB_ID.airspeed_validated), self.latest(ORB_ID.wind)))
         if self.step >= int(self.args["steps"]):
             raise SystemExit(0)
 

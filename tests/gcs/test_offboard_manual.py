@@ -95,10 +95,10 @@ def test_the_relay_keeps_the_proof_of_life_going_while_the_client_streams():
     sp, mode = offboard.position_target(_position(IGNORE_ACCEL_YAW_RATE | IGNORE_VELOCITY), 0.0, 0)
     relay.on_setpoint(sp, mode, 1_000_000)
     first = relay.due(1_000_000, 5_000, in_offboard=False)
-    assert [topic for topic, _ in first] == ["offboard_control_mode"] and first[0][1].timestamp == 5_000
+    assert [topic.name for topic, _ in first] == ["offboard_control_mode"] and first[0][1].timestamp == 5_000
     assert relay.due(1_010_000, 6_000, in_offboard=True) == []
     out = relay.due(1_020_000, 7_000, in_offboard=True)
-    assert [topic for topic, _ in out] == ["offboard_control_mode", "trajectory_setpoint"]
+    assert [topic.name for topic, _ in out] == ["offboard_control_mode", "trajectory_setpoint"]
     assert out[1][1].timestamp == 7_000
     assert relay.due(1_000_000 + offboard.PROOF_OF_LIFE_US + 1, 8_000, in_offboard=True) == []
 

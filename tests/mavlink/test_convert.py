@@ -13,6 +13,7 @@ from stack.mathlib import quaternion as quat
 from stack.mathlib.geo import MapProjection
 from stack.mathlib.scalar import CONSTANTS_ONE_G
 from stack.mavlink import convert
+from stack.msg.registry import ORB_ID
 from stack.msg.setpoints import VehicleAttitudeSetpoint, VehicleRatesSetpoint
 from stack.msg.system import BatteryStatus
 
@@ -56,9 +57,11 @@ def imu(fields_updated: int = ALL_IMU, **changes: float) -> mavlink2.MAVLink_mes
 def test_highres_imu_gives_every_sensor_in_si_units_accelerometer_before_gyro():
     out, refused = convert.highres_imu(imu(), 123_456, device_id=7)
     assert refused == []
-    assert [topic for topic, _ in out] == ["sensor_accel", "sensor_gyro", "sensor_mag", "sensor_baro"]
+    assert [topic.name for topic, _ in out] == ["sensor_accel", "sensor_gyro", "sensor_mag", "sensor_baro"]
     msgs = dict(out)
-    accel, gyro, mag, baro = msgs["sensor_accel"], msgs["sensor_gyro"], msgs["sensor_mag"], msgs["sensor_baro"]
+    accel, gyro, mag, baro = (
+        msgs[t] for t in (ORB_ID.sensor_accel, ORB_ID.sensor_gyro, ORB_ID.sensor_mag, ORB_ID.sensor_baro)
+    )
     assert (accel.x, accel.y, accel.z) == pytest.approx((0.1, -0.2, -9.8))
     assert (gyro.x, gyro.y, gyro.z) == pytest.approx((0.01, -0.02, 0.03))
     assert (mag.x, mag.y, mag.z) == pytest.approx((0.21, 0.01, 0.42))  # gauss, as sensor_mag wants
@@ -71,12 +74,12 @@ def test_highres_imu_publishes_only_what_fields_updated_marks_new():
     gyro_only = mavlink2.HIGHRES_IMU_UPDATED_XGYRO | mavlink2.HIGHRES_IMU_UPDATED_YGYRO
     gyro_only |= mavlink2.HIGHRES_IMU_UPDATED_ZGYRO
     out, _ = convert.highres_imu(imu(gyro_only), 1, 1)
-    assert [topic for topic, _ in out] == ["sensor_gyro"]
+    assert [topic.name for topic, _ in out] == ["sensor_gyro"]
     assert math.isnan(out[0][1].temperature)  # temperature not updated: unknown
     out, _ = convert.highres_imu(imu(mavlink2.HIGHRES_IMU_UPDATED_XGYRO), 1, 1)
     assert out == []  # one axis alone is not a sample
     out, _ = convert.highres_imu(imu(mavlink2.HIGHRES_IMU_UPDATED_ABS_PRESSURE), 1, 1)
-    assert [topic for topic, _ in out] == ["sensor_baro"]
+    assert [topic.name for topic, _ in out] == ["sensor_baro"]
 
 
 @pytest.mark.parametrize(
@@ -92,7 +95,7 @@ def test_highres_imu_publishes_only_what_fields_updated_marks_new():
 def test_a_corrupt_imu_value_refuses_that_sensor_only(change, refused_topic):
     out, refused = convert.highres_imu(imu(**change), 1, 1)
     assert len(refused) == 1 and refused[0]
-    topics = [topic for topic, _ in out]
+    topics = [topic.name for topic, _ in out]
     assert refused_topic not in topics and len(topics) == 3
 
 

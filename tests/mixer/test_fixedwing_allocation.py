@@ -9,6 +9,7 @@ from stack.mixer.fixedwing import FixedWingAllocator, fixed_wing_effectiveness, 
 from stack.mixer.module import ControlAllocatorModule
 from stack.mixer.output import MotorOutput, servo_outputs
 from stack.msg.actuators import ActuatorOutputs
+from stack.msg.registry import ORB_ID
 from stack.msg.setpoints import VehicleThrustSetpoint, VehicleTorqueSetpoint
 from stack.msg.system import ActuatorArmed
 from tests.support.bench import ModuleBench
@@ -86,25 +87,25 @@ def test_a_planes_motor_has_no_idle_and_its_surfaces_centre_when_disarmed():
 
 
 def plane_outputs(bench: ModuleBench, torque, throttle) -> ActuatorOutputs:
-    bench.put("vehicle_thrust_setpoint", VehicleThrustSetpoint(xyz=(throttle, 0.0, 0.0)))
+    bench.put(ORB_ID.vehicle_thrust_setpoint, VehicleThrustSetpoint(xyz=(throttle, 0.0, 0.0)))
     bench.run(VehicleTorqueSetpoint(xyz=torque), 0.004)
-    return bench.sent("actuator_outputs_sim")[-1]
+    return bench.sent(ORB_ID.actuator_outputs_sim)[-1]
 
 
 def test_the_allocator_module_drives_a_plane_in_the_shared_output_convention():
     bench = ModuleBench(ControlAllocatorModule, PLANE)
     disarmed = plane_outputs(bench, (0.3, -0.2, 0.1), 0.7)
     assert disarmed.noutputs == 4 and disarmed.output == (0.0,) * 16
-    assert math.isnan(bench.sent("actuator_motors")[-1].control[0])
-    assert bench.sent("actuator_servos")[-1].control[:3] == (0.0, 0.0, 0.0)
-    bench.put("actuator_armed", ActuatorArmed(armed=True))
+    assert math.isnan(bench.sent(ORB_ID.actuator_motors)[-1].control[0])
+    assert bench.sent(ORB_ID.actuator_servos)[-1].control[:3] == (0.0, 0.0, 0.0)
+    bench.put(ORB_ID.actuator_armed, ActuatorArmed(armed=True))
     armed = plane_outputs(bench, (0.3, -0.2, 0.1), 0.7)
     # throttle, aileron, elevator, rudder
     assert armed.output[:4] == pytest.approx((0.7, 0.3, -0.2, 0.1)) and armed.output[4:] == (0.0,) * 12
-    assert bench.sent("actuator_servos")[-1].control[:3] == pytest.approx((0.3, -0.2, 0.1))
-    assert all(math.isnan(v) for v in bench.sent("actuator_servos")[-1].control[3:])
-    assert bench.sent("actuator_motors")[-1].control[0] == pytest.approx(0.7)
-    assert bench.sent("actuator_outputs")[-1].output[:4] == pytest.approx((1700.0, 1650.0, 1400.0, 1550.0))
+    assert bench.sent(ORB_ID.actuator_servos)[-1].control[:3] == pytest.approx((0.3, -0.2, 0.1))
+    assert all(math.isnan(v) for v in bench.sent(ORB_ID.actuator_servos)[-1].control[3:])
+    assert bench.sent(ORB_ID.actuator_motors)[-1].control[0] == pytest.approx(0.7)
+    assert bench.sent(ORB_ID.actuator_outputs)[-1].output[:4] == pytest.approx((1700.0, 1650.0, 1400.0, 1550.0))
     nan = plane_outputs(bench, (math.nan, 0.5, 0.0), math.nan)
     assert nan.output[:4] == pytest.approx((0.0, 0.0, 0.5, 0.0))
 
@@ -113,11 +114,11 @@ def test_the_airframe_parameter_switches_between_multicopter_and_plane():
     quad = {f"CA_ROTOR{i}_P{c}": v for i, (x, y) in enumerate(((1, 1), (-1, -1), (1, -1), (-1, 1)))
             for c, v in (("X", x), ("Y", y))}
     bench = ModuleBench(ControlAllocatorModule, {"CA_ROTOR_COUNT": 4, **quad})
-    bench.put("actuator_armed", ActuatorArmed(armed=True))
-    bench.put("vehicle_thrust_setpoint", VehicleThrustSetpoint(xyz=(0.0, 0.0, -0.5)))
+    bench.put(ORB_ID.actuator_armed, ActuatorArmed(armed=True))
+    bench.put(ORB_ID.vehicle_thrust_setpoint, VehicleThrustSetpoint(xyz=(0.0, 0.0, -0.5)))
     bench.run(VehicleTorqueSetpoint(), 0.004)
-    assert bench.sent("actuator_outputs_sim")[-1].noutputs == 4 and bench.sent("actuator_servos") == []
-    hover = bench.sent("actuator_motors")[-1].control[:4]
+    assert bench.sent(ORB_ID.actuator_outputs_sim)[-1].noutputs == 4 and bench.sent(ORB_ID.actuator_servos) == []
+    hover = bench.sent(ORB_ID.actuator_motors)[-1].control[:4]
     assert hover == pytest.approx((0.5,) * 4)
     for name, value in (("CA_ROTOR_COUNT", 1), ("CA_ROTOR0_PY", 0.0), ("CA_AIRFRAME", 1)):
         bench.set_param(name, value)

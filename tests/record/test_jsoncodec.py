@@ -13,7 +13,7 @@ from stack.msg.sensors import SensorGyro
 from stack.record.jsoncodec import JsonMessageCodec, UnsupportedType, codec_for, nonfinite_name, schema_decoder
 
 NEG_NAN = math.copysign(math.nan, -1.0)
-TYPES = sorted({t.__name__: t for t in TOPICS.values()}.items())
+TYPES = sorted({t.type.__name__: t.type for t in TOPICS.values()}.items())
 
 
 def float_bits(x: float) -> int:

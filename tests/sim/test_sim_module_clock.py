@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import itertools
 
+from stack.msg.registry import ORB_ID
 from stack.sim.module import SimulatorModule
 from stack.sim.simulator import MAX_CATCH_UP_STEPS
 from tests.support.bench import ModuleBench
@@ -14,7 +15,7 @@ PERIOD_S = 0.004
 
 
 def imu_times(bench: ModuleBench) -> list[int]:
-    return [m.timestamp_sample for m in bench.sent("sensor_gyro")]
+    return [m.timestamp_sample for m in bench.sent(ORB_ID.sensor_gyro)]
 
 
 def test_one_step_per_run_when_on_time():
@@ -48,7 +49,7 @@ def test_beyond_the_catch_up_limit_the_missed_time_is_skipped():
     assert len(times) == 2 and times[-1] == bench.now  # one step, stamped now: the stack's clock again
     assert bench.module.status() == {"catch_up_steps": 0, "skipped_steps": late - 1}
     assert bench.module.sim.time_us == 2 * 4000  # the physics did not see the skipped time
-    truth = bench.sent("sim_groundtruth")
+    truth = bench.sent(ORB_ID.sim_groundtruth)
     assert truth[-1].timestamp_sample == bench.now
 
 

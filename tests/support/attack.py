@@ -49,9 +49,9 @@ def forged(kind: str) -> Iterator[tuple[str, Any, float]]:
     if kind in ("nonfinite", "nonfinite-states"):
         values = (math.nan, math.inf, -math.inf)
         topics = [
-            (topic, cls)
-            for topic, cls in TOPICS.items()
-            if _floats(cls) and (kind == "nonfinite" or not cls.NAN_MEANS_NOT_CONTROLLED)
+            (name, topic.type)
+            for name, topic in TOPICS.items()
+            if _floats(topic.type) and (kind == "nonfinite" or not topic.type.NAN_MEANS_NOT_CONTROLLED)
         ]
         n = 0
         while True:

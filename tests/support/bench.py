@@ -3,11 +3,15 @@ for unit tests of a module's glue without a bus or other processes."""
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, TypeVar
 
+from stack.msg.base import Message
+from stack.msg.topic import Topic
 from stack.params.store import ParamStore
 from stack.runtime.module import Module
 from stack.runtime.spec import ModuleSpec, resolve_args
+
+M = TypeVar("M", bound=Message)
 
 
 class _Input:
@@ -39,8 +43,8 @@ class _Output:
 
 
 class ModuleBench:
-    """``bench = ModuleBench(MyModule, {"PARAM": 1})``; ``bench.put("topic", msg)``; ``bench.run(msg, dt)``;
-    ``bench.sent("topic")`` lists what the module published there, oldest first."""
+    """``bench = ModuleBench(MyModule, {"PARAM": 1})``; ``bench.put(ORB_ID.topic, msg)``; ``bench.run(msg, dt)``;
+    ``bench.sent(ORB_ID.topic)`` lists what the module published there, oldest first."""
 
     def __init__(
         self, cls: type[Module], params: dict[str, object] | None = None, args: dict[str, Any] | None = None
@@ -68,11 +72,11 @@ class ModuleBench:
     def watch_modules(self, on_change: Any) -> None:
         """No other module processes on a bench."""
 
-    def put(self, topic: str, msg: Any, instance: int = 0) -> None:
+    def put(self, topic: Topic[M], msg: M, instance: int = 0) -> None:
         """Deliver ``msg`` on ``topic`` (stamped now when its timestamp is 0)."""
         if msg.timestamp == 0:
             msg.timestamp = self.now
-        self.inputs[(topic, instance)].put(msg)
+        self.inputs[(topic.name, instance)].put(msg)
 
     def set_param(self, name: str, value: object) -> None:
         self.params.set(name, value)
@@ -83,5 +87,5 @@ class ModuleBench:
         self.now += round(dt * 1e6)
         self.module.run(msg, dt)
 
-    def sent(self, topic: str, instance: int = 0) -> list[Any]:
-        return self.outputs[(topic, instance)].sent
+    def sent(self, topic: Topic[M], instance: int = 0) -> list[M]:
+        return self.outputs[(topic.name, instance)].sent

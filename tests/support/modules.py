@@ -14,6 +14,7 @@ import time
 from pathlib import Path
 
 from stack.msg.estimation import VehicleAngularVelocity
+from stack.msg.registry import ORB_ID
 from stack.msg.sensors import SensorGyro
 from stack.msg.setpoints import VehicleRatesSetpoint, VehicleTorqueSetpoint
 from stack.msg.system import VehicleCommand, VehicleCommandAck
@@ -33,8 +34,8 @@ class TickSource(Module):
 
     def __init__(self, rt) -> None:
         super().__init__(rt)
-        self.advertise("sensor_gyro")
-        self.subscribe("vehicle_torque_setpoint")
+        self.advertise(ORB_ID.sensor_gyro)
+        self.subscribe(ORB_ID.vehicle_torque_setpoint)
         self.rng = random.Random(rt.spec.seed)
         self.step = 0
         self.trace: list[list[float]] = []
@@ -46,13 +47,15 @@ class TickSource(Module):
         self.step += 1
         if self.step == self.args["crash_at_step"]:
             os._exit(3)
-        torque = self.latest("vehicle_torque_setpoint")
+        torque = self.latest(ORB_ID.vehicle_torque_setpoint)
         if torque is not None:
             self.trace.append([self.now_us(), *torque.xyz])
         gain = float(self.params["TEST_GAIN"])
         t = self.now_us()
         x = gain * self.rng.uniform(-1.0, 1.0)
-        self.publish("sensor_gyro", SensorGyro(timestamp_sample=t, x=x, y=2.0 * x, z=torque.xyz[0] if torque else 0.0))
+        self.publish(
+            ORB_ID.sensor_gyro, SensorGyro(timestamp_sample=t, x=x, y=2.0 * x, z=torque.xyz[0] if torque else 0.0)
+        )
         if self.args["steps"] and self.step >= self.args["steps"]:
             self.close()
             raise SystemExit(0)
@@ -67,23 +70,23 @@ class Doubler(Module):
     """Triggered by sensor_gyro: publishes twice the gyro plus the latest rates setpoint it can see."""
 
     NAME = "doubler"
-    TRIGGER = Trigger("sensor_gyro")
+    TRIGGER = Trigger(ORB_ID.sensor_gyro)
     PARAMS = (Param("TEST_OFFSET", 0.0, -100.0, 100.0),)
 
     def __init__(self, rt) -> None:
         super().__init__(rt)
-        self.subscribe("vehicle_rates_setpoint")
-        self.advertise("vehicle_angular_velocity")
+        self.subscribe(ORB_ID.vehicle_rates_setpoint)
+        self.advertise(ORB_ID.vehicle_angular_velocity)
         self.offset = float(self.params["TEST_OFFSET"])
 
     def on_params_changed(self, changed: set[str]) -> None:
         self.offset = float(self.params["TEST_OFFSET"])
 
     def run(self, msg: SensorGyro, dt: float) -> None:
-        sp = self.latest("vehicle_rates_setpoint")
+        sp = self.latest(ORB_ID.vehicle_rates_setpoint)
         extra = sp.roll if sp is not None else 0.0
         self.publish(
-            "vehicle_angular_velocity",
+            ORB_ID.vehicle_angular_velocity,
             VehicleAngularVelocity(
                 timestamp_sample=msg.timestamp_sample,
                 xyz=(2.0 * msg.x + extra + self.offset, msg.y, msg.z),
@@ -96,19 +99,19 @@ class Summer(Module):
     """Triggered by vehicle_angular_velocity: torque = rate + the pacer's latest setpoint."""
 
     NAME = "summer"
-    TRIGGER = Trigger("vehicle_angular_velocity")
+    TRIGGER = Trigger(ORB_ID.vehicle_angular_velocity)
 
     def __init__(self, rt) -> None:
         super().__init__(rt)
-        self.subscribe("vehicle_rates_setpoint")
-        self.advertise("vehicle_torque_setpoint")
+        self.subscribe(ORB_ID.vehicle_rates_setpoint)
+        self.advertise(ORB_ID.vehicle_torque_setpoint)
         self.acc = 0.0
 
     def run(self, msg: VehicleAngularVelocity, dt: float) -> None:
-        sp = self.latest("vehicle_rates_setpoint")
+        sp = self.latest(ORB_ID.vehicle_rates_setpoint)
         self.acc = 0.9 * self.acc + msg.xyz[0] + (sp.pitch if sp is not None else 0.0)
         self.publish(
-            "vehicle_torque_setpoint",
+            ORB_ID.vehicle_torque_setpoint,
             VehicleTorqueSetpoint(timestamp_sample=msg.timestamp_sample, xyz=(self.acc, msg.xyz[0], dt)),
         )
 
@@ -121,15 +124,15 @@ class Pacer(Module):
 
     def __init__(self, rt) -> None:
         super().__init__(rt)
-        self.subscribe("vehicle_angular_velocity")
-        self.advertise("vehicle_rates_setpoint")
+        self.subscribe(ORB_ID.vehicle_angular_velocity)
+        self.advertise(ORB_ID.vehicle_rates_setpoint)
         self.n = 0
 
     def run(self, msg: None, dt: float) -> None:
-        av = self.latest("vehicle_angular_velocity")
+        av = self.latest(ORB_ID.vehicle_angular_velocity)
         self.n += 1
         value = av.xyz[0] if av is not None else 0.0
-        self.publish("vehicle_rates_setpoint", VehicleRatesSetpoint(roll=0.5 * value, pitch=float(self.n), yaw=dt))
+        self.publish(ORB_ID.vehicle_rates_setpoint, VehicleRatesSetpoint(roll=0.5 * value, pitch=float(self.n), yaw=dt))
 
 
 class CommandCounter(Module):
@@ -140,14 +143,14 @@ class CommandCounter(Module):
 
     def __init__(self, rt) -> None:
         super().__init__(rt)
-        self.subscribe("vehicle_command", queue=True)
-        self.advertise("vehicle_command_ack")
+        self.subscribe(ORB_ID.vehicle_command, queue=True)
+        self.advertise(ORB_ID.vehicle_command_ack)
         self.count = 0
 
     def run(self, msg: None, dt: float) -> None:
-        for cmd in self.take("vehicle_command"):
+        for cmd in self.take(ORB_ID.vehicle_command):
             self.count += 1
-            self.publish("vehicle_command_ack", VehicleCommandAck(command=cmd.command, result_param2=self.count))
+            self.publish(ORB_ID.vehicle_command_ack, VehicleCommandAck(command=cmd.command, result_param2=self.count))
 
 
 class Watcher(Module):
@@ -176,7 +179,7 @@ class Crasher(Module):
 
     def __init__(self, rt) -> None:
         super().__init__(rt)
-        self.advertise("vehicle_command")
+        self.advertise(ORB_ID.vehicle_command)
         self.ticks = 0
         if self.args["marker"]:
             with open(str(self.args["marker"]), "a") as f:
@@ -186,14 +189,14 @@ class Crasher(Module):
         self.ticks += 1
         if self.ticks >= int(self.args["ticks"]):
             raise SystemExit(4)
-        self.publish("vehicle_command", VehicleCommand(command=VehicleCommand.VEHICLE_CMD_NAV_LOITER_UNLIM))
+        self.publish(ORB_ID.vehicle_command, VehicleCommand(command=VehicleCommand.VEHICLE_CMD_NAV_LOITER_UNLIM))
 
 
 class Staller(Module):
     """Triggered by sensor_gyro; hangs forever on its N-th run (lockstep stall detection tests)."""
 
     NAME = "staller"
-    TRIGGER = Trigger("sensor_gyro")
+    TRIGGER = Trigger(ORB_ID.sensor_gyro)
     ARGS = (Arg("stall_at", 100),)
 
     def __init__(self, rt) -> None:
@@ -211,7 +214,7 @@ class Untriggered(Module):
     """Triggered by a topic nothing in the chain publishes: a lockstep member that never runs."""
 
     NAME = "untriggered"
-    TRIGGER = Trigger("vehicle_thrust_setpoint")
+    TRIGGER = Trigger(ORB_ID.vehicle_thrust_setpoint)
 
     def run(self, msg: object, dt: float) -> None:
         raise AssertionError("nothing publishes vehicle_thrust_setpoint in the test chain")
@@ -221,18 +224,18 @@ class Probe(Module):
     """Triggered by sensor_gyro: records which input messages each run could see, into a JSON file."""
 
     NAME = "probe"
-    TRIGGER = Trigger("sensor_gyro")
+    TRIGGER = Trigger(ORB_ID.sensor_gyro)
     ARGS = (Arg("out", ""),)
 
     def __init__(self, rt) -> None:
         super().__init__(rt)
-        self.subscribe("vehicle_rates_setpoint")
-        self.subscribe("vehicle_angular_velocity")
+        self.subscribe(ORB_ID.vehicle_rates_setpoint)
+        self.subscribe(ORB_ID.vehicle_angular_velocity)
         self.seen: list[list[float]] = []
 
     def run(self, msg: SensorGyro, dt: float) -> None:
-        sp = self.latest("vehicle_rates_setpoint")
-        av = self.latest("vehicle_angular_velocity")
+        sp = self.latest(ORB_ID.vehicle_rates_setpoint)
+        av = self.latest(ORB_ID.vehicle_angular_velocity)
         self.seen.append(
             [self.now_us(), msg.timestamp_sample, sp.timestamp if sp else -1, av.timestamp if av else -1, dt]
         )

@@ -2,7 +2,6 @@
 
 import rerun.blueprint as rrb
 
-from stack.msg.registry import TOPICS as CATALOGUE
 from stack.viz import layout as lay
 from stack.viz.logger import TOPICS, FlightLogger, new_recording
 from tests.viz.rrd import read_rrd
@@ -43,7 +42,7 @@ def test_views_cover_the_scene_the_events_and_every_plotted_series(tmp_path):
     rec.save(path)
     logger = FlightLogger(rec, plot_rate_hz=0.0)
     for topic in TOPICS:
-        logger.log_message(topic, 0, CATALOGUE[topic](timestamp=1000))
+        logger.log_message(topic.name, 0, topic.type(timestamp=1000))
     logger.flush()
     rec.flush()
     rec.disconnect()
