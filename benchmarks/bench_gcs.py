@@ -31,7 +31,7 @@ from pathlib import Path
 import psutil
 from pymavlink.dialects.v20 import common as mavlink2
 
-from tests.gcs.peer import Link, Peer, links_profile, udp_port
+from tests.mavlink.peer import Link, Peer, links_profile, udp_port
 from tests.support.harness import REPO, RunningStack, toml_text, write_profile
 
 SETTLE_S = 6.0

@@ -29,7 +29,7 @@ import threading
 import time
 from pathlib import Path
 
-from stack.mavlink.plant import link_budget_bytes_per_s
+from stack.pixhawk.plant import link_budget_bytes_per_s
 
 REPO = Path(__file__).resolve().parents[1]
 UART_BAUD = 921600

@@ -34,13 +34,13 @@ from collections.abc import Mapping
 
 import numpy as np
 
+from stack.airframe.model import VehicleModel
 from stack.attctl.rotors_joy import RollPitchYawrateThrust
 from stack.mathlib import quaternion as quat
 from stack.mathlib.quaternion import Mat3, Quat
 from stack.mathlib.vector import Vec3
 from stack.params import catalogue
 from stack.params.param import Param
-from stack.sim.vehicle import VehicleModel
 
 PARAMS: tuple[Param, ...] = catalogue.params(
     "RPYT_ATT_GAIN_X", "RPYT_ATT_GAIN_Y", "RPYT_ATT_GAIN_Z", "RPYT_RATE_GAIN_X", "RPYT_RATE_GAIN_Y",

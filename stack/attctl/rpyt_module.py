@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import math
 
+from stack.airframe.model import load_vehicle
 from stack.attctl import rate_control, rpyt_control, stabilized
 from stack.attctl.rate_control import AcroStickMapping
 from stack.attctl.rotors_joy import RollPitchYawrateThrust
@@ -46,7 +47,6 @@ from stack.msg.system import VehicleControlMode
 from stack.params import catalogue
 from stack.runtime.module import Arg, Module, Trigger
 from stack.runtime.priority import RATE_CTRL
-from stack.sim.vehicle import load_vehicle
 
 _NO_MODE = VehicleControlMode()
 _NO_RATES: Vec3 = (math.nan, math.nan, math.nan)
@@ -64,7 +64,7 @@ class RollPitchYawrateThrustController(Module):
         *rate_control.ACRO_PARAMS,
         *catalogue.params("MC_YAW_P"),
     )
-    ARGS = (Arg("vehicle", "", "Vehicle model: a name in stack/sim/vehicles or a path to a model file"),)
+    ARGS = (Arg("vehicle", "", "Vehicle model: a name in stack/airframe/vehicles or a path to a model file"),)
 
     def __init__(self, rt) -> None:
         super().__init__(rt)

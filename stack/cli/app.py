@@ -154,7 +154,7 @@ def _speed(prof: Profile, text: str | None, realtime: bool) -> float:
 def _device_args(prof: Profile, device: str) -> dict[str, dict[str, object]]:
     """``--device``: the ``device`` argument of the profile's pixhawk module(s), checked before anything starts."""
     from stack.mavlink.endpoint import parse_endpoint
-    from stack.mavlink.module import PixhawkAdapterModule
+    from stack.pixhawk.module import PixhawkAdapterModule
 
     try:
         parse_endpoint(device)

@@ -35,7 +35,7 @@ def pixhawk_sim(
         "(the stack opens serial:PATH:BAUD)",
     ),
     baud: int = typer.Option(DEFAULT_BAUD, "--baud", help="UART baud rate of the pty link (10 bits per byte)"),
-    vehicle: str = typer.Option("sih_quad", "--vehicle", help="Vehicle model (stack/sim/vehicles) or a path"),
+    vehicle: str = typer.Option("sih_quad", "--vehicle", help="Vehicle model (stack/airframe/vehicles) or a path"),
     system_id: int = typer.Option(1, "--sysid", min=1, max=255, help="MAVLink system id (PX4 MAV_SYS_ID)"),
     component_id: int = typer.Option(1, "--compid", min=1, max=255, help="MAVLink component id (autopilot: 1)"),
     param: list[str] = typer.Option([], "--param", help="PX4 parameter NAME=VALUE (repeatable)"),
@@ -62,11 +62,11 @@ def pixhawk_sim(
     """A simulated PX4 Pixhawk: the stack's simulator with PX4's rate controller and allocator, paced to the wall
     clock behind a MAVLink endpoint that behaves as PX4 firmware does (streams, commands, Offboard, failsafes).
     It talks MAVLink only; it never joins the stack's bus."""
+    from stack.airframe.model import load_vehicle
     from stack.params.param import ParamError
     from stack.pixhawk_sim.faults import FaultSettings
     from stack.pixhawk_sim.params import parameter_values, read_params_file
     from stack.pixhawk_sim.runner import RunOptions, run
-    from stack.sim.vehicle import load_vehicle
 
     if link is not None and pty_link is not None:
         fail("give either --link or --pty-link, not both", code=2)

@@ -59,7 +59,7 @@ requirements and control flags (:mod:`stack.commander.modes`), the airspeed pre-
 watched (:mod:`stack.commander.control_chain`) and ``vehicle_status.vehicle_type``/``system_type``.
 
 With COM_EXT_AP the plant is an external autopilot (a PX4 Pixhawk the ``pixhawk`` module flies through,
-see :mod:`stack.mavlink.plant`): arming also needs it connected and armable; the commander arms, holds the
+see :mod:`stack.pixhawk.plant`): arming also needs it connected and armable; the commander arms, holds the
 arming command's acknowledgement until the autopilot reports itself armed (``external_autopilot_status``),
 and if the autopilot refuses, or has not armed within EXTERNAL_ARM_TIMEOUT_US, disarms and refuses the
 command with the autopilot's reason. The autopilot's own arming state is the truth: when it disarms, the

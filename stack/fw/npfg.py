@@ -17,7 +17,7 @@ Preventing Run-away of Small, Low-speed, Fixed-wing UAVs in Strong Winds", IROS 
   bounded below for the roll response (FW_NPFG_ROLL_TC, safety factor FW_NPFG_PERIOD_SF) and above for
   track keeping on curved paths in wind.
 
-The API mirrors :class:`stack.posctl.l1_guidance.L1Guidance` (same method names and arguments, plus the
+The API mirrors :class:`stack.fw.l1_guidance.L1Guidance` (same method names and arguments, plus the
 wind estimate as the keyword ``wind``; a non-finite wind counts as none), so a position controller can
 switch between the two on FW_USE_NPFG. Output attributes as L1's: ``lateral_acceleration`` [m/s², + =
 right], ``roll_setpoint``, ``nav_bearing`` (the bearing vector), ``target_bearing`` (the path tangent),

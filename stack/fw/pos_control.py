@@ -2,7 +2,7 @@
 
 PX4's ``fw_pos_control_l1`` (v1.13; ``FixedwingPositionControl.cpp``) in one I/O-free class:
 
-* lateral guidance by L1 (seed 004, :class:`~stack.posctl.l1_guidance.L1Guidance`) or NPFG
+* lateral guidance by L1 (seed 004, :class:`~stack.fw.l1_guidance.L1Guidance`) or NPFG
   (:class:`~stack.fw.npfg.NPFG`), chosen by FW_USE_NPFG: lines between waypoints, loiter circles and headings
   give a lateral acceleration, flown as the roll angle atan(a/g) within FW_R_LIM;
 * longitudinal control by TECS (:class:`~stack.fw.tecs.Tecs`): altitude and airspeed setpoints give the
@@ -30,6 +30,7 @@ import math
 from collections.abc import Mapping
 from typing import NamedTuple
 
+from stack.fw.l1_guidance import L1Guidance
 from stack.fw.landing import Landing, LandingParams
 from stack.fw.npfg import NPFG, NpfgParams
 from stack.fw.runway_takeoff import RunwayTakeoff, RunwayTakeoffParams, RunwayTakeoffState
@@ -41,7 +42,6 @@ from stack.msg.setpoints import ManualControlSetpoint
 from stack.msg.system import VehicleStatus
 from stack.params import catalogue
 from stack.params.param import Param
-from stack.posctl.l1_guidance import L1Guidance
 
 NS = VehicleStatus
 SP = PositionSetpoint

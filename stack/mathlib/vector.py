@@ -72,3 +72,21 @@ def nan_to_zero(a: Vec3) -> Vec3:
         a[1] if math.isfinite(a[1]) else 0.0,
         a[2] if math.isfinite(a[2]) else 0.0,
     )
+
+
+def line_crossing_point(a: Vec3, b: Vec3, position: Vec3, distance: float) -> Vec3:
+    """Point on the line A→B at ``distance`` from position, ahead along A→B (PX4 ``_getL1Point``).
+
+    The foot of the perpendicular from position, moved √(distance² − d⊥²) toward B; the foot
+    itself when the line is farther than ``distance``. A zero-length leg returns A.
+    """
+    ux, uy, uz = b[0] - a[0], b[1] - a[1], b[2] - a[2]
+    n = math.sqrt(ux * ux + uy * uy + uz * uz)
+    if n > 0.0:
+        ux, uy, uz = ux / n, uy / n, uz / n
+    along = (position[0] - a[0]) * ux + (position[1] - a[1]) * uy + (position[2] - a[2]) * uz
+    cx, cy, cz = a[0] + ux * along, a[1] + uy * along, a[2] + uz * along
+    dx, dy, dz = cx - position[0], cy - position[1], cz - position[2]
+    cross_track = math.sqrt(dx * dx + dy * dy + dz * dz)
+    ahead = math.sqrt(distance * distance - cross_track * cross_track) if distance > cross_track else 0.0
+    return (cx + ahead * ux, cy + ahead * uy, cz + ahead * uz)

@@ -1,1 +1,1 @@
-"""MAVLink: the link to an external autopilot (a Pixhawk running PX4), its codec mapping and PX4's modes."""
+"""PX4's mavlink module and the MAVLink it speaks: links, framing, signing, PX4's modes, the protocols."""

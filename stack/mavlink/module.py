@@ -1,501 +1,786 @@
-"""The ``pixhawk`` plant module: a PX4 Pixhawk over MAVLink in the simulator's place.
+"""The ``mavlink`` module: one MAVLink link to ground stations and SDKs, the stack answering as a PX4 autopilot.
 
-The first module of its profile, on the wall clock (never a lockstep member). One thread runs the link:
-it waits on the link and on the stack's setpoints, publishes what the Pixhawk streams (its sensors, its
-own estimate on instance 1, or 0 with ``estimate = "pixhawk"``, the simulator's truth when there is one)
-and sends each new setpoint at once as SET_ATTITUDE_TARGET while the stack is armed. The module's 50 Hz
-run does the rest: the arming and Offboard hand-off with the commander, the idle proof-of-life stream,
-the stream requests and ``external_autopilot_status``. What it decides is in :mod:`stack.mavlink.plant`,
-how messages map in :mod:`stack.mavlink.convert`; this file is the glue. Its heartbeat carries the link's
-counters, the time sync, and the age of the setpoints it sends (from the gyro sample they were computed
-from, through the stack's estimate).
+One process per link, as PX4 starts one ``mavlink`` instance per port. A thread serves the link: it waits on the
+link and on a wake-up pipe (an acknowledgement from the commander wakes it at once), reads what came, publishes
+what it asks for, and sends what is due; the protocols are the I/O-free classes of :mod:`stack.mavlink`, this file is
+the glue. The module never joins the lockstep (``OUTSIDE_LOCKSTEP``): it runs on the wall clock, streams at wall
+rates, judges its peers' liveness on the wall clock, and stamps what it publishes with the latest simulated time
+it has seen (:mod:`stack.mavlink.clock`).
+
+It reads the topics behind the telemetry only while a peer is using the link (a message within the last
+PEER_TIMEOUT_US): until then it sends its HEARTBEAT and reads the few topics that say what the vehicle is doing, so
+an idle link costs the stack (and its lockstep) next to nothing. Parameter queries go through a worker thread, as
+they wait for every module's answer. Its heartbeat carries the link's counters and what it forwarded, answered,
+refused and dropped.
 """
 
 from __future__ import annotations
 
 import contextlib
-import logging
 import math
 import os
+import queue
 import select
 import threading
 from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
 from typing import TYPE_CHECKING, Any, ClassVar
 
-import msgspec
 from pymavlink.dialects.v20 import common as mavlink2
 
+from stack.bus import keys
+from stack.bus.node import wall_clock_us
 from stack.bus.topics import TopicSubscriber
-from stack.estimator.imu_summary import STATUS_INTERVAL_US, ImuSummary
-from stack.mavlink import convert, plant, px4_modes
-from stack.mavlink.endpoint import parse_endpoint
-from stack.mavlink.link import MavlinkLink, monotonic_us
-from stack.msg.estimation import EstimatorStatus
-from stack.msg.registry import ORB_ID
-from stack.msg.setpoints import VehicleThrustSetpoint
-from stack.msg.system import ExternalAutopilotStatus, VehicleCommand, VehicleCommandAck
+from stack.commander.state_machine import Commander
+from stack.mathlib.geo import MapProjection
+from stack.mavlink import commands, identity, mission_items, offboard, params, signing, telemetry, transport
+from stack.mavlink.clock import StampClock
+from stack.mavlink.endpoint import Endpoint, parse_endpoint
+from stack.mavlink.link import MavlinkLink
+from stack.mavlink.manual import ManualInput, manual_control
+from stack.mavlink.mission_progress import MissionProgress
+from stack.mavlink.mission_transfer import Clear, MissionTransfer, Refused, SetCurrent, Upload
+from stack.mavlink.param_source import BusParamSource
+from stack.mavlink.presence import Presence
+from stack.mavlink.statustext import StatustextSender
+from stack.mavlink.streams import StreamScheduler
+from stack.mission.items import GeoPoint, Mission
+from stack.mission.transfer import mission_from_message, mission_id_for, mission_message
+from stack.msg.navigation import Mission as MissionMsg
+from stack.msg.navigation import MissionResult
+from stack.msg.registry import ORB_ID, fingerprint
+from stack.msg.system import TelemetryStatus, VehicleCommand, VehicleCommandAck
+from stack.msg.system import VehicleStatus as NS
 from stack.msg.topic import Topic
 from stack.params import catalogue
+from stack.params.param import ParamError
 from stack.runtime.module import Arg, Module, Timer
 
 if TYPE_CHECKING:
     from stack.bus.node import Node
     from stack.runtime.runner import Runtime
 
-RUN_HZ = 50.0
-LINK_WAIT_S = 0.02
-PROOF_OF_LIFE_US = 100_000
-"""The idle setpoint's period (10 Hz: PX4 wants at least 2 Hz, ``docs/en/flight_modes/offboard.md``)."""
-STATUS_PERIOD_US = 200_000
-SILENCE_US = 500_000
-"""The link also counts as lost after this long without any message (the IMU streams at up to 250 Hz), so
-a cut shows in half a second (before the stack's estimates time out, in 1 s), while a lost heartbeat or two
-(1 Hz) does not drop the link."""
-STREAM_CHECK_US = 1_000_000
-STREAM_REQUESTS = 5
-"""How often a stream the Pixhawk does not deliver at half the asked rate is asked for again."""
-SYS_STATUS_BATTERY_AFTER_US = 3_000_000
-"""SYS_STATUS gives the battery only if no BATTERY_STATUS came for this long."""
-REFUSAL_LOG_EVERY = 500
-MAV_COMP_ID_ONBOARD_COMPUTER = 191
-DEVICE_ID_BASE = 0x4D4C0000
-"""Device ids of the Pixhawk's sensors as the stack sees them ("ML" + the MAVLink system id)."""
-MODE_COMMANDS = frozenset(
-    {
-        VehicleCommand.VEHICLE_CMD_DO_SET_MODE,
-        VehicleCommand.VEHICLE_CMD_SET_NAV_STATE,
-        VehicleCommand.VEHICLE_CMD_NAV_TAKEOFF,
-        VehicleCommand.VEHICLE_CMD_NAV_LAND,
-        VehicleCommand.VEHICLE_CMD_NAV_RETURN_TO_LAUNCH,
-        VehicleCommand.VEHICLE_CMD_NAV_LOITER_UNLIM,
-        VehicleCommand.VEHICLE_CMD_DO_REPOSITION,
-        VehicleCommand.VEHICLE_CMD_DO_REPOSITION_LOCAL,
-        VehicleCommand.VEHICLE_CMD_MISSION_START,
-    }
+ACTIVE_WAIT_S = 0.01
+IDLE_WAIT_S = 0.1
+ACK_TIMEOUT_US = 3_000_000
+"""A command the commander has not answered in this long is answered FAILED."""
+PARAM_VALUES_PER_S = 1000
+"""How fast a parameter list goes out on a UDP or TCP link; a serial link gets half its bytes at most."""
+PARAM_VALUE_BYTES = 37
+ERROR_LOG_EVERY = 100
+BASE_TOPICS = (
+    ORB_ID.vehicle_status,
+    ORB_ID.vehicle_control_mode,
+    ORB_ID.vehicle_land_detected,
+    ORB_ID.home_position,
+    ORB_ID.vehicle_command_ack,
+    ORB_ID.mavlink_log,
+    ORB_ID.parameter_update,
+    ORB_ID.mission,
+    ORB_ID.mission_result,
 )
-"""Commands that set a mode: accepted by the commander after the Pixhawk took over, they hand control back."""
-STATUSTEXT_LEVELS = {
-    mavlink2.MAV_SEVERITY_EMERGENCY: logging.ERROR,
-    mavlink2.MAV_SEVERITY_ALERT: logging.ERROR,
-    mavlink2.MAV_SEVERITY_CRITICAL: logging.ERROR,
-    mavlink2.MAV_SEVERITY_ERROR: logging.ERROR,
-    mavlink2.MAV_SEVERITY_WARNING: logging.WARNING,
-    mavlink2.MAV_SEVERITY_NOTICE: logging.INFO,
-    mavlink2.MAV_SEVERITY_INFO: logging.INFO,
-    mavlink2.MAV_SEVERITY_DEBUG: logging.DEBUG,
+"""Read always: what the HEARTBEAT, the acknowledgements, the operator's messages and the missions need."""
+TELEMETRY_TOPICS = (
+    ORB_ID.vehicle_local_position,
+    ORB_ID.estimator_status,
+    ORB_ID.vehicle_imu_status,
+    ORB_ID.sensor_gps,
+    ORB_ID.battery_status,
+    ORB_ID.sensor_mag,
+    ORB_ID.sensor_baro,
+)
+"""Read while a peer uses the link."""
+VIEW_FIELDS = {
+    ORB_ID.vehicle_status: "status",
+    ORB_ID.vehicle_control_mode: "control_mode",
+    ORB_ID.vehicle_land_detected: "land",
+    ORB_ID.home_position: "home",
+    ORB_ID.vehicle_local_position: "local_position",
+    ORB_ID.estimator_status: "estimator",
+    ORB_ID.vehicle_imu_status: "imu",
+    ORB_ID.sensor_gps: "gps",
+    ORB_ID.battery_status: "battery",
+    ORB_ID.sensor_mag: "mag",
+    ORB_ID.sensor_baro: "baro",
 }
+QUEUED_TOPICS = {ORB_ID.vehicle_command_ack: 64, ORB_ID.mavlink_log: 64, ORB_ID.mission: 8, ORB_ID.mission_result: 16}
+SUPPORTED_COMMANDS = Commander().supported_commands
+M = mavlink2
+_Answer = tuple[int, int, list[mavlink2.MAVLink_message]]
+"""A command answered by this module: MAV_RESULT, the offending parameter, the messages to send after the ACK."""
 
 
-class _WakingSubscriber(TopicSubscriber):
-    """A callback subscription that also wakes the link thread (a byte on a pipe) for each message."""
+class _Subscriber(TopicSubscriber):
+    """Decoded on Zenoh's thread into a queue; optionally wakes the link thread for each message."""
 
     __slots__ = ("_wake",)
 
-    def __init__(self, node: Node, topic: Topic, wake: Callable[[], None]) -> None:
+    def __init__(self, node: Node, topic: Topic, capacity: int, wake: Callable[[], None] | None) -> None:
         self._wake = wake
-        super().__init__(node, topic.name, 0, topic.type, capacity=8, callback=True)
-        node.subscribers.append(self)
-        node.announce("sub", topic.name, 0)
+        super().__init__(node, topic.name, 0, topic.type, capacity, callback=True)
 
     def _on_sample(self, sample: Any) -> None:
         TopicSubscriber._on_sample(self, sample)
-        self._wake()
+        if self._wake is not None:
+            self._wake()
 
 
-class PixhawkAdapterModule(Module):
-    NAME = "pixhawk"
-    DESCRIPTION = "A PX4 Pixhawk over MAVLink as the plant: its sensors in, the stack's setpoints out in Offboard"
-    TRIGGER = Timer(RUN_HZ)
-    DT_RANGE = (0.001, 0.1)
-    PARAMS = catalogue.params("PXH_EST_SRC", "PXH_SP_TYPE")
+class _Subscription:
+    """A subscription this module declares and withdraws while it runs, announced in the topic graph (so that a
+    fast-path run puts the topic on Zenoh for it only while it is there)."""
+
+    def __init__(self, node: Node, topic: Topic, capacity: int, wake: Callable[[], None] | None = None) -> None:
+        self.topic = topic
+        self.sub = _Subscriber(node, topic, capacity, wake)
+        kind = topic.type
+        key = keys.graph_token(node.vehicle, node.name, "sub", topic.name, 0, kind.__name__, fingerprint(kind))
+        self.token = node.session.liveliness().declare_token(key)
+
+    def close(self) -> None:
+        self.token.undeclare()
+        self.sub.undeclare()
+
+
+def _open(remote: tuple[str, int] | None) -> Callable[[Endpoint], transport.Transport]:
+    def opener(endpoint: Endpoint) -> transport.Transport:
+        if endpoint.kind == "udpin":
+            return transport.UdpPeerTransport(endpoint.host, endpoint.port, remote)
+        return transport.open_transport(endpoint)
+
+    return opener
+
+
+def _remote(text: str) -> tuple[str, int] | None:
+    if not text:
+        return None
+    host, sep, port = text.rpartition(":")
+    if not sep or not host or not port.isdigit() or not 0 < int(port) < 65536:
+        raise ValueError(f"remote {text!r}: expected HOST:PORT, e.g. 127.0.0.1:14550")
+    return host, int(port)
+
+
+class MavlinkModule(Module):
+    NAME = "mavlink"
+    DESCRIPTION = "A MAVLink link for ground stations and SDKs (PX4's mavlink module): the stack as a PX4 autopilot"
+    TRIGGER = Timer(1.0)
+    DT_RANGE = (0.1, 10.0)
+    OUTSIDE_LOCKSTEP = True
+    PARAMS = catalogue.params("MAV_SYS_ID", "MAV_COMP_ID", "MAV_TYPE")
+    """The vehicle's MAVLink identity: what it sends as, and which commands and messages are for it; MAV_TYPE
+    is the HEARTBEAT's type, read at every heartbeat (PX4's mavlink module reads the parameter too)."""
     ARGS = (
-        Arg("device", "udp:127.0.0.1:14540", "MAVLink endpoint: serial:/dev/ttyACM0:921600, udp:HOST:PORT, tcp:..."),
-        Arg("system_id", 1, "MAVLink system id of the vehicle (PX4 MAV_SYS_ID); the adapter is its component 191"),
-        Arg("imu_rate_hz", plant.IMU_RATE_HZ, "HIGHRES_IMU rate asked for (less if the serial link cannot carry it)"),
-        Arg("link_timeout_s", 3.0, "The link counts as lost after this long without the Pixhawk's heartbeat"),
+        Arg(
+            "device",
+            "udp:127.0.0.1:18570",
+            "The link: udp:HOST:PORT (bound there, answers whoever writes to it), serial:DEVICE:BAUD (a telemetry "
+            "radio), tcpin:HOST:PORT, udpout:HOST:PORT",
+        ),
+        Arg("remote", "127.0.0.1:14550", "UDP: where to send until a peer has written (PX4's -o); empty: nowhere"),
+        Arg(
+            "signing_key",
+            "",
+            "A file with a MAVLink 2 signing key (64 hex digits): sign everything, refuse unsigned messages "
+            "except HEARTBEAT; empty: no signing",
+        ),
     )
 
     def __init__(self, rt: Runtime) -> None:
         super().__init__(rt)
-        if rt.spec.lockstep:
-            raise ValueError("pixhawk runs on the wall clock: set [stack] lockstep = false in the profile")
         a = self.args
-        endpoint = parse_endpoint(str(a["device"]))
-        self.own_estimate = bool(self.params["PXH_EST_SRC"])
-        attitude_setpoints = bool(self.params["PXH_SP_TYPE"])
-        self.estimate_instance = 0 if self.own_estimate else 1
-        self.streams = plant.stream_plan(endpoint.baud or None, self.own_estimate, float(a["imu_rate_hz"]))
-        self.baud = endpoint.baud or None
-        self.subscribe(ORB_ID.actuator_armed)
-        self.subscribe(ORB_ID.vehicle_command_ack, queue=True)
-        self.advertise(ORB_ID.external_autopilot_status)
+        self.endpoint = parse_endpoint(str(a["device"]))
+        remote = _remote(str(a["remote"]))
+        key = signing.load_key(str(a["signing_key"])) if a["signing_key"] else None
+        self.own = (int(self.params["MAV_SYS_ID"]), int(self.params["MAV_COMP_ID"]))
+        self.clock = StampClock(rt.spec.lockstep, wall_clock_us)
         for topic in (
-            ORB_ID.sensor_accel,
-            ORB_ID.sensor_gyro,
-            ORB_ID.sensor_mag,
-            ORB_ID.sensor_baro,
-            ORB_ID.sensor_gps,
-            ORB_ID.battery_status,
+            ORB_ID.vehicle_command,
+            ORB_ID.telemetry_status,
+            ORB_ID.mission,
+            ORB_ID.manual_control_setpoint,
+            ORB_ID.offboard_control_mode,
+            *offboard.SETPOINT_TOPICS.values(),
         ):
             self.advertise(topic)
-        self.advertise(ORB_ID.sim_groundtruth)
-        self.advertise(ORB_ID.vehicle_thrust_setpoint)
-        self.advertise(ORB_ID.vehicle_attitude, self.estimate_instance)
-        self.advertise(ORB_ID.vehicle_local_position, self.estimate_instance)
-        if self.own_estimate:
-            for topic in (ORB_ID.vehicle_angular_velocity, ORB_ID.vehicle_imu_status, ORB_ID.estimator_status):
-                self.advertise(topic)
+        self.view = telemetry.VehicleView()
+        self.presence = Presence(self.own)
+        self.streams = StreamScheduler()
+        self.parameters = params.ParamProtocol(self.own)
+        self.transfer = MissionTransfer(self.own)
+        self.progress = MissionProgress()
+        self.pending = commands.PendingCommands(ACK_TIMEOUT_US)
+        self.relay = offboard.OffboardRelay()
+        self.manual = ManualInput()
+        self.texts = StatustextSender()
+        self.counts: dict[str, int] = dict.fromkeys(
+            (
+                "commands",
+                "command_duplicates",
+                "command_timeouts",
+                "unsupported",
+                "refused",
+                "ignored",
+                "handler_errors",
+                "unstamped",
+                "statustexts",
+            ),
+            0,
+        )
         self._lock = threading.Lock()
         self._stop = threading.Event()
         self._wake_r, self._wake_w = os.pipe2(os.O_NONBLOCK | os.O_CLOEXEC)
-        setpoint = ORB_ID.vehicle_attitude_setpoint if attitude_setpoints else ORB_ID.vehicle_rates_setpoint
-        self.to_target = convert.attitude_target if attitude_setpoints else convert.rates_target
-        self.setpoints = _WakingSubscriber(rt.node, setpoint, self._wake)
-        self.estimates = rt.node.subscriber(ORB_ID.vehicle_attitude.name, capacity=4, callback=True)
-        self.link = MavlinkLink(
-            endpoint,
-            system_id=int(a["system_id"]),
-            component_id=MAV_COMP_ID_ONBOARD_COMPUTER,
-            link_timeout_s=float(a["link_timeout_s"]),
-            timesync=True,
+        self._param_source = BusParamSource(rt.node.session, rt.node.vehicle)
+        self._param_worker = ThreadPoolExecutor(max_workers=1, thread_name_prefix="params")
+        self._param_results: queue.SimpleQueue[tuple[params.ListJob | params.SetJob, Any]] = queue.SimpleQueue()
+        self._param_budget = 0.0
+        self._param_rate = (
+            PARAM_VALUES_PER_S
+            if self.endpoint.kind != "serial"
+            else max(1.0, self.endpoint.baud / 10 / 2 / PARAM_VALUE_BYTES)
         )
-        self.handoff = plant.Handoff()
-        self.truth = convert.TruthFrame()
-        self.statustext = convert.StatustextAssembler()
-        self.origin = convert.LocalOrigin()
-        self.imu = ImuSummary()
-        self.latency = plant.LatencyStats()
-        self.device_id = DEVICE_ID_BASE | int(a["system_id"])
-        self._estimate_sample_us = 0
-        self._last_rx_us = 0
-        self._data_resumed_us = 0
-        self._last_target_us = 0
-        self._battery_status_us = -SYS_STATUS_BATTERY_AFTER_US
-        self._status_us = 0
-        self._published_status: ExternalAutopilotStatus | None = None
-        self._refused = 0
-        self._stream_counts: dict[int, int] = {}
-        self._stream_check_us = 0
-        self._stream_requests: dict[int, int] = {}
-        self._autopilot: tuple[int, int] | None = None
-        self._estimator_status_us = 0
+        self._mission_msg: MissionMsg | None = None
+        self._download_key: tuple[int | None, bool, int | None] | None = None
+        self._verdict_id: int | None = None
+        self._active = False
+        self._last_service_us = wall_clock_us()
+        self._link_error: str | None = None
+        self._builders = self._message_builders()
+        self.link = MavlinkLink(
+            self.endpoint,
+            system_id=self.own[0],
+            component_id=self.own[1],
+            heartbeat=self._heartbeat,
+            opener=_open(remote),
+        )
+        if key is not None:
+            signing.enable(self.link.mav, key)
+        self._subs = {
+            topic: _Subscription(
+                rt.node,
+                topic,
+                QUEUED_TOPICS.get(topic, 4),
+                self._wake if topic == ORB_ID.vehicle_command_ack else None,
+            )
+            for topic in BASE_TOPICS
+        }
+        self._telemetry: list[_Subscription] = []
         self.log.info(
-            "link %s; asking for HIGHRES_IMU at %.0f Hz; sending %s setpoints; the %s's estimate flies",
-            endpoint,
-            self.streams[0].hz,
-            "attitude" if attitude_setpoints else "body-rate",
-            "Pixhawk" if self.own_estimate else "stack",
+            "link %s%s, system %d, MAV_TYPE %d%s",
+            self.endpoint,
+            f" (sending to {remote[0]}:{remote[1]} until a peer writes)" if remote else "",
+            self.own[0],
+            int(self.params["MAV_TYPE"]),
+            ", signed" if key is not None else "",
         )
         self._thread = threading.Thread(target=self._link_loop, name="mavlink", daemon=True)
         self._thread.start()
 
-    # -- the link thread ----------------------------------------------------------------------------------
+    def _heartbeat(self) -> dict[str, int]:
+        """The HEARTBEAT's fields now: the commander's state, and MAV_TYPE as the parameter is now."""
+        return identity.heartbeat(self.view.status, int(self.params["MAV_TYPE"]))
+
+    # -- the link thread ------------------------------------------------------------------------------
 
     def _wake(self) -> None:
-        with contextlib.suppress(BlockingIOError):  # a full pipe: a wake is pending already
+        with contextlib.suppress(OSError):  # full (a wake is pending) or, at shutdown, closed
             os.write(self._wake_w, b"\0")
 
     def _link_loop(self) -> None:
         while not self._stop.is_set():
             fd = self.link.fileno()
-            select.select([self._wake_r] if fd is None else [self._wake_r, fd], [], [], LINK_WAIT_S)
+            wait = ACTIVE_WAIT_S if self._active or self.parameters.sending() else IDLE_WAIT_S
+            select.select([self._wake_r] if fd is None else [self._wake_r, fd], [], [], wait)
             with contextlib.suppress(BlockingIOError):
                 os.read(self._wake_r, 4096)
             try:
                 with self._lock:
-                    self._service_link()
+                    self._service()
             except Exception:
                 self.rt.errors += 1
                 self.log.exception("link thread: a step failed; carrying on")
 
-    def _service_link(self) -> None:
-        messages = self.link.poll(0.0)
-        now = monotonic_us()
-        if messages:
-            if now - self._last_rx_us >= SILENCE_US:
-                self._data_resumed_us = now
-            self._last_rx_us = now
-        self.handoff.on_connection(now, self._connected(now))
-        for msg in messages:
-            self._on_message(msg, now)
-        self._track_estimate()
-        item = None
-        while (newest := self.setpoints.poll()) is not None:
-            item = newest
-        if item is not None:
-            self._forward(item.msg, now)
+    def _service(self) -> None:
+        now = wall_clock_us()
+        self._read_bus()
+        for msg in self.link.poll(0.0):
+            self._on_link_message(msg, now)
+        self._note_link_error()
+        self._periodic(now)
 
-    def _connected(self, now: int) -> bool:
-        """The Pixhawk is heard: data within SILENCE_US, and its heartbeat within the link timeout (counted from
-        when data came back after a gap, as the next 1 Hz heartbeat may be a second away)."""
-        if self._autopilot is None or now - self._last_rx_us >= SILENCE_US:
-            return False
-        return self.link.connected or now - self._data_resumed_us < self.link.link_timeout_us
+    def _note_link_error(self) -> None:
+        error = self.link.error
+        if error != self._link_error:
+            self._link_error = error
+            if error:
+                self.log.warning("%s (retrying every 0.5 s)", error)
+            else:
+                self.log.info("link %s open", self.endpoint)
 
-    def _track_estimate(self) -> None:
-        while (item := self.estimates.poll()) is not None:
-            self._estimate_sample_us = item.msg.timestamp_sample
+    def _send(self, msg: mavlink2.MAVLink_message) -> None:
+        self.link.send(msg)
 
-    def _forward(self, setpoint: Any, now: int) -> None:
-        """Send the stack's newest setpoint (while it is armed and the link is up); NaN or out of range: refused."""
-        if not self.handoff.stream:
+    def _say(self, severity: int, text: str) -> None:
+        self.counts["statustexts"] += 1
+        for msg in self.texts.messages(severity, text):
+            self._send(msg)
+
+    def _publish(self, topic: Topic, msg: Any) -> None:
+        """Publish stamped with the stack's time; in lockstep nothing goes out before any time was seen."""
+        stamp = self.clock.now()
+        if stamp <= 0:
+            self.counts["unstamped"] += 1
             return
-        try:
-            target = self.to_target(setpoint)
-        except convert.Refused as e:
-            self._refuse(f"setpoint not sent: {e}")
-            return
-        self._send_target(target, now)
-        self.publish(
-            ORB_ID.vehicle_thrust_setpoint, VehicleThrustSetpoint(timestamp_sample=now, xyz=(0.0, 0.0, -target.thrust))
+        msg.timestamp = stamp
+        self.publish(topic, msg)
+
+    # -- the bus --------------------------------------------------------------------------------------
+
+    def _read_bus(self) -> None:
+        for sub in (*self._subs.values(), *self._telemetry):
+            while (item := sub.sub.poll()) is not None:
+                msg = item.msg
+                self.clock.observe(msg.timestamp)
+                field = VIEW_FIELDS.get(sub.topic)
+                if field is not None:
+                    setattr(self.view, field, msg)
+                    if field == "status":
+                        self._on_progress(self.progress.result)
+                else:
+                    self._bus_handlers[sub.topic](self, msg)
+
+    def _on_ack(self, ack: VehicleCommandAck) -> None:
+        answer = self.pending.answer(ack)
+        if answer is not None:
+            self._send(answer)
+
+    def _on_log(self, log: Any) -> None:
+        self._say(log.severity, log.text)  # also to a silent peer: what happened while it was away
+
+    def _on_parameter_update(self, msg: Any) -> None:
+        if self._active and self.parameters.loaded:
+            self.parameters.refresh()
+        else:
+            self.parameters.loaded = False  # listed afresh when a peer next asks
+
+    def _on_mission(self, msg: MissionMsg) -> None:
+        self._mission_msg = msg
+        self._refresh_download()
+
+    def _on_mission_result(self, result: MissionResult) -> None:
+        if self._verdict_id is not None and result.mission_id == self._verdict_id and self.transfer.judging:
+            self._verdict_id = None
+            self.transfer.verdict(result.valid)
+            if not result.valid:
+                self._say(M.MAV_SEVERITY_CRITICAL, f"Mission rejected: {result.reason}")
+        self._on_progress(result)
+        self._refresh_download()
+
+    def _on_progress(self, result: MissionResult | None) -> None:
+        nav_state = self.view.status.nav_state if self.view.status is not None else -1
+        for msg in self.progress.update(result, nav_state):
+            if self._active:
+                self._send(msg)
+
+    def _refresh_download(self) -> None:
+        """The mission a download gets: the last ``mission`` message, once the navigator has accepted it."""
+        result, msg = self.progress.result, self._mission_msg
+        key = (
+            result.mission_id if result is not None else None,
+            result is not None and result.valid,
+            msg.mission_id if msg is not None else None,
         )
-        if self._estimate_sample_us:
-            self.latency.add(monotonic_us() - self._estimate_sample_us)
-
-    def _send_target(self, t: convert.AttitudeTarget, now: int) -> None:
-        peer = self._autopilot or (0, 0)
-        self.link.mav.set_attitude_target_send(
-            (now // 1000) & 0xFFFFFFFF,
-            peer[0],
-            peer[1],
-            t.type_mask,
-            t.q,
-            t.body_roll_rate,
-            t.body_pitch_rate,
-            t.body_yaw_rate,
-            t.thrust,
-        )
-        self._last_target_us = now
-
-    def _refuse(self, why: str) -> None:
-        self._refused += 1
-        self.rt.rejected += 1
-        if self._refused % REFUSAL_LOG_EVERY == 1:
-            self.log.warning("%s (%d refused so far)", why, self._refused)
-
-    def _sample_us(self, remote_us: int, now: int) -> int:
-        """The autopilot's sample time on the stack's clock (the receive time until the clocks are synced);
-        never later than its arrival."""
-        ts = self.link.timesync
-        if not ts.synced or convert.is_unix_time(remote_us):
-            return now
-        return min(ts.to_local_us(remote_us), now)
-
-    def _on_message(self, msg: Any, now: int) -> None:
-        source = (msg.get_srcSystem(), msg.get_srcComponent())
-        if self.link.peer is None or source != self.link.peer:
+        if key == self._download_key:
             return
-        kind = msg.get_msgId()
-        self._stream_counts[kind] = self._stream_counts.get(kind, 0) + 1
-        handler = self._handlers.get(kind)
-        if handler is None:
+        self._download_key = key
+        if result is None or not result.valid or msg is None or msg.mission_id != result.mission_id:
+            self.transfer.items = []
             return
-        try:
-            handler(self, msg, now)
-        except convert.Refused as e:
-            self._refuse(str(e))
+        home = mission_from_message(msg).home
+        self.transfer.items = [
+            mission_items.mission_item_int(entry, seq, home, (0, 0), current=seq == result.seq_current)
+            for seq, entry in enumerate(msg.items)
+        ]
 
-    def _on_heartbeat(self, msg: Any, now: int) -> None:
-        if self._autopilot != self.link.peer:
-            self._autopilot = self.link.peer
-            self.log.info(
-                "autopilot: system %d component %d, MAV_AUTOPILOT %d, MAV_TYPE %d, mode %s",
-                *self.link.peer,
-                msg.autopilot,
-                msg.type,
-                px4_modes.describe(msg.custom_mode),
-            )
-        self.handoff.on_heartbeat(now, msg.base_mode, msg.custom_mode, msg.system_status)
-
-    def _on_highres_imu(self, msg: Any, now: int) -> None:
-        t = self._sample_us(msg.time_usec, now)
-        out, refused = convert.highres_imu(msg, t, self.device_id)
-        for why in refused:
-            self._refuse(why)
-        for topic, m in out:
-            self.publish(topic, m)
-            if self.own_estimate and topic == ORB_ID.sensor_gyro:
-                self._summarise_imu(m, out)
-
-    def _summarise_imu(self, gyro: Any, out: list[tuple[Topic, Any]]) -> None:
-        accel = next((m for topic, m in out if topic == ORB_ID.sensor_accel), None)
-        self.imu.add(gyro.timestamp_sample, (gyro.x, gyro.y, gyro.z), accel)
-        if gyro.timestamp_sample - self.imu.start_us >= STATUS_INTERVAL_US:
-            self.publish(ORB_ID.vehicle_imu_status, self.imu.status(gyro))
-
-    def _on_gps(self, msg: Any, now: int) -> None:
-        self.publish(ORB_ID.sensor_gps, convert.gps_raw_int(msg, self._sample_us(msg.time_usec, now), self.device_id))
-
-    def _on_battery(self, msg: Any, now: int) -> None:
-        self._battery_status_us = now
-        self.publish(ORB_ID.battery_status, convert.battery_status(msg))
-
-    def _on_sys_status(self, msg: Any, now: int) -> None:
-        self.handoff.on_sys_status(convert.prearm_ok(msg))
-        if now - self._battery_status_us > SYS_STATUS_BATTERY_AFTER_US:
-            self.publish(ORB_ID.battery_status, convert.sys_status_battery(msg))
-
-    def _on_attitude(self, msg: Any, now: int) -> None:
-        t = self._sample_us(msg.time_boot_ms * 1000, now)
-        attitude, rates = convert.attitude_quaternion(msg, t)
-        if self.own_estimate:
-            self.publish(ORB_ID.vehicle_angular_velocity, rates)
-        self.publish(ORB_ID.vehicle_attitude, attitude, self.estimate_instance)
-        if self.own_estimate and now - self._estimator_status_us >= STATUS_INTERVAL_US:
-            self._estimator_status_us = now
-            self.publish(
-                ORB_ID.estimator_status,
-                EstimatorStatus(
-                    attitude_valid=True, q=attitude.q, attitude_timestamp=now, angular_velocity_timestamp=now
-                ),
-            )
-
-    def _on_local_position(self, msg: Any, now: int) -> None:
-        lpos = convert.local_position_ned(msg, self._sample_us(msg.time_boot_ms * 1000, now), self.origin)
-        self.publish(ORB_ID.vehicle_local_position, lpos, self.estimate_instance)
-
-    def _on_odometry(self, msg: Any, now: int) -> None:
-        _, lpos = convert.odometry(msg, self._sample_us(msg.time_usec, now), self.origin)
-        self.publish(ORB_ID.vehicle_local_position, lpos, self.estimate_instance)
-
-    def _on_origin(self, msg: Any, now: int) -> None:
-        self.origin = convert.gps_global_origin(msg)
-
-    def _on_sim_state(self, msg: Any, now: int) -> None:
-        self.publish(ORB_ID.sim_groundtruth, self.truth.convert(msg, now))
-
-    def _on_statustext(self, msg: Any, now: int) -> None:
-        text = self.statustext.add(msg.text, getattr(msg, "id", 0), getattr(msg, "chunk_seq", 0))
-        if text is None:
-            return
-        self.handoff.on_statustext(now, msg.severity, text)
-        self.log.log(STATUSTEXT_LEVELS.get(msg.severity, logging.INFO), "Pixhawk: %s", text)
-
-    def _on_command_ack(self, msg: Any, now: int) -> None:
-        if msg.target_system not in (0, self.link.system_id) or msg.target_component not in (
-            0,
-            MAV_COMP_ID_ONBOARD_COMPUTER,
-        ):
-            return
-        self.handoff.on_ack(now, msg.command, msg.result)
-
-    _handlers: ClassVar[dict[int, Callable[[PixhawkAdapterModule, Any, int], None]]] = {
-        mavlink2.MAVLINK_MSG_ID_HEARTBEAT: _on_heartbeat,
-        mavlink2.MAVLINK_MSG_ID_HIGHRES_IMU: _on_highres_imu,
-        mavlink2.MAVLINK_MSG_ID_GPS_RAW_INT: _on_gps,
-        mavlink2.MAVLINK_MSG_ID_BATTERY_STATUS: _on_battery,
-        mavlink2.MAVLINK_MSG_ID_SYS_STATUS: _on_sys_status,
-        mavlink2.MAVLINK_MSG_ID_ATTITUDE_QUATERNION: _on_attitude,
-        mavlink2.MAVLINK_MSG_ID_LOCAL_POSITION_NED: _on_local_position,
-        mavlink2.MAVLINK_MSG_ID_ODOMETRY: _on_odometry,
-        mavlink2.MAVLINK_MSG_ID_GPS_GLOBAL_ORIGIN: _on_origin,
-        mavlink2.MAVLINK_MSG_ID_SIM_STATE: _on_sim_state,
-        mavlink2.MAVLINK_MSG_ID_STATUSTEXT: _on_statustext,
-        mavlink2.MAVLINK_MSG_ID_COMMAND_ACK: _on_command_ack,
+    _bus_handlers: ClassVar[dict[str, Callable[[MavlinkModule, Any], None]]] = {
+        ORB_ID.vehicle_command_ack: _on_ack,
+        ORB_ID.mavlink_log: _on_log,
+        ORB_ID.parameter_update: _on_parameter_update,
+        ORB_ID.mission: _on_mission,
+        ORB_ID.mission_result: _on_mission_result,
     }
 
-    # -- the 50 Hz run: hand-off, proof of life, streams, status ----------------------------------------
+    # -- the link -------------------------------------------------------------------------------------
+
+    def _on_link_message(self, msg: mavlink2.MAVLink_message, now: int) -> None:
+        source = (msg.get_srcSystem(), msg.get_srcComponent())
+        if source == self.own:
+            return
+        kind = msg.get_type()
+        self.presence.on_message(source, now, msg.type if kind == "HEARTBEAT" else None)
+        self._activate(now)
+        handler = self._link_handlers.get(kind)
+        if handler is None:
+            if kind not in ("HEARTBEAT", "TIMESYNC"):
+                self.counts["ignored"] += 1
+            return
+        try:
+            handler(self, msg, source, now)
+        except Exception:
+            self.counts["handler_errors"] += 1
+            self.rt.errors += 1
+            if self.counts["handler_errors"] % ERROR_LOG_EVERY == 1:
+                self.log.exception("%s from %d/%d: handling failed (dropped)", kind, *source)
+
+    def _on_command(self, msg: Any, source: tuple[int, int], now: int) -> None:
+        if not commands.addressed_to(msg.target_system, msg.target_component, self.own):
+            return
+        local = self._local_commands.get(msg.command)
+        if local is not None:
+            result, param, replies = local(self, msg.param1, msg.param2)
+            self._send(commands.command_ack(msg.command, result, source, param))
+            for reply in replies:  # after the acknowledgement, as the MAVLink command protocol has it
+                self._send(reply)
+            return
+        if msg.get_type() == "COMMAND_INT":
+            home = self.view.home
+            home_alt = home.alt if home is not None and home.valid_alt else math.nan
+            cmd = commands.from_command_int(msg, source, self.own, SUPPORTED_COMMANDS, home_alt)
+        else:
+            cmd = commands.from_command_long(msg, source, self.own, SUPPORTED_COMMANDS)
+        if isinstance(cmd, commands.Refusal):
+            self.counts["unsupported" if cmd.result == M.MAV_RESULT_UNSUPPORTED else "refused"] += 1
+            self._send(commands.command_ack(msg.command, cmd.result, source, cmd.param))
+            if cmd.reason:
+                self._say(M.MAV_SEVERITY_CRITICAL, cmd.reason)
+            return
+        self._forward(cmd, now)
+
+    def _forward(self, cmd: VehicleCommand, now: int) -> None:
+        if not self.pending.add(cmd, now):
+            self.counts["command_duplicates"] += 1
+            return
+        self.counts["commands"] += 1
+        self._publish(ORB_ID.vehicle_command, cmd)
+
+    def _set_message_interval(self, msg_id: float, interval_us: float) -> _Answer:
+        result = self.streams.set_interval(msg_id, interval_us)
+        return result, (2 if result == M.MAV_RESULT_DENIED else 0), []
+
+    def _get_message_interval(self, msg_id: float, unused: float) -> _Answer:
+        if not math.isfinite(msg_id) or msg_id != int(msg_id) or not 0 <= msg_id < 2**24:
+            return M.MAV_RESULT_DENIED, 1, []
+        interval = M.MAVLink_message_interval_message(int(msg_id), self.streams.interval_us(int(msg_id)))
+        return M.MAV_RESULT_ACCEPTED, 0, [interval]
+
+    def _request_message(self, msg_id: float, unused: float) -> _Answer:
+        if not math.isfinite(msg_id) or msg_id != int(msg_id):
+            return M.MAV_RESULT_DENIED, 1, []
+        build = self._builders.get(int(msg_id))
+        if build is None:
+            return M.MAV_RESULT_UNSUPPORTED, 0, []
+        message = build()
+        if message is None:
+            return M.MAV_RESULT_TEMPORARILY_REJECTED, 0, []  # provided, but there is no data for it yet
+        return M.MAV_RESULT_ACCEPTED, 0, [message]
+
+    def _request_capabilities(self, unused1: float, unused2: float) -> _Answer:
+        return M.MAV_RESULT_ACCEPTED, 0, [identity.autopilot_version(self.rt.node.vehicle, self.own[0])]
+
+    _local_commands: ClassVar[dict[int, Callable[[MavlinkModule, float, float], _Answer]]] = {
+        M.MAV_CMD_SET_MESSAGE_INTERVAL: _set_message_interval,
+        M.MAV_CMD_GET_MESSAGE_INTERVAL: _get_message_interval,
+        M.MAV_CMD_REQUEST_MESSAGE: _request_message,
+        M.MAV_CMD_REQUEST_AUTOPILOT_CAPABILITIES: _request_capabilities,
+    }
+
+    def _on_set_mode(self, msg: Any, source: tuple[int, int], now: int) -> None:
+        if msg.target_system == self.own[0]:
+            self.counts["commands"] += 1
+            self._publish(ORB_ID.vehicle_command, commands.from_set_mode(msg, source, self.own))
+
+    def _on_param_request_list(self, msg: Any, source: tuple[int, int], now: int) -> None:
+        self.parameters.on_request_list(msg)
+
+    def _on_param_request_read(self, msg: Any, source: tuple[int, int], now: int) -> None:
+        self.parameters.on_request_read(msg)
+
+    def _on_param_set(self, msg: Any, source: tuple[int, int], now: int) -> None:
+        reason = self.parameters.on_set(msg)
+        if reason:
+            self.counts["refused"] += 1
+            self._say(M.MAV_SEVERITY_ERROR, reason)
+
+    def _on_mission_message(self, msg: Any, source: tuple[int, int], now: int) -> None:
+        self.transfer.on_message(msg, source, now)
+
+    def _on_manual_control(self, msg: Any, source: tuple[int, int], now: int) -> None:
+        if msg.target != self.own[0]:
+            return
+        try:
+            sticks = manual_control(msg, self.clock.now())
+        except ValueError as e:
+            self._refuse(str(e))
+            return
+        self.manual.on_sticks(sticks, now)
+        self._publish(ORB_ID.manual_control_setpoint, sticks)
+
+    def _on_setpoint(self, msg: Any, source: tuple[int, int], now: int) -> None:
+        if msg.target_system != self.own[0]:
+            return
+        stamp = self.clock.now()
+        try:
+            if msg.get_type() == "SET_ATTITUDE_TARGET":
+                setpoint, mode = offboard.attitude_target(msg, stamp)
+            else:
+                lpos = self.view.local_position
+                heading = lpos.heading if lpos is not None else math.nan
+                setpoint, mode = offboard.position_target(msg, heading, stamp)
+        except offboard.Refused as e:
+            self._refuse(f"{msg.get_type()} refused: {e}")
+            return
+        self.relay.on_setpoint(setpoint, mode, now)
+
+    def _on_ping(self, msg: Any, source: tuple[int, int], now: int) -> None:
+        if msg.target_system == 0 and msg.target_component == 0:  # a request; an answer names its receiver
+            self._send(M.MAVLink_ping_message(msg.time_usec, msg.seq, *source))
+
+    def _refuse(self, why: str) -> None:
+        self.counts["refused"] += 1
+        self.rt.rejected += 1
+        if self.counts["refused"] % ERROR_LOG_EVERY == 1:
+            self.log.warning("%s (%d refused so far)", why, self.counts["refused"])
+
+    _link_handlers: ClassVar[dict[str, Callable[[MavlinkModule, Any, tuple[int, int], int], None]]] = {
+        "COMMAND_LONG": _on_command,
+        "COMMAND_INT": _on_command,
+        "SET_MODE": _on_set_mode,
+        "PARAM_REQUEST_LIST": _on_param_request_list,
+        "PARAM_REQUEST_READ": _on_param_request_read,
+        "PARAM_SET": _on_param_set,
+        **dict.fromkeys(MissionTransfer._handlers, _on_mission_message),
+        "MANUAL_CONTROL": _on_manual_control,
+        "SET_POSITION_TARGET_LOCAL_NED": _on_setpoint,
+        "SET_ATTITUDE_TARGET": _on_setpoint,
+        "PING": _on_ping,
+    }
+
+    # -- what is due ----------------------------------------------------------------------------------
+
+    def _activate(self, now: int) -> None:
+        """Read the telemetry topics while a peer uses the link, and only then."""
+        active = self.presence.active(now)
+        if active == self._active:
+            return
+        self._active = active
+        if active:
+            self.log.info("a peer uses the link: streaming")
+            self.streams.restart(now)
+            self._telemetry = [_Subscription(self.rt.node, topic, 4) for topic in TELEMETRY_TOPICS]
+            if not self.parameters.loaded:
+                self.parameters.refresh()
+        else:
+            self.log.info("no peer on the link for a while: streams stopped")
+            for sub in self._telemetry:
+                sub.close()
+            self._telemetry = []
+            for field in ("local_position", "estimator", "imu", "gps", "battery", "mag", "baro"):
+                setattr(self.view, field, None)
+
+    def _periodic(self, now: int) -> None:
+        self._activate(now)
+        flags = self.presence.telemetry_due(now)
+        if flags is not None:
+            status = TelemetryStatus(
+                type=TelemetryStatus.LINK_TYPE_UDP if self.endpoint.kind.startswith("udp") else 0,
+                heartbeat_type_gcs=flags[0],
+                heartbeat_type_onboard_controller=flags[1],
+            )
+            self._publish(ORB_ID.telemetry_status, status)
+        if self._active:
+            for msg_id in self.streams.due(now):
+                message = self._builders[msg_id]()
+                if message is not None:
+                    self._send(message)
+        self._missions(now)
+        for ack in self.pending.expired(now):
+            self.counts["command_timeouts"] += 1
+            self._send(ack)
+        self._parameters(now)
+        stamp = self.clock.now()
+        if stamp > 0:
+            in_offboard = self.view.status is not None and self.view.status.nav_state == NS.NAVIGATION_STATE_OFFBOARD
+            for topic, msg in self.relay.due(now, stamp, in_offboard):
+                self.publish(topic, msg)
+            sticks = self.manual.due(now, stamp)
+            if sticks is not None:
+                self.publish(ORB_ID.manual_control_setpoint, sticks)
+
+    def _missions(self, now: int) -> None:
+        self.transfer.tick(now)
+        out, actions = self.transfer.take()
+        for msg in out:
+            self._send(msg)
+        for action in actions:
+            if isinstance(action, Upload):
+                self._upload(action.items)
+            elif isinstance(action, Clear):
+                self._verdict_id = None
+                self._publish(ORB_ID.mission, mission_message(Mission(()), None, mission_id_for(Mission(()))))
+            elif isinstance(action, Refused):
+                self._say(M.MAV_SEVERITY_CRITICAL, f"Mission rejected: {action.reason}")
+            elif isinstance(action, SetCurrent):
+                cmd = VehicleCommand(
+                    command=VehicleCommand.VEHICLE_CMD_DO_SET_MISSION_CURRENT,
+                    param1=float(action.seq),
+                    target_system=self.own[0],
+                    target_component=self.own[1],
+                    source_system=action.source[0],
+                    source_component=action.source[1],
+                )
+                self._publish(ORB_ID.vehicle_command, cmd)
+        out, _ = self.transfer.take()  # a verdict given while converting
+        for msg in out:
+            self._send(msg)
+
+    def _mission_home(self) -> GeoPoint | None:
+        """The vehicle's home, where the mission's global positions are placed (failing that, where it is)."""
+        home = self.view.home
+        if home is not None and home.valid_hpos and home.valid_alt:
+            return GeoPoint(home.lat, home.lon, home.alt)
+        lpos = self.view.local_position
+        if lpos is not None and lpos.xy_valid and lpos.z_valid and math.isfinite(lpos.ref_lat):
+            lat, lon = MapProjection(lpos.ref_lat, lpos.ref_lon).reproject(lpos.x, lpos.y)
+            return GeoPoint(lat, lon, lpos.ref_alt - lpos.z)
+        return None
+
+    def _upload(self, items: list[Any]) -> None:
+        home = self._mission_home()
+        try:
+            converted = tuple(mission_items.item_from_mission_item_int(m, home) for m in items)
+        except mission_items.ItemRefused as e:
+            self.transfer.verdict(False, e.mission_result)
+            self._say(M.MAV_SEVERITY_CRITICAL, f"Mission rejected: {e}")
+            return
+        mission = Mission(converted, home, source=f"mavlink:{self.rt.name}")
+        self._verdict_id = mission_id_for(mission)
+        self._publish(ORB_ID.mission, mission_message(mission, home, self._verdict_id))
+
+    def _parameters(self, now: int) -> None:
+        for job in self.parameters.take_jobs():
+            future = self._param_worker.submit(self._run_param_job, job)
+            future.add_done_callback(lambda f, job=job: self._param_done(job, f))
+        while True:
+            try:
+                job, result = self._param_results.get_nowait()
+            except queue.Empty:
+                break
+            if isinstance(job, params.ListJob):
+                if isinstance(result, Exception):
+                    self.log.warning("listing the parameters failed: %s", result)
+                    self.parameters.on_list_failed()
+                else:
+                    self.parameters.on_list(result)
+            else:
+                reason = self.parameters.on_set_result(job.name, result)
+                if reason:
+                    self.counts["refused"] += 1
+                    self._say(M.MAV_SEVERITY_ERROR, reason)
+        elapsed = (now - self._last_service_us) * 1e-6
+        self._last_service_us = now
+        if self.parameters.sending():
+            self._param_budget = min(self._param_budget + elapsed * self._param_rate, self._param_rate * 0.1)
+            count = int(self._param_budget)
+            if count:
+                self._param_budget -= count
+                for msg in self.parameters.take(count):
+                    self._send(msg)
+        else:
+            self._param_budget = 1.0
+
+    def _run_param_job(self, job: params.ListJob | params.SetJob) -> Any:
+        if isinstance(job, params.ListJob):
+            return self._param_source.list()
+        try:
+            return self._param_source.set(job.name, job.value)
+        except ParamError as e:
+            return e
+
+    def _param_done(self, job: params.ListJob | params.SetJob, future: Any) -> None:
+        error = future.exception()
+        self._param_results.put((job, error if error is not None else future.result()))
+        self._wake()
+
+    # -- messages on request and in streams -----------------------------------------------------------
+
+    def _message_builders(self) -> dict[int, Callable[[], mavlink2.MAVLink_message | None]]:
+        view, now = self.view, self.clock.now
+
+        def sys_status() -> mavlink2.MAVLink_message:
+            c = self.link.counters
+            drop = 1.0 - c.quality if self.link.connected else 0.0
+            return telemetry.sys_status(view, now(), drop, c.crc_errors + c.parse_errors)
+
+        def of(build: Callable[[telemetry.VehicleView, int], mavlink2.MAVLink_message | None]) -> Callable[[], Any]:
+            return lambda: build(view, now())
+
+        return {
+            M.MAVLINK_MSG_ID_AUTOPILOT_VERSION: lambda: identity.autopilot_version(self.rt.node.vehicle, self.own[0]),
+            M.MAVLINK_MSG_ID_SYS_STATUS: sys_status,
+            M.MAVLINK_MSG_ID_EXTENDED_SYS_STATE: of(telemetry.extended_sys_state),
+            M.MAVLINK_MSG_ID_ATTITUDE: of(telemetry.attitude),
+            M.MAVLINK_MSG_ID_ATTITUDE_QUATERNION: of(telemetry.attitude_quaternion),
+            M.MAVLINK_MSG_ID_GLOBAL_POSITION_INT: of(telemetry.global_position_int),
+            M.MAVLINK_MSG_ID_LOCAL_POSITION_NED: of(telemetry.local_position_ned),
+            M.MAVLINK_MSG_ID_GPS_RAW_INT: of(telemetry.gps_raw_int),
+            M.MAVLINK_MSG_ID_HOME_POSITION: of(telemetry.home_position),
+            M.MAVLINK_MSG_ID_BATTERY_STATUS: of(telemetry.battery_status),
+            M.MAVLINK_MSG_ID_VFR_HUD: of(telemetry.vfr_hud),
+            M.MAVLINK_MSG_ID_MISSION_CURRENT: self.progress.current,
+        }
+
+    # -- the runtime's side ---------------------------------------------------------------------------
 
     def run(self, msg: None, dt: float) -> None:
-        armed = self.latest(ORB_ID.actuator_armed)
-        mode_set = any(
-            ack.command in MODE_COMMANDS and ack.result == VehicleCommandAck.VEHICLE_CMD_RESULT_ACCEPTED
-            for ack in self.take(ORB_ID.vehicle_command_ack)
-        )
-        with self._lock:
-            now = monotonic_us()
-            h = self.handoff
-            h.on_stack_armed(armed is not None and armed.armed)
-            if mode_set:
-                h.on_stack_mode_command()
-            for command in h.tick(now):
-                self._send_command(command)
-            if h.proof_of_life and now - self._last_target_us >= PROOF_OF_LIFE_US:
-                self._send_target(convert.IDLE_TARGET, now)
-            self._check_streams(now)
-            status = self._status(now)
-            events = list(h.events)
-            h.events.clear()
-        for event in events:
-            self.log.info("%s", event)
-        if status != self._published_status or now - self._status_us >= STATUS_PERIOD_US:
-            self._published_status = status
-            self._status_us = now
-            self.publish(ORB_ID.external_autopilot_status, status)
-
-    def _send_command(self, c: plant.CommandLong) -> None:
-        peer = self._autopilot or (0, 0)
-        self.link.mav.command_long_send(peer[0], peer[1], c.command, c.confirmation, *c.params)
-
-    def _check_streams(self, now: int) -> None:
-        """(Re)ask for each stream not arriving at half its rate, at most STREAM_REQUESTS times per connection."""
-        if not self.link.connected or self._autopilot is None:
-            self._stream_requests.clear()
-            return
-        if now - self._stream_check_us < STREAM_CHECK_US:
-            return
-        span_s = (now - self._stream_check_us) * 1e-6 if self._stream_check_us else 0.0
-        self._stream_check_us = now
-        for stream in self.streams:
-            received = self._stream_counts.get(stream.msg_id, 0)
-            slow = stream.hz > 0 and (span_s == 0.0 or received < 0.5 * stream.hz * span_s)
-            stopped = stream.hz == 0 and received > 0
-            asked = self._stream_requests.get(stream.msg_id, 0)
-            if (slow or stopped or asked == 0) and asked < STREAM_REQUESTS:
-                self._stream_requests[stream.msg_id] = asked + 1
-                self._send_command(plant.message_interval_command(stream))
-        self._stream_counts.clear()
-
-    def _status(self, now: int) -> ExternalAutopilotStatus:
-        h, v = self.handoff, self.handoff.view
-        peer = self._autopilot or (0, 0)
-        return ExternalAutopilotStatus(
-            timestamp=now,
-            connected=v.connected,
-            system_id=peer[0],
-            component_id=peer[1],
-            autopilot=mavlink2.MAV_AUTOPILOT_PX4 if self._autopilot else 0,
-            armed=v.armed,
-            custom_mode=v.custom_mode,
-            mode=px4_modes.describe(v.custom_mode) if v.heartbeat_us else "",
-            system_status=v.system_status,
-            armable=v.armable,
-            offboard=v.offboard,
-            in_control=h.in_control,
-            refusals=h.refusals,
-            refusal=h.refusal,
-            link_losses=self.link.counters.link_losses,
-            link_quality=self.link.counters.quality,
-        )
-
-    # -- heartbeat figures and shutdown -----------------------------------------------------------------
+        if not self._thread.is_alive():
+            raise RuntimeError("the link thread has stopped")
 
     def status(self) -> dict[str, float | int | str | bool]:
         with self._lock:
-            figures: dict[str, float | int | str | bool] = dict(msgspec.structs.asdict(self.link.counters))
-            ts = self.link.timesync
-            figures.update(
-                connected=self.link.connected,
-                control=self.handoff.control.value,
-                mode=px4_modes.describe(self.handoff.view.custom_mode),
-                timesync_synced=ts.synced,
-                timesync_offset_us=ts.offset_us,
-                timesync_skew=ts.skew,
-                timesync_rtt_us=ts.rtt_us,
-                setpoint_age_p50_us=self.latency.percentile(50.0),
-                setpoint_age_p99_us=self.latency.percentile(99.0),
-                refused=self._refused,
-                imu_rate_asked_hz=self.streams[0].hz,
-            )
-            if self.baud is not None:
-                figures["link_budget_bytes_s"] = plant.link_budget_bytes_per_s(self.baud)
-        return {k: v for k, v in figures.items() if not (isinstance(v, float) and math.isnan(v))}
+            c = self.link.counters
+            now = wall_clock_us()
+            figures: dict[str, float | int | str | bool] = {
+                "bytes_in": c.bytes_in,
+                "bytes_out": c.bytes_out,
+                "packets_in": c.packets_in,
+                "packets_out": c.packets_out,
+                "send_drops": c.send_drops,
+                "crc_errors": c.crc_errors,
+                "parse_errors": c.parse_errors,
+                "unknown_messages": c.unknown_messages,
+                "open_failures": c.open_failures,
+                "link_error": self.link.error or "",
+                "bus_in": sum(s.sub.received for s in (*self._subs.values(), *self._telemetry)),
+                "peers": sum(1 for p in self.presence.peers.values() if now - p.last_us < 5_000_000),
+                "gcs": self.presence.gcs(now),
+                "active": self._active,
+                "pending_commands": len(self.pending),
+                "params_served": len(self.parameters.entries),
+                "params_skipped": self.parameters.skipped,
+                "mission_uploads": self.transfer.uploads,
+                "mission_downloads": self.transfer.downloads,
+                "mission_refusals": self.transfer.refused,
+                "signature_refusals": signing.refused(self.link.mav),
+                **self.counts,
+            }
+        return figures
 
     def close(self) -> None:
         self._stop.set()
         self._wake()
         self._thread.join(timeout=2.0)
+        self._param_worker.shutdown(wait=False, cancel_futures=True)
         with self._lock:
             self.link.close()
+            for sub in (*self._subs.values(), *self._telemetry):
+                sub.close()
         os.close(self._wake_r)
         os.close(self._wake_w)

@@ -15,6 +15,7 @@ from collections.abc import Iterable, Mapping
 from enum import IntEnum
 from pathlib import Path
 
+from stack.airframe.model import VehicleModel
 from stack.attctl import attitude_control, rate_control
 from stack.commander import land_detector
 from stack.commander import state_machine as commander
@@ -25,7 +26,6 @@ from stack.params.param import Param, ParamError, ParamValue
 from stack.posctl import flight_mode_manager, pos_module
 from stack.sim import battery
 from stack.sim.module import SimulatorModule
-from stack.sim.vehicle import VehicleModel
 
 
 class OffboardLossAction(IntEnum):

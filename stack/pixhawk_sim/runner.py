@@ -22,6 +22,7 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from stack.airframe.model import VehicleModel
 from stack.mavlink.endpoint import DEFAULT_BAUD
 from stack.mavlink.link import MavlinkLink
 from stack.pixhawk_sim.control import ControlChannel
@@ -31,7 +32,6 @@ from stack.pixhawk_sim.telemetry import Message
 from stack.pixhawk_sim.vehicle import SimulatedPixhawk
 from stack.pixhawk_sim.wire import PhysicalLink, PtyUart, UdpLink, Wire
 from stack.sim.simulator import MAX_CATCH_UP_STEPS
-from stack.sim.vehicle import VehicleModel
 
 
 @dataclass

@@ -14,6 +14,7 @@ from typing import NamedTuple
 
 from pymavlink.dialects.v20 import common as mavlink
 
+from stack.airframe.model import VehicleModel
 from stack.commander.home import HomePosition
 from stack.commander.land_detector import LandDetectorInputs, LandDetectorState, MulticopterLandDetector
 from stack.commander.module import LAND_DETECTOR_PERIOD_US
@@ -26,7 +27,6 @@ from stack.sim.battery import BatteryModel, BatteryState
 from stack.sim.module import BATTERY_PERIOD_US
 from stack.sim.sensors import BaroSample, GpsSample, ImuSample, MagSample
 from stack.sim.simulator import GroundTruth, Simulator
-from stack.sim.vehicle import VehicleModel
 
 
 class Sample(NamedTuple):

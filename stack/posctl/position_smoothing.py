@@ -28,9 +28,8 @@ import math
 from dataclasses import dataclass
 
 from stack.mathlib.scalar import FLT_EPSILON
-from stack.mathlib.vector import Vec3
+from stack.mathlib.vector import Vec3, line_crossing_point
 from stack.params import catalogue
-from stack.posctl.l1_guidance import line_crossing_point
 from stack.posctl.velocity_smoothing import TrajectoryPoint, VelocitySmoothing3D
 
 Waypoints = tuple[Vec3, Vec3, Vec3]

@@ -78,27 +78,6 @@ def slipstream_speed(thrust: float, density: float, prop_radius: float) -> float
     return sqrt(2.0 * thrust / (density * math.pi * prop_radius * prop_radius))
 
 
-def propeller_thrust(
-    throttle: float, axial_speed: float, density: float, diameter: float, max_rpm: float,
-    coefficients: tuple[float, float, float],
-) -> float:
-    """Thrust (N) of a propeller with the advance-ratio model of PX4 SIH's ``Thruster`` (aero.hpp; UIUC
-    propeller database fits): n = rpm_max·√u / 60 rev/s, J = V/(n·D), T = max(C_T(J), 0)·ρ·n²·D⁴ with
-    C_T(J) = c0 + c1·J + c2·J² (no windmilling)."""
-    if throttle <= 0.0:
-        return 0.0
-    n = max_rpm * sqrt(min(throttle, 1.0)) / 60.0
-    if n <= 1e-4:
-        return 0.0
-    j = axial_speed / (n * diameter)
-    c0, c1, c2 = coefficients
-    ct = c0 + c1 * j + c2 * j * j
-    if ct <= 0.0:
-        return 0.0
-    d2 = diameter * diameter
-    return ct * density * n * n * d2 * d2
-
-
 def _sign(x: float) -> float:
     return (x > 0.0) - (x < 0.0)
 

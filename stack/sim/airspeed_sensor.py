@@ -14,10 +14,9 @@ import random
 from dataclasses import dataclass
 from typing import NamedTuple
 
-from stack.mathlib.atmosphere import ISA_GAS_CONSTANT_AIR, isa_pressure_pa, isa_temperature_k
+from stack.mathlib.atmosphere import AIR_DENSITY_SEA_LEVEL, ISA_GAS_CONSTANT_AIR, isa_pressure_pa, isa_temperature_k
 
 KELVIN_OFFSET = 273.15
-AIR_DENSITY_SEA_LEVEL = 1.225  # kg/m³, PX4 CONSTANTS_AIR_DENSITY_SEA_LEVEL_15C
 
 
 def air_density(altitude_msl: float) -> float:

@@ -35,14 +35,14 @@ import math
 from collections.abc import Sequence
 from typing import NamedTuple
 
+from stack.airframe.model import FIXEDWING_CONTROLS, FixedwingModel, propeller_thrust
 from stack.mathlib.quaternion import IDENTITY, Quat, from_euler, yaw
 from stack.mathlib.scalar import CONSTANTS_ONE_G
 from stack.mathlib.vector import ZERO3, Vec3
-from stack.sim.aero import AeroSegment, propeller_thrust, slipstream_speed
+from stack.sim.aero import AeroSegment, slipstream_speed
 from stack.sim.airspeed_sensor import air_density
 from stack.sim.physics import SIH_MAX_BODY_RATE
 from stack.sim.rigid_body import RigidBodyState
-from stack.sim.vehicle import FIXEDWING_CONTROLS, FixedwingModel
 
 _REST_TOLERANCE = 1e-12
 _REST_ITERATIONS = 50

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import math
 
+from stack.airframe.model import FixedwingModel, VehicleModel, load_vehicle
 from stack.commander.command_checks import addressed_to
 from stack.mathlib.vector import Vec3
 from stack.msg.fixedwing import Airspeed
@@ -30,7 +31,6 @@ from stack.sim.airspeed_sensor import AirspeedSample
 from stack.sim.battery import BatteryModel
 from stack.sim.sensors import BaroSample, GpsSample, ImuSample, MagSample
 from stack.sim.simulator import MAX_CATCH_UP_STEPS, Simulator
-from stack.sim.vehicle import FixedwingModel, VehicleModel, load_vehicle
 from stack.sim.wind import WindParams
 
 # Device ids as PX4's simulated drivers report them (SIH's IMU id; the others distinct).
@@ -48,7 +48,7 @@ class SimulatorModule(Module):
     DESCRIPTION = "Rigid-body simulator (PX4 SIH-like), multicopter or airplane: physics, sensors, ground truth"
     LOCKSTEP_COORDINATOR = True
     ARGS = (
-        Arg("vehicle", "sih_quad", "Vehicle model: a name in stack/sim/vehicles or a path to a model file"),
+        Arg("vehicle", "sih_quad", "Vehicle model: a name in stack/airframe/vehicles or a path to a model file"),
         Arg("imu_rate_hz", 250.0, "IMU rate = lockstep step rate (PX4 SITL IMU_INTEG_RATE)"),
         Arg("physics_rate_hz", 1000.0, "Physics step rate (a multicopter's RK4; for the SIH airplane 500 is enough)"),
         Arg("mag_rate_hz", 50.0),

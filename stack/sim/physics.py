@@ -3,7 +3,7 @@
 The model combines PX4 SIH (``simulator_sih``: linear thrust, linear drag and angular damping, rate
 clamp, ground handling) and RotorS (``gazebo_motor_model``: asymmetric first-order rotor-speed lag,
 quadratic thrust, reaction moment k_M·thrust, rotor H-force and rolling moment on the air velocity
-at each hub). Which terms are active follows from the :class:`~stack.sim.vehicle.VehicleModel`.
+at each hub). Which terms are active follows from the :class:`~stack.airframe.model.VehicleModel`.
 
 Frames and units follow PX4: position and velocity NED (m, m/s) about the home point, attitude a
 Hamilton quaternion rotating body FRD to NED, body rates FRD (rad/s). The ground is the plane
@@ -38,6 +38,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 
+from stack.airframe.model import VehicleModel
 from stack.mathlib.quaternion import (
     IDENTITY,
     Quat,
@@ -50,7 +51,6 @@ from stack.mathlib.quaternion import (
 from stack.mathlib.scalar import CONSTANTS_ONE_G
 from stack.mathlib.vector import ZERO3, Vec3
 from stack.sim.rigid_body import RigidBodyState
-from stack.sim.vehicle import VehicleModel
 
 SIH_MAX_BODY_RATE = 6.0 * math.pi
 GROUND_TIP_RATE = 3.0  # rad/s: how fast a vehicle resting tilted on the ground tips onto its legs

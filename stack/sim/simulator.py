@@ -26,6 +26,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import NamedTuple
 
+from stack.airframe.model import FixedwingModel, VehicleModel, load_vehicle
 from stack.mathlib.geo import MapProjection
 from stack.mathlib.quaternion import IDENTITY, Quat, rotate_inv
 from stack.mathlib.vector import ZERO3, Vec3
@@ -47,7 +48,6 @@ from stack.sim.sensors import (
     MagParams,
     MagSample,
 )
-from stack.sim.vehicle import FixedwingModel, VehicleModel, load_vehicle
 from stack.sim.wind import WindModel, WindParams
 
 SIH_HOME: tuple[float, float, float] = (

@@ -406,7 +406,7 @@ class _Loader:
     def _airframe_params(self, airframe: str) -> dict[str, object]:
         if not airframe:
             return {}
-        from stack.sim.vehicle import load_vehicle
+        from stack.airframe.model import load_vehicle
 
         try:
             model = load_vehicle(airframe)

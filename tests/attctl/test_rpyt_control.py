@@ -5,11 +5,11 @@ import math
 
 import pytest
 
+from stack.airframe.model import load_vehicle
 from stack.attctl.rotors_joy import RollPitchYawrateThrust
 from stack.attctl.rpyt_control import RollPitchYawrateThrustControl, allocation_matrix, zxy, zxy_angles
 from stack.attctl.rpyt_setpoints import command_from_attitude, thrust_newtons
 from stack.mathlib import quaternion as quat
-from stack.sim.vehicle import load_vehicle
 
 G = 9.80665
 # The rotor data as RotorS gives it (rotors_description/urdf/<mav>.xacro): k_f [N/(rad/s)²], ω_max [rad/s], k_m

@@ -10,7 +10,7 @@ from stack.commander import commands as C
 from stack.commander.control_chain import CHAIN, FW_CHAIN
 from stack.commander.modes import VALID_NAV_STATES_MASK, control_mode, vehicle_type_from_mav_type
 from stack.commander.state_machine import Commander
-from stack.gcs.module import MavlinkModule
+from stack.mavlink.module import MavlinkModule
 from stack.msg.system import VehicleStatus as NS
 from tests.commander.helpers import make_clock
 

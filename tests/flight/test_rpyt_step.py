@@ -15,9 +15,9 @@ from collections.abc import Callable
 
 import pytest
 
+from stack.airframe.model import load_vehicle
 from stack.params import catalogue
 from stack.scenario.catalogue import scenarios
-from stack.sim.vehicle import load_vehicle
 from stack.supervisor.profile import load_profile
 from tests.flight.flights import InProcessFlight
 

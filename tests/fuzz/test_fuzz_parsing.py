@@ -10,7 +10,7 @@ from hypothesis import strategies as st
 from pymavlink.dialects.v20 import common as mavlink2
 
 from stack.commander.state_machine import Commander
-from stack.gcs.commands import Refusal, from_command_int, from_command_long, from_set_mode
+from stack.mavlink.commands import Refusal, from_command_int, from_command_long, from_set_mode
 from stack.mission.items import MissionError
 from stack.mission.plan import parse_plan
 from stack.mission.waypoints import parse_waypoint_list, parse_wpl

@@ -7,10 +7,10 @@ import math
 
 from hypothesis import given
 
+from stack.airframe.model import load_vehicle
 from stack.attctl.rotors_joy import JoyMapping, RollPitchYawrateThrust
 from stack.attctl.rpyt_control import RollPitchYawrateThrustControl
 from stack.attctl.rpyt_setpoints import command_from_attitude
-from stack.sim.vehicle import load_vehicle
 from tests.fuzz.strategies import FUZZ, all_finite, nasty_float, quat, vec3
 
 FIREFLY = load_vehicle("firefly")

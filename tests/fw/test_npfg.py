@@ -3,10 +3,10 @@ import math
 
 import pytest
 
+from stack.fw.l1_guidance import L1Guidance
 from stack.fw.npfg import NPFG, NpfgParams
 from stack.mathlib.scalar import CONSTANTS_ONE_G as G
 from stack.params import catalogue
-from stack.posctl.l1_guidance import L1Guidance
 
 DEFAULTS = NpfgParams.from_params({n: catalogue.get(n).default for n in NpfgParams.PARAM_NAMES})
 A = (0.0, 0.0)

@@ -6,8 +6,8 @@ import math
 
 import pytest
 
-from stack.gcs.mission_items import item_from_mission_item_int, mission_item_int
 from stack.launch_files import find_launch_file
+from stack.mavlink.mission_items import item_from_mission_item_int, mission_item_int
 from stack.mission.items import (
     MAV_CMD_NAV_LOITER_TURNS,
     MAV_CMD_NAV_LOITER_UNLIM,

@@ -9,6 +9,7 @@ from collections import Counter
 import pytest
 from pymavlink.dialects.v20 import common as mavlink
 
+from stack.airframe.model import load_vehicle
 from stack.mathlib import quaternion as quat
 from stack.mathlib.geo import MapProjection
 from stack.mavlink import px4_modes
@@ -19,7 +20,6 @@ from stack.pixhawk_sim.streams import ONBOARD_RATES_HZ, StreamScheduler
 from stack.pixhawk_sim.telemetry import Telemetry
 from stack.pixhawk_sim.vehicle import SimulatedPixhawk
 from stack.sim.sensors import ImuSample
-from stack.sim.vehicle import load_vehicle
 
 GCS = (255, 190)
 

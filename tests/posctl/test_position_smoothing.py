@@ -3,7 +3,7 @@ import random
 
 import pytest
 
-from stack.posctl.l1_guidance import line_crossing_point
+from stack.mathlib.vector import line_crossing_point
 from stack.posctl.position_smoothing import (
     PositionSmoothing,
     PositionSmoothingParams,

@@ -7,9 +7,9 @@ from pathlib import Path
 
 import pytest
 
+from stack.airframe.model import VEHICLES_DIR, FixedwingModel, load_vehicle
 from stack.mathlib.quaternion import from_euler, to_euler
 from stack.sim.fixedwing_physics import FixedwingPhysics, level_trim, rest_pose
-from stack.sim.vehicle import VEHICLES_DIR, FixedwingModel, load_vehicle
 
 HOME_ALT = 489.4  # SIH_LOC_H0
 DT = 0.002  # 500 Hz

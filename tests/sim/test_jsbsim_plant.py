@@ -9,13 +9,13 @@ from pathlib import Path
 
 import pytest
 
+from stack.airframe.model import load_vehicle
 from stack.mathlib import quaternion as quat
-from stack.mathlib.atmosphere import isa_pressure_pa
-from stack.sim.airspeed_sensor import AIR_DENSITY_SEA_LEVEL, AirspeedSample, air_density
+from stack.mathlib.atmosphere import AIR_DENSITY_SEA_LEVEL, isa_pressure_pa
+from stack.sim.airspeed_sensor import AirspeedSample, air_density
 from stack.sim.jsbsim_plant import FT, JsbsimPlant
 from stack.sim.sensors import BaroSample, GpsSample, ImuParams, ImuSample, MagParams, MagSample
 from stack.sim.simulator import SIH_HOME
-from stack.sim.vehicle import load_vehicle
 from stack.sim.wind import WindParams
 
 G = 9.80665

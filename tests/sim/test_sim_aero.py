@@ -7,15 +7,10 @@ import math
 
 import pytest
 
-from stack.sim.aero import (
-    AeroSegment,
-    flat_plate_stall_angle,
-    lift_slope,
-    propeller_thrust,
-    slipstream_speed,
-)
+from stack.airframe.model import propeller_thrust
+from stack.mathlib.atmosphere import AIR_DENSITY_SEA_LEVEL as RHO
+from stack.sim.aero import AeroSegment, flat_plate_stall_angle, lift_slope, slipstream_speed
 
-RHO = 1.225
 DEG = math.pi / 180.0
 
 

@@ -6,10 +6,10 @@ import math
 
 import pytest
 
+from stack.airframe.model import VehicleModel, load_vehicle
 from stack.mathlib.quaternion import angle_between, from_euler, from_rotation_vector, mul, to_euler
 from stack.mathlib.vector import cross
 from stack.sim.physics import GROUND_TIP_RATE, MulticopterPhysics
-from stack.sim.vehicle import VehicleModel, load_vehicle
 
 G = 9.80665
 DT = 0.001

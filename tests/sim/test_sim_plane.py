@@ -7,12 +7,13 @@ from typing import Any
 
 import pytest
 
+from stack.mathlib.atmosphere import AIR_DENSITY_SEA_LEVEL
 from stack.mathlib.quaternion import from_euler, rotate_inv
 from stack.msg.actuators import ActuatorOutputs
 from stack.msg.system import ActuatorArmed
 from stack.params.store import ParamStore
 from stack.runtime.spec import ModuleSpec, resolve_args
-from stack.sim.airspeed_sensor import AIR_DENSITY_SEA_LEVEL, AirspeedParams, AirspeedSample, air_density
+from stack.sim.airspeed_sensor import AirspeedParams, AirspeedSample, air_density
 from stack.sim.fixedwing_physics import FixedwingPhysics, level_trim
 from stack.sim.module import AIRSPEED_DEVICE_ID, SimulatorModule
 from stack.sim.simulator import SIH_HOME, Simulator

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from stack.sim.vehicle import VEHICLES_DIR, available_vehicles, load_vehicle
+from stack.airframe.model import VEHICLES_DIR, available_vehicles, load_vehicle
 
 ALL_VEHICLES = ["sih_quad", "hummingbird", "pelican", "firefly"]  # the multicopters
 

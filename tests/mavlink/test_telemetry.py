@@ -5,9 +5,9 @@ import math
 import pytest
 from pymavlink.dialects.v20 import common as M
 
-from stack.gcs import telemetry as T
 from stack.mathlib import quaternion as quat
 from stack.mathlib.geo import MapProjection
+from stack.mavlink import telemetry as T
 from stack.msg.estimation import EstimatorStatus, VehicleImuStatus, VehicleLocalPosition
 from stack.msg.sensors import SensorBaro, SensorGps, SensorMag
 from stack.msg.system import BatteryStatus, HomePosition, VehicleControlMode, VehicleLandDetected

@@ -5,9 +5,9 @@ import math
 import pytest
 from pymavlink.dialects.v20 import common as M
 
-from stack.gcs import offboard
-from stack.gcs.manual import LOSS_US, ManualInput, Refused, manual_control
-from stack.gcs.offboard import REPUBLISH_US
+from stack.mavlink import offboard
+from stack.mavlink.manual import LOSS_US, ManualInput, Refused, manual_control
+from stack.mavlink.offboard import REPUBLISH_US
 from stack.msg.setpoints import TrajectorySetpoint, VehicleAttitudeSetpoint, VehicleRatesSetpoint
 
 NAN = math.nan

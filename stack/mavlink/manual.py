@@ -14,7 +14,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from stack.gcs.offboard import REPUBLISH_US
+from stack.mavlink.offboard import REPUBLISH_US
 from stack.msg.setpoints import ManualControlSetpoint
 from stack.params import catalogue
 

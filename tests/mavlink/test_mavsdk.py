@@ -23,7 +23,7 @@ from mavsdk.plugins.mission import MissionItem, MissionPlan
 from mavsdk.plugins.telemetry import FlightMode
 
 from stack.mathlib.geo import MapProjection
-from tests.gcs.peer import Link, links_profile, udp_port
+from tests.mavlink.peer import Link, links_profile, udp_port
 from tests.support.harness import RunningStack, wait_no_processes
 
 T = TypeVar("T")

@@ -1,4 +1,4 @@
-"""The stack's parameters as a :class:`~stack.gcs.params.ParamSource`: the parameter client every tool uses.
+"""The stack's parameters as a :class:`~stack.mavlink.params.ParamSource`: the parameter client every tool uses.
 
 :mod:`stack.params.client` lists each parameter once with the modules that read it, and sets it in all of them or
 in none, as ``stack param`` does. MAVLink knows INT32 and REAL32 only: booleans and integers go as INT32.
@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import zenoh
 
-from stack.gcs.params import ParamNumber
+from stack.mavlink.params import ParamNumber
 from stack.params import client
 from stack.params.param import MAV_PARAM_TYPE_INT32, ParamError
 

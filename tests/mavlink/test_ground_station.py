@@ -24,15 +24,15 @@ from pathlib import Path
 import pytest
 from pymavlink.dialects.v20 import common as M
 
-from stack.gcs.params import decode
 from stack.mavlink import px4_modes
-from stack.mavlink.convert import StatustextAssembler
 from stack.mavlink.framing import FrameParser
+from stack.mavlink.params import decode
 from stack.mavlink.px4_modes import Px4Mode
 from stack.mission.transfer import MAX_ITEMS
 from stack.params import catalogue
+from stack.pixhawk.convert import StatustextAssembler
 from stack.supervisor.profile import DEFAULT_PROFILE, load_profile
-from tests.gcs.peer import Link, Peer, links_profile, udp_port
+from tests.mavlink.peer import Link, Peer, links_profile, udp_port
 from tests.support.harness import RunningStack, eventually, wait_no_processes
 
 KEY = bytes(range(32))

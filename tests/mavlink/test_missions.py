@@ -5,10 +5,10 @@ import math
 import pytest
 from pymavlink.dialects.v20 import common as M
 
-from stack.gcs.mission_items import ItemRefused, item_from_mission_item_int, mission_item_int
-from stack.gcs.mission_progress import MissionProgress, mission_state
-from stack.gcs.mission_transfer import RETRY_US, Clear, MissionTransfer, Refused, SetCurrent, Upload
 from stack.mathlib.geo import MapProjection
+from stack.mavlink.mission_items import ItemRefused, item_from_mission_item_int, mission_item_int
+from stack.mavlink.mission_progress import MissionProgress, mission_state
+from stack.mavlink.mission_transfer import RETRY_US, Clear, MissionTransfer, Refused, SetCurrent, Upload
 from stack.mission.items import GeoPoint, Mission
 from stack.mission.transfer import MAX_ITEMS, mission_from_message, mission_message
 from stack.msg.navigation import MissionResult

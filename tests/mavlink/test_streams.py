@@ -4,7 +4,7 @@ import math
 
 from pymavlink.dialects.v20 import common as M
 
-from stack.gcs.streams import MIN_INTERVAL_US, NORMAL_RATES_HZ, StreamScheduler
+from stack.mavlink.streams import MIN_INTERVAL_US, NORMAL_RATES_HZ, StreamScheduler
 
 ATTITUDE = M.MAVLINK_MSG_ID_ATTITUDE
 

@@ -1,4 +1,4 @@
-"""MAVLink ↔ stack message mapping (stack.mavlink.convert): units, frames, validity flags, refusals.
+"""MAVLink ↔ stack message mapping (stack.pixhawk.convert): units, frames, validity flags, refusals.
 
 Inbound messages go through a real MAVLink 2 encode and parse first, so field names and wire types are
 pymavlink's own.
@@ -12,10 +12,10 @@ from pymavlink.dialects.v20 import common as mavlink2
 from stack.mathlib import quaternion as quat
 from stack.mathlib.geo import MapProjection
 from stack.mathlib.scalar import CONSTANTS_ONE_G
-from stack.mavlink import convert
 from stack.msg.registry import ORB_ID
 from stack.msg.setpoints import VehicleAttitudeSetpoint, VehicleRatesSetpoint
 from stack.msg.system import BatteryStatus
+from stack.pixhawk import convert
 
 MAV = mavlink2.MAVLink(None, srcSystem=1, srcComponent=1)
 ALL_IMU = 0x1FFF

@@ -2,14 +2,14 @@
 
 A text longer than STATUSTEXT's 50 characters goes out in chunks sharing a non-zero ``id`` and numbered by
 ``chunk_seq``; the last chunk is shorter than 50 characters (an empty one follows a text of an exact multiple of
-50), as ``common.xml`` defines it and :class:`stack.mavlink.convert.StatustextAssembler` reads it.
+50), as ``common.xml`` defines it and :class:`stack.pixhawk.convert.StatustextAssembler` reads it.
 """
 
 from __future__ import annotations
 
 from pymavlink.dialects.v20 import common as mavlink2
 
-from stack.mavlink.convert import STATUSTEXT_CHUNK
+from stack.pixhawk.convert import STATUSTEXT_CHUNK
 
 MAX_CHUNKS = 8
 """Longer texts are cut (400 characters)."""

@@ -7,11 +7,11 @@ import pytest
 from pymavlink.dialects.v20 import common as M
 
 from stack.bus.ports import free_port
-from stack.gcs import signing
-from stack.gcs.statustext import StatustextSender
-from stack.mavlink.convert import StatustextAssembler
+from stack.mavlink import signing
 from stack.mavlink.framing import FrameParser
+from stack.mavlink.statustext import StatustextSender
 from stack.mavlink.transport import UdpPeerTransport
+from stack.pixhawk.convert import StatustextAssembler
 
 KEY = bytes(range(32))
 

@@ -2,8 +2,9 @@ import math
 
 import pytest
 
+from stack.fw.l1_guidance import L1Guidance, crosstrack_error
 from stack.mathlib.scalar import CONSTANTS_ONE_G as G
-from stack.posctl.l1_guidance import L1Guidance, crosstrack_error, line_crossing_point
+from stack.mathlib.vector import line_crossing_point
 
 A = (0.0, 0.0)
 B = (100.0, 0.0)

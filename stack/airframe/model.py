@@ -1,4 +1,4 @@
-"""Vehicle models as data: loading and validating ``stack/sim/vehicles/*.toml``.
+"""Vehicle models as data: loading and validating ``stack/airframe/vehicles/*.toml``.
 
 A file's ``type`` says what it describes: ``"multicopter"`` (the default) or ``"fixedwing"`` (see
 :class:`FixedwingModel`, the PX4 SIH airplane's figures: aerodynamic segments, thruster, landing gear).
@@ -36,13 +36,12 @@ from pathlib import Path
 from types import MappingProxyType
 from typing import TYPE_CHECKING, Any
 
+from stack.mathlib.atmosphere import AIR_DENSITY_SEA_LEVEL
 from stack.mathlib.scalar import CONSTANTS_ONE_G
 from stack.mathlib.vector import Vec3
-from stack.sim.aero import propeller_thrust
-from stack.sim.airspeed_sensor import AIR_DENSITY_SEA_LEVEL
 
 if TYPE_CHECKING:
-    from stack.sim.jsbsim_plant import JsbsimAircraft
+    from stack.airframe.jsbsim import JsbsimAircraft
 
 VEHICLES_DIR = Path(__file__).with_name("vehicles")
 
@@ -148,10 +147,31 @@ class VehicleModel:
         return self.motor.command_for_thrust_fraction(self.hover_thrust_fraction)
 
 
+def propeller_thrust(
+    throttle: float, axial_speed: float, density: float, diameter: float, max_rpm: float,
+    coefficients: tuple[float, float, float],
+) -> float:
+    """Thrust (N) of a propeller with the advance-ratio model of PX4 SIH's ``Thruster`` (aero.hpp; UIUC
+    propeller database fits): n = rpm_max·√u / 60 rev/s, J = V/(n·D), T = max(C_T(J), 0)·ρ·n²·D⁴ with
+    C_T(J) = c0 + c1·J + c2·J² (no windmilling)."""
+    if throttle <= 0.0:
+        return 0.0
+    n = max_rpm * math.sqrt(min(throttle, 1.0)) / 60.0
+    if n <= 1e-4:
+        return 0.0
+    j = axial_speed / (n * diameter)
+    c0, c1, c2 = coefficients
+    ct = c0 + c1 * j + c2 * j * j
+    if ct <= 0.0:
+        return 0.0
+    d2 = diameter * diameter
+    return ct * density * n * n * d2 * d2
+
+
 @dataclass(frozen=True, slots=True)
 class Propeller:
     """PX4 SIH's advance-ratio propeller (SIH_F_DIA_INCH, SIH_F_RPM_MAX, SIH_F_CT0..2): see
-    :func:`stack.sim.aero.propeller_thrust`. ``diameter`` in m."""
+    :func:`propeller_thrust`. ``diameter`` in m."""
 
     diameter: float
     max_rpm: float
@@ -266,12 +286,12 @@ class FixedwingModel:
 
 
 def available_vehicles() -> list[str]:
-    """Names of the vehicle files shipped in ``stack/sim/vehicles``."""
+    """Names of the vehicle files shipped in ``stack/airframe/vehicles``."""
     return sorted(p.stem for p in VEHICLES_DIR.glob("*.toml"))
 
 
 def vehicle_path(name_or_path: str | Path) -> Path:
-    """The file of a vehicle name in ``stack/sim/vehicles``, or the path given."""
+    """The file of a vehicle name in ``stack/airframe/vehicles``, or the path given."""
     text = str(name_or_path)
     if isinstance(name_or_path, Path) or text.endswith(".toml") or "/" in text or "\\" in text:
         return Path(name_or_path)
@@ -303,7 +323,7 @@ def load_vehicle(name_or_path: str | Path) -> VehicleModel | FixedwingModel | Js
     if kind == "fixedwing":
         return _Parser(path).fixedwing(data)
     if kind == "jsbsim":
-        from stack.sim.jsbsim_plant import JsbsimParser  # JSBSim loads only for a vehicle that needs it
+        from stack.airframe.jsbsim import JsbsimParser
 
         return JsbsimParser(path).aircraft(data)
     if kind != "multicopter":

@@ -2,15 +2,11 @@
 
 Follows ``src/lib/l1/ECL_L1_Pos_Controller.cpp`` (Park, Deyst, How, "A New Nonlinear Guidance Logic for
 Trajectory Tracking", AIAA GNC 2004, with PX4's extensions), but on 2-D local (north, east) metres instead
-of lat/lon. The
-guidance picks a reference point at distance L1 = (damping·period/π)·groundspeed ahead on the
-path and commands the lateral acceleration a = K_L1·v²/L1·sin η (K_L1 = 4·damping²) where η is the
-angle between the ground velocity and the line to that point; positive a turns right. For a
-multicopter this acceleration is a cross-track correction applied perpendicular to the ground
-velocity (``lateral_acceleration_ne``); a fixed-wing would fly the bank angle atan(a/g).
-
-Also holds ``line_crossing_point``, the "L1-style" point on a leg that PX4's ``PositionSmoothing``
-steers to when the vehicle is off the line.
+of lat/lon. The guidance picks a reference point at distance L1 = (damping·period/π)·groundspeed ahead on the
+path and commands the lateral acceleration a = K_L1·v²/L1·sin η (K_L1 = 4·damping²) where η is the angle
+between the ground velocity and the line to that point; positive a turns right. fw_pos_control flies it as
+the bank angle atan(a/g) (``roll_setpoint``); ``lateral_acceleration_ne`` gives it as a vector perpendicular
+to the ground velocity.
 """
 
 from __future__ import annotations
@@ -18,7 +14,6 @@ from __future__ import annotations
 import math
 
 from stack.mathlib.scalar import CONSTANTS_ONE_G, FLT_EPSILON, wrap_pi
-from stack.mathlib.vector import Vec3
 
 Vec2 = tuple[float, float]
 
@@ -48,24 +43,6 @@ def crosstrack_error(a: Vec2, b: Vec2, position: Vec2) -> float:
     """Signed distance of position from the line A→B [m], positive to the right of the track."""
     ab = _unit((b[0] - a[0], b[1] - a[1]))
     return _cross(ab, (position[0] - a[0], position[1] - a[1]))
-
-
-def line_crossing_point(a: Vec3, b: Vec3, position: Vec3, distance: float) -> Vec3:
-    """Point on the line A→B at ``distance`` from position, ahead along A→B (PX4 ``_getL1Point``).
-
-    The foot of the perpendicular from position, moved √(distance² − d⊥²) toward B; the foot
-    itself when the line is farther than ``distance``. A zero-length leg returns A.
-    """
-    ux, uy, uz = b[0] - a[0], b[1] - a[1], b[2] - a[2]
-    n = math.sqrt(ux * ux + uy * uy + uz * uz)
-    if n > 0.0:
-        ux, uy, uz = ux / n, uy / n, uz / n
-    along = (position[0] - a[0]) * ux + (position[1] - a[1]) * uy + (position[2] - a[2]) * uz
-    cx, cy, cz = a[0] + ux * along, a[1] + uy * along, a[2] + uz * along
-    dx, dy, dz = cx - position[0], cy - position[1], cz - position[2]
-    cross_track = math.sqrt(dx * dx + dy * dy + dz * dz)
-    ahead = math.sqrt(distance * distance - cross_track * cross_track) if distance > cross_track else 0.0
-    return (cx + ahead * ux, cy + ahead * uy, cz + ahead * uz)
 
 
 class L1Guidance:

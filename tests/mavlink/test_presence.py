@@ -4,8 +4,8 @@ import itertools
 
 from pymavlink.dialects.v20 import common as M
 
-from stack.gcs.clock import StampClock
-from stack.gcs.presence import HEARTBEAT_TIMEOUT_US, PEER_TIMEOUT_US, TELEMETRY_PERIOD_US, Presence
+from stack.mavlink.clock import StampClock
+from stack.mavlink.presence import HEARTBEAT_TIMEOUT_US, PEER_TIMEOUT_US, TELEMETRY_PERIOD_US, Presence
 
 OWN = (1, 1)
 GCS = (255, 190)

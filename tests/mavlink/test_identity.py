@@ -4,8 +4,8 @@ import pytest
 from pymavlink.dialects.v20 import common as M
 
 from stack.commander.modes import MODES
-from stack.gcs.identity import CAPABILITIES, autopilot_version, heartbeat, software_version
 from stack.mavlink import px4_modes
+from stack.mavlink.identity import CAPABILITIES, autopilot_version, heartbeat, software_version
 from stack.mavlink.inspect import firmware
 from stack.msg.system import VehicleStatus as NS
 from stack.record.provenance import git_commit

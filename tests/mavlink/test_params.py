@@ -6,7 +6,7 @@ import struct
 import pytest
 from pymavlink.dialects.v20 import common as M
 
-from stack.gcs.params import INT32, REAL32, ListJob, ParamProtocol, SetJob, decode, encode, float32_decimal
+from stack.mavlink.params import INT32, REAL32, ListJob, ParamProtocol, SetJob, decode, encode, float32_decimal
 from stack.params import catalogue
 from stack.params.catalogue import CATALOGUE
 from stack.params.param import ParamError

@@ -18,7 +18,7 @@ from typing import Any
 
 from pymavlink.dialects.v20 import common as mavlink2
 
-from stack.gcs import signing
+from stack.mavlink import signing
 from stack.mavlink.framing import FrameParser
 from tests.support.harness import REPO, udp_port, write_profile
 

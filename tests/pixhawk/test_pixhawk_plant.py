@@ -1,11 +1,12 @@
-"""What the pixhawk module decides (stack.mavlink.plant): stream rates, command transactions, the hand-off."""
+"""What the pixhawk module decides (stack.pixhawk.plant): stream rates, command transactions, the hand-off."""
 
 import pytest
 from pymavlink.dialects.v20 import common as mavlink2
 
-from stack.mavlink import plant, px4_modes
-from stack.mavlink.plant import Control, Handoff
+from stack.mavlink import px4_modes
 from stack.mavlink.px4_modes import Px4Mode
+from stack.pixhawk import plant
+from stack.pixhawk.plant import Control, Handoff
 
 ARMED = mavlink2.MAV_MODE_FLAG_SAFETY_ARMED | mavlink2.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED
 DISARMED = mavlink2.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED

@@ -6,7 +6,7 @@ import pytest
 from pymavlink.dialects.v20 import common as M
 
 from stack.commander.state_machine import Commander
-from stack.gcs.commands import (
+from stack.mavlink.commands import (
     INT32_MAX,
     PendingCommands,
     Refusal,
