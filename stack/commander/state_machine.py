@@ -70,6 +70,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Mapping
+from dataclasses import replace
 from enum import IntEnum
 from typing import NamedTuple
 
@@ -337,17 +338,7 @@ class Commander:
         self._disarm_preflight_us = round(float(p["COM_DISARM_PRFLT"]) * 1e6)
         self._failsafe.set_params(p)
         self._geofence.set_params(p)
-        self._health = HealthParams(
-            sys_has_baro=bool(p["SYS_HAS_BARO"]),
-            sys_has_mag=bool(p["SYS_HAS_MAG"]),
-            sys_has_gps=bool(p["SYS_HAS_GPS"]),
-            com_arm_wo_gps=bool(p["COM_ARM_WO_GPS"]),
-            com_pos_fs_eph=float(p["COM_POS_FS_EPH"]),
-            com_ext_ap=bool(p["COM_EXT_AP"]),
-            vehicle_type=self.vehicle_type,
-            sys_has_num_aspd=bool(p["SYS_HAS_NUM_ASPD"]),
-            fw_airspd_max=float(p["FW_AIRSPD_MAX"]),
-        )
+        self._health = replace(HealthParams.from_params(p), vehicle_type=self.vehicle_type)
         self._take_vehicle_type()
 
     def _take_vehicle_type(self) -> None:
@@ -361,7 +352,7 @@ class Commander:
             return
         self.vehicle_type = vehicle_type
         self._failsafe.vehicle_type = vehicle_type
-        self._health.vehicle_type = vehicle_type
+        self._health = replace(self._health, vehicle_type=vehicle_type)
         self.chain.use(FW_CHAIN if vehicle_type == FIXED_WING else CHAIN)
         self._preflight_checked = None
 

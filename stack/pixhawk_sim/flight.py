@@ -39,8 +39,7 @@ from stack.mixer.output import MotorOutput
 from stack.pixhawk_sim.offboard import OffboardSetpoint
 from stack.posctl import flight_task
 from stack.posctl.flight_mode_manager import FlightModeManager, NavigatorInputs
-from stack.posctl.pos_module import control_params
-from stack.posctl.position_control import PositionControl, failsafe_setpoint
+from stack.posctl.position_control import PositionControl, PositionControlParams, failsafe_setpoint
 
 NAN3: Vec3 = (math.nan, math.nan, math.nan)
 ZERO3: Vec3 = (0.0, 0.0, 0.0)
@@ -85,7 +84,7 @@ class FlightControl:
         self.yaw_filter = YawTorqueLowPass(float(params["MC_YAW_TQ_CUTOFF"]))
         self.attitude_control = AttitudeControl(params)
         self.navigator = FlightModeManager(params)
-        self.position_control = PositionControl(control_params(params))
+        self.position_control = PositionControl(PositionControlParams.from_params(params))
         self.velocity_derivative = VelocityDerivative(float(params["MPC_VELD_LP"]))
         self.allocator = ControlAllocator.from_params(params)
         self.output = MotorOutput(self.allocator.num_motors, params)
