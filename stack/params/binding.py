@@ -36,6 +36,7 @@ from stack.params import catalogue
 from stack.params.param import Param
 
 _SCALARS: dict[str, type] = {"bool": bool, "int": int, "float": float}
+_A: dict[type, str] = {bool: "a bool", int: "an int", float: "a float"}
 
 
 class Values(Protocol):
@@ -92,7 +93,7 @@ class ParamSet:
                 raise TypeError(f"{cls.__qualname__}.{attr}: {name}'s default is the catalogue's; write none")
             if kind is not p.type:
                 raise TypeError(
-                    f"{cls.__qualname__}.{attr}: {name} is a {p.type.__name__} in the catalogue, "
+                    f"{cls.__qualname__}.{attr}: {name} is {_A[p.type]} in the catalogue, "
                     f"annotated {getattr(annotation, '__name__', annotation)}"
                 )
             setattr(cls, attr, p.default)

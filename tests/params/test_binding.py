@@ -84,7 +84,7 @@ def test_no_other_dataclass_restates_a_catalogue_default():
 
 
 def test_a_name_the_catalogue_does_not_hold_is_refused_when_the_class_is_defined():
-    with pytest.raises(ParamError, match="unknown parameter 'MPC_THR_HOVR'.*MPC_THR_HOVER"):
+    with pytest.raises(ParamError, match=r"unknown parameter 'MPC_THR_HOVR'.*MPC_THR_HOVER"):
 
         class Misspelt(ParamSet):
             mpc_thr_hovr: float
