@@ -21,7 +21,8 @@ may be something else:
 
 What an algorithm computes from its parameters (a unit conversion, a product) is a property of the class.
 
-:func:`combine` joins parameter definitions (a module's PARAMS from its algorithms'), each name once.
+:func:`combine` joins parameter definitions (a module's PARAMS from its algorithms'), each name once;
+:func:`with_defaults` gives the values of a family of parameters indexed at run time (CA_ROTOR<i>_*).
 """
 
 from __future__ import annotations
@@ -57,6 +58,12 @@ def combine(*groups: Iterable[Param]) -> tuple[Param, ...]:
             if first is not p and first != p:
                 raise ValueError(f"parameter {p.name} is defined twice, differently")
     return tuple(seen.values())
+
+
+def with_defaults(params: Iterable[Param], values: Values) -> dict[str, object]:
+    """The values of ``params`` by name: ``values``' where it has one, else the definition's default. For a family
+    of parameters indexed at run time (rotor ``i``'s CA_ROTOR<i>_*), which a ParamSet's fields cannot name."""
+    return {p.name: values[p.name] if p.name in values else p.default for p in params}
 
 
 @dataclass_transform(frozen_default=True, field_specifiers=(dataclasses.field,))
