@@ -30,7 +30,7 @@ from __future__ import annotations
 import dataclasses
 import inspect
 import sys
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping
 from typing import Any, ClassVar, Protocol, Self, dataclass_transform
 
 from stack.params import catalogue
@@ -60,10 +60,10 @@ def combine(*groups: Iterable[Param]) -> tuple[Param, ...]:
     return tuple(seen.values())
 
 
-def with_defaults(params: Iterable[Param], values: Values) -> dict[str, object]:
+def with_defaults(params: Iterable[Param], values: Mapping[str, object]) -> dict[str, object]:
     """The values of ``params`` by name: ``values``' where it has one, else the definition's default. For a family
     of parameters indexed at run time (rotor ``i``'s CA_ROTOR<i>_*), which a ParamSet's fields cannot name."""
-    return {p.name: values[p.name] if p.name in values else p.default for p in params}
+    return {p.name: values.get(p.name, p.default) for p in params}
 
 
 @dataclass_transform(frozen_default=True, field_specifiers=(dataclasses.field,))

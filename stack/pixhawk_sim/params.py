@@ -86,7 +86,7 @@ PARAMS: tuple[Param, ...] = _unique(
     (
         OWN_PARAMS,
         OFFBOARD_PARAMS,
-        (p for p in commander.OWN_PARAMS if p.name in _COMMANDER_NAMES),
+        (p for p in commander.PARAMS if p.name in _COMMANDER_NAMES),
         (p for p in SimulatorModule.PARAMS if p.name in _SIMULATOR_NAMES),
         GYRO_PARAMS,
         rate_control.PARAMS,
