@@ -28,19 +28,11 @@ from stack.msg.estimation import VehicleAttitude
 from stack.msg.setpoints import RollPitchYawrateThrustSetpoint, VehicleAttitudeSetpoint, VehicleRatesSetpoint
 from stack.msg.system import VehicleControlMode
 from stack.params import ca, catalogue
-from stack.params.param import Param
+from stack.params.binding import combine
 from stack.runtime.module import Module, Trigger
 from stack.runtime.priority import NAV_AND_CONTROLLERS
 
 _NO_MODE = VehicleControlMode()
-
-
-def _unique(*groups: tuple[Param, ...]) -> tuple[Param, ...]:
-    seen: dict[str, Param] = {}
-    for group in groups:
-        for p in group:
-            seen.setdefault(p.name, p)
-    return tuple(seen.values())
 
 
 class MulticopterAttitudeControl(Module):
@@ -49,7 +41,7 @@ class MulticopterAttitudeControl(Module):
     DESCRIPTION = "Attitude controller (PX4 mc_att_control): attitude setpoint → body-rate setpoint"
     TRIGGER = Trigger("vehicle_attitude")
     DT_RANGE = (0.0002, 0.02)
-    PARAMS = _unique(
+    PARAMS = combine(
         attitude_control.PARAMS,
         input_shaping.PARAMS,
         stabilized.PARAMS,

@@ -19,6 +19,7 @@ from stack.estimator.imu_summary import STATUS_INTERVAL_US, ImuSummary
 from stack.msg.estimation import EstimatorStatus, VehicleAngularVelocity, VehicleAttitude
 from stack.msg.sensors import SensorAccel, SensorGyro
 from stack.params import catalogue
+from stack.params.binding import combine
 from stack.runtime.module import TRIGGER_BACKLOG, Module, Trigger
 from stack.runtime.priority import INS
 
@@ -33,7 +34,7 @@ class AttitudeEstimatorModule(Module):
     DESCRIPTION = "Quaternion complementary filter (PX4 attitude_estimator_q) and gyro filtering"
     TRIGGER = Trigger("sensor_gyro", every=True)
     DT_RANGE = (0.00001, 0.02)
-    PARAMS = ATTITUDE_PARAMS + GYRO_PARAMS + COMPENSATION_PARAMS
+    PARAMS = combine(ATTITUDE_PARAMS, GYRO_PARAMS, COMPENSATION_PARAMS)
 
     def __init__(self, rt) -> None:
         super().__init__(rt)

@@ -29,12 +29,12 @@ from stack.mixer.allocation import (
 )
 from stack.mixer.effectiveness import rotor_effectiveness
 from stack.params import ca
-from stack.params.binding import with_defaults
+from stack.params.binding import combine, with_defaults
 from stack.params.ca import MAX_ROTORS, MAX_SURFACES, SURFACE_TYPES_WITHOUT_TORQUE
 from stack.params.param import Param
 
 PARAMS: tuple[Param, ...] = ca.SURFACE_PARAMS
-_GEOMETRY: tuple[Param, ...] = ca.ROTOR_PARAMS + ca.SURFACE_PARAMS
+_GEOMETRY: tuple[Param, ...] = combine(ca.ROTOR_PARAMS, ca.SURFACE_PARAMS)
 
 FORWARD = (1.0, 0.0, 0.0)
 """A fixed-wing motor's thrust axis (body +x)."""

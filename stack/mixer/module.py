@@ -24,6 +24,7 @@ from stack.msg.actuators import MOTOR_SLOTS, OUTPUT_SLOTS, ActuatorMotors, Actua
 from stack.msg.fixedwing import SERVO_SLOTS, ActuatorServos
 from stack.msg.setpoints import VehicleTorqueSetpoint
 from stack.params import ca
+from stack.params.binding import combine
 from stack.runtime.module import Module, Trigger
 from stack.runtime.priority import RATE_CTRL
 
@@ -34,7 +35,7 @@ class ControlAllocatorModule(Module):
     DESCRIPTION = "Control allocation (PX4 control_allocator) and motor and servo outputs"
     TRIGGER = Trigger("vehicle_torque_setpoint")
     DT_RANGE = (0.0002, 0.02)
-    PARAMS = effectiveness.PARAMS + allocation.PARAMS + output.PARAMS + ca.AIRFRAME_PARAMS + fixedwing.PARAMS
+    PARAMS = combine(effectiveness.PARAMS, allocation.PARAMS, output.PARAMS, ca.AIRFRAME_PARAMS, fixedwing.PARAMS)
 
     def __init__(self, rt) -> None:
         super().__init__(rt)
