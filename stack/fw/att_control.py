@@ -252,10 +252,8 @@ class FixedwingAttitudeController:
     Non-finite inputs are refused (the call returns None and ``nonfinite_inputs`` counts them); a NaN airspeed
     means no valid airspeed."""
 
-    __slots__ = ("_acro_max", "_airspeed_max", "_airspeed_min", "_airspeed_stall", "_airspeed_trim",
-                 "_pitch_rate_max_neg", "_pitch_rate_max_pos", "_roll_rate_max", "_scale_enabled", "_tc_pitch",
-                 "_tc_roll", "_wheel_enabled", "_yaw_euler_rate", "_yaw_rate_max", "nonfinite_inputs", "pitch",
-                 "roll", "wheel", "yaw")
+    __slots__ = ("_acro_max", "_p", "_pitch_rate_max_neg", "_pitch_rate_max_pos", "_roll_rate_max", "_wheel_enabled",
+                 "_yaw_euler_rate", "_yaw_rate_max", "nonfinite_inputs", "pitch", "roll", "wheel", "yaw")
 
     def __init__(self, params: Mapping[str, object] | None = None) -> None:
         self.roll = RateLoop()
@@ -267,14 +265,7 @@ class FixedwingAttitudeController:
         self.set_params(params or {})
 
     def set_params(self, params: Mapping[str, object]) -> None:
-        p = FwAttControlParams.from_params(params)
-        self._airspeed_min = p.fw_airspd_min
-        self._airspeed_trim = p.fw_airspd_trim
-        self._airspeed_max = p.fw_airspd_max
-        self._airspeed_stall = p.fw_airspd_stall
-        self._scale_enabled = p.fw_arsp_scale_en
-        self._tc_roll = p.fw_r_tc
-        self._tc_pitch = p.fw_p_tc
+        self._p = p = FwAttControlParams.from_params(params)
         self._roll_rate_max = math.radians(p.fw_r_rmax)
         self._pitch_rate_max_pos = math.radians(p.fw_p_rmax_pos)
         self._pitch_rate_max_neg = math.radians(p.fw_p_rmax_neg)
@@ -301,14 +292,15 @@ class FixedwingAttitudeController:
 
     def airspeed(self, calibrated_airspeed: float) -> tuple[float, float]:
         """(The airspeed the loops use [m/s], the scaling s) for a measured calibrated airspeed (NaN: none)."""
-        v = controller_airspeed(calibrated_airspeed, self._airspeed_trim)
-        return v, airspeed_scaler(v, self._airspeed_trim, self._airspeed_stall, self._airspeed_max, self._scale_enabled)
+        p = self._p
+        v = controller_airspeed(calibrated_airspeed, p.fw_airspd_trim)
+        return v, airspeed_scaler(v, p.fw_airspd_trim, p.fw_airspd_stall, p.fw_airspd_max, p.fw_arsp_scale_en)
 
     def _lock_integrator(self, calibrated_airspeed: float, dt: float, landed: bool) -> bool:
         """Whether this step holds the integrators; landed, they restart and stay at zero."""
         if landed:
             self.reset_integrals()
-        slow_below = INTEGRATOR_AIRSPEED_FRACTION * self._airspeed_min
+        slow_below = INTEGRATOR_AIRSPEED_FRACTION * self._p.fw_airspd_min
         slow = math.isfinite(calibrated_airspeed) and calibrated_airspeed < slow_below
         return landed or dt > INTEGRATOR_LOCK_DT or slow
 
@@ -324,13 +316,13 @@ class FixedwingAttitudeController:
         roll, pitch, yaw = quat.to_euler(q)
         airspeed, scaler = self.airspeed(calibrated_airspeed)
         lock = self._lock_integrator(calibrated_airspeed, dt, landed)
-        roll_rate = (target.roll - roll) / self._tc_roll
-        pitch_rate = (target.pitch - pitch) / self._tc_pitch
+        roll_rate = (target.roll - roll) / self._p.fw_r_tc
+        pitch_rate = (target.pitch - pitch) / self._p.fw_p_tc
         wheel = target.wheel and self._wheel_enabled
         if wheel:
             self.yaw.reset_integrator()
         else:
-            turn = coordinated_turn_rate(roll, pitch, target.roll, airspeed, self._airspeed_stall)
+            turn = coordinated_turn_rate(roll, pitch, target.roll, airspeed, self._p.fw_airspd_stall)
             if turn is not None:
                 self._yaw_euler_rate = turn
             self.wheel.reset_integrator()
@@ -341,7 +333,7 @@ class FixedwingAttitudeController:
         torque_y = self.pitch.update(pitch_sp, rates[1], scaler, dt, lock)
         if wheel:
             yaw_sp = self.wheel.rate_setpoint(target.yaw, yaw)
-            torque_z = self.wheel.update(yaw_sp, rates[2], groundspeed, self._airspeed_stall, dt, lock)
+            torque_z = self.wheel.update(yaw_sp, rates[2], groundspeed, self._p.fw_airspd_stall, dt, lock)
         else:
             yaw_sp = constrain(body[2], -self._yaw_rate_max, self._yaw_rate_max)
             torque_z = self.yaw.update(yaw_sp, rates[2], scaler, dt, lock)

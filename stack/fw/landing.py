@@ -28,7 +28,7 @@ import math
 from typing import NamedTuple
 
 from stack.mathlib.scalar import constrain
-from stack.params.binding import ParamSet
+from stack.params.binding import ParamSet, radians_of
 
 Vec2 = tuple[float, float]
 
@@ -47,50 +47,26 @@ class LandingParams(ParamSet):
     into its radian limits unconverted; here it is converted)."""
 
     fw_lnd_ang: float
+    slope_angle = radians_of("fw_lnd_ang")
     fw_lnd_flalt: float
     fw_lnd_fl_time: float
     fw_lnd_fl_sink: float
     fw_lnd_td_time: float
     fw_lnd_hhdist: float
     fw_lnd_fl_pmin: float
+    flare_pitch_min = radians_of("fw_lnd_fl_pmin")
     fw_lnd_fl_pmax: float
+    flare_pitch_max = radians_of("fw_lnd_fl_pmax")
     fw_lnd_airspd_sc: float
     fw_airspd_min: float
     fw_p_lim_min: float
+    pitch_min = radians_of("fw_p_lim_min")
     fw_p_lim_max: float
+    pitch_max = radians_of("fw_p_lim_max")
     rwto_psp: float
+    runway_pitch = radians_of("rwto_psp")
     fw_thr_max: float
     fw_thr_idle: float
-
-    @property
-    def slope_angle(self) -> float:
-        """FW_LND_ANG [rad]"""
-        return math.radians(self.fw_lnd_ang)
-
-    @property
-    def flare_pitch_min(self) -> float:
-        """FW_LND_FL_PMIN [rad]"""
-        return math.radians(self.fw_lnd_fl_pmin)
-
-    @property
-    def flare_pitch_max(self) -> float:
-        """FW_LND_FL_PMAX [rad]"""
-        return math.radians(self.fw_lnd_fl_pmax)
-
-    @property
-    def pitch_min(self) -> float:
-        """FW_P_LIM_MIN [rad]: where the flare's lower pitch limit starts."""
-        return math.radians(self.fw_p_lim_min)
-
-    @property
-    def pitch_max(self) -> float:
-        """FW_P_LIM_MAX [rad]"""
-        return math.radians(self.fw_p_lim_max)
-
-    @property
-    def runway_pitch(self) -> float:
-        """RWTO_PSP [rad]"""
-        return math.radians(self.rwto_psp)
 
     @property
     def airspeed(self) -> float:

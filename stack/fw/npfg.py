@@ -32,7 +32,7 @@ from __future__ import annotations
 import math
 
 from stack.mathlib.scalar import CONSTANTS_ONE_G, constrain
-from stack.params.binding import ParamSet
+from stack.params.binding import ParamSet, radians_of
 
 Vec2 = tuple[float, float]
 
@@ -85,19 +85,11 @@ class NpfgParams(ParamSet):
     fw_npfg_period_sf: float
     fw_gnd_spd_min: float
     fw_r_lim: float
+    roll_limit = radians_of("fw_r_lim")
     fw_l1_r_slew_max: float
+    roll_slew_rate = radians_of("fw_l1_r_slew_max")
     fw_airspd_trim: float
     fw_airspd_max: float
-
-    @property
-    def roll_limit(self) -> float:
-        """FW_R_LIM [rad]"""
-        return math.radians(self.fw_r_lim)
-
-    @property
-    def roll_slew_rate(self) -> float:
-        """FW_L1_R_SLEW_MAX [rad/s], 0 = off"""
-        return math.radians(self.fw_l1_r_slew_max)
 
 
 class NPFG:

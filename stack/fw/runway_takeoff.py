@@ -22,7 +22,7 @@ import math
 from enum import IntEnum
 
 from stack.mathlib.scalar import constrain
-from stack.params.binding import ParamSet
+from stack.params.binding import ParamSet, radians_of
 
 Vec2 = tuple[float, float]
 
@@ -49,27 +49,15 @@ class RunwayTakeoffParams(ParamSet):
     rwto_nav_alt: float
     rwto_max_thr: float
     rwto_psp: float
+    runway_pitch = radians_of("rwto_psp")
     rwto_max_pitch: float
+    max_pitch = radians_of("rwto_max_pitch")
     rwto_max_roll: float
+    max_roll = radians_of("rwto_max_roll")
     rwto_airspd_scl: float
     rwto_ramp_time: float
     fw_airspd_min: float
     fw_clmbout_diff: float
-
-    @property
-    def runway_pitch(self) -> float:
-        """RWTO_PSP [rad]"""
-        return math.radians(self.rwto_psp)
-
-    @property
-    def max_pitch(self) -> float:
-        """RWTO_MAX_PITCH [rad]"""
-        return math.radians(self.rwto_max_pitch)
-
-    @property
-    def max_roll(self) -> float:
-        """RWTO_MAX_ROLL [rad]"""
-        return math.radians(self.rwto_max_roll)
 
     @property
     def rotation_airspeed(self) -> float:

@@ -19,7 +19,8 @@ may be something else:
 * another ParamSet, whose parameters are read from the same values (its definitions join ``PARAMS``);
 * a value of the algorithm's own that no parameter gives, with an explicit default (``vehicle_type: int = 1``).
 
-What an algorithm computes from its parameters (a unit conversion, a product) is a property of the class.
+What an algorithm computes from its parameters is a property of the class; a field in degrees read in radians is
+``roll_limit = radians_of("fw_r_lim")``.
 
 :func:`combine` joins parameter definitions (a module's PARAMS from its algorithms'), each name once;
 :func:`with_defaults` gives the values of a family of parameters indexed at run time (CA_ROTOR<i>_*).
@@ -29,6 +30,7 @@ from __future__ import annotations
 
 import dataclasses
 import inspect
+import math
 import sys
 from collections.abc import Iterable, Mapping
 from typing import Any, ClassVar, Protocol, Self, dataclass_transform
@@ -121,6 +123,25 @@ class ParamSet:
         for attr, kind in cls._NESTED_FIELDS:
             kwargs[attr] = kind.from_params(values)
         return cls(**kwargs)
+
+
+class _Radians:
+    """A ParamSet's field in degrees (as the catalogue gives it), read in radians."""
+
+    def __init__(self, field: str) -> None:
+        self.field = field
+
+    def __set_name__(self, owner: type, name: str) -> None:
+        if self.field not in inspect.get_annotations(owner):
+            raise AttributeError(f"{owner.__qualname__}.{name}: {owner.__qualname__} has no field {self.field}")
+
+    def __get__(self, obj: object, owner: type | None = None) -> Any:
+        return self if obj is None else math.radians(getattr(obj, self.field))
+
+
+def radians_of(field: str) -> Any:
+    """A read-only attribute of a ParamSet: its field ``field`` (degrees) in radians."""
+    return _Radians(field)
 
 
 def _resolve(cls: type, annotation: object) -> object:

@@ -59,20 +59,11 @@ _AUTO_NAV_STATES = (
 )
 _YAW_ALONG_MIN_SPEED = 0.5
 
-class FlightModeManagerParams(ParamSet):
-    """What the manager reads itself, and the trajectories' (the return's, the mission's and the manual modes' take
-    theirs from the same values)."""
 
-    mpc_xy_cruise: float
-    mpc_xy_vel_max: float
-    mpc_z_v_auto_up: float
-    mpc_z_v_auto_dn: float
-    mpc_acc_hor: float
-    mpc_acc_up_max: float
-    mpc_acc_down_max: float
-    mpc_jerk_auto: float
-    mpc_xy_err_max: float
-    mpc_xy_traj_p: float
+class FlightModeManagerParams(ParamSet):
+    """What the manager reads itself, and its position smoothing's (the return, the mission and the manual modes
+    take theirs from the same values)."""
+
     mpc_tko_speed: float
     mis_takeoff_alt: float
     mpc_land_speed: float
@@ -90,7 +81,6 @@ class FlightModeManagerParams(ParamSet):
     mpc_z_vel_max_dn: float
     gf_max_hor_dist: float
     gf_max_ver_dist: float
-    nav_acc_rad: float
     smoothing: PositionSmoothingParams
 
 
@@ -231,7 +221,7 @@ class FlightModeManager:
         if nav == NS.NAVIGATION_STATE_AUTO_TAKEOFF:
             self._start_takeoff(inp)
         elif nav == NS.NAVIGATION_STATE_AUTO_LOITER:
-            self._target = stopping_point(state.position, state.velocity, self._p.mpc_acc_hor)
+            self._target = self._stopping_point(state)
             self._take_reposition(inp)
         elif nav == NS.NAVIGATION_STATE_AUTO_MISSION:
             self._start_mission(inp)
@@ -304,10 +294,10 @@ class FlightModeManager:
         px, py = state.position[0], state.position[1]
         if mode == YAW_TOWARD_WAYPOINT:
             dx, dy = target[0] - px, target[1] - py
-            return math.atan2(dy, dx) if math.hypot(dx, dy) > self._p.nav_acc_rad else NAN
+            return math.atan2(dy, dx) if math.hypot(dx, dy) > self._p.smoothing.nav_acc_rad else NAN
         if mode in (YAW_TOWARD_HOME, YAW_AWAY_FROM_HOME) and home is not None:
             dx, dy = home.x - px, home.y - py
-            if math.hypot(dx, dy) <= self._p.nav_acc_rad:
+            if math.hypot(dx, dy) <= self._p.smoothing.nav_acc_rad:
                 return NAN
             bearing = math.atan2(dy, dx)
             return bearing if mode == YAW_TOWARD_HOME else bearing + math.pi
@@ -375,7 +365,7 @@ class FlightModeManager:
     def _mission(self, inp: NavigatorInputs, dt: float) -> TrajectoryCommand:
         state = inp.state
         if self.tracker is None or self.mission is None:
-            return self._fly_to(state, stopping_point(state.position, state.velocity, self._p.mpc_acc_hor), dt)
+            return self._fly_to(state, self._stopping_point(state), dt)
         if self._mission_returning:
             return self._return(inp, dt)
         progress = self.tracker.update(state.now_us, state.position, state.yaw, state.landed)
@@ -430,7 +420,7 @@ class FlightModeManager:
     def _return(self, inp: NavigatorInputs, dt: float) -> TrajectoryCommand:
         state, home = inp.state, inp.home
         if home is None:
-            return self._fly_to(state, stopping_point(state.position, state.velocity, self._p.mpc_acc_hor), dt)
+            return self._fly_to(state, self._stopping_point(state), dt)
         sp = self.rtl.update(state.now_us, state.position, state.landed)
         if sp.phase in (RtlPhase.LAND, RtlPhase.LANDED):
             return self._land(state, home, dt, yaw=home.yaw, at=(home.x, home.y))
@@ -447,7 +437,7 @@ class FlightModeManager:
     ) -> TrajectoryCommand:
         """Land at ``at`` (default: where the vehicle can stop), chosen when the landing starts."""
         if self._land_xy is None:
-            stop = stopping_point(state.position, state.velocity, self._p.mpc_acc_hor)
+            stop = self._stopping_point(state)
             self._land_xy = at or (stop[0], stop[1])
             self._land_vz = _descent_rate(state)
         # The trajectory keeps its own height; the descent is a velocity setpoint below it.
@@ -461,15 +451,18 @@ class FlightModeManager:
             jerk=(point.jerk[0], point.jerk[1], NAN),
         )
 
+    def _stopping_point(self, state: VehicleState) -> Vec3:
+        return stopping_point(state.position, state.velocity, self._p.smoothing.mpc_acc_hor)
+
     def _land_speed(self, state: VehicleState, home: HomePosition | None) -> float:
         p = self._p
         if home is None or not math.isfinite(state.position[2]):
             return p.mpc_land_speed
         height = home.z - state.position[2]
-        return interpolate(height, p.mpc_land_alt2, p.mpc_land_alt1, p.mpc_land_speed, p.mpc_z_v_auto_dn)
+        return interpolate(height, p.mpc_land_alt2, p.mpc_land_alt1, p.mpc_land_speed, p.smoothing.mpc_z_v_auto_dn)
 
     def _slew_descent(self, target: float, dt: float) -> float:
-        step = self._p.mpc_acc_down_max * dt
+        step = self._p.smoothing.mpc_acc_down_max * dt
         return max(self._land_vz - step, min(self._land_vz + step, target))
 
     def _descend(self, state: VehicleState, home: HomePosition | None, dt: float) -> TrajectoryCommand:
