@@ -83,7 +83,7 @@ class ParamSet:
         nested: list[tuple[str, type[ParamSet]]] = []
         groups: list[tuple[Param, ...]] = []
         for attr, annotation in inspect.get_annotations(cls).items():
-            if isinstance(annotation, str) and annotation.startswith("ClassVar"):
+            if str(annotation).startswith(("ClassVar", "typing.ClassVar")):
                 continue
             name = attr.upper()
             own_default = attr in cls.__dict__
@@ -108,6 +108,9 @@ class ParamSet:
             setattr(cls, attr, p.default)
             scalars.append((attr, name, p.type))
             groups.append((p,))
+        for attr, value in vars(cls).items():
+            if isinstance(value, _Radians) and value.field not in inspect.get_annotations(cls):
+                raise AttributeError(f"{cls.__qualname__}.{attr}: {cls.__qualname__} has no field {value.field}")
         cls._SCALAR_FIELDS = tuple(scalars)
         cls._NESTED_FIELDS = tuple(nested)
         cls.PARAMS = combine(*groups)
@@ -130,10 +133,6 @@ class _Radians:
 
     def __init__(self, field: str) -> None:
         self.field = field
-
-    def __set_name__(self, owner: type, name: str) -> None:
-        if self.field not in inspect.get_annotations(owner):
-            raise AttributeError(f"{owner.__qualname__}.{name}: {owner.__qualname__} has no field {self.field}")
 
     def __get__(self, obj: object, owner: type | None = None) -> Any:
         return self if obj is None else math.radians(getattr(obj, self.field))

@@ -3,13 +3,15 @@ catalogue's defaults, no class restates one, and a name the catalogue does not h
 
 import dataclasses
 import importlib
+import inspect
+import math
 import pkgutil
 
 import pytest
 
 import stack
 from stack.params import catalogue
-from stack.params.binding import ParamSet, combine
+from stack.params.binding import ParamSet, combine, radians_of, with_defaults
 from stack.params.catalogue import CATALOGUE
 from stack.params.param import Param, ParamError
 
@@ -83,6 +85,31 @@ def test_no_other_dataclass_restates_a_catalogue_default():
     assert restating == []
 
 
+def _functions_of_the_stack() -> list:
+    found: dict[int, object] = {}
+    for module in MODULES:
+        for obj in vars(module).values():
+            if getattr(obj, "__module__", None) != module.__name__:
+                continue
+            if inspect.isfunction(obj):
+                found[id(obj)] = obj
+            elif inspect.isclass(obj) and not issubclass(obj, ParamSet):
+                generated = {"__init__"} if dataclasses.is_dataclass(obj) else set()  # the dataclass test's
+                found.update({id(f): f for n, f in vars(obj).items() if inspect.isfunction(f) and n not in generated})
+    return list(found.values())
+
+
+def test_no_function_restates_a_catalogue_default_as_a_keyword_default():
+    """Nor does a keyword argument named after a parameter (``ATT_W_ACC: float = 0.2``) restate its default."""
+    restating = [
+        f"{f.__module__}.{f.__qualname__}({name})"
+        for f in _functions_of_the_stack()
+        for name, arg in inspect.signature(f).parameters.items()
+        if name.upper() in CATALOGUE and arg.default is not inspect.Parameter.empty
+    ]
+    assert restating == []
+
+
 def test_a_name_the_catalogue_does_not_hold_is_refused_when_the_class_is_defined():
     with pytest.raises(ParamError, match=r"unknown parameter 'MPC_THR_HOVR'.*MPC_THR_HOVER"):
 
@@ -100,6 +127,12 @@ def test_a_restated_default_or_another_type_is_refused_when_the_class_is_defined
 
         class Retyped(ParamSet):
             mpc_thr_hover: int
+
+    with pytest.raises(AttributeError, match="has no field mpc_tiltmax_ai"):
+
+        class Misread(ParamSet):
+            mpc_tiltmax_air: float
+            tilt_max = radians_of("mpc_tiltmax_ai")
 
 
 class Hover(ParamSet):
@@ -127,3 +160,13 @@ def test_combine_keeps_each_name_once_in_order_and_refuses_two_definitions():
     assert [p.name for p in combine(a, b)] == ["MPC_THR_HOVER", "MPC_THR_MIN", "MPC_THR_MAX"]
     with pytest.raises(ValueError, match="MPC_THR_MIN is defined twice"):
         combine(a, (Param("MPC_THR_MIN", 0.2, 0.0, 1.0),))
+
+
+def test_a_field_in_degrees_reads_in_radians_and_a_family_takes_the_catalogue_defaults():
+    class Tilt(ParamSet):
+        mpc_tiltmax_air: float
+        tilt_max = radians_of("mpc_tiltmax_air")
+
+    assert Tilt(mpc_tiltmax_air=30.0).tilt_max == pytest.approx(math.pi / 6.0)
+    rotor = catalogue.params("CA_ROTOR0_PX", "CA_ROTOR0_CT")
+    assert with_defaults(rotor, {"CA_ROTOR0_PX": 0.2, "OTHER": 1}) == {"CA_ROTOR0_PX": 0.2, "CA_ROTOR0_CT": 6.5}
