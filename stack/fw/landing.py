@@ -28,7 +28,7 @@ import math
 from typing import NamedTuple
 
 from stack.mathlib.scalar import constrain
-from stack.params.binding import ParamSet, radians_of
+from stack.params.binding import ParamSet
 
 Vec2 = tuple[float, float]
 
@@ -47,32 +47,20 @@ class LandingParams(ParamSet):
     into its radian limits unconverted; here it is converted)."""
 
     fw_lnd_ang: float
-    slope_angle = radians_of("fw_lnd_ang")
     fw_lnd_flalt: float
     fw_lnd_fl_time: float
     fw_lnd_fl_sink: float
     fw_lnd_td_time: float
     fw_lnd_hhdist: float
     fw_lnd_fl_pmin: float
-    flare_pitch_min = radians_of("fw_lnd_fl_pmin")
     fw_lnd_fl_pmax: float
-    flare_pitch_max = radians_of("fw_lnd_fl_pmax")
     fw_lnd_airspd_sc: float
     fw_airspd_min: float
     fw_p_lim_min: float
-    pitch_min = radians_of("fw_p_lim_min")
     fw_p_lim_max: float
-    pitch_max = radians_of("fw_p_lim_max")
     rwto_psp: float
-    runway_pitch = radians_of("rwto_psp")
     fw_thr_max: float
     fw_thr_idle: float
-
-    @property
-    def airspeed(self) -> float:
-        """FW_LND_AIRSPD_SC·FW_AIRSPD_MIN [m/s]"""
-        return self.fw_lnd_airspd_sc * self.fw_airspd_min
-
 
 class LandingSetpoint(NamedTuple):
     altitude_sp: float
@@ -176,7 +164,7 @@ class Landing:
 
         sink = down_speed if math.isfinite(down_speed) else 0.0
         flare_height = max(p.fw_lnd_fl_time * sink, p.fw_lnd_flalt)
-        slope_height = min(slope_distance * math.tan(p.slope_angle), self.entrance_height)
+        slope_height = min(slope_distance * math.tan(math.radians(p.fw_lnd_ang)), self.entrance_height)
         altitude_sp = height_rate_sp = pitch_min = pitch_max = throttle_min = throttle_max = math.nan
         if height < flare_height or self.flaring:
             if not self.flaring:
@@ -189,13 +177,14 @@ class Landing:
             # PX4 eases the setpoints in on the square root of the ramp: most of the change comes early.
             r = math.sqrt(self.flare_ramp)
             height_rate_sp = r * -p.fw_lnd_fl_sink + (1.0 - r) * self.flare_initial_height_rate
-            pitch_min = r * p.flare_pitch_min + (1.0 - r) * p.pitch_min
-            pitch_max = r * p.flare_pitch_max + (1.0 - r) * p.pitch_max
+            pitch_min = r * math.radians(p.fw_lnd_fl_pmin) + (1.0 - r) * math.radians(p.fw_p_lim_min)
+            pitch_max = r * math.radians(p.fw_lnd_fl_pmax) + (1.0 - r) * math.radians(p.fw_p_lim_max)
             if p.fw_lnd_td_time > 0.0:
                 touchdown = max(p.fw_lnd_td_time, p.fw_lnd_fl_time)
                 clamp = constrain((elapsed - touchdown) / POST_TOUCHDOWN_CLAMP_TIME, 0.0, 1.0)
-                pitch_min = clamp * p.runway_pitch + (1.0 - clamp) * pitch_min
-                pitch_max = clamp * p.runway_pitch + (1.0 - clamp) * pitch_max
+                runway_pitch = math.radians(p.rwto_psp)
+                pitch_min = clamp * runway_pitch + (1.0 - clamp) * pitch_min
+                pitch_max = clamp * runway_pitch + (1.0 - clamp) * pitch_max
             throttle_min = p.fw_thr_idle
             throttle_max = r * p.fw_thr_idle + (1.0 - r) * p.fw_thr_max
         elif height >= slope_height or self.on_slope:
@@ -206,7 +195,7 @@ class Landing:
         return LandingSetpoint(
             altitude_sp=altitude_sp,
             height_rate_sp=height_rate_sp,
-            airspeed_sp=p.airspeed,
+            airspeed_sp=p.fw_lnd_airspd_sc * p.fw_airspd_min,
             flaring=self.flaring,
             pitch_min=pitch_min,
             pitch_max=pitch_max,

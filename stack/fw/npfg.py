@@ -32,7 +32,7 @@ from __future__ import annotations
 import math
 
 from stack.mathlib.scalar import CONSTANTS_ONE_G, constrain
-from stack.params.binding import ParamSet, radians_of
+from stack.params.binding import ParamSet
 
 Vec2 = tuple[float, float]
 
@@ -85,9 +85,7 @@ class NpfgParams(ParamSet):
     fw_npfg_period_sf: float
     fw_gnd_spd_min: float
     fw_r_lim: float
-    roll_limit = radians_of("fw_r_lim")
     fw_l1_r_slew_max: float
-    roll_slew_rate = radians_of("fw_l1_r_slew_max")
     fw_airspd_trim: float
     fw_airspd_max: float
 
@@ -500,9 +498,10 @@ class NPFG:
     def _finish(self, ground_velocity: Vec2, dt: float) -> None:
         self._ground_velocity = (ground_velocity[0], ground_velocity[1])
         roll = math.atan(self.lateral_acceleration / CONSTANTS_ONE_G)
-        roll = constrain(roll, -self.params.roll_limit, self.params.roll_limit)
-        if dt > 0.0 and self.params.roll_slew_rate > 0.0:
-            step = self.params.roll_slew_rate * dt
+        roll_limit = math.radians(self.params.fw_r_lim)
+        roll = constrain(roll, -roll_limit, roll_limit)
+        if dt > 0.0 and self.params.fw_l1_r_slew_max > 0.0:
+            step = math.radians(self.params.fw_l1_r_slew_max) * dt
             roll = constrain(roll, self.roll_setpoint - step, self.roll_setpoint + step)
         if math.isfinite(roll):
             self.roll_setpoint = roll

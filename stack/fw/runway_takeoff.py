@@ -22,7 +22,7 @@ import math
 from enum import IntEnum
 
 from stack.mathlib.scalar import constrain
-from stack.params.binding import ParamSet, radians_of
+from stack.params.binding import ParamSet
 
 Vec2 = tuple[float, float]
 
@@ -49,21 +49,12 @@ class RunwayTakeoffParams(ParamSet):
     rwto_nav_alt: float
     rwto_max_thr: float
     rwto_psp: float
-    runway_pitch = radians_of("rwto_psp")
     rwto_max_pitch: float
-    max_pitch = radians_of("rwto_max_pitch")
     rwto_max_roll: float
-    max_roll = radians_of("rwto_max_roll")
     rwto_airspd_scl: float
     rwto_ramp_time: float
     fw_airspd_min: float
     fw_clmbout_diff: float
-
-    @property
-    def rotation_airspeed(self) -> float:
-        """RWTO_AIRSPD_SCL·FW_AIRSPD_MIN [m/s]"""
-        return self.rwto_airspd_scl * self.fw_airspd_min
-
 
 class RunwayTakeoff:
     """PX4's runway takeoff state machine. ``init`` on the runway, ``update`` every step, then take the
@@ -98,12 +89,13 @@ class RunwayTakeoff:
     def update(self, time_us: int, airspeed: float, altitude_agl: float, position: Vec2) -> RunwayTakeoffState:
         """Advance with the (calibrated) ``airspeed`` [m/s] and the height above the runway [m]."""
         p = self.params
+        rotation_airspeed = p.rwto_airspd_scl * p.fw_airspd_min
         s = RunwayTakeoffState
         if self.state == s.THROTTLE_RAMP:
-            if self._elapsed(time_us) > p.rwto_ramp_time or airspeed > p.rotation_airspeed * RAMP_AIRSPEED_RATIO:
+            if self._elapsed(time_us) > p.rwto_ramp_time or airspeed > rotation_airspeed * RAMP_AIRSPEED_RATIO:
                 self.state = s.CLAMPED_TO_RUNWAY
         elif self.state == s.CLAMPED_TO_RUNWAY:
-            if airspeed > p.rotation_airspeed:
+            if airspeed > rotation_airspeed:
                 self.state = s.TAKEOFF
         elif self.state == s.TAKEOFF:
             if altitude_agl > p.rwto_nav_alt:
@@ -137,14 +129,15 @@ class RunwayTakeoff:
 
     def pitch(self, tecs_pitch: float) -> float:
         if self.state <= RunwayTakeoffState.CLAMPED_TO_RUNWAY:
-            return self.params.runway_pitch
+            return math.radians(self.params.rwto_psp)
         return tecs_pitch
 
     def roll(self, nav_roll: float) -> float:
         if self.state < RunwayTakeoffState.CLIMBOUT:
             return 0.0
         if self.state < RunwayTakeoffState.FLY:
-            return constrain(nav_roll, -self.params.max_roll, self.params.max_roll)
+            max_roll = math.radians(self.params.rwto_max_roll)
+            return constrain(nav_roll, -max_roll, max_roll)
         return nav_roll
 
     def yaw(self, nav_yaw: float) -> float:
@@ -158,8 +151,9 @@ class RunwayTakeoff:
 
     def max_pitch(self, pitch_max: float) -> float:
         """TECS' upper pitch limit: RWTO_MAX_PITCH (when set) until FLY."""
-        if self.state < RunwayTakeoffState.FLY and self.params.max_pitch > MAX_PITCH_USED:
-            return self.params.max_pitch
+        max_pitch = math.radians(self.params.rwto_max_pitch)
+        if self.state < RunwayTakeoffState.FLY and max_pitch > MAX_PITCH_USED:
+            return max_pitch
         return pitch_max
 
     def _elapsed(self, time_us: int) -> float:

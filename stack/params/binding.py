@@ -19,8 +19,8 @@ may be something else:
 * another ParamSet, whose parameters are read from the same values (its definitions join ``PARAMS``);
 * a value of the algorithm's own that no parameter gives, with an explicit default (``vehicle_type: int = 1``).
 
-What an algorithm computes from its parameters is a property of the class; a field in degrees read in radians is
-``roll_limit = radians_of("fw_r_lim")``.
+A field holds the catalogue's value in the catalogue's unit: what an algorithm computes from it (degrees to
+radians, a product of two) it computes where it uses it.
 
 :func:`combine` joins parameter definitions (a module's PARAMS from its algorithms'), each name once;
 :func:`with_defaults` gives the values of a family of parameters indexed at run time (CA_ROTOR<i>_*).
@@ -30,7 +30,6 @@ from __future__ import annotations
 
 import dataclasses
 import inspect
-import math
 import sys
 from collections.abc import Iterable, Mapping
 from typing import Any, ClassVar, Protocol, Self, dataclass_transform
@@ -108,9 +107,6 @@ class ParamSet:
             setattr(cls, attr, p.default)
             scalars.append((attr, name, p.type))
             groups.append((p,))
-        for attr, value in vars(cls).items():
-            if isinstance(value, _Radians) and value.field not in inspect.get_annotations(cls):
-                raise AttributeError(f"{cls.__qualname__}.{attr}: {cls.__qualname__} has no field {value.field}")
         cls._SCALAR_FIELDS = tuple(scalars)
         cls._NESTED_FIELDS = tuple(nested)
         cls.PARAMS = combine(*groups)
@@ -126,21 +122,6 @@ class ParamSet:
         for attr, kind in cls._NESTED_FIELDS:
             kwargs[attr] = kind.from_params(values)
         return cls(**kwargs)
-
-
-class _Radians:
-    """A ParamSet's field in degrees (as the catalogue gives it), read in radians."""
-
-    def __init__(self, field: str) -> None:
-        self.field = field
-
-    def __get__(self, obj: object, owner: type | None = None) -> Any:
-        return self if obj is None else math.radians(getattr(obj, self.field))
-
-
-def radians_of(field: str) -> Any:
-    """A read-only attribute of a ParamSet: its field ``field`` (degrees) in radians."""
-    return _Radians(field)
 
 
 def _resolve(cls: type, annotation: object) -> object:

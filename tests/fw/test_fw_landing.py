@@ -27,11 +27,11 @@ def flare(landing, t0=10.0, down_speed=1.2, throttle=0.4):
 def test_parameters_are_px4_v1_14s():
     assert DEFAULTS.fw_lnd_flalt == 0.5 and DEFAULTS.fw_lnd_fl_time == 1.0 and DEFAULTS.fw_lnd_fl_sink == 0.25
     assert DEFAULTS.fw_lnd_td_time == -1.0
-    assert DEFAULTS.airspeed == pytest.approx(1.3 * 10.0)
-    assert (DEFAULTS.flare_pitch_min, DEFAULTS.flare_pitch_max) == pytest.approx(
-        (math.radians(2.5), math.radians(15.0))
+    assert (DEFAULTS.fw_lnd_airspd_sc, DEFAULTS.fw_airspd_min) == (1.3, 10.0)
+    assert (DEFAULTS.fw_lnd_fl_pmin, DEFAULTS.fw_lnd_fl_pmax) == (2.5, 15.0)
+    assert (DEFAULTS.fw_p_lim_min, DEFAULTS.fw_p_lim_max) == pytest.approx(
+        (math.degrees(P_LIM_MIN), math.degrees(P_LIM_MAX))
     )
-    assert (DEFAULTS.pitch_min, DEFAULTS.pitch_max) == pytest.approx((P_LIM_MIN, P_LIM_MAX))
     assert (DEFAULTS.fw_thr_max, DEFAULTS.fw_thr_idle) == (1.0, 0.0)
     for removed in ("FW_LND_HVIRT", "FW_LND_TLALT", "FW_THR_LND_MAX"):
         assert removed not in catalogue.CATALOGUE

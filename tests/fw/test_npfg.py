@@ -16,7 +16,7 @@ TIME_CONSTANT = 10.0 * 0.7
 
 def test_defaults_come_from_the_catalogue():
     assert (DEFAULTS.fw_npfg_period, DEFAULTS.fw_npfg_damping, DEFAULTS.fw_npfg_sw_dst_mlt) == (10.0, 0.7, 0.32)
-    assert DEFAULTS.roll_limit == pytest.approx(math.radians(50.0))
+    assert DEFAULTS.fw_r_lim == 50.0
     assert (DEFAULTS.fw_airspd_trim, DEFAULTS.fw_airspd_max, DEFAULTS.fw_gnd_spd_min) == (15.0, 20.0, 5.0)
 
 

@@ -14,10 +14,10 @@ TECS_THROTTLE = 0.8
 
 
 def test_parameters():
-    assert DEFAULTS.rotation_airspeed == pytest.approx(1.3 * 10.0)
+    assert (DEFAULTS.rwto_airspd_scl, DEFAULTS.fw_airspd_min) == (1.3, 10.0)
     assert (DEFAULTS.rwto_ramp_time, DEFAULTS.rwto_nav_alt, DEFAULTS.fw_clmbout_diff) == (2.0, 5.0, 10.0)
-    assert DEFAULTS.max_pitch == pytest.approx(math.radians(20.0))
-    assert DEFAULTS.max_roll == pytest.approx(math.radians(25.0))
+    assert DEFAULTS.rwto_max_pitch == 20.0
+    assert DEFAULTS.rwto_max_roll == 25.0
 
 
 def fly(params):

@@ -4,14 +4,13 @@ catalogue's defaults, no class restates one, and a name the catalogue does not h
 import dataclasses
 import importlib
 import inspect
-import math
 import pkgutil
 
 import pytest
 
 import stack
 from stack.params import catalogue
-from stack.params.binding import ParamSet, combine, radians_of, with_defaults
+from stack.params.binding import ParamSet, combine, with_defaults
 from stack.params.catalogue import CATALOGUE
 from stack.params.param import Param, ParamError
 
@@ -128,12 +127,6 @@ def test_a_restated_default_or_another_type_is_refused_when_the_class_is_defined
         class Retyped(ParamSet):
             mpc_thr_hover: int
 
-    with pytest.raises(AttributeError, match="has no field mpc_tiltmax_ai"):
-
-        class Misread(ParamSet):
-            mpc_tiltmax_air: float
-            tilt_max = radians_of("mpc_tiltmax_ai")
-
 
 class Hover(ParamSet):
     mpc_thr_hover: float
@@ -162,11 +155,6 @@ def test_combine_keeps_each_name_once_in_order_and_refuses_two_definitions():
         combine(a, (Param("MPC_THR_MIN", 0.2, 0.0, 1.0),))
 
 
-def test_a_field_in_degrees_reads_in_radians_and_a_family_takes_the_catalogue_defaults():
-    class Tilt(ParamSet):
-        mpc_tiltmax_air: float
-        tilt_max = radians_of("mpc_tiltmax_air")
-
-    assert Tilt(mpc_tiltmax_air=30.0).tilt_max == pytest.approx(math.pi / 6.0)
+def test_a_family_indexed_at_run_time_takes_the_catalogue_defaults():
     rotor = catalogue.params("CA_ROTOR0_PX", "CA_ROTOR0_CT")
     assert with_defaults(rotor, {"CA_ROTOR0_PX": 0.2, "OTHER": 1}) == {"CA_ROTOR0_PX": 0.2, "CA_ROTOR0_CT": 6.5}
