@@ -29,19 +29,11 @@ from stack.msg.registry import ORB_ID
 from stack.msg.setpoints import RollPitchYawrateThrustSetpoint, VehicleAttitudeSetpoint, VehicleRatesSetpoint
 from stack.msg.system import VehicleControlMode
 from stack.params import ca, catalogue
-from stack.params.param import Param
+from stack.params.binding import combine
 from stack.runtime.module import Module, Trigger
 from stack.runtime.priority import NAV_AND_CONTROLLERS
 
 _NO_MODE = VehicleControlMode()
-
-
-def _unique(*groups: tuple[Param, ...]) -> tuple[Param, ...]:
-    seen: dict[str, Param] = {}
-    for group in groups:
-        for p in group:
-            seen.setdefault(p.name, p)
-    return tuple(seen.values())
 
 
 class MulticopterAttitudeControl(Module):
@@ -50,7 +42,7 @@ class MulticopterAttitudeControl(Module):
     DESCRIPTION = "Attitude controller (PX4 mc_att_control): attitude setpoint → body-rate setpoint"
     TRIGGER = Trigger(ORB_ID.vehicle_attitude)
     DT_RANGE = (0.0002, 0.02)
-    PARAMS = _unique(
+    PARAMS = combine(
         attitude_control.PARAMS,
         input_shaping.PARAMS,
         stabilized.PARAMS,

@@ -17,14 +17,23 @@ from collections.abc import Mapping
 from stack.mathlib import quaternion as quat
 from stack.mathlib.quaternion import Quat
 from stack.mathlib.vector import Vec3
-from stack.params import catalogue
+from stack.params.binding import ParamSet
 from stack.params.param import Param
 
-PARAMS: tuple[Param, ...] = catalogue.params(
-    "MC_ROLL_P", "MC_PITCH_P", "MC_YAW_P", "MC_YAW_WEIGHT", "MC_ROLLRATE_MAX", "MC_PITCHRATE_MAX",
-    "MC_YAWRATE_MAX",
-)
-DEFAULTS: dict[str, object] = {p.name: p.default for p in PARAMS}
+
+class AttitudeControlParams(ParamSet):
+    """The attitude loop's P gains, yaw weight and body-rate limits (the catalogue's MC_*)."""
+
+    mc_roll_p: float
+    mc_pitch_p: float
+    mc_yaw_p: float
+    mc_yaw_weight: float
+    mc_rollrate_max: float
+    mc_pitchrate_max: float
+    mc_yawrate_max: float
+
+
+PARAMS: tuple[Param, ...] = AttitudeControlParams.PARAMS
 
 _AXIS_DEGENERATE = 1.0 - 1e-5
 
@@ -47,11 +56,10 @@ class AttitudeControl:
 
     def set_params(self, params: Mapping[str, object]) -> None:
         """Apply MC_ROLL_P, MC_PITCH_P, MC_YAW_P, MC_YAW_WEIGHT and MC_*RATE_MAX (missing → PX4 default)."""
-        p = {**DEFAULTS, **params}
-        self.set_gains((float(p["MC_ROLL_P"]), float(p["MC_PITCH_P"]), float(p["MC_YAW_P"])),
-                       float(p["MC_YAW_WEIGHT"]))
-        self.set_rate_limits(tuple(math.radians(float(p[n]))
-                                   for n in ("MC_ROLLRATE_MAX", "MC_PITCHRATE_MAX", "MC_YAWRATE_MAX")))
+        p = AttitudeControlParams.from_params(params)
+        self.set_gains((p.mc_roll_p, p.mc_pitch_p, p.mc_yaw_p),
+                       p.mc_yaw_weight)
+        self.set_rate_limits(tuple(math.radians(r) for r in (p.mc_rollrate_max, p.mc_pitchrate_max, p.mc_yawrate_max)))
 
     def set_gains(self, proportional_gain: Vec3, yaw_weight: float) -> None:
         """P gains (roll, pitch, yaw) [1/s] and the yaw weight in [0, 1]; the yaw gain is divided by the

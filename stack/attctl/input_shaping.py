@@ -26,14 +26,27 @@ from stack.mathlib import quaternion as quat
 from stack.mathlib.quaternion import Quat
 from stack.mathlib.scalar import is_negative, is_positive, is_zero, wrap_pi
 from stack.mathlib.vector import Vec3
-from stack.params import catalogue
+from stack.params.binding import ParamSet
 from stack.params.param import Param
 
-PARAMS: tuple[Param, ...] = catalogue.params(
-    "ATC_INPUT_TC", "ATC_ACCEL_R_MAX", "ATC_ACCEL_P_MAX", "ATC_ACCEL_Y_MAX", "ATC_RATE_FF_ENAB", "ATC_SLEW_YAW",
-    "ATC_RATE_R_MAX", "ATC_RATE_P_MAX", "ATC_RATE_Y_MAX", "ACRO_RP_RATE_TC", "ACRO_Y_RATE_TC",
-)
-DEFAULTS: dict[str, object] = {p.name: p.default for p in PARAMS}
+
+class InputShapingParams(ParamSet):
+    """ArduPilot's ATC_* shaping and the acro rate time constants (the catalogue's)."""
+
+    atc_input_tc: float
+    atc_accel_r_max: float
+    atc_accel_p_max: float
+    atc_accel_y_max: float
+    atc_rate_ff_enab: int
+    atc_slew_yaw: float
+    atc_rate_r_max: float
+    atc_rate_p_max: float
+    atc_rate_y_max: float
+    acro_rp_rate_tc: float
+    acro_y_rate_tc: float
+
+
+PARAMS: tuple[Param, ...] = InputShapingParams.PARAMS
 
 THRUST_ERROR_ANGLE = math.radians(30.0)
 """ArduPilot ``AC_ATTITUDE_THRUST_ERROR_ANGLE``: beyond it the feed-forward fades out, gone at twice it."""
@@ -201,17 +214,17 @@ class AttitudeInputShaper:
 
     def set_params(self, params: Mapping[str, object]) -> None:
         """Apply the ATC_* / ACRO_*_RATE_TC parameters (missing → ArduPilot Copter default)."""
-        p = {**DEFAULTS, **params}
-        self._input_tc = float(p["ATC_INPUT_TC"])
-        self._accel_max = tuple(math.radians(float(p[n]) * 0.01)
-                                for n in ("ATC_ACCEL_R_MAX", "ATC_ACCEL_P_MAX", "ATC_ACCEL_Y_MAX"))
-        self._rate_max = tuple(math.radians(float(p[n]))
-                               for n in ("ATC_RATE_R_MAX", "ATC_RATE_P_MAX", "ATC_RATE_Y_MAX"))
-        self._ff_enabled = int(p["ATC_RATE_FF_ENAB"]) != 0
-        slew = math.radians(float(p["ATC_SLEW_YAW"]) * 0.01)
+        p = InputShapingParams.from_params(params)
+        self._input_tc = p.atc_input_tc
+        self._accel_max = tuple(
+            math.radians(a * 0.01) for a in (p.atc_accel_r_max, p.atc_accel_p_max, p.atc_accel_y_max)
+        )
+        self._rate_max = tuple(math.radians(r) for r in (p.atc_rate_r_max, p.atc_rate_p_max, p.atc_rate_y_max))
+        self._ff_enabled = p.atc_rate_ff_enab != 0
+        slew = math.radians(p.atc_slew_yaw * 0.01)
         self._slew_yaw_max = min(slew, self._rate_max[2]) if self._rate_max[2] > 0.0 else slew
-        self._rate_rp_tc = float(p["ACRO_RP_RATE_TC"])
-        self._rate_y_tc = float(p["ACRO_Y_RATE_TC"])
+        self._rate_rp_tc = p.acro_rp_rate_tc
+        self._rate_y_tc = p.acro_y_rate_tc
 
     @property
     def q_target(self) -> Quat:

@@ -14,20 +14,49 @@ from collections.abc import Mapping
 from stack.mathlib.filters import AlphaFilter
 from stack.mathlib.scalar import FLT_EPSILON, superexpo
 from stack.mathlib.vector import Vec3
-from stack.params import catalogue
+from stack.params.binding import ParamSet
 from stack.params.param import Param
 
-PARAMS: tuple[Param, ...] = catalogue.params(
-    "MC_ROLLRATE_P", "MC_ROLLRATE_I", "MC_ROLLRATE_D", "MC_ROLLRATE_FF", "MC_ROLLRATE_K", "MC_RR_INT_LIM",
-    "MC_PITCHRATE_P", "MC_PITCHRATE_I", "MC_PITCHRATE_D", "MC_PITCHRATE_FF", "MC_PITCHRATE_K", "MC_PR_INT_LIM",
-    "MC_YAWRATE_P", "MC_YAWRATE_I", "MC_YAWRATE_D", "MC_YAWRATE_FF", "MC_YAWRATE_K", "MC_YR_INT_LIM",
-    "MC_YAW_TQ_CUTOFF",
-)
-ACRO_PARAMS: tuple[Param, ...] = catalogue.params(
-    "MC_ACRO_R_MAX", "MC_ACRO_P_MAX", "MC_ACRO_Y_MAX", "MC_ACRO_EXPO", "MC_ACRO_EXPO_Y", "MC_ACRO_SUPEXPO",
-    "MC_ACRO_SUPEXPOY",
-)
-DEFAULTS: dict[str, object] = {p.name: p.default for p in PARAMS + ACRO_PARAMS}
+
+class RateControlParams(ParamSet):
+    """The rate loop's gains in PX4's K-form (effective P/I/D = K × P/I/D), integrator limits and yaw torque
+    cut-off (the catalogue's MC_*)."""
+
+    mc_rollrate_p: float
+    mc_rollrate_i: float
+    mc_rollrate_d: float
+    mc_rollrate_ff: float
+    mc_rollrate_k: float
+    mc_rr_int_lim: float
+    mc_pitchrate_p: float
+    mc_pitchrate_i: float
+    mc_pitchrate_d: float
+    mc_pitchrate_ff: float
+    mc_pitchrate_k: float
+    mc_pr_int_lim: float
+    mc_yawrate_p: float
+    mc_yawrate_i: float
+    mc_yawrate_d: float
+    mc_yawrate_ff: float
+    mc_yawrate_k: float
+    mc_yr_int_lim: float
+    mc_yaw_tq_cutoff: float
+
+
+class AcroParams(ParamSet):
+    """Acro's full-stick rates and stick curves (the catalogue's MC_ACRO_*)."""
+
+    mc_acro_r_max: float
+    mc_acro_p_max: float
+    mc_acro_y_max: float
+    mc_acro_expo: float
+    mc_acro_expo_y: float
+    mc_acro_supexpo: float
+    mc_acro_supexpoy: float
+
+
+PARAMS: tuple[Param, ...] = RateControlParams.PARAMS
+ACRO_PARAMS: tuple[Param, ...] = AcroParams.PARAMS
 
 I_FACTOR_RATE = math.radians(400.0)
 """Rate error at which the integrator gain falls to zero (PX4 i_factor)."""
@@ -70,16 +99,15 @@ class RateControl:
 
     def set_params(self, params: Mapping[str, object]) -> None:
         """Apply the MC_*RATE_* and MC_*R_INT_LIM parameters in PX4's K-form (effective P/I/D = K × P/I/D)."""
-        p = {**DEFAULTS, **params}
-        axes = ("ROLLRATE", "PITCHRATE", "YAWRATE")
-        k = [float(p[f"MC_{a}_K"]) for a in axes]
+        p = RateControlParams.from_params(params)
+        k = (p.mc_rollrate_k, p.mc_pitchrate_k, p.mc_yawrate_k)
         self.set_gains(
-            tuple(k[i] * float(p[f"MC_{a}_P"]) for i, a in enumerate(axes)),
-            tuple(k[i] * float(p[f"MC_{a}_I"]) for i, a in enumerate(axes)),
-            tuple(k[i] * float(p[f"MC_{a}_D"]) for i, a in enumerate(axes)),
+            (k[0] * p.mc_rollrate_p, k[1] * p.mc_pitchrate_p, k[2] * p.mc_yawrate_p),
+            (k[0] * p.mc_rollrate_i, k[1] * p.mc_pitchrate_i, k[2] * p.mc_yawrate_i),
+            (k[0] * p.mc_rollrate_d, k[1] * p.mc_pitchrate_d, k[2] * p.mc_yawrate_d),
         )
-        self.set_feed_forward_gain(tuple(float(p[f"MC_{a}_FF"]) for a in axes))
-        self.set_integrator_limit(tuple(float(p[n]) for n in ("MC_RR_INT_LIM", "MC_PR_INT_LIM", "MC_YR_INT_LIM")))
+        self.set_feed_forward_gain((p.mc_rollrate_ff, p.mc_pitchrate_ff, p.mc_yawrate_ff))
+        self.set_integrator_limit((p.mc_rr_int_lim, p.mc_pr_int_lim, p.mc_yr_int_lim))
 
     def set_gains(self, p: Vec3, i: Vec3, d: Vec3) -> None:
         self._gain_p = tuple(p)
@@ -169,12 +197,12 @@ class AcroStickMapping:
         self.set_params(params or {})
 
     def set_params(self, params: Mapping[str, object]) -> None:
-        p = {**DEFAULTS, **params}
-        self._rate_max = tuple(math.radians(float(p[n])) for n in ("MC_ACRO_R_MAX", "MC_ACRO_P_MAX", "MC_ACRO_Y_MAX"))
-        self._expo = float(p["MC_ACRO_EXPO"])
-        self._expo_y = float(p["MC_ACRO_EXPO_Y"])
-        self._supexpo = float(p["MC_ACRO_SUPEXPO"])
-        self._supexpo_y = float(p["MC_ACRO_SUPEXPOY"])
+        p = AcroParams.from_params(params)
+        self._rate_max = tuple(math.radians(r) for r in (p.mc_acro_r_max, p.mc_acro_p_max, p.mc_acro_y_max))
+        self._expo = p.mc_acro_expo
+        self._expo_y = p.mc_acro_expo_y
+        self._supexpo = p.mc_acro_supexpo
+        self._supexpo_y = p.mc_acro_supexpoy
 
     def rates(self, roll: float, pitch: float, yaw: float) -> Vec3:
         """Body-rate setpoint [rad/s] from the roll, pitch and yaw sticks."""

@@ -15,11 +15,20 @@ import math
 from collections.abc import Mapping
 from typing import NamedTuple
 
-from stack.params import catalogue
+from stack.params.binding import ParamSet
 from stack.params.param import Param
 
-PARAMS: tuple[Param, ...] = catalogue.params("RJOY_ROLL_MAX", "RJOY_PITCH_MAX", "RJOY_YAWRATE_MAX", "RJOY_THR_MAX")
-DEFAULTS: dict[str, object] = {p.name: p.default for p in PARAMS}
+
+class RotorsJoyParams(ParamSet):
+    """The joystick mapping's full-stick angles, yaw rate and thrust (the catalogue's RJOY_*)."""
+
+    rjoy_roll_max: float
+    rjoy_pitch_max: float
+    rjoy_yawrate_max: float
+    rjoy_thr_max: float
+
+
+PARAMS: tuple[Param, ...] = RotorsJoyParams.PARAMS
 
 
 class RollPitchYawrateThrust(NamedTuple):
@@ -45,11 +54,11 @@ class JoyMapping:
         self.set_params(params or {})
 
     def set_params(self, params: Mapping[str, object]) -> None:
-        p = {**DEFAULTS, **params}
-        self._roll_max = math.radians(float(p["RJOY_ROLL_MAX"]))
-        self._pitch_max = math.radians(float(p["RJOY_PITCH_MAX"]))
-        self._yaw_rate_max = math.radians(float(p["RJOY_YAWRATE_MAX"]))
-        self._thrust_max = float(p["RJOY_THR_MAX"])
+        p = RotorsJoyParams.from_params(params)
+        self._roll_max = math.radians(p.rjoy_roll_max)
+        self._pitch_max = math.radians(p.rjoy_pitch_max)
+        self._yaw_rate_max = math.radians(p.rjoy_yawrate_max)
+        self._thrust_max = p.rjoy_thr_max
 
     def command(self, roll: float, pitch: float, yaw: float, throttle: float) -> RollPitchYawrateThrust:
         throttle = _clip(throttle) if math.isfinite(throttle) else -1.0

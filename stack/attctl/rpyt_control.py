@@ -39,14 +39,22 @@ from stack.attctl.rotors_joy import RollPitchYawrateThrust
 from stack.mathlib import quaternion as quat
 from stack.mathlib.quaternion import Mat3, Quat
 from stack.mathlib.vector import Vec3
-from stack.params import catalogue
+from stack.params.binding import ParamSet
 from stack.params.param import Param
 
-PARAMS: tuple[Param, ...] = catalogue.params(
-    "RPYT_ATT_GAIN_X", "RPYT_ATT_GAIN_Y", "RPYT_ATT_GAIN_Z", "RPYT_RATE_GAIN_X", "RPYT_RATE_GAIN_Y",
-    "RPYT_RATE_GAIN_Z",
-)
-DEFAULTS: dict[str, object] = {p.name: p.default for p in PARAMS}
+
+class RpytParams(ParamSet):
+    """The attitude and rate gains per axis (the catalogue's RPYT_*)."""
+
+    rpyt_att_gain_x: float
+    rpyt_att_gain_y: float
+    rpyt_att_gain_z: float
+    rpyt_rate_gain_x: float
+    rpyt_rate_gain_y: float
+    rpyt_rate_gain_z: float
+
+
+PARAMS: tuple[Param, ...] = RpytParams.PARAMS
 
 RANK_THRESHOLD = 1e-9
 """Pivots below this do not count toward the allocation's rank (RotorS' ``lu.setThreshold``)."""
@@ -123,9 +131,9 @@ class RollPitchYawrateThrustControl:
         self.set_params(params or {})
 
     def set_params(self, params: Mapping[str, object]) -> None:
-        p = {**DEFAULTS, **params}
-        self._attitude_gain = tuple(float(p[f"RPYT_ATT_GAIN_{axis}"]) for axis in "XYZ")
-        self._rate_gain = tuple(float(p[f"RPYT_RATE_GAIN_{axis}"]) for axis in "XYZ")
+        p = RpytParams.from_params(params)
+        self._attitude_gain = (p.rpyt_att_gain_x, p.rpyt_att_gain_y, p.rpyt_att_gain_z)
+        self._rate_gain = (p.rpyt_rate_gain_x, p.rpyt_rate_gain_y, p.rpyt_rate_gain_z)
 
     @property
     def thrust(self) -> float:

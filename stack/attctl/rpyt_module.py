@@ -45,6 +45,7 @@ from stack.msg.registry import ORB_ID
 from stack.msg.setpoints import VehicleThrustSetpoint
 from stack.msg.system import VehicleControlMode
 from stack.params import catalogue
+from stack.params.binding import combine
 from stack.runtime.module import Arg, Module, Trigger
 from stack.runtime.priority import RATE_CTRL
 
@@ -58,12 +59,7 @@ class RollPitchYawrateThrustController(Module):
     DESCRIPTION = "RotorS roll-pitch-yawrate-thrust controller: attitude law and rotor allocation → motor commands"
     TRIGGER = Trigger(ORB_ID.vehicle_attitude)
     DT_RANGE = (0.0002, 0.02)
-    PARAMS = (
-        *rpyt_control.PARAMS,
-        *stabilized.PARAMS,
-        *rate_control.ACRO_PARAMS,
-        *catalogue.params("MC_YAW_P"),
-    )
+    PARAMS = combine(rpyt_control.PARAMS, stabilized.PARAMS, rate_control.ACRO_PARAMS, catalogue.params("MC_YAW_P"))
     ARGS = (Arg("vehicle", "", "Vehicle model: a name in stack/airframe/vehicles or a path to a model file"),)
 
     def __init__(self, rt) -> None:

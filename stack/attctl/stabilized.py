@@ -26,14 +26,26 @@ from stack.mathlib.filters import AlphaFilter, SlewRate
 from stack.mathlib.quaternion import Quat
 from stack.mathlib.scalar import interpolate, wrap_pi
 from stack.mathlib.vector import Vec3
-from stack.params import catalogue
+from stack.params.binding import ParamSet
 from stack.params.param import Param
 
-PARAMS: tuple[Param, ...] = catalogue.params(
-    "MPC_MAN_TILT_MAX", "MC_MAN_TILT_TAU", "MPC_MAN_Y_MAX", "MPC_MANTHR_MIN", "MPC_THR_HOVER", "MPC_THR_MAX",
-    "MPC_THR_CURVE", "COM_SPOOLUP_TIME", "MC_AIRMODE", "MC_RATT_TH",
-)
-DEFAULTS: dict[str, object] = {p.name: p.default for p in PARAMS}
+
+class StabilizedParams(ParamSet):
+    """The sticks' tilt, yaw rate and thrust mapping (the catalogue's), and what arming and air mode change in it."""
+
+    mpc_man_tilt_max: float
+    mc_man_tilt_tau: float
+    mpc_man_y_max: float
+    mpc_manthr_min: float
+    mpc_thr_hover: float
+    mpc_thr_max: float
+    mpc_thr_curve: int
+    com_spoolup_time: float
+    mc_airmode: int
+    mc_ratt_th: float
+
+
+PARAMS: tuple[Param, ...] = StabilizedParams.PARAMS
 
 THROTTLE_MIN_SLEW = 0.05
 """Slew rate [1/s] of the minimum manual thrust and of the hover thrust (PX4)."""
@@ -71,16 +83,16 @@ class StabilizedAttitudeSetpoint:
         self.reset()
 
     def set_params(self, params: Mapping[str, object]) -> None:
-        p = {**DEFAULTS, **params}
-        self._tilt_max = math.radians(float(p["MPC_MAN_TILT_MAX"]))
-        self._tilt_tau = float(p["MC_MAN_TILT_TAU"])
-        self._yaw_max = math.radians(float(p["MPC_MAN_Y_MAX"]))
-        self._man_thr_min = float(p["MPC_MANTHR_MIN"])
-        self._hover_param = float(p["MPC_THR_HOVER"])
-        self._thr_max = float(p["MPC_THR_MAX"])
-        self._thr_curve = int(p["MPC_THR_CURVE"])
-        self._spoolup_time = float(p["COM_SPOOLUP_TIME"])
-        self._airmode = int(p["MC_AIRMODE"])
+        p = StabilizedParams.from_params(params)
+        self._tilt_max = math.radians(p.mpc_man_tilt_max)
+        self._tilt_tau = p.mc_man_tilt_tau
+        self._yaw_max = math.radians(p.mpc_man_y_max)
+        self._man_thr_min = p.mpc_manthr_min
+        self._hover_param = p.mpc_thr_hover
+        self._thr_max = p.mpc_thr_max
+        self._thr_curve = p.mpc_thr_curve
+        self._spoolup_time = p.com_spoolup_time
+        self._airmode = p.mc_airmode
         if not math.isfinite(self._hover_estimate):
             self._hover.set_forced_value(self._hover_param)
 

@@ -47,15 +47,23 @@ from stack.commander.geofence import GeofenceAction
 from stack.commander.health import can_run, missing_cause
 from stack.commander.modes import AUTO_NAV_STATES, FIXED_WING, ROTARY_WING, Requirement
 from stack.msg.system import BatteryWarning, VehicleStatus
-from stack.params import catalogue
+from stack.params.binding import ParamSet
 from stack.params.param import Param
 
 NS = VehicleStatus
 
-PARAMS: tuple[Param, ...] = catalogue.params(
-    "NAV_DLL_ACT", "COM_DLL_EXCEPT", "NAV_RCL_ACT", "COM_RCL_EXCEPT", "COM_LOW_BAT_ACT", "COM_FAIL_ACT_T"
-)
-DEFAULTS: dict[str, object] = {p.name: p.default for p in PARAMS}
+class FailsafeParams(ParamSet):
+    """The failsafe actions and their exceptions, and the delay before one is taken (the catalogue's)."""
+
+    nav_dll_act: int
+    com_dll_except: int
+    nav_rcl_act: int
+    com_rcl_except: int
+    com_low_bat_act: int
+    com_fail_act_t: float
+
+
+PARAMS: tuple[Param, ...] = FailsafeParams.PARAMS
 
 DLL_EXCEPT_MISSION = 1
 DLL_EXCEPT_AUTO_MODES = 2
@@ -296,7 +304,7 @@ class Failsafe:
         self.set_params(params or {})
 
     def set_params(self, params: Mapping[str, object]) -> None:
-        self._p = {**DEFAULTS, **params}
+        self._p = FailsafeParams.from_params(params)
 
     @property
     def selected_action(self) -> FailsafeAction:
@@ -330,10 +338,10 @@ class Failsafe:
         failing = cond.failing
         vehicle_type = self.vehicle_type
         landing = intended == NS.NAVIGATION_STATE_AUTO_LAND
-        dll_action = int(p["NAV_DLL_ACT"])
+        dll_action = p.nav_dll_act
         if dll_action != 0 and armed and not landing and not self._dll_exempt(intended):
             self._check("gcs_connection_loss", cond.gcs_connection_lost, _from_link_loss_param(dll_action))
-        rcl_action = int(p["NAV_RCL_ACT"])
+        rcl_action = p.nav_rcl_act
         rcl_ignored = self._manual_control_lost_at_arming or self._rcl_exempt(intended)
         if rcl_action != 0 and armed and not landing and not rcl_ignored:
             self._check("manual_control_loss", cond.manual_control_lost, _from_link_loss_param(rcl_action))
@@ -348,7 +356,7 @@ class Failsafe:
 
         warning = cond.battery_warning
         if warning > BatteryWarning.NONE:
-            bat_action = int(p["COM_LOW_BAT_ACT"]) if warning > self._battery_warning_at_arming else 0
+            bat_action = p.com_low_bat_act if warning > self._battery_warning_at_arming else 0
             self._check(BATTERY_CAUSES[BatteryWarning(min(warning, 4))], True, _from_battery_param(bat_action, warning))
 
         fallback, _ = mode_fallback(failing, intended, vehicle_type)
@@ -378,7 +386,7 @@ class Failsafe:
         self._actions.clear()
 
     def _dll_exempt(self, intended: int) -> bool:
-        mask = int(self._p["COM_DLL_EXCEPT"])
+        mask = self._p.com_dll_except
         if intended == NS.NAVIGATION_STATE_AUTO_MISSION:
             return bool(mask & DLL_EXCEPT_MISSION)
         if intended in AUTO_NAV_STATES:
@@ -386,7 +394,7 @@ class Failsafe:
         return False
 
     def _rcl_exempt(self, intended: int) -> bool:
-        mask = int(self._p["COM_RCL_EXCEPT"])
+        mask = self._p.com_rcl_except
         if intended == NS.NAVIGATION_STATE_AUTO_MISSION:
             return bool(mask & RCL_EXCEPT_MISSION)
         if intended in (NS.NAVIGATION_STATE_AUTO_LOITER, NS.NAVIGATION_STATE_AUTO_TAKEOFF):
@@ -411,9 +419,9 @@ class Failsafe:
             return
         takeover = options.takeover
         if takeover == Takeover.AUTO:
-            if float(self._p["COM_FAIL_ACT_T"]) > 0.1:
+            if self._p.com_fail_act_t > 0.1:
                 if options.action != FailsafeAction.WARN and self._delay_us == 0:
-                    self._delay_us = round(float(self._p["COM_FAIL_ACT_T"]) * 1e6)
+                    self._delay_us = round(self._p.com_fail_act_t * 1e6)
                 takeover = Takeover.ALWAYS
             else:
                 takeover = Takeover.MODE_SWITCH_ONLY

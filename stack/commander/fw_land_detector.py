@@ -34,13 +34,22 @@ from stack.commander.hysteresis import Hysteresis
 from stack.commander.land_detector import LandDetectorState
 from stack.mathlib.vector import ZERO3, Vec3
 from stack.msg.fixedwing import AIRSPEED_TIMEOUT_US
-from stack.params import catalogue
+from stack.params.binding import ParamSet
 from stack.params.param import Param
 
-PARAMS: tuple[Param, ...] = catalogue.params(
-    "LNDFW_TRIG_TIME", "LNDFW_VEL_XY_MAX", "LNDFW_VEL_Z_MAX", "LNDFW_AIRSPD_MAX", "LNDFW_XYACC_MAX", "LNDFW_ROT_MAX"
-)
-DEFAULTS: dict[str, object] = {p.name: p.default for p in PARAMS}
+
+class FwLandDetectorParams(ParamSet):
+    """The fixed-wing detector's thresholds (the catalogue's LNDFW_*)."""
+
+    lndfw_trig_time: float
+    lndfw_vel_xy_max: float
+    lndfw_vel_z_max: float
+    lndfw_airspd_max: float
+    lndfw_xyacc_max: float
+    lndfw_rot_max: float
+
+
+PARAMS: tuple[Param, ...] = FwLandDetectorParams.PARAMS
 
 POSITION_TIMEOUT_US = 1_000_000
 NO_AIRSPEED_XY_FACTOR = 0.7
@@ -130,13 +139,13 @@ class FixedwingLandDetector:
         self.set_params(params or {})
 
     def set_params(self, params: Mapping[str, object]) -> None:
-        p = {**DEFAULTS, **params}
-        self._landed.set_hysteresis_time_from(False, round(float(p["LNDFW_TRIG_TIME"]) * 1e6))
-        self._vel_xy_max = float(p["LNDFW_VEL_XY_MAX"])
-        self._vel_z_max = float(p["LNDFW_VEL_Z_MAX"])
-        self._airspeed_max = float(p["LNDFW_AIRSPD_MAX"])
-        self._xyacc_max = float(p["LNDFW_XYACC_MAX"])
-        self._rot_max = math.radians(float(p["LNDFW_ROT_MAX"]))
+        p = FwLandDetectorParams.from_params(params)
+        self._landed.set_hysteresis_time_from(False, round(p.lndfw_trig_time * 1e6))
+        self._vel_xy_max = p.lndfw_vel_xy_max
+        self._vel_z_max = p.lndfw_vel_z_max
+        self._airspeed_max = p.lndfw_airspd_max
+        self._xyacc_max = p.lndfw_xyacc_max
+        self._rot_max = math.radians(p.lndfw_rot_max)
 
     def resume_in_air(self) -> None:
         """Start from flying, not from the landed power-on state (a commander restarted in the air)."""

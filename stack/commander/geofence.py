@@ -11,7 +11,7 @@ import math
 from collections.abc import Mapping
 from enum import IntEnum
 
-from stack.params import catalogue
+from stack.params.binding import ParamSet
 from stack.params.param import Param
 
 
@@ -26,8 +26,15 @@ class GeofenceAction(IntEnum):
     LAND = 5
 
 
-PARAMS: tuple[Param, ...] = catalogue.params("GF_ACTION", "GF_MAX_HOR_DIST", "GF_MAX_VER_DIST")
-DEFAULTS: dict[str, object] = {p.name: p.default for p in PARAMS}
+class GeofenceParams(ParamSet):
+    """The fence's action and its horizontal and vertical distances from home."""
+
+    gf_action: int
+    gf_max_hor_dist: float
+    gf_max_ver_dist: float
+
+
+PARAMS: tuple[Param, ...] = GeofenceParams.PARAMS
 
 
 class CylinderGeofence:
@@ -39,10 +46,10 @@ class CylinderGeofence:
         self.set_params(params or {})
 
     def set_params(self, params: Mapping[str, object]) -> None:
-        p = {**DEFAULTS, **params}
-        self.action = GeofenceAction(int(p["GF_ACTION"]))
-        self.max_hor_dist = float(p["GF_MAX_HOR_DIST"])
-        self.max_ver_dist = float(p["GF_MAX_VER_DIST"])
+        p = GeofenceParams.from_params(params)
+        self.action = GeofenceAction(p.gf_action)
+        self.max_hor_dist = p.gf_max_hor_dist
+        self.max_ver_dist = p.gf_max_ver_dist
 
     @property
     def enabled(self) -> bool:

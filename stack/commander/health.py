@@ -44,6 +44,7 @@ from stack.mathlib.quaternion import IDENTITY, Quat
 from stack.msg.estimation import VehicleLocalPosition
 from stack.msg.sensors import SensorGps
 from stack.msg.system import BatteryWarning, ExternalAutopilotStatus
+from stack.params.binding import ParamSet
 
 ESTIMATE_TIMEOUT_US = 1_000_000
 SENSOR_TIMEOUT_US = 1_000_000
@@ -91,28 +92,20 @@ class CommanderInputs:
     calibrated_airspeed: float = math.nan
 
 
-@dataclass(slots=True)
-class HealthParams:
-    """Tunables under their PX4 names."""
+class HealthParams(ParamSet):
+    """The checks' parameters (the catalogue's: the sensors fitted, COM_ARM_WO_GPS, COM_POS_FS_EPH, COM_EXT_AP,
+    FW_AIRSPD_MAX) and the vehicle type they apply to."""
 
-    sys_has_baro: bool = True
-    """SYS_HAS_BARO: a barometer is fitted and required."""
-    sys_has_mag: bool = True
-    """SYS_HAS_MAG: a magnetometer is fitted and required."""
-    sys_has_gps: bool = True
-    """SYS_HAS_GPS: a GNSS receiver is fitted."""
-    com_arm_wo_gps: bool = True
-    """COM_ARM_WO_GPS: allow arming without a GPS fix in modes that do not need a position."""
-    com_pos_fs_eph: float = 5.0
-    """COM_POS_FS_EPH: horizontal position error [m] above which the local position is invalid."""
-    com_ext_ap: bool = False
-    """COM_EXT_AP: the plant is an external autopilot (a Pixhawk), which must be connected and armable."""
+    sys_has_baro: int
+    sys_has_mag: int
+    sys_has_gps: int
+    com_arm_wo_gps: int
+    com_pos_fs_eph: float
+    com_ext_ap: int
+    sys_has_num_aspd: int
+    fw_airspd_max: float
     vehicle_type: int = ROTARY_WING
     """``vehicle_status.vehicle_type`` (from MAV_TYPE)."""
-    sys_has_num_aspd: bool = True
-    """SYS_HAS_NUM_ASPD: a fixed-wing vehicle has an airspeed sensor, required to arm."""
-    fw_airspd_max: float = 20.0
-    """FW_AIRSPD_MAX [m/s]: the highest airspeed reading arming accepts."""
 
 
 def _fresh(now_us: int, stamp_us: int, timeout_us: int) -> bool:

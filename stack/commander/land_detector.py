@@ -31,14 +31,27 @@ from typing import NamedTuple
 from stack.commander.hysteresis import Hysteresis
 from stack.mathlib.vector import ZERO3, Vec3
 from stack.msg.setpoints import TakeoffState
-from stack.params import catalogue
+from stack.params.binding import ParamSet
 from stack.params.param import Param
 
-PARAMS: tuple[Param, ...] = catalogue.params(
-    "LNDMC_TRIG_TIME", "LNDMC_Z_VEL_MAX", "LNDMC_XY_VEL_MAX", "LNDMC_ROT_MAX", "LNDMC_ALT_GND", "MPC_THR_MIN",
-    "MPC_THR_HOVER", "MPC_MANTHR_MIN", "MPC_USE_HTE", "MPC_LAND_SPEED", "MPC_LAND_CRWL",
-)
-DEFAULTS: dict[str, object] = {p.name: p.default for p in PARAMS}
+
+class LandDetectorParams(ParamSet):
+    """The detector's thresholds (LNDMC_*) and the position controller's thrust and landing speeds it judges by."""
+
+    lndmc_trig_time: float
+    lndmc_z_vel_max: float
+    lndmc_xy_vel_max: float
+    lndmc_rot_max: float
+    lndmc_alt_gnd: float
+    mpc_thr_min: float
+    mpc_thr_hover: float
+    mpc_manthr_min: float
+    mpc_use_hte: bool
+    mpc_land_speed: float
+    mpc_land_crwl: float
+
+
+PARAMS: tuple[Param, ...] = LandDetectorParams.PARAMS
 
 FREEFALL_SPECIFIC_FORCE = 2.0
 """Specific-force magnitude [m/s²] below which the vehicle is falling freely."""
@@ -159,19 +172,19 @@ class MulticopterLandDetector:
         self.state = self.state._replace(ground_contact=False, maybe_landed=False, landed=False, at_rest=False)
 
     def set_params(self, params: Mapping[str, object]) -> None:
-        p = {**DEFAULTS, **params}
+        p = LandDetectorParams.from_params(params)
         # PX4 rewrites LNDMC_Z_VEL_MAX when it exceeds the slowest landing speed / 1.2.
-        ceiling = min(float(p["MPC_LAND_CRWL"]), float(p["MPC_LAND_SPEED"])) / 1.2
-        self._z_vel_max = min(float(p["LNDMC_Z_VEL_MAX"]), ceiling)
-        self._xy_vel_max = float(p["LNDMC_XY_VEL_MAX"])
-        self._rot_max = math.radians(float(p["LNDMC_ROT_MAX"]))
-        self._alt_gnd = float(p["LNDMC_ALT_GND"])
-        self._thr_min = float(p["MPC_THR_MIN"])
-        self._thr_hover = float(p["MPC_THR_HOVER"])
+        ceiling = min(p.mpc_land_crwl, p.mpc_land_speed) / 1.2
+        self._z_vel_max = min(p.lndmc_z_vel_max, ceiling)
+        self._xy_vel_max = p.lndmc_xy_vel_max
+        self._rot_max = math.radians(p.lndmc_rot_max)
+        self._alt_gnd = p.lndmc_alt_gnd
+        self._thr_min = p.mpc_thr_min
+        self._thr_hover = p.mpc_thr_hover
         # Manual-thrust modes idle at MPC_MANTHR_MIN; climb-rate modes at MPC_THR_MIN.
-        self._manual_thrust_min = float(p["MPC_MANTHR_MIN"]) + 0.01
-        self._use_hte = bool(p["MPC_USE_HTE"])
-        self._stage_us = round(float(p["LNDMC_TRIG_TIME"]) * 1e6 / 3.0)
+        self._manual_thrust_min = p.mpc_manthr_min + 0.01
+        self._use_hte = bool(p.mpc_use_hte)
+        self._stage_us = round(p.lndmc_trig_time * 1e6 / 3.0)
         self._stage_time_us = -1
 
     @property

@@ -48,6 +48,7 @@ from stack.msg.system import (
     command_label,
 )
 from stack.params import catalogue
+from stack.params.binding import combine
 from stack.runtime.module import Module, Timer
 from stack.runtime.priority import COMMANDER
 
@@ -97,12 +98,7 @@ class CommanderModule(Module):
     DESCRIPTION = "Arming, flight modes, commands and failsafes (PX4 commander)"
     TRIGGER = Timer(RATE_HZ)
     DT_RANGE = (0.001, 0.1)
-    PARAMS = (
-        COMMANDER_PARAMS
-        + OFFBOARD_PARAMS
-        + tuple(p for p in land_detector.PARAMS if p.name not in {q.name for q in COMMANDER_PARAMS})
-        + fw_land_detector.PARAMS
-    )
+    PARAMS = combine(COMMANDER_PARAMS, OFFBOARD_PARAMS, land_detector.PARAMS, fw_land_detector.PARAMS)
 
     def __init__(self, rt) -> None:
         super().__init__(rt)

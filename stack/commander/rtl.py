@@ -23,14 +23,23 @@ from typing import NamedTuple
 
 from stack.commander.home import HomePosition
 from stack.mathlib.vector import Vec3
-from stack.params import catalogue
+from stack.params.binding import ParamSet
 from stack.params.param import Param
 
-PARAMS: tuple[Param, ...] = catalogue.params(
-    "RTL_RETURN_ALT", "RTL_DESCEND_ALT", "RTL_LAND_DELAY", "RTL_MIN_DIST", "RTL_CONE_ANG", "NAV_ACC_RAD",
-    "NAV_MC_ALT_RAD",
-)
-DEFAULTS: dict[str, object] = {p.name: p.default for p in PARAMS}
+
+class RtlParams(ParamSet):
+    """The return's altitudes, cone, landing delay and acceptance radii (the catalogue's)."""
+
+    rtl_return_alt: float
+    rtl_descend_alt: float
+    rtl_land_delay: float
+    rtl_min_dist: float
+    rtl_cone_ang: int
+    nav_acc_rad: float
+    nav_mc_alt_rad: float
+
+
+PARAMS: tuple[Param, ...] = RtlParams.PARAMS
 
 
 class RtlPhase(IntEnum):
@@ -66,20 +75,19 @@ class ReturnToLaunch:
         self.set_params(params or {})
 
     def set_params(self, params: Mapping[str, object]) -> None:
-        p = {**DEFAULTS, **params}
-        self._p = {name: float(value) for name, value in p.items()}
+        self._p = RtlParams.from_params(params)
 
     def return_altitude(self, position: Vec3, home: HomePosition) -> float:
         """Height above home [m] to fly back at, from ``position`` (PX4's cone rule)."""
         p = self._p
         distance = math.hypot(position[0] - home.x, position[1] - home.y)
-        acc_rad = p["NAV_ACC_RAD"]
-        altitude = p["RTL_RETURN_ALT"]
+        acc_rad = p.nav_acc_rad
+        altitude = p.rtl_return_alt
         if distance <= acc_rad:
             altitude = 2.0 * distance
         else:
-            cone = p["RTL_CONE_ANG"]
-            if cone > 0.0 and distance <= p["RTL_MIN_DIST"]:
+            cone = p.rtl_cone_ang
+            if cone > 0.0 and distance <= p.rtl_min_dist:
                 half_angle = math.radians(min(max(cone, 1.0), 89.0))
                 altitude = min(altitude, distance / math.tan(half_angle))
             altitude = max(altitude, 2.0 * acc_rad)
@@ -99,7 +107,7 @@ class ReturnToLaunch:
             return RtlSetpoint(RtlPhase.IDLE, position, math.nan)
         if landed and self.phase in (RtlPhase.DESCEND, RtlPhase.LOITER, RtlPhase.LAND):
             self.phase = RtlPhase.LANDED
-        loiter_z = max(self._return_z, home.z - p["RTL_DESCEND_ALT"])
+        loiter_z = max(self._return_z, home.z - p.rtl_descend_alt)
         climb_target = (self._climb_xy[0], self._climb_xy[1], self._return_z)
         if self.phase == RtlPhase.CLIMB and self._reached(position, climb_target):
             self.phase = RtlPhase.RETURN
@@ -109,7 +117,7 @@ class ReturnToLaunch:
             self.phase = RtlPhase.LOITER
             self._loiter_since_us = now_us
         if self.phase == RtlPhase.LOITER:
-            delay = p["RTL_LAND_DELAY"]
+            delay = p.rtl_land_delay
             if delay >= 0.0 and now_us - self._loiter_since_us >= delay * 1e6:
                 self.phase = RtlPhase.LAND
 
@@ -117,7 +125,7 @@ class ReturnToLaunch:
             return RtlSetpoint(self.phase, climb_target, math.nan)
         if self.phase == RtlPhase.RETURN:
             north, east = home.x - position[0], home.y - position[1]
-            heading = math.atan2(east, north) if math.hypot(north, east) > p["NAV_ACC_RAD"] else math.nan
+            heading = math.atan2(east, north) if math.hypot(north, east) > p.nav_acc_rad else math.nan
             return RtlSetpoint(self.phase, (home.x, home.y, self._return_z), heading)
         if self.phase in (RtlPhase.DESCEND, RtlPhase.LOITER):
             return RtlSetpoint(self.phase, (home.x, home.y, loiter_z), home.yaw)
@@ -126,6 +134,6 @@ class ReturnToLaunch:
     def _reached(self, position: Vec3, target: Vec3) -> bool:
         p = self._p
         return (
-            math.hypot(position[0] - target[0], position[1] - target[1]) <= p["NAV_ACC_RAD"]
-            and abs(position[2] - target[2]) <= p["NAV_MC_ALT_RAD"]
+            math.hypot(position[0] - target[0], position[1] - target[1]) <= p.nav_acc_rad
+            and abs(position[2] - target[2]) <= p.nav_mc_alt_rad
         )

@@ -70,15 +70,14 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Mapping
+from dataclasses import replace
 from enum import IntEnum
 from typing import NamedTuple
 
 from stack.commander.command_checks import addressed_to, goto_refusal, takeoff_altitude_refusal
 from stack.commander.control_chain import CHAIN, FW_CHAIN, ChainFault, ControlChainMonitor, Loss
-from stack.commander.failsafe import ACTION_NAMES, Failsafe, FailsafeAction, FailsafeConditions
-from stack.commander.failsafe import PARAMS as FAILSAFE_PARAMS
-from stack.commander.geofence import PARAMS as GEOFENCE_PARAMS
-from stack.commander.geofence import CylinderGeofence
+from stack.commander.failsafe import ACTION_NAMES, Failsafe, FailsafeAction, FailsafeConditions, FailsafeParams
+from stack.commander.geofence import CylinderGeofence, GeofenceParams
 from stack.commander.health import (
     CommanderInputs,
     HealthParams,
@@ -115,7 +114,7 @@ from stack.msg.system import (
     VehicleStatus,
     command_label,
 )
-from stack.params import catalogue
+from stack.params.binding import ParamSet
 from stack.params.param import Param
 
 NS = VehicleStatus
@@ -141,14 +140,35 @@ EXTERNAL_LINK_GRACE_US = 1_500_000
 """After the external autopilot's link comes back, its sensors have this long to make the estimates valid."""
 _POSITION_AND_ALTITUDE = int(Requirement.LOCAL_POSITION | Requirement.LOCAL_ALT)
 
-OWN_PARAMS: tuple[Param, ...] = catalogue.params(
-    "COM_DISARM_LAND", "COM_DISARM_PRFLT", "COM_DL_LOSS_T", "COM_RC_LOSS_T", "COM_TAKEOFF_ACT", "COM_POS_FS_EPH",
-    "COM_ARM_WO_GPS", "SYS_HAS_BARO", "SYS_HAS_MAG", "SYS_HAS_GPS", "SYS_FAILURE_EN", "MIS_TAKEOFF_ALT",
-    "NAV_MC_ALT_RAD", "COM_EXT_AP", "MIS_DIST_1WP", "MAV_SYS_ID", "MAV_COMP_ID", "MAV_TYPE", "NAV_FW_ALT_RAD",
-    "SYS_HAS_NUM_ASPD", "FW_AIRSPD_MAX",
-)
-PARAMS: tuple[Param, ...] = OWN_PARAMS + FAILSAFE_PARAMS + GEOFENCE_PARAMS
-DEFAULTS: dict[str, object] = {p.name: p.default for p in PARAMS}
+class CommanderParams(ParamSet):
+    """What the state machine reads itself (the health checks' among them), and its failsafe's and geofence's."""
+
+    com_disarm_land: float
+    com_disarm_prflt: float
+    com_dl_loss_t: int
+    com_rc_loss_t: float
+    com_takeoff_act: int
+    com_pos_fs_eph: float
+    com_arm_wo_gps: int
+    sys_has_baro: int
+    sys_has_mag: int
+    sys_has_gps: int
+    sys_failure_en: int
+    mis_takeoff_alt: float
+    nav_mc_alt_rad: float
+    com_ext_ap: int
+    mis_dist_1wp: float
+    mav_sys_id: int
+    mav_comp_id: int
+    mav_type: int
+    nav_fw_alt_rad: float
+    sys_has_num_aspd: int
+    fw_airspd_max: float
+    failsafe: FailsafeParams
+    geofence: GeofenceParams
+
+
+PARAMS: tuple[Param, ...] = CommanderParams.PARAMS
 
 
 OWN_STALL_US = 250_000
@@ -257,7 +277,7 @@ class Commander:
         self._inputs = CommanderInputs()
         self.vehicle_type = ROTARY_WING
         """``vehicle_status.vehicle_type``, from MAV_TYPE (``mav_type``) while disarmed."""
-        self.mav_type = int(DEFAULTS["MAV_TYPE"])
+        self.mav_type = CommanderParams().mav_type
         self._failsafe = Failsafe()
         self._geofence = CylinderGeofence()
         self._health = HealthParams()
@@ -326,33 +346,22 @@ class Commander:
             CMD.VEHICLE_CMD_INJECT_FAILURE: self._cmd_inject_failure,
         }
         self.set_params(params or {})
-        self._takeoff_altitude = float(self._p["MIS_TAKEOFF_ALT"])
+        self._takeoff_altitude = self._p.mis_takeoff_alt
 
     # ------------------------------------------------------------------ configuration and state
 
     def set_params(self, params: Mapping[str, object]) -> None:
-        p = {**DEFAULTS, **params}
-        self._p = p
-        self._disarm_land_us = round(float(p["COM_DISARM_LAND"]) * 1e6)
-        self._disarm_preflight_us = round(float(p["COM_DISARM_PRFLT"]) * 1e6)
-        self._failsafe.set_params(p)
-        self._geofence.set_params(p)
-        self._health = HealthParams(
-            sys_has_baro=bool(p["SYS_HAS_BARO"]),
-            sys_has_mag=bool(p["SYS_HAS_MAG"]),
-            sys_has_gps=bool(p["SYS_HAS_GPS"]),
-            com_arm_wo_gps=bool(p["COM_ARM_WO_GPS"]),
-            com_pos_fs_eph=float(p["COM_POS_FS_EPH"]),
-            com_ext_ap=bool(p["COM_EXT_AP"]),
-            vehicle_type=self.vehicle_type,
-            sys_has_num_aspd=bool(p["SYS_HAS_NUM_ASPD"]),
-            fw_airspd_max=float(p["FW_AIRSPD_MAX"]),
-        )
+        self._p = p = CommanderParams.from_params(params)
+        self._disarm_land_us = round(p.com_disarm_land * 1e6)
+        self._disarm_preflight_us = round(p.com_disarm_prflt * 1e6)
+        self._failsafe.set_params(params)
+        self._geofence.set_params(params)
+        self._health = replace(HealthParams.from_params(params), vehicle_type=self.vehicle_type)
         self._take_vehicle_type()
 
     def _take_vehicle_type(self) -> None:
         """Take MAV_TYPE's vehicle type, unless armed (then it waits for the disarm)."""
-        mav_type = int(self._p["MAV_TYPE"])
+        mav_type = self._p.mav_type
         if self.armed or mav_type == self.mav_type:
             return
         self.mav_type = mav_type
@@ -361,7 +370,7 @@ class Commander:
             return
         self.vehicle_type = vehicle_type
         self._failsafe.vehicle_type = vehicle_type
-        self._health.vehicle_type = vehicle_type
+        self._health = replace(self._health, vehicle_type=vehicle_type)
         self.chain.use(FW_CHAIN if vehicle_type == FIXED_WING else CHAIN)
         self._preflight_checked = None
 
@@ -406,7 +415,7 @@ class Commander:
 
     def addressed_to_me(self, cmd: VehicleCommand) -> bool:
         """Whether ``cmd`` is for this vehicle's autopilot (MAV_SYS_ID, MAV_COMP_ID, or 0 for all)."""
-        return addressed_to(cmd, int(self._p["MAV_SYS_ID"]), int(self._p["MAV_COMP_ID"]))
+        return addressed_to(cmd, self._p.mav_sys_id, self._p.mav_comp_id)
 
     def handle_command(self, cmd: VehicleCommand, now_us: int) -> VehicleCommandAck | None:
         """Execute a ``vehicle_command`` and return its acknowledgement, or None when it is addressed to another
@@ -466,7 +475,7 @@ class Commander:
 
         self._update_link(now_us)
         self._update_manual_control(now_us)
-        if self._p["COM_EXT_AP"]:
+        if self._p.com_ext_ap:
             self._follow_external_autopilot(now_us)
             armed = self.armed
         self._geofence_violation = ""
@@ -481,7 +490,7 @@ class Commander:
             and self._takeoff_reached()
         ):
             follow = NS.NAVIGATION_STATE_AUTO_LOITER
-            if int(p["COM_TAKEOFF_ACT"]) == 1 and self.can_run(NS.NAVIGATION_STATE_AUTO_MISSION):
+            if p.com_takeoff_act == 1 and self.can_run(NS.NAVIGATION_STATE_AUTO_MISSION):
                 follow = NS.NAVIGATION_STATE_AUTO_MISSION
             self._events.append(f"Takeoff complete, switching to {mode_name(follow)}")
             self._set_intention(follow)
@@ -507,7 +516,7 @@ class Commander:
             landed=inp.landed,
         )
         result = self._failsafe.update(
-            now_us, armed, self.user_intended_nav_state, self._intention_updated, conditions, int(p["GF_ACTION"])
+            now_us, armed, self.user_intended_nav_state, self._intention_updated, conditions, p.geofence.gf_action
         )
         self._intention_updated = False
         self._note_failsafe(result.action, result.delayed_action, result.cause, result.user_takeover)
@@ -568,7 +577,7 @@ class Commander:
     def _update_control_chain(self, now_us: int, armed: bool) -> None:
         if self.nav_state == NS.NAVIGATION_STATE_TERMINATION:
             return  # terminated: the loops are off, and the modules that were lost stay named
-        if self._p["COM_EXT_AP"]:
+        if self._p.com_ext_ap:
             self._chain_faults = ()  # an external autopilot flies the vehicle; its estimates come over its link
             return
         faults = tuple(self.chain.update(now_us, armed, control_mode(self.nav_state, armed, self.vehicle_type)))
@@ -581,7 +590,7 @@ class Commander:
 
     def _update_link(self, now_us: int) -> None:
         last = self._inputs.last_gcs_heartbeat_us
-        lost = last > 0 and now_us - last > int(self._p["COM_DL_LOSS_T"]) * 1_000_000
+        lost = last > 0 and now_us - last > self._p.com_dl_loss_t * 1_000_000
         if lost and not self._gcs_lost:
             self._gcs_lost_counter += 1
             self._events.append("Connection to ground station lost")
@@ -590,7 +599,7 @@ class Commander:
         self._gcs_lost = lost
 
     def _manual_control_present(self, now_us: int) -> bool:
-        return manual_control_present(now_us, self._inputs, float(self._p["COM_RC_LOSS_T"]))
+        return manual_control_present(now_us, self._inputs, self._p.com_rc_loss_t)
 
     def _update_manual_control(self, now_us: int) -> None:
         """Manual control input counts as lost when it is no longer present, once some has been seen (PX4
@@ -605,7 +614,7 @@ class Commander:
     def _external_link_down(self, now_us: int) -> bool:
         """Armed with COM_EXT_AP, and the external autopilot's link is down or has just come back: its sensors,
         hence the stack's estimates, are missing, and its own failsafe (COM_OF_LOSS_T) flies the vehicle."""
-        if not (self._p["COM_EXT_AP"] and self.armed):
+        if not (self._p.com_ext_ap and self.armed):
             return False
         up_at = self._external_link_up_at
         return up_at is None or now_us - up_at < EXTERNAL_LINK_GRACE_US
@@ -673,15 +682,15 @@ class Commander:
             return False
         target_z = self._home.z - self._takeoff_altitude
         if self.vehicle_type == FIXED_WING:
-            acceptance = min(float(self._p["NAV_FW_ALT_RAD"]), self._takeoff_altitude / 2.0)
+            acceptance = min(self._p.nav_fw_alt_rad, self._takeoff_altitude / 2.0)
         else:
-            acceptance = float(self._p["NAV_MC_ALT_RAD"])
+            acceptance = self._p.nav_mc_alt_rad
         return lpos.z <= target_z + acceptance
 
     def _note_failsafe(self, action: FailsafeAction, delayed: FailsafeAction, cause: str, takeover: bool) -> None:
         if action != self._failsafe_action or delayed != self._failsafe_delayed:
             if delayed > FailsafeAction.WARN:
-                delay = float(self._p["COM_FAIL_ACT_T"])
+                delay = self._p.failsafe.com_fail_act_t
                 self._events.append(
                     f"Failsafe activated ({cause}): entering Hold for {delay:g} s, then {ACTION_NAMES[delayed]}"
                 )
@@ -742,7 +751,7 @@ class Commander:
         if position_known and lpos is not None:
             self._set_home(lpos)  # without a position now, the home set before stays, as in PX4
         self._events.append("Armed (forced: pre-arm checks skipped)" if forced else "Armed")
-        if self._p["COM_EXT_AP"]:
+        if self._p.com_ext_ap:
             ext = self._inputs.external_autopilot
             self._external_arming = (now_us, ext.refusals if ext is not None else 0)
         return ""
@@ -804,7 +813,7 @@ class Commander:
         if nav_state != self.user_intended_nav_state:
             self._events.append(f"Mode: {mode_name(nav_state)}")
             if nav_state == NS.NAVIGATION_STATE_AUTO_TAKEOFF:
-                self._takeoff_altitude = float(self._p["MIS_TAKEOFF_ALT"])
+                self._takeoff_altitude = self._p.mis_takeoff_alt
                 self._takeoff_yaw = math.nan
         self._set_intention(nav_state)
         return _ACCEPTED
@@ -887,7 +896,7 @@ class Commander:
         altitude = cmd.param7
         relative = math.isfinite(cmd.param2) and round(cmd.param2) == TAKEOFF_ALTITUDE_RELATIVE
         if math.isnan(altitude):
-            altitude = float(self._p["MIS_TAKEOFF_ALT"])
+            altitude = self._p.mis_takeoff_alt
         elif not math.isfinite(altitude):
             return _denied(f"Takeoff: altitude (param7) must be finite, got {altitude:g}", 7)
         elif not relative:
@@ -966,8 +975,8 @@ class Commander:
             home,
             (north, east, down),
             altitude_given,
-            float(self._p["MIS_DIST_1WP"]),
-            float(self._p["NAV_MC_ALT_RAD"]),
+            self._p.mis_dist_1wp,
+            self._p.nav_mc_alt_rad,
         )
         if too_far:
             return _denied(too_far, param)
@@ -1017,7 +1026,7 @@ class Commander:
         return _ACCEPTED
 
     def _cmd_inject_failure(self, cmd: VehicleCommand, now_us: int) -> _Verdict:
-        if not self._p["SYS_FAILURE_EN"]:
+        if not self._p.sys_failure_en:
             return _denied("Failure injection is disabled (SYS_FAILURE_EN 0)")
         for index, value in ((1, cmd.param1), (2, cmd.param2)):
             if not math.isfinite(value) or value != round(value) or value < 0:
@@ -1058,8 +1067,8 @@ class Commander:
             self._published_key = key
             terminated = self.nav_state == NS.NAVIGATION_STATE_TERMINATION
             status = VehicleStatus(
-                system_id=int(self._p["MAV_SYS_ID"]),
-                component_id=int(self._p["MAV_COMP_ID"]),
+                system_id=self._p.mav_sys_id,
+                component_id=self._p.mav_comp_id,
                 armed_time=self._armed_time_us,
                 takeoff_time=self._takeoff_time_us,
                 arming_state=self.arming_state,

@@ -14,11 +14,19 @@ import math
 
 from stack.mathlib.filters import AlphaFilter, LowPassFilter2p
 from stack.mathlib.vector import ZERO3, Vec3
+from stack.params.binding import ParamSet
 
 DT_MIN_S = 2e-5
 DT_MAX_S = 0.02
 RATE_WINDOW_SAMPLES = 50  # intervals averaged before the sample rate is re-checked
 RATE_TOLERANCE = 0.02  # relative change of the measured rate that triggers a filter re-design
+
+
+class GyroFilterParams(ParamSet):
+    """The rate and angular acceleration low-pass cutoffs (the catalogue's IMU_*)."""
+
+    imu_gyro_cutoff: float
+    imu_dgyro_cutoff: float
 
 
 class AngularVelocityFilter:
@@ -47,14 +55,10 @@ class AngularVelocityFilter:
         "xyz_derivative",
     )
 
-    def __init__(
-        self,
-        IMU_GYRO_CUTOFF: float = 40.0,
-        IMU_DGYRO_CUTOFF: float = 20.0,
-        sample_rate_hz: float = 250.0,
-    ) -> None:
-        self._gyro_cutoff_hz = max(IMU_GYRO_CUTOFF, 0.0)
-        self._dgyro_cutoff_hz = max(IMU_DGYRO_CUTOFF, 0.0)
+    def __init__(self, params: GyroFilterParams | None = None, sample_rate_hz: float = 250.0) -> None:
+        params = params or GyroFilterParams()
+        self._gyro_cutoff_hz = max(params.imu_gyro_cutoff, 0.0)
+        self._dgyro_cutoff_hz = max(params.imu_dgyro_cutoff, 0.0)
         self.sample_rate_hz = sample_rate_hz
         self._lp_rate = [LowPassFilter2p(sample_rate_hz, self._gyro_cutoff_hz) for _ in range(3)]
         self._lp_accel = [AlphaFilter(sample_rate_hz, self._dgyro_cutoff_hz) for _ in range(3)]
@@ -65,12 +69,10 @@ class AngularVelocityFilter:
         self.xyz: Vec3 = ZERO3
         self.xyz_derivative: Vec3 = ZERO3
 
-    def set_params(self, *, IMU_GYRO_CUTOFF: float | None = None, IMU_DGYRO_CUTOFF: float | None = None) -> None:
-        """Change cutoffs (None keeps the current one); the filters restart from the current output."""
-        if IMU_GYRO_CUTOFF is not None:
-            self._gyro_cutoff_hz = max(IMU_GYRO_CUTOFF, 0.0)
-        if IMU_DGYRO_CUTOFF is not None:
-            self._dgyro_cutoff_hz = max(IMU_DGYRO_CUTOFF, 0.0)
+    def set_params(self, params: GyroFilterParams) -> None:
+        """Change the cutoffs; the filters restart from the current output."""
+        self._gyro_cutoff_hz = max(params.imu_gyro_cutoff, 0.0)
+        self._dgyro_cutoff_hz = max(params.imu_dgyro_cutoff, 0.0)
         self._design(self.sample_rate_hz)
 
     def reset(self) -> None:

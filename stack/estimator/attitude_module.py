@@ -13,22 +13,20 @@ import math
 from collections import deque
 
 from stack.estimator.acceleration import VelocityDerivative
-from stack.estimator.angular_velocity import AngularVelocityFilter
-from stack.estimator.attitude_q import AttitudeEstimatorQ
+from stack.estimator.angular_velocity import AngularVelocityFilter, GyroFilterParams
+from stack.estimator.attitude_q import AttitudeEstimatorParams, AttitudeEstimatorQ
 from stack.estimator.imu_summary import STATUS_INTERVAL_US, ImuSummary
 from stack.msg.estimation import EstimatorStatus, VehicleAngularVelocity, VehicleAttitude
 from stack.msg.registry import ORB_ID
 from stack.msg.sensors import SensorAccel, SensorGyro
 from stack.params import catalogue
-from stack.params.param import Param
+from stack.params.binding import combine
 from stack.runtime.module import TRIGGER_BACKLOG, Module, Trigger
 from stack.runtime.priority import INS
 
-ATTITUDE_PARAMS = catalogue.params(
-    "ATT_W_ACC", "ATT_W_MAG", "ATT_W_GYRO_BIAS", "ATT_BIAS_MAX", "ATT_MAG_DECL", "ATT_ACC_COMP",
-)
+ATTITUDE_PARAMS = AttitudeEstimatorParams.PARAMS
 COMPENSATION_PARAMS = catalogue.params("ATT_ACC_COMP_LP")
-GYRO_PARAMS = catalogue.params("IMU_GYRO_CUTOFF", "IMU_DGYRO_CUTOFF")
+GYRO_PARAMS = GyroFilterParams.PARAMS
 
 
 class AttitudeEstimatorModule(Module):
@@ -37,7 +35,7 @@ class AttitudeEstimatorModule(Module):
     DESCRIPTION = "Quaternion complementary filter (PX4 attitude_estimator_q) and gyro filtering"
     TRIGGER = Trigger(ORB_ID.sensor_gyro, every=True)
     DT_RANGE = (0.00001, 0.02)
-    PARAMS = ATTITUDE_PARAMS + GYRO_PARAMS + COMPENSATION_PARAMS
+    PARAMS = combine(ATTITUDE_PARAMS, GYRO_PARAMS, COMPENSATION_PARAMS)
 
     def __init__(self, rt) -> None:
         super().__init__(rt)
@@ -51,8 +49,8 @@ class AttitudeEstimatorModule(Module):
         self.advertise(ORB_ID.estimator_status)
         self.imu = ImuSummary()
         self._attitude_time = 0
-        self.estimator = AttitudeEstimatorQ(**self._values(ATTITUDE_PARAMS))
-        self.rates = AngularVelocityFilter(**self._values(GYRO_PARAMS))
+        self.estimator = AttitudeEstimatorQ(AttitudeEstimatorParams.from_params(self.params))
+        self.rates = AngularVelocityFilter(GyroFilterParams.from_params(self.params))
         self.acceleration = VelocityDerivative(float(self.params["ATT_ACC_COMP_LP"]))
         self._accels: deque[SensorAccel] = deque(maxlen=TRIGGER_BACKLOG)
         self._velocity_time = 0
@@ -73,12 +71,9 @@ class AttitudeEstimatorModule(Module):
         self.estimator.gyro_bias = tuple(max(-limit, min(limit, b)) for b in bias)
         self.log.info("restarted: resuming from the kept attitude")
 
-    def _values(self, params: tuple[Param, ...]) -> dict[str, object]:
-        return {p.name: self.params[p.name] for p in params}
-
     def on_params_changed(self, changed: set[str]) -> None:
-        self.estimator.set_params(**self._values(ATTITUDE_PARAMS))
-        self.rates.set_params(**self._values(GYRO_PARAMS))
+        self.estimator.set_params(AttitudeEstimatorParams.from_params(self.params))
+        self.rates.set_params(GyroFilterParams.from_params(self.params))
         if "ATT_ACC_COMP_LP" in changed:
             self.acceleration = VelocityDerivative(float(self.params["ATT_ACC_COMP_LP"]))
 

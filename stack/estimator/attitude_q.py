@@ -19,6 +19,7 @@ from stack.mathlib import vector as vec
 from stack.mathlib.quaternion import Quat
 from stack.mathlib.scalar import CONSTANTS_ONE_G, constrain, wrap_pi
 from stack.mathlib.vector import Vec3
+from stack.params.binding import ParamSet
 
 DT_MIN_S = 1e-5
 DT_MAX_S = 0.02
@@ -32,6 +33,18 @@ ALIGN_TIME_S = 2.0
 """Accelerometer and magnetometer samples are averaged this long before the first attitude is set."""
 ALIGN_SPIN_RATE_MAX = 0.1  # rad/s: a vehicle turning faster than this restarts the alignment
 ALIGN_MAG_SAMPLES_MIN = 10
+
+
+class AttitudeEstimatorParams(ParamSet):
+    """The filter's weights, gyro bias limit, magnetic declination and acceleration compensation (the catalogue's
+    ATT_*); :meth:`AttitudeEstimatorQ.set_params` clamps them to PX4's ranges."""
+
+    att_w_acc: float
+    att_w_mag: float
+    att_w_gyro_bias: float
+    att_bias_max: float
+    att_mag_decl: float
+    att_acc_comp: int
 
 
 class AttitudeEstimatorQ:
@@ -77,15 +90,7 @@ class AttitudeEstimatorQ:
         "rates",
     )
 
-    def __init__(
-        self,
-        ATT_W_ACC: float = 0.2,
-        ATT_W_MAG: float = 0.1,
-        ATT_W_GYRO_BIAS: float = 0.1,
-        ATT_BIAS_MAX: float = 0.05,
-        ATT_MAG_DECL: float = 0.0,
-        ATT_ACC_COMP: int = 0,
-    ) -> None:
+    def __init__(self, params: AttitudeEstimatorParams | None = None) -> None:
         self.q: Quat = quat.IDENTITY
         self.gyro_bias: Vec3 = vec.ZERO3
         self.rates: Vec3 = vec.ZERO3
@@ -93,48 +98,26 @@ class AttitudeEstimatorQ:
         self._mag: Vec3 | None = None
         self._mag_decl = 0.0
         self._restart_alignment()
-        self.set_params(
-            ATT_W_ACC=ATT_W_ACC,
-            ATT_W_MAG=ATT_W_MAG,
-            ATT_W_GYRO_BIAS=ATT_W_GYRO_BIAS,
-            ATT_BIAS_MAX=ATT_BIAS_MAX,
-            ATT_MAG_DECL=ATT_MAG_DECL,
-            ATT_ACC_COMP=ATT_ACC_COMP,
-        )
+        self.set_params(params or AttitudeEstimatorParams())
 
-    def set_params(
-        self,
-        *,
-        ATT_W_ACC: float | None = None,
-        ATT_W_MAG: float | None = None,
-        ATT_W_GYRO_BIAS: float | None = None,
-        ATT_BIAS_MAX: float | None = None,
-        ATT_MAG_DECL: float | None = None,
-        ATT_ACC_COMP: int | None = None,
-    ) -> None:
-        """Apply the given parameters (None keeps the current value), clamped to their PX4 ranges.
+    def set_params(self, params: AttitudeEstimatorParams) -> None:
+        """Apply the parameters, clamped to their PX4 ranges.
 
         A declination change rotates the current estimate at once, as PX4 does, so the heading
         loop does not wind the gyro bias up while it catches up.
         """
-        if ATT_W_ACC is not None:
-            self._w_acc = constrain(ATT_W_ACC, 0.0, 1.0)
-        if ATT_W_MAG is not None:
-            self._w_mag = constrain(ATT_W_MAG, 0.0, 1.0)
-        if ATT_W_GYRO_BIAS is not None:
-            self._w_bias = constrain(ATT_W_GYRO_BIAS, 0.0, 1.0)
-        if ATT_ACC_COMP is not None:
-            self.acc_comp = bool(ATT_ACC_COMP)
-        if ATT_BIAS_MAX is not None:
-            lim = self.bias_max = constrain(ATT_BIAS_MAX, 0.0, 2.0)
-            b = self.gyro_bias
-            self.gyro_bias = (constrain(b[0], -lim, lim), constrain(b[1], -lim, lim), constrain(b[2], -lim, lim))
-        if ATT_MAG_DECL is not None:
-            decl = math.radians(constrain(ATT_MAG_DECL, -180.0, 180.0))
-            if self.initialised and abs(decl - self._mag_decl) > 1e-4:
-                turn = quat.from_axis_angle((0.0, 0.0, 1.0), decl - self._mag_decl)
-                self.q = quat.normalized(quat.mul(turn, self.q))
-            self._mag_decl = decl
+        self._w_acc = constrain(params.att_w_acc, 0.0, 1.0)
+        self._w_mag = constrain(params.att_w_mag, 0.0, 1.0)
+        self._w_bias = constrain(params.att_w_gyro_bias, 0.0, 1.0)
+        self.acc_comp = bool(params.att_acc_comp)
+        lim = self.bias_max = constrain(params.att_bias_max, 0.0, 2.0)
+        b = self.gyro_bias
+        self.gyro_bias = (constrain(b[0], -lim, lim), constrain(b[1], -lim, lim), constrain(b[2], -lim, lim))
+        decl = math.radians(constrain(params.att_mag_decl, -180.0, 180.0))
+        if self.initialised and abs(decl - self._mag_decl) > 1e-4:
+            turn = quat.from_axis_angle((0.0, 0.0, 1.0), decl - self._mag_decl)
+            self.q = quat.normalized(quat.mul(turn, self.q))
+        self._mag_decl = decl
 
     def reset(self, q: Quat | None = None) -> None:
         """Forget the estimate. With ``q`` the filter restarts from that attitude; without it, it

@@ -20,7 +20,6 @@ from stack.mathlib.quaternion import IDENTITY, is_finite, rotate_inv
 from stack.mathlib.scalar import CONSTANTS_ONE_G
 from stack.msg.fixedwing import AirspeedValidated, PositionSetpoint, Wind
 from stack.msg.registry import ORB_ID
-from stack.params import catalogue
 from stack.runtime.module import Module, Timer
 from stack.runtime.priority import NAV_AND_CONTROLLERS
 
@@ -38,7 +37,7 @@ class AirspeedSelectorModule(Module):
     DESCRIPTION = "Airspeed checks and wind estimation (PX4 airspeed_selector)"
     TRIGGER = Timer(RATE_HZ)
     DT_RANGE = (0.01, 1.0)
-    PARAMS = catalogue.params(*AirspeedValidatorParams.PARAM_NAMES)
+    PARAMS = AirspeedValidatorParams.PARAMS
 
     def __init__(self, rt) -> None:
         super().__init__(rt)
@@ -100,7 +99,7 @@ class AirspeedSelectorModule(Module):
         in_air = land is not None and not land.landed and not landing
         if not in_air:
             self.in_takeoff_situation = True
-        elif indicated_airspeed > self.validator.params.stall_airspeed:
+        elif indicated_airspeed > self.validator.params.fw_airspd_stall:
             self.in_takeoff_situation = False
         return in_air and not self.in_takeoff_situation
 

@@ -19,13 +19,12 @@ the first 10 s after the estimator (re)started.
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
-from dataclasses import dataclass
 
 from stack.fw.wind_estimator import WindEstimator, WindEstimatorParams
 from stack.mathlib.quaternion import Quat
 from stack.mathlib.scalar import CONSTANTS_ONE_G, constrain
 from stack.mathlib.vector import Vec3
+from stack.params.binding import ParamSet
 
 APPLIED_SCALE = 1.0
 """CAS = IAS·scale: no scale is applied (PX4's default ASPD_SCALE 1, no scale estimate applied)."""
@@ -37,47 +36,18 @@ LOAD_FACTOR_FILTER = 0.05
 """Weight of each new sample in the load factor ratio's low-pass filter (PX4: 0.05 per sample)."""
 
 
-@dataclass(frozen=True, slots=True)
-class AirspeedValidatorParams:
-    """The checks' settings; :meth:`from_params` takes them (and the estimator's) from the PX4 parameters."""
+class AirspeedValidatorParams(ParamSet):
+    """The checks' settings (the catalogue's): ASPD_FS_INNOV, the test ratio above which innovations count;
+    ASPD_FS_INTEG [s]; ASPD_FS_T_STOP and ASPD_FS_T_START [s] (negative: never valid again); FW_AIRSPD_STALL;
+    and the wind estimator's."""
 
-    checks_enabled: bool
-    innovation_threshold: float
-    """ASPD_FS_INNOV: test ratio above which innovations count."""
-    innovation_integral_threshold: float
-    """ASPD_FS_INTEG [s]"""
-    fail_delay: float
-    """ASPD_FS_T_STOP [s]"""
-    clear_delay: float
-    """ASPD_FS_T_START [s], negative: never valid again."""
-    stall_airspeed: float
-    """FW_AIRSPD_STALL [m/s]"""
+    aspd_do_checks: int
+    aspd_fs_innov: float
+    aspd_fs_integ: float
+    aspd_fs_t_stop: int
+    aspd_fs_t_start: int
+    fw_airspd_stall: float
     wind: WindEstimatorParams
-
-    PARAM_NAMES = (
-        "ASPD_DO_CHECKS",
-        "ASPD_FS_INNOV",
-        "ASPD_FS_INTEG",
-        "ASPD_FS_T_STOP",
-        "ASPD_FS_T_START",
-        "FW_AIRSPD_STALL",
-        *WindEstimatorParams.PARAM_NAMES,
-    )
-
-    @classmethod
-    def from_params(cls, values: Mapping[str, object]) -> AirspeedValidatorParams:
-        def f(name: str) -> float:
-            return float(values[name])  # type: ignore[arg-type]
-
-        return cls(
-            checks_enabled=bool(values["ASPD_DO_CHECKS"]),
-            innovation_threshold=f("ASPD_FS_INNOV"),
-            innovation_integral_threshold=f("ASPD_FS_INTEG"),
-            fail_delay=f("ASPD_FS_T_STOP"),
-            clear_delay=f("ASPD_FS_T_START"),
-            stall_airspeed=f("FW_AIRSPD_STALL"),
-            wind=WindEstimatorParams.from_params(values),
-        )
 
 
 class AirspeedValidator:
@@ -135,7 +105,7 @@ class AirspeedValidator:
         if velocity is not None and in_fixed_wing_flight:
             estimator.fuse_airspeed(time_us, true_airspeed, velocity, velocity_var_ne, q)
             estimator.fuse_beta(time_us, velocity, velocity_var_ne, q)
-        checks = self.params.checks_enabled and in_fixed_wing_flight
+        checks = bool(self.params.aspd_do_checks) and in_fixed_wing_flight
         self._check_innovation(time_us, checks)
         self._check_load_factor(checks, accel_z)
         self._update_valid(time_us)
@@ -161,13 +131,13 @@ class AirspeedValidator:
             gate = max(p.wind.aspd_tas_gate, 1.0)
             innov_var = estimator.tas_innov_var
             test_ratio = estimator.tas_innov**2 / (gate * gate * innov_var) if innov_var > 0.0 else 0.0
-            if test_ratio > p.innovation_threshold:
-                self._innov_integral += dt * (test_ratio - p.innovation_threshold)
+            if test_ratio > p.aspd_fs_innov:
+                self._innov_integral += dt * (test_ratio - p.aspd_fs_innov)
             else:
                 self._innov_integral = 0.0
-                if p.innovation_integral_threshold <= 0.0:
+                if p.aspd_fs_integ <= 0.0:
                     self._time_last_tas_pass_us = time_us
-            if p.innovation_integral_threshold > 0.0 and self._innov_integral < p.innovation_integral_threshold:
+            if p.aspd_fs_integ > 0.0 and self._innov_integral < p.aspd_fs_integ:
                 self._time_last_tas_pass_us = time_us
             self.innovations_check_failed = time_us - self._time_last_tas_pass_us > TAS_INNOV_FAIL_DELAY_US
         self._time_last_innov_check_us = time_us
@@ -177,7 +147,7 @@ class AirspeedValidator:
             self.load_factor_ratio = 0.5
             self.load_factor_check_failed = False
             return
-        max_lift_ratio = (max(self.calibrated_airspeed, 0.7) / max(self.params.stall_airspeed, 1.0)) ** 2
+        max_lift_ratio = (max(self.calibrated_airspeed, 0.7) / max(self.params.fw_airspd_stall, 1.0)) ** 2
         ratio = abs(accel_z) / CONSTANTS_ONE_G / max_lift_ratio
         self.load_factor_ratio += LOAD_FACTOR_FILTER * (ratio - self.load_factor_ratio)
         self.load_factor_ratio = constrain(self.load_factor_ratio, 0.25, 2.0)
@@ -193,7 +163,7 @@ class AirspeedValidator:
         if self.valid:
             # Both failing together is likely a real fault; one alone may be a short false alarm.
             both = self.innovations_check_failed and self.load_factor_check_failed
-            if both or time_us - self._time_checks_passed_us > p.fail_delay * 1e6:
+            if both or time_us - self._time_checks_passed_us > p.aspd_fs_t_stop * 1e6:
                 self.valid = False
-        elif p.clear_delay > 0.0 and time_us - self._time_checks_failed_us > p.clear_delay * 1e6:
+        elif p.aspd_fs_t_start > 0.0 and time_us - self._time_checks_failed_us > p.aspd_fs_t_start * 1e6:
             self.valid = True

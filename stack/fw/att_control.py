@@ -29,20 +29,62 @@ from stack.mathlib import quaternion as quat
 from stack.mathlib.quaternion import Quat
 from stack.mathlib.scalar import CONSTANTS_ONE_G, constrain, wrap_pi
 from stack.mathlib.vector import Vec3
-from stack.params import catalogue
+from stack.params.binding import ParamSet, combine
 from stack.params.param import Param
 
-PARAMS: tuple[Param, ...] = catalogue.params(
-    "FW_AIRSPD_MIN", "FW_AIRSPD_TRIM", "FW_AIRSPD_MAX", "FW_AIRSPD_STALL", "FW_ARSP_SCALE_EN",
-    "FW_R_TC", "FW_P_TC", "FW_R_RMAX", "FW_P_RMAX_POS", "FW_P_RMAX_NEG", "FW_Y_RMAX",
-    "FW_RR_P", "FW_RR_I", "FW_RR_FF", "FW_RR_IMAX",
-    "FW_PR_P", "FW_PR_I", "FW_PR_FF", "FW_PR_IMAX",
-    "FW_YR_P", "FW_YR_I", "FW_YR_FF", "FW_YR_IMAX",
-    "FW_W_EN", "FW_WR_P", "FW_WR_I", "FW_WR_FF", "FW_WR_IMAX", "FW_W_RMAX",
-    "FW_MAN_R_MAX", "FW_MAN_P_MAX", "FW_MAN_R_SC", "FW_MAN_P_SC", "FW_MAN_Y_SC",
-    "FW_ACRO_X_MAX", "FW_ACRO_Y_MAX", "FW_ACRO_Z_MAX",
-)
-DEFAULTS: dict[str, object] = {p.name: p.default for p in PARAMS}
+
+class FwAttControlParams(ParamSet):
+    """The attitude and rate loops' time constants, rate limits and gains per axis, the wheel's, and the airspeeds
+    their scaling takes (the catalogue's FW_*)."""
+
+    fw_airspd_min: float
+    fw_airspd_trim: float
+    fw_airspd_max: float
+    fw_airspd_stall: float
+    fw_arsp_scale_en: bool
+    fw_r_tc: float
+    fw_p_tc: float
+    fw_r_rmax: float
+    fw_p_rmax_pos: float
+    fw_p_rmax_neg: float
+    fw_y_rmax: float
+    fw_rr_p: float
+    fw_rr_i: float
+    fw_rr_ff: float
+    fw_rr_imax: float
+    fw_pr_p: float
+    fw_pr_i: float
+    fw_pr_ff: float
+    fw_pr_imax: float
+    fw_yr_p: float
+    fw_yr_i: float
+    fw_yr_ff: float
+    fw_yr_imax: float
+    fw_w_en: bool
+    fw_wr_p: float
+    fw_wr_i: float
+    fw_wr_ff: float
+    fw_wr_imax: float
+    fw_w_rmax: float
+    fw_acro_x_max: float
+    fw_acro_y_max: float
+    fw_acro_z_max: float
+
+
+class StickMappingParams(ParamSet):
+    """The manual modes' full-stick angles and scales, and Acro's full-stick rates (the catalogue's FW_*)."""
+
+    fw_man_r_max: float
+    fw_man_p_max: float
+    fw_man_r_sc: float
+    fw_man_p_sc: float
+    fw_man_y_sc: float
+    fw_acro_x_max: float
+    fw_acro_y_max: float
+    fw_acro_z_max: float
+
+
+PARAMS: tuple[Param, ...] = combine(FwAttControlParams.PARAMS, StickMappingParams.PARAMS)
 
 AIRSPEED_NUMERICAL_MIN = 0.5
 """Lowest airspeed [m/s] the controllers ever use (FixedwingAttitudeControl.cpp, against numerical trouble)."""
@@ -210,10 +252,8 @@ class FixedwingAttitudeController:
     Non-finite inputs are refused (the call returns None and ``nonfinite_inputs`` counts them); a NaN airspeed
     means no valid airspeed."""
 
-    __slots__ = ("_acro_max", "_airspeed_max", "_airspeed_min", "_airspeed_stall", "_airspeed_trim",
-                 "_pitch_rate_max_neg", "_pitch_rate_max_pos", "_roll_rate_max", "_scale_enabled", "_tc_pitch",
-                 "_tc_roll", "_wheel_enabled", "_yaw_euler_rate", "_yaw_rate_max", "nonfinite_inputs", "pitch",
-                 "roll", "wheel", "yaw")
+    __slots__ = ("_acro_max", "_p", "_pitch_rate_max_neg", "_pitch_rate_max_pos", "_roll_rate_max", "_wheel_enabled",
+                 "_yaw_euler_rate", "_yaw_rate_max", "nonfinite_inputs", "pitch", "roll", "wheel", "yaw")
 
     def __init__(self, params: Mapping[str, object] | None = None) -> None:
         self.roll = RateLoop()
@@ -225,30 +265,21 @@ class FixedwingAttitudeController:
         self.set_params(params or {})
 
     def set_params(self, params: Mapping[str, object]) -> None:
-        p = {**DEFAULTS, **params}
-
-        def number(name: str) -> float:
-            return float(p[name])
-
-        self._airspeed_min = number("FW_AIRSPD_MIN")
-        self._airspeed_trim = number("FW_AIRSPD_TRIM")
-        self._airspeed_max = number("FW_AIRSPD_MAX")
-        self._airspeed_stall = number("FW_AIRSPD_STALL")
-        self._scale_enabled = bool(p["FW_ARSP_SCALE_EN"])
-        self._tc_roll = number("FW_R_TC")
-        self._tc_pitch = number("FW_P_TC")
-        self._roll_rate_max = math.radians(number("FW_R_RMAX"))
-        self._pitch_rate_max_pos = math.radians(number("FW_P_RMAX_POS"))
-        self._pitch_rate_max_neg = math.radians(number("FW_P_RMAX_NEG"))
-        self._yaw_rate_max = math.radians(number("FW_Y_RMAX"))
-        self._acro_max = tuple(math.radians(number(n)) for n in ("FW_ACRO_X_MAX", "FW_ACRO_Y_MAX", "FW_ACRO_Z_MAX"))
-        for loop, axis in ((self.roll, "RR"), (self.pitch, "PR"), (self.yaw, "YR"), (self.wheel, "WR")):
-            loop.k_p = number(f"FW_{axis}_P")
-            loop.k_i = number(f"FW_{axis}_I")
-            loop.k_ff = number(f"FW_{axis}_FF")
-            loop.integrator_max = number(f"FW_{axis}_IMAX")
-        self._wheel_enabled = bool(p["FW_W_EN"])
-        self.wheel.max_rate = math.radians(number("FW_W_RMAX"))
+        self._p = p = FwAttControlParams.from_params(params)
+        self._roll_rate_max = math.radians(p.fw_r_rmax)
+        self._pitch_rate_max_pos = math.radians(p.fw_p_rmax_pos)
+        self._pitch_rate_max_neg = math.radians(p.fw_p_rmax_neg)
+        self._yaw_rate_max = math.radians(p.fw_y_rmax)
+        self._acro_max = tuple(math.radians(r) for r in (p.fw_acro_x_max, p.fw_acro_y_max, p.fw_acro_z_max))
+        for loop, (k_p, k_i, k_ff, integrator_max) in (
+            (self.roll, (p.fw_rr_p, p.fw_rr_i, p.fw_rr_ff, p.fw_rr_imax)),
+            (self.pitch, (p.fw_pr_p, p.fw_pr_i, p.fw_pr_ff, p.fw_pr_imax)),
+            (self.yaw, (p.fw_yr_p, p.fw_yr_i, p.fw_yr_ff, p.fw_yr_imax)),
+            (self.wheel, (p.fw_wr_p, p.fw_wr_i, p.fw_wr_ff, p.fw_wr_imax)),
+        ):
+            loop.k_p, loop.k_i, loop.k_ff, loop.integrator_max = k_p, k_i, k_ff, integrator_max
+        self._wheel_enabled = p.fw_w_en
+        self.wheel.max_rate = math.radians(p.fw_w_rmax)
 
     def reset_integrals(self) -> None:
         for loop in (self.roll, self.pitch, self.yaw, self.wheel):
@@ -261,14 +292,15 @@ class FixedwingAttitudeController:
 
     def airspeed(self, calibrated_airspeed: float) -> tuple[float, float]:
         """(The airspeed the loops use [m/s], the scaling s) for a measured calibrated airspeed (NaN: none)."""
-        v = controller_airspeed(calibrated_airspeed, self._airspeed_trim)
-        return v, airspeed_scaler(v, self._airspeed_trim, self._airspeed_stall, self._airspeed_max, self._scale_enabled)
+        p = self._p
+        v = controller_airspeed(calibrated_airspeed, p.fw_airspd_trim)
+        return v, airspeed_scaler(v, p.fw_airspd_trim, p.fw_airspd_stall, p.fw_airspd_max, p.fw_arsp_scale_en)
 
     def _lock_integrator(self, calibrated_airspeed: float, dt: float, landed: bool) -> bool:
         """Whether this step holds the integrators; landed, they restart and stay at zero."""
         if landed:
             self.reset_integrals()
-        slow_below = INTEGRATOR_AIRSPEED_FRACTION * self._airspeed_min
+        slow_below = INTEGRATOR_AIRSPEED_FRACTION * self._p.fw_airspd_min
         slow = math.isfinite(calibrated_airspeed) and calibrated_airspeed < slow_below
         return landed or dt > INTEGRATOR_LOCK_DT or slow
 
@@ -284,13 +316,13 @@ class FixedwingAttitudeController:
         roll, pitch, yaw = quat.to_euler(q)
         airspeed, scaler = self.airspeed(calibrated_airspeed)
         lock = self._lock_integrator(calibrated_airspeed, dt, landed)
-        roll_rate = (target.roll - roll) / self._tc_roll
-        pitch_rate = (target.pitch - pitch) / self._tc_pitch
+        roll_rate = (target.roll - roll) / self._p.fw_r_tc
+        pitch_rate = (target.pitch - pitch) / self._p.fw_p_tc
         wheel = target.wheel and self._wheel_enabled
         if wheel:
             self.yaw.reset_integrator()
         else:
-            turn = coordinated_turn_rate(roll, pitch, target.roll, airspeed, self._airspeed_stall)
+            turn = coordinated_turn_rate(roll, pitch, target.roll, airspeed, self._p.fw_airspd_stall)
             if turn is not None:
                 self._yaw_euler_rate = turn
             self.wheel.reset_integrator()
@@ -301,7 +333,7 @@ class FixedwingAttitudeController:
         torque_y = self.pitch.update(pitch_sp, rates[1], scaler, dt, lock)
         if wheel:
             yaw_sp = self.wheel.rate_setpoint(target.yaw, yaw)
-            torque_z = self.wheel.update(yaw_sp, rates[2], groundspeed, self._airspeed_stall, dt, lock)
+            torque_z = self.wheel.update(yaw_sp, rates[2], groundspeed, self._p.fw_airspd_stall, dt, lock)
         else:
             yaw_sp = constrain(body[2], -self._yaw_rate_max, self._yaw_rate_max)
             torque_z = self.yaw.update(yaw_sp, rates[2], scaler, dt, lock)
@@ -334,13 +366,11 @@ class StickMapping:
         self.set_params(params or {})
 
     def set_params(self, params: Mapping[str, object]) -> None:
-        p = {**DEFAULTS, **params}
-        self._roll_max = math.radians(float(p["FW_MAN_R_MAX"]))
-        self._pitch_max = math.radians(float(p["FW_MAN_P_MAX"]))
-        self._scale = tuple(float(p[n]) for n in ("FW_MAN_R_SC", "FW_MAN_P_SC", "FW_MAN_Y_SC"))
-        self._acro_max = tuple(
-            math.radians(float(p[n])) for n in ("FW_ACRO_X_MAX", "FW_ACRO_Y_MAX", "FW_ACRO_Z_MAX")
-        )
+        p = StickMappingParams.from_params(params)
+        self._roll_max = math.radians(p.fw_man_r_max)
+        self._pitch_max = math.radians(p.fw_man_p_max)
+        self._scale = (p.fw_man_r_sc, p.fw_man_p_sc, p.fw_man_y_sc)
+        self._acro_max = tuple(math.radians(r) for r in (p.fw_acro_x_max, p.fw_acro_y_max, p.fw_acro_z_max))
 
     def attitude(self, roll: float, pitch: float, yaw: float) -> AttitudeTarget:
         """Stabilized: roll = stick·FW_MAN_R_MAX, pitch = −stick·FW_MAN_P_MAX, heading ``yaw`` (not controlled)."""

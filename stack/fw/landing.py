@@ -25,11 +25,10 @@ or once flaring (PX4 v1.13's heading hold; v1.14 tracks the line down to the run
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
-from dataclasses import dataclass
 from typing import NamedTuple
 
 from stack.mathlib.scalar import constrain
+from stack.params.binding import ParamSet
 
 Vec2 = tuple[float, float]
 
@@ -41,80 +40,27 @@ POST_TOUCHDOWN_CLAMP_TIME = 0.5
 """Time over which the pitch limits go to RWTO_PSP at the touchdown time [s] (PX4's constant)."""
 
 
-@dataclass(frozen=True, slots=True)
-class LandingParams:
-    """The landing's settings; :meth:`from_params` takes them from the PX4 parameters."""
+class LandingParams(ParamSet):
+    """The landing's settings (the catalogue's FW_LND_*, with the pitch and throttle limits the flare starts from).
+    FW_LND_TD_TIME counts from the flare's start (≤ 0: no nose-down clamp); FW_LND_HHDIST 0: no heading hold;
+    RWTO_PSP is the pitch on the wheels the touchdown clamp goes to (PX4 v1.14 blends the parameter's degrees
+    into its radian limits unconverted; here it is converted)."""
 
-    slope_angle: float
-    """FW_LND_ANG [rad]"""
-    flare_altitude: float
-    """FW_LND_FLALT: the least height the flare starts at [m]."""
-    flare_time: float
-    """FW_LND_FL_TIME [s]"""
-    flare_sink_rate: float
-    """FW_LND_FL_SINK [m/s, down]"""
-    touchdown_time: float
-    """FW_LND_TD_TIME [s] after the flare's start; ≤ 0: no nose-down clamp."""
-    heading_hold_distance: float
-    """FW_LND_HHDIST [m], 0 = no heading hold."""
-    flare_pitch_min: float
-    """FW_LND_FL_PMIN [rad]"""
-    flare_pitch_max: float
-    """FW_LND_FL_PMAX [rad]"""
-    pitch_min: float
-    """FW_P_LIM_MIN [rad]: where the flare's lower pitch limit starts."""
-    pitch_max: float
-    """FW_P_LIM_MAX [rad]"""
-    runway_pitch: float
-    """RWTO_PSP [rad]: the pitch on the wheels the touchdown clamp goes to (PX4 v1.14 blends the parameter's
-    degrees into its radian limits unconverted; here it is converted)."""
-    throttle_max: float
-    """FW_THR_MAX: where the flare's throttle limit starts."""
-    throttle_idle: float
-    """FW_THR_IDLE: where it ends, and the least throttle of the flare."""
-    airspeed: float
-    """FW_LND_AIRSPD_SC·FW_AIRSPD_MIN [m/s]"""
-
-    PARAM_NAMES = (
-        "FW_LND_ANG",
-        "FW_LND_FLALT",
-        "FW_LND_FL_TIME",
-        "FW_LND_FL_SINK",
-        "FW_LND_TD_TIME",
-        "FW_LND_HHDIST",
-        "FW_LND_FL_PMIN",
-        "FW_LND_FL_PMAX",
-        "FW_LND_AIRSPD_SC",
-        "FW_AIRSPD_MIN",
-        "FW_P_LIM_MIN",
-        "FW_P_LIM_MAX",
-        "RWTO_PSP",
-        "FW_THR_MAX",
-        "FW_THR_IDLE",
-    )
-
-    @classmethod
-    def from_params(cls, values: Mapping[str, object]) -> LandingParams:
-        def f(name: str) -> float:
-            return float(values[name])  # type: ignore[arg-type]
-
-        return cls(
-            slope_angle=math.radians(f("FW_LND_ANG")),
-            flare_altitude=f("FW_LND_FLALT"),
-            flare_time=f("FW_LND_FL_TIME"),
-            flare_sink_rate=f("FW_LND_FL_SINK"),
-            touchdown_time=f("FW_LND_TD_TIME"),
-            heading_hold_distance=f("FW_LND_HHDIST"),
-            flare_pitch_min=math.radians(f("FW_LND_FL_PMIN")),
-            flare_pitch_max=math.radians(f("FW_LND_FL_PMAX")),
-            pitch_min=math.radians(f("FW_P_LIM_MIN")),
-            pitch_max=math.radians(f("FW_P_LIM_MAX")),
-            runway_pitch=math.radians(f("RWTO_PSP")),
-            throttle_max=f("FW_THR_MAX"),
-            throttle_idle=f("FW_THR_IDLE"),
-            airspeed=f("FW_LND_AIRSPD_SC") * f("FW_AIRSPD_MIN"),
-        )
-
+    fw_lnd_ang: float
+    fw_lnd_flalt: float
+    fw_lnd_fl_time: float
+    fw_lnd_fl_sink: float
+    fw_lnd_td_time: float
+    fw_lnd_hhdist: float
+    fw_lnd_fl_pmin: float
+    fw_lnd_fl_pmax: float
+    fw_lnd_airspd_sc: float
+    fw_airspd_min: float
+    fw_p_lim_min: float
+    fw_p_lim_max: float
+    rwto_psp: float
+    fw_thr_max: float
+    fw_thr_idle: float
 
 class LandingSetpoint(NamedTuple):
     altitude_sp: float
@@ -209,16 +155,16 @@ class Landing:
             self.entrance_height = max(entrance - land_altitude, 0.0)
 
         if (
-            p.heading_hold_distance > 0.0
+            p.fw_lnd_hhdist > 0.0
             and not self.heading_hold
-            and (distance < p.heading_hold_distance or self.flaring)
+            and (distance < p.fw_lnd_hhdist or self.flaring)
         ):
             self.heading_hold = True
             self.target_bearing = line_bearing if previous is not None else yaw
 
         sink = down_speed if math.isfinite(down_speed) else 0.0
-        flare_height = max(p.flare_time * sink, p.flare_altitude)
-        slope_height = min(slope_distance * math.tan(p.slope_angle), self.entrance_height)
+        flare_height = max(p.fw_lnd_fl_time * sink, p.fw_lnd_flalt)
+        slope_height = min(slope_distance * math.tan(math.radians(p.fw_lnd_ang)), self.entrance_height)
         altitude_sp = height_rate_sp = pitch_min = pitch_max = throttle_min = throttle_max = math.nan
         if height < flare_height or self.flaring:
             if not self.flaring:
@@ -227,19 +173,20 @@ class Landing:
                 self.flare_initial_height_rate = -sink
                 self.flare_initial_throttle = throttle
             elapsed = now - self.flare_start
-            self.flare_ramp = constrain(elapsed / max(p.flare_time, 1e-3), 0.0, 1.0)
+            self.flare_ramp = constrain(elapsed / max(p.fw_lnd_fl_time, 1e-3), 0.0, 1.0)
             # PX4 eases the setpoints in on the square root of the ramp: most of the change comes early.
             r = math.sqrt(self.flare_ramp)
-            height_rate_sp = r * -p.flare_sink_rate + (1.0 - r) * self.flare_initial_height_rate
-            pitch_min = r * p.flare_pitch_min + (1.0 - r) * p.pitch_min
-            pitch_max = r * p.flare_pitch_max + (1.0 - r) * p.pitch_max
-            if p.touchdown_time > 0.0:
-                touchdown = max(p.touchdown_time, p.flare_time)
+            height_rate_sp = r * -p.fw_lnd_fl_sink + (1.0 - r) * self.flare_initial_height_rate
+            pitch_min = r * math.radians(p.fw_lnd_fl_pmin) + (1.0 - r) * math.radians(p.fw_p_lim_min)
+            pitch_max = r * math.radians(p.fw_lnd_fl_pmax) + (1.0 - r) * math.radians(p.fw_p_lim_max)
+            if p.fw_lnd_td_time > 0.0:
+                touchdown = max(p.fw_lnd_td_time, p.fw_lnd_fl_time)
                 clamp = constrain((elapsed - touchdown) / POST_TOUCHDOWN_CLAMP_TIME, 0.0, 1.0)
-                pitch_min = clamp * p.runway_pitch + (1.0 - clamp) * pitch_min
-                pitch_max = clamp * p.runway_pitch + (1.0 - clamp) * pitch_max
-            throttle_min = p.throttle_idle
-            throttle_max = r * p.throttle_idle + (1.0 - r) * p.throttle_max
+                runway_pitch = math.radians(p.rwto_psp)
+                pitch_min = clamp * runway_pitch + (1.0 - clamp) * pitch_min
+                pitch_max = clamp * runway_pitch + (1.0 - clamp) * pitch_max
+            throttle_min = p.fw_thr_idle
+            throttle_max = r * p.fw_thr_idle + (1.0 - r) * p.fw_thr_max
         elif height >= slope_height or self.on_slope:
             self.on_slope = True
             altitude_sp = land_altitude + slope_height
@@ -248,7 +195,7 @@ class Landing:
         return LandingSetpoint(
             altitude_sp=altitude_sp,
             height_rate_sp=height_rate_sp,
-            airspeed_sp=p.airspeed,
+            airspeed_sp=p.fw_lnd_airspd_sc * p.fw_airspd_min,
             flaring=self.flaring,
             pitch_min=pitch_min,
             pitch_max=pitch_max,

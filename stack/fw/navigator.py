@@ -41,7 +41,7 @@ from stack.mission.store import MissionStore
 from stack.msg.fixedwing import PositionSetpoint, PositionSetpointTriplet
 from stack.msg.navigation import NavigationRequest
 from stack.msg.system import VehicleStatus
-from stack.params import catalogue
+from stack.params.binding import ParamSet, combine
 from stack.params.param import Param
 
 NS = VehicleStatus
@@ -55,12 +55,20 @@ APPROACH_STRAIGHT_LOITERS = 2.0
 LOITER_ALTITUDE_REACHED = 2.0
 """How close to its altitude a descending loiter must be [m] before the landing approach starts."""
 
-OWN_PARAMS: tuple[Param, ...] = catalogue.params(
-    "NAV_LOITER_RAD", "MIS_TAKEOFF_ALT", "RTL_RETURN_ALT", "RTL_DESCEND_ALT", "FW_LND_ANG", "NAV_ACC_RAD",
-    "NAV_FW_ALT_RAD",
-)
-PARAMS: tuple[Param, ...] = tuple({p.name: p for p in (*OWN_PARAMS, *tracker.PARAMS, *feasibility.PARAMS)}.values())
-DEFAULTS: dict[str, object] = {p.name: p.default for p in PARAMS}
+class FwNavigatorParams(ParamSet):
+    """What the navigator reads itself (the mission's tracker and feasibility check take theirs from the same
+    values)."""
+
+    nav_loiter_rad: float
+    mis_takeoff_alt: float
+    rtl_return_alt: float
+    rtl_descend_alt: float
+    fw_lnd_ang: float
+    nav_acc_rad: float
+    nav_fw_alt_rad: float
+
+
+PARAMS: tuple[Param, ...] = combine(FwNavigatorParams.PARAMS, tracker.PARAMS, feasibility.PARAMS)
 
 
 class LandPhase(IntEnum):
@@ -121,7 +129,9 @@ class FixedwingNavigator:
     """``missions`` holds the uploaded mission; ``update(inputs)`` every cycle returns the triplet."""
 
     def __init__(self, params: Mapping[str, object] | None = None) -> None:
-        self._p: dict[str, float] = {}
+        self._p = FwNavigatorParams()
+        self._values: dict[str, object] = {}
+        """The values given so far, by PX4 name (a later ``set_params`` may give only some)."""
         self.missions = MissionStore(fixed_wing=True, on_replaced=self._mission_replaced)
         self.runway: Runway | None = None
         self._active: int | None = None
@@ -138,13 +148,13 @@ class FixedwingNavigator:
         self.set_params(params or {})
 
     def set_params(self, params: Mapping[str, object]) -> None:
-        merged = {**DEFAULTS, **self._p, **params}
-        self._p = {name: float(value) for name, value in merged.items()}  # type: ignore[arg-type]
-        self.missions.set_params(merged)
+        self._values.update(params)
+        self._p = FwNavigatorParams.from_params(self._values)
+        self.missions.set_params(self._values)
 
     @property
     def loiter_radius(self) -> float:
-        return self._p["NAV_LOITER_RAD"]
+        return self._p.nav_loiter_rad
 
     # ------------------------------------------------------------------ cycle
 
@@ -190,7 +200,7 @@ class FixedwingNavigator:
 
     def _takeoff_altitude(self, inp: FwNavigatorInputs) -> float:
         altitude = inp.request.takeoff_altitude if inp.request is not None else NAN
-        return altitude if math.isfinite(altitude) and altitude > 0.0 else self._p["MIS_TAKEOFF_ALT"]
+        return altitude if math.isfinite(altitude) and altitude > 0.0 else self._p.mis_takeoff_alt
 
     def _ground_z(self, inp: FwNavigatorInputs) -> float:
         return inp.home.z if inp.home is not None else inp.position[2]
@@ -198,7 +208,7 @@ class FixedwingNavigator:
     def _start_takeoff(self, inp: FwNavigatorInputs, altitude: float, towards: Vec3 | None = None) -> None:
         start = inp.position
         heading = inp.yaw if math.isfinite(inp.yaw) else 0.0
-        if towards is not None and math.hypot(towards[0] - start[0], towards[1] - start[1]) > self._p["NAV_ACC_RAD"]:
+        if towards is not None and math.hypot(towards[0] - start[0], towards[1] - start[1]) > self._p.nav_acc_rad:
             target = towards
         else:
             target = (
@@ -329,9 +339,9 @@ class FixedwingNavigator:
     # ------------------------------------------------------------------ return and land
 
     def _approach(self, touchdown: Vec3, heading: float, inp: FwNavigatorInputs) -> LandingApproach:
-        height = max(self._p["RTL_DESCEND_ALT"], 1.0)
+        height = max(self._p.rtl_descend_alt, 1.0)
         straight = APPROACH_STRAIGHT_LOITERS * self.loiter_radius
-        return LandingApproach.build(touchdown, heading, height, self._p["FW_LND_ANG"], straight)
+        return LandingApproach.build(touchdown, heading, height, self._p.fw_lnd_ang, straight)
 
     def _home_runway(self, inp: FwNavigatorInputs) -> tuple[Vec3, float]:
         """The touchdown point and direction of a landing at home: the takeoff's runway when known."""
@@ -349,7 +359,7 @@ class FixedwingNavigator:
         touchdown, heading = self._home_runway(inp)
         self._landing = self._approach(touchdown, heading, inp)
         ground = touchdown[2]
-        self._return_altitude = min(inp.position[2], ground - self._p["RTL_RETURN_ALT"])
+        self._return_altitude = min(inp.position[2], ground - self._p.rtl_return_alt)
         self._loiter_center = (touchdown[0], touchdown[1], self._return_altitude)
         self._land_phase = LandPhase.RETURN
         self._return_from = inp.position
@@ -385,8 +395,8 @@ class FixedwingNavigator:
                 return self._loiter(center)
         if self._land_phase == LandPhase.APPROACH:
             entry = landing.entry
-            radius = inp.acceptance_radius if inp.acceptance_radius > 0.0 else p["NAV_ACC_RAD"]
-            if math.hypot(entry[0] - position[0], entry[1] - position[1]) <= max(radius, p["NAV_ACC_RAD"]):
+            radius = inp.acceptance_radius if inp.acceptance_radius > 0.0 else p.nav_acc_rad
+            if math.hypot(entry[0] - position[0], entry[1] - position[1]) <= max(radius, p.nav_acc_rad):
                 self._land_phase = LandPhase.LAND
             else:
                 previous, current = landing.setpoints(LandPhase.APPROACH, self._approach_from)

@@ -30,10 +30,9 @@ airspeed it asks for), ``heading_reference``, ``track_error_bound``, ``adapted_p
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
-from dataclasses import dataclass
 
 from stack.mathlib.scalar import CONSTANTS_ONE_G, constrain
+from stack.params.binding import ParamSet
 
 Vec2 = tuple[float, float]
 
@@ -69,73 +68,26 @@ def _finite_or_zero(v: Vec2) -> Vec2:
     return (v[0], v[1]) if math.isfinite(v[0]) and math.isfinite(v[1]) else _ZERO
 
 
-@dataclass(frozen=True, slots=True)
-class NpfgParams:
-    """NPFG's settings; :meth:`from_params` takes them from the PX4 parameters."""
+class NpfgParams(ParamSet):
+    """NPFG's settings (the catalogue's FW_NPFG_*, and PX4 v1.13's FW_L1_R_SLEW_MAX, shared between L1 and NPFG);
+    FW_AIRSPD_TRIM is the initial nominal airspeed reference (see :meth:`NPFG.set_airspeed_limits`)."""
 
-    period: float
-    damping: float
-    lower_bound_period: bool
-    upper_bound_period: bool
-    track_keeping: bool
-    min_ground_speed_enabled: bool
-    wind_excess_regulation: bool
-    track_keeping_ground_speed_max: float
-    roll_time_constant: float
-    switch_distance_multiplier: float
-    period_safety_factor: float
-    min_ground_speed: float
-    roll_limit: float
-    """[rad]"""
-    roll_slew_rate: float
-    """[rad/s], 0 = off"""
-    airspeed_nominal: float
-    """Initial nominal airspeed reference [m/s] (see :meth:`NPFG.set_airspeed_limits`)."""
-    airspeed_max: float
-
-    PARAM_NAMES = (
-        "FW_NPFG_PERIOD",
-        "FW_NPFG_DAMPING",
-        "FW_NPFG_LB_PERIOD",
-        "FW_NPFG_UB_PERIOD",
-        "FW_NPFG_TRACK_KEEP",
-        "FW_NPFG_EN_MIN_GSP",
-        "FW_NPFG_WIND_REG",
-        "FW_NPFG_GSP_MAX_TK",
-        "FW_NPFG_ROLL_TC",
-        "FW_NPFG_SW_DST_MLT",
-        "FW_NPFG_PERIOD_SF",
-        "FW_GND_SPD_MIN",
-        "FW_R_LIM",
-        "FW_L1_R_SLEW_MAX",
-        "FW_AIRSPD_TRIM",
-        "FW_AIRSPD_MAX",
-    )
-    """The parameters :meth:`from_params` reads (PX4 v1.13 shares FW_L1_R_SLEW_MAX between L1 and NPFG)."""
-
-    @classmethod
-    def from_params(cls, values: Mapping[str, object]) -> NpfgParams:
-        def f(name: str) -> float:
-            return float(values[name])  # type: ignore[arg-type]
-
-        return cls(
-            period=f("FW_NPFG_PERIOD"),
-            damping=f("FW_NPFG_DAMPING"),
-            lower_bound_period=bool(values["FW_NPFG_LB_PERIOD"]),
-            upper_bound_period=bool(values["FW_NPFG_UB_PERIOD"]),
-            track_keeping=bool(values["FW_NPFG_TRACK_KEEP"]),
-            min_ground_speed_enabled=bool(values["FW_NPFG_EN_MIN_GSP"]),
-            wind_excess_regulation=bool(values["FW_NPFG_WIND_REG"]),
-            track_keeping_ground_speed_max=f("FW_NPFG_GSP_MAX_TK"),
-            roll_time_constant=f("FW_NPFG_ROLL_TC"),
-            switch_distance_multiplier=f("FW_NPFG_SW_DST_MLT"),
-            period_safety_factor=f("FW_NPFG_PERIOD_SF"),
-            min_ground_speed=f("FW_GND_SPD_MIN"),
-            roll_limit=math.radians(f("FW_R_LIM")),
-            roll_slew_rate=math.radians(f("FW_L1_R_SLEW_MAX")),
-            airspeed_nominal=f("FW_AIRSPD_TRIM"),
-            airspeed_max=f("FW_AIRSPD_MAX"),
-        )
+    fw_npfg_period: float
+    fw_npfg_damping: float
+    fw_npfg_lb_period: int
+    fw_npfg_ub_period: int
+    fw_npfg_track_keep: int
+    fw_npfg_en_min_gsp: int
+    fw_npfg_wind_reg: int
+    fw_npfg_gsp_max_tk: float
+    fw_npfg_roll_tc: float
+    fw_npfg_sw_dst_mlt: float
+    fw_npfg_period_sf: float
+    fw_gnd_spd_min: float
+    fw_r_lim: float
+    fw_l1_r_slew_max: float
+    fw_airspd_trim: float
+    fw_airspd_max: float
 
 
 class NPFG:
@@ -143,8 +95,8 @@ class NPFG:
 
     def __init__(self, params: NpfgParams) -> None:
         self.set_params(params)
-        self.airspeed_nominal = max(params.airspeed_nominal, 0.1)
-        self.airspeed_max = max(params.airspeed_max, 0.1)
+        self.airspeed_nominal = max(params.fw_airspd_trim, 0.1)
+        self.airspeed_max = max(params.fw_airspd_max, 0.1)
         self.time_constant = self._period * self._damping
         self.adapted_period = self._period
         self.p_gain = 4.0 * math.pi * self._damping / self._period
@@ -167,8 +119,8 @@ class NPFG:
 
     def set_params(self, params: NpfgParams) -> None:
         self.params = params
-        self._period = max(params.period, EPSILON)
-        self._damping = constrain(params.damping, EPSILON, 1.0)
+        self._period = max(params.fw_npfg_period, EPSILON)
+        self._damping = constrain(params.fw_npfg_damping, EPSILON, 1.0)
 
     def set_airspeed_limits(self, nominal: float, maximum: float) -> None:
         """The nominal and maximum true airspeeds the reference may use [m/s] (PX4 sets them every step
@@ -179,7 +131,7 @@ class NPFG:
 
     def switch_distance(self, waypoint_radius: float) -> float:
         """Distance at which to switch to the next waypoint: min(acceptance radius, FW_NPFG_SW_DST_MLT·bound)."""
-        return min(waypoint_radius, self.track_error_bound * self.params.switch_distance_multiplier)
+        return min(waypoint_radius, self.track_error_bound * self.params.fw_npfg_sw_dst_mlt)
 
     @property
     def heading_reference(self) -> float:
@@ -369,16 +321,16 @@ class NPFG:
     ) -> float:
         p = self.params
         period = self._period
-        if not p.lower_bound_period:
+        if not p.fw_npfg_lb_period:
             return period
         air_turn_rate = abs(curvature * airspeed)
         wind_factor = self._wind_factor(airspeed, wind_speed)
         feas_on_track = self.bearing_feasibility_on_track
-        period_lb = self._period_lower_bound(air_turn_rate, wind_factor, feas_on_track) * p.period_safety_factor
+        period_lb = self._period_lower_bound(air_turn_rate, wind_factor, feas_on_track) * p.fw_npfg_period_sf
         period = max(period_lb, period)
         # Upper bounding only with lower bounding: shortening the period without it can destabilise.
         period_ub = self._period_upper_bound(air_turn_rate, wind_factor, feas_on_track)
-        if p.upper_bound_period and math.isfinite(period_ub) and period > period_ub:
+        if p.fw_npfg_ub_period and math.isfinite(period_ub) and period > period_ub:
             period_adapted = max(period_lb, period_ub)
             time_constant = period * self._damping
             bound = self._track_error_bound(ground_speed, time_constant)
@@ -406,7 +358,7 @@ class NPFG:
 
     def _period_lower_bound(self, air_turn_rate: float, wind_factor: float, feas_on_track: float) -> float:
         """Marginal stability against the roll response lag (a conservative worst case)."""
-        roll_tc = self.params.roll_time_constant
+        roll_tc = self.params.fw_npfg_roll_tc
         period_lb = math.pi * roll_tc / self._damping
         if air_turn_rate * wind_factor < EPSILON or self._damping < 0.5:
             return period_lb
@@ -449,13 +401,13 @@ class NPFG:
     def _min_ground_speed(self, normalised_track_error: float, feasibility: float) -> float:
         p = self.params
         track_keeping = 0.0
-        if p.track_keeping and p.wind_excess_regulation:
+        if p.fw_npfg_track_keep and p.fw_npfg_wind_reg:
             track_keeping = (
                 (1.0 - feasibility)
-                * p.track_keeping_ground_speed_max
+                * p.fw_npfg_gsp_max_tk
                 * constrain(normalised_track_error / NTE_FRACTION, 0.0, 1.0)
             )
-        desired = max(p.min_ground_speed, 0.0) if p.min_ground_speed_enabled and p.wind_excess_regulation else 0.0
+        desired = max(p.fw_gnd_spd_min, 0.0) if p.fw_npfg_en_min_gsp and p.fw_npfg_wind_reg else 0.0
         return max(track_keeping, desired)
 
     def _reference_air_velocity(
@@ -472,8 +424,8 @@ class NPFG:
         feasible = self._bearing_is_feasible
         if (
             min_ground_speed > wind_dot_bearing
-            and (p.min_ground_speed_enabled or p.track_keeping)
-            and p.wind_excess_regulation
+            and (p.fw_npfg_en_min_gsp or p.fw_npfg_track_keep)
+            and p.fw_npfg_wind_reg
         ):
             # The airspeed that gives the minimum ground speed along the bearing.
             airspeed_min = math.hypot(min_ground_speed - wind_dot_bearing, wind_cross_bearing)
@@ -484,7 +436,7 @@ class NPFG:
             return self._solve_wind_triangle(wind_cross_bearing, max(airspeed_min, nominal), bearing)
         if feasible(wind_cross_bearing, wind_dot_bearing, nominal, wind_speed):
             return self._solve_wind_triangle(wind_cross_bearing, nominal, bearing)
-        if p.wind_excess_regulation and feasible(wind_cross_bearing, wind_dot_bearing, maximum, wind_speed):
+        if p.fw_npfg_wind_reg and feasible(wind_cross_bearing, wind_dot_bearing, maximum, wind_speed):
             if wind_dot_bearing <= 0.0:
                 # Regulate, not overcome, the excess head wind: fly into it at the wind speed (at worst
                 # zero ground speed). PX4's code assigns +wind here, which points downwind; its own note
@@ -493,7 +445,7 @@ class NPFG:
             # Square to the bearing: the least airspeed that holds it.
             return (-wind_cross_bearing * bearing[1], wind_cross_bearing * bearing[0])
         return self._infeasible_air_velocity(
-            wind_vel, bearing, wind_speed, maximum if p.wind_excess_regulation else nominal
+            wind_vel, bearing, wind_speed, maximum if p.fw_npfg_wind_reg else nominal
         )
 
     @staticmethod
@@ -546,9 +498,10 @@ class NPFG:
     def _finish(self, ground_velocity: Vec2, dt: float) -> None:
         self._ground_velocity = (ground_velocity[0], ground_velocity[1])
         roll = math.atan(self.lateral_acceleration / CONSTANTS_ONE_G)
-        roll = constrain(roll, -self.params.roll_limit, self.params.roll_limit)
-        if dt > 0.0 and self.params.roll_slew_rate > 0.0:
-            step = self.params.roll_slew_rate * dt
+        roll_limit = math.radians(self.params.fw_r_lim)
+        roll = constrain(roll, -roll_limit, roll_limit)
+        if dt > 0.0 and self.params.fw_l1_r_slew_max > 0.0:
+            step = math.radians(self.params.fw_l1_r_slew_max) * dt
             roll = constrain(roll, self.roll_setpoint - step, self.roll_setpoint + step)
         if math.isfinite(roll):
             self.roll_setpoint = roll

@@ -40,7 +40,7 @@ from stack.mathlib.vector import Vec3
 from stack.msg.fixedwing import PositionSetpoint, PositionSetpointTriplet
 from stack.msg.setpoints import ManualControlSetpoint
 from stack.msg.system import VehicleStatus
-from stack.params import catalogue
+from stack.params.binding import ParamSet
 from stack.params.param import Param
 
 NS = VehicleStatus
@@ -62,18 +62,33 @@ SWITCH_DISTANCE_CAP = 500.0
 """The waypoint radius the guidance's switching distance is capped by (PX4 fw_pos_control: switch_distance(500)):
 the navigator accepts a waypoint within the larger of this distance and the item's radius."""
 
-_OWN = (
-    "FW_USE_NPFG", "FW_L1_PERIOD", "FW_L1_DAMPING", "FW_L1_R_SLEW_MAX", "FW_R_LIM", "FW_P_LIM_MIN", "FW_P_LIM_MAX",
-    "FW_THR_CRUISE", "FW_THR_MIN", "FW_THR_MAX", "FW_THR_IDLE", "FW_AIRSPD_MIN", "FW_AIRSPD_TRIM", "FW_AIRSPD_MAX",
-    "FW_MAN_R_MAX", "NAV_ACC_RAD", "NAV_LOITER_RAD",
-)
-PARAMS: tuple[Param, ...] = catalogue.params(
-    *dict.fromkeys(
-        (*_OWN, *TecsParams.param_names(), *NpfgParams.PARAM_NAMES, *RunwayTakeoffParams.PARAM_NAMES,
-         *LandingParams.PARAM_NAMES)
-    )
-)
-DEFAULTS: dict[str, object] = {p.name: p.default for p in PARAMS}
+class FwPosControlParams(ParamSet):
+    """What the position controller reads itself, and its guidance's, TECS', runway takeoff's and landing's."""
+
+    fw_use_npfg: int
+    fw_l1_period: float
+    fw_l1_damping: float
+    fw_l1_r_slew_max: float
+    fw_r_lim: float
+    fw_p_lim_min: float
+    fw_p_lim_max: float
+    fw_thr_cruise: float
+    fw_thr_min: float
+    fw_thr_max: float
+    fw_thr_idle: float
+    fw_airspd_min: float
+    fw_airspd_trim: float
+    fw_airspd_max: float
+    fw_man_r_max: float
+    nav_acc_rad: float
+    nav_loiter_rad: float
+    tecs: TecsParams
+    npfg: NpfgParams
+    runway: RunwayTakeoffParams
+    landing: LandingParams
+
+
+PARAMS: tuple[Param, ...] = FwPosControlParams.PARAMS
 
 
 class FwPosInputs(NamedTuple):
@@ -137,13 +152,14 @@ class FixedwingPositionControl:
     is not one this controller flies, or the vehicle is disarmed)."""
 
     def __init__(self, params: Mapping[str, object] | None = None) -> None:
-        self._p: dict[str, float] = {}
-        self._values: dict[str, object] = dict(DEFAULTS)
-        self.tecs = Tecs(TecsParams.from_params(DEFAULTS))
+        self._p = FwPosControlParams()
+        self._values: dict[str, object] = {}
+        """The values given so far, by PX4 name (a later ``set_params`` may give only some)."""
+        self.tecs = Tecs(self._p.tecs)
         self.l1 = L1Guidance()
-        self.npfg = NPFG(NpfgParams.from_params(DEFAULTS))
-        self.runway = RunwayTakeoff(RunwayTakeoffParams.from_params(DEFAULTS))
-        self.landing = Landing(LandingParams.from_params(DEFAULTS))
+        self.npfg = NPFG(self._p.npfg)
+        self.runway = RunwayTakeoff(self._p.runway)
+        self.landing = Landing(self._p.landing)
         self._mode_key: tuple[int, int] | None = None
         self._hold_line: tuple[Vec2, Vec2] | None = None
         self._hold_center: Vec3 | None = None
@@ -157,21 +173,19 @@ class FixedwingPositionControl:
 
     def set_params(self, params: Mapping[str, object]) -> None:
         self._values.update(params)
-        values = self._values
-        self._p = {name: float(value) for name, value in values.items()}  # type: ignore[arg-type]
-        p = self._p
-        self.tecs.set_params(TecsParams.from_params(values))
-        self.npfg.set_params(NpfgParams.from_params(values))
-        self.runway.params = RunwayTakeoffParams.from_params(values)
-        self.landing.set_params(LandingParams.from_params(values))
-        self.l1.set_l1_period(p["FW_L1_PERIOD"])
-        self.l1.set_l1_damping(p["FW_L1_DAMPING"])
-        self.l1.roll_limit = math.radians(p["FW_R_LIM"])
-        self.l1.roll_slew_rate = math.radians(p["FW_L1_R_SLEW_MAX"])
+        self._p = p = FwPosControlParams.from_params(self._values)
+        self.tecs.set_params(p.tecs)
+        self.npfg.set_params(p.npfg)
+        self.runway.params = p.runway
+        self.landing.set_params(p.landing)
+        self.l1.set_l1_period(p.fw_l1_period)
+        self.l1.set_l1_damping(p.fw_l1_damping)
+        self.l1.roll_limit = math.radians(p.fw_r_lim)
+        self.l1.roll_slew_rate = math.radians(p.fw_l1_r_slew_max)
 
     @property
     def uses_npfg(self) -> bool:
-        return self._p["FW_USE_NPFG"] >= 0.5
+        return self._p.fw_use_npfg >= 0.5
 
     @property
     def guidance(self) -> L1Guidance | NPFG:
@@ -210,14 +224,14 @@ class FixedwingPositionControl:
         if triplet is None or not triplet.current.valid:
             if self._hold_center is None:
                 self._hold_center = inp.position
-            return self._loiter(inp, self._hold_center, self._p["NAV_LOITER_RAD"], 1)
+            return self._loiter(inp, self._hold_center, self._p.nav_loiter_rad, 1)
         current = triplet.current
         if current.type == SP.SETPOINT_TYPE_TAKEOFF:
             return self._takeoff(inp, triplet)
         if current.type == SP.SETPOINT_TYPE_LAND:
             return self._land(inp, triplet)
         if current.type == SP.SETPOINT_TYPE_LOITER:
-            radius = current.loiter_radius if math.isfinite(current.loiter_radius) else self._p["NAV_LOITER_RAD"]
+            radius = current.loiter_radius if math.isfinite(current.loiter_radius) else self._p.nav_loiter_rad
             direction = -1 if current.loiter_direction_counter_clockwise else 1
             return self._loiter(inp, (current.x, current.y, current.z), radius, direction)
         return self._waypoint(inp, triplet)
@@ -244,10 +258,10 @@ class FixedwingPositionControl:
         (else FW_AIRSPD_MIN) raised as the stall speed rises in a turn, by the square root of the load factor
         1/cos(roll) of the bank last commanded (PX4 v1.14 ``FixedwingPositionControl::adapt_airspeed_setpoint``)."""
         p = self._p
-        speed = requested if math.isfinite(requested) and requested > 0.0 else p["FW_AIRSPD_TRIM"]
-        least = minimum if math.isfinite(minimum) else p["FW_AIRSPD_MIN"]
+        speed = requested if math.isfinite(requested) and requested > 0.0 else p.fw_airspd_trim
+        least = minimum if math.isfinite(minimum) else p.fw_airspd_min
         least *= math.sqrt(1.0 / max(math.cos(self._roll_sp), FLT_EPSILON))
-        return constrain(speed, min(least, p["FW_AIRSPD_MAX"]), p["FW_AIRSPD_MAX"])
+        return constrain(speed, min(least, p.fw_airspd_max), p.fw_airspd_max)
 
     def _tecs(
         self,
@@ -264,10 +278,10 @@ class FixedwingPositionControl:
         in_air: bool = True,
     ) -> tuple[float, float]:
         p = self._p
-        pitch_min = pitch_min if math.isfinite(pitch_min) else math.radians(p["FW_P_LIM_MIN"])
-        pitch_max = pitch_max if math.isfinite(pitch_max) else math.radians(p["FW_P_LIM_MAX"])
-        throttle_min = throttle_min if math.isfinite(throttle_min) else p["FW_THR_MIN"]
-        throttle_max = throttle_max if math.isfinite(throttle_max) else p["FW_THR_MAX"]
+        pitch_min = pitch_min if math.isfinite(pitch_min) else math.radians(p.fw_p_lim_min)
+        pitch_max = pitch_max if math.isfinite(pitch_max) else math.radians(p.fw_p_lim_max)
+        throttle_min = throttle_min if math.isfinite(throttle_min) else p.fw_thr_min
+        throttle_max = throttle_max if math.isfinite(throttle_max) else p.fw_thr_max
         vz = inp.velocity[2]
         out = self.tecs.update(
             inp.dt,
@@ -286,7 +300,7 @@ class FixedwingPositionControl:
             pitch_max=pitch_max,
             throttle_min=throttle_min,
             throttle_max=throttle_max,
-            throttle_trim=p["FW_THR_CRUISE"],
+            throttle_trim=p.fw_thr_cruise,
             height_rate_sp=height_rate_sp,
             climbout=climbout,
             climbout_pitch_min=CLIMBOUT_PITCH_MIN,
@@ -306,7 +320,7 @@ class FixedwingPositionControl:
         position, velocity = _xy(inp.position), self._ground_velocity(inp)
         if g is self.npfg:
             self.npfg.set_airspeed_limits(
-                self._p["FW_AIRSPD_TRIM"] * _ratio(inp), self._p["FW_AIRSPD_MAX"] * _ratio(inp)
+                self._p.fw_airspd_trim * _ratio(inp), self._p.fw_airspd_max * _ratio(inp)
             )
             self.npfg.navigate_waypoints(a, b, position, velocity, inp.dt, wind=self._wind(inp))
         else:
@@ -318,7 +332,7 @@ class FixedwingPositionControl:
         position, velocity = _xy(inp.position), self._ground_velocity(inp)
         if g is self.npfg:
             self.npfg.set_airspeed_limits(
-                self._p["FW_AIRSPD_TRIM"] * _ratio(inp), self._p["FW_AIRSPD_MAX"] * _ratio(inp)
+                self._p.fw_airspd_trim * _ratio(inp), self._p.fw_airspd_max * _ratio(inp)
             )
             self.npfg.navigate_loiter(center, position, radius, direction, velocity, inp.dt, wind=self._wind(inp))
         else:
@@ -392,8 +406,8 @@ class FixedwingPositionControl:
             inp,
             -current.z,
             self._airspeed_sp(),
-            pitch_min=runway.min_pitch(CLIMBOUT_PITCH_MIN, math.radians(p["FW_P_LIM_MIN"])),
-            pitch_max=runway.max_pitch(math.radians(p["FW_P_LIM_MAX"])),
+            pitch_min=runway.min_pitch(CLIMBOUT_PITCH_MIN, math.radians(p.fw_p_lim_min)),
+            pitch_max=runway.max_pitch(math.radians(p.fw_p_lim_max)),
             climbout=runway.climbout,
             in_air=state >= RunwayTakeoffState.TAKEOFF,
         )
@@ -438,7 +452,7 @@ class FixedwingPositionControl:
         pitch, throttle = self._tecs(
             inp,
             sp.altitude_sp,
-            self._airspeed_sp(sp.airspeed_sp, min(p["FW_AIRSPD_MIN"], sp.airspeed_sp)),
+            self._airspeed_sp(sp.airspeed_sp, min(p.fw_airspd_min, sp.airspeed_sp)),
             height_rate_sp=sp.height_rate_sp,
             pitch_min=sp.pitch_min,
             pitch_max=sp.pitch_max,
@@ -450,7 +464,7 @@ class FixedwingPositionControl:
             # On the wheels, or just above them: idle, steered along the runway. The pitch stays the flare's (PX4
             # v1.14 flies it down to the ground): raising the nose of a vehicle still floating would stall it.
             self._report(inp, _xy(current), current.type)
-            return FwPosOutput(0.0, pitch, sp.target_bearing, p["FW_THR_IDLE"], True, True)
+            return FwPosOutput(0.0, pitch, sp.target_bearing, p.fw_thr_idle, True, True)
         roll = self._heading(inp, sp.target_bearing) if sp.heading_hold else self._line(inp, sp.track_a, sp.track_b)
         roll = constrain(roll, -sp.roll_limit, sp.roll_limit)
         self._report(inp, _xy(current), current.type)
@@ -480,14 +494,14 @@ class FixedwingPositionControl:
             self._report(inp, self._hold_line[1], SP.SETPOINT_TYPE_POSITION)
         else:
             self._hold_line = None
-            roll = roll_stick * math.radians(p["FW_MAN_R_MAX"])
+            roll = roll_stick * math.radians(p.fw_man_r_max)
         # Stick forward (+pitch) descends, back climbs (PX4 FW_POSCTL's height-rate stick).
-        rate = -pitch_stick * (p["FW_T_SINK_MAX"] if pitch_stick > 0.0 else p["FW_T_CLMB_MAX"])
+        rate = -pitch_stick * (p.tecs.fw_t_sink_max if pitch_stick > 0.0 else p.tecs.fw_t_clmb_max)
         throttle01 = constrain(0.5 * (throttle_stick + 1.0), 0.0, 1.0)
         if throttle01 < 0.5:
-            airspeed = p["FW_AIRSPD_MIN"] + (p["FW_AIRSPD_TRIM"] - p["FW_AIRSPD_MIN"]) * throttle01 * 2.0
+            airspeed = p.fw_airspd_min + (p.fw_airspd_trim - p.fw_airspd_min) * throttle01 * 2.0
         else:
-            airspeed = p["FW_AIRSPD_TRIM"] + (p["FW_AIRSPD_MAX"] - p["FW_AIRSPD_TRIM"]) * (throttle01 - 0.5) * 2.0
+            airspeed = p.fw_airspd_trim + (p.fw_airspd_max - p.fw_airspd_trim) * (throttle01 - 0.5) * 2.0
         # Sticks centred: hold the altitude where the height rate went to zero.
         if rate != 0.0:
             self._altitude_hold = NAN
@@ -499,9 +513,9 @@ class FixedwingPositionControl:
     def _descend(self, inp: FwPosInputs) -> FwPosOutput:
         p = self._p
         if math.isfinite(inp.position[2]):
-            pitch, throttle = self._tecs(inp, NAN, self._airspeed_sp(), height_rate_sp=-p["FW_T_SINK_MIN"])
+            pitch, throttle = self._tecs(inp, NAN, self._airspeed_sp(), height_rate_sp=-p.tecs.fw_t_sink_min)
         else:
-            pitch, throttle = 0.0, p["FW_THR_CRUISE"] * 0.5
+            pitch, throttle = 0.0, p.fw_thr_cruise * 0.5
         return FwPosOutput(DESCEND_BANK, pitch, inp.yaw, throttle, False, False)
 
 

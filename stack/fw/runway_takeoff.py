@@ -19,11 +19,10 @@ the takeoff waypoint (1). Plain class: the caller passes time (µs) and state.
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
-from dataclasses import dataclass
 from enum import IntEnum
 
 from stack.mathlib.scalar import constrain
+from stack.params.binding import ParamSet
 
 Vec2 = tuple[float, float]
 
@@ -41,58 +40,21 @@ class RunwayTakeoffState(IntEnum):
     FLY = 4
 
 
-@dataclass(frozen=True, slots=True)
-class RunwayTakeoffParams:
-    """The runway takeoff's settings; :meth:`from_params` takes them from the PX4 parameters."""
+class RunwayTakeoffParams(ParamSet):
+    """The runway takeoff's settings (the catalogue's RWTO_*, FW_AIRSPD_MIN and FW_CLMBOUT_DIFF). RWTO_HDG: 0 the
+    airframe heading at the start, 1 the navigation's (to the takeoff waypoint); RWTO_NAV_ALT and FW_CLMBOUT_DIFF
+    are heights above the runway."""
 
-    heading_mode: int
-    """RWTO_HDG: 0 the airframe heading at the start, 1 the navigation's (to the takeoff waypoint)."""
-    nav_altitude: float
-    """RWTO_NAV_ALT [m] above the runway."""
-    max_throttle: float
-    runway_pitch: float
-    """RWTO_PSP [rad]"""
-    max_pitch: float
-    """RWTO_MAX_PITCH [rad]"""
-    max_roll: float
-    """RWTO_MAX_ROLL [rad]"""
-    rotation_airspeed: float
-    """RWTO_AIRSPD_SCL·FW_AIRSPD_MIN [m/s]"""
-    ramp_time: float
-    """RWTO_RAMP_TIME [s]"""
-    climbout_altitude: float
-    """FW_CLMBOUT_DIFF [m] above the runway."""
-
-    PARAM_NAMES = (
-        "RWTO_HDG",
-        "RWTO_NAV_ALT",
-        "RWTO_MAX_THR",
-        "RWTO_PSP",
-        "RWTO_MAX_PITCH",
-        "RWTO_MAX_ROLL",
-        "RWTO_AIRSPD_SCL",
-        "RWTO_RAMP_TIME",
-        "FW_AIRSPD_MIN",
-        "FW_CLMBOUT_DIFF",
-    )
-
-    @classmethod
-    def from_params(cls, values: Mapping[str, object]) -> RunwayTakeoffParams:
-        def f(name: str) -> float:
-            return float(values[name])  # type: ignore[arg-type]
-
-        return cls(
-            heading_mode=int(values["RWTO_HDG"]),  # type: ignore[call-overload]
-            nav_altitude=f("RWTO_NAV_ALT"),
-            max_throttle=f("RWTO_MAX_THR"),
-            runway_pitch=math.radians(f("RWTO_PSP")),
-            max_pitch=math.radians(f("RWTO_MAX_PITCH")),
-            max_roll=math.radians(f("RWTO_MAX_ROLL")),
-            rotation_airspeed=f("RWTO_AIRSPD_SCL") * f("FW_AIRSPD_MIN"),
-            ramp_time=f("RWTO_RAMP_TIME"),
-            climbout_altitude=f("FW_CLMBOUT_DIFF"),
-        )
-
+    rwto_hdg: int
+    rwto_nav_alt: float
+    rwto_max_thr: float
+    rwto_psp: float
+    rwto_max_pitch: float
+    rwto_max_roll: float
+    rwto_airspd_scl: float
+    rwto_ramp_time: float
+    fw_airspd_min: float
+    fw_clmbout_diff: float
 
 class RunwayTakeoff:
     """PX4's runway takeoff state machine. ``init`` on the runway, ``update`` every step, then take the
@@ -127,20 +89,21 @@ class RunwayTakeoff:
     def update(self, time_us: int, airspeed: float, altitude_agl: float, position: Vec2) -> RunwayTakeoffState:
         """Advance with the (calibrated) ``airspeed`` [m/s] and the height above the runway [m]."""
         p = self.params
+        rotation_airspeed = p.rwto_airspd_scl * p.fw_airspd_min
         s = RunwayTakeoffState
         if self.state == s.THROTTLE_RAMP:
-            if self._elapsed(time_us) > p.ramp_time or airspeed > p.rotation_airspeed * RAMP_AIRSPEED_RATIO:
+            if self._elapsed(time_us) > p.rwto_ramp_time or airspeed > rotation_airspeed * RAMP_AIRSPEED_RATIO:
                 self.state = s.CLAMPED_TO_RUNWAY
         elif self.state == s.CLAMPED_TO_RUNWAY:
-            if airspeed > p.rotation_airspeed:
+            if airspeed > rotation_airspeed:
                 self.state = s.TAKEOFF
         elif self.state == s.TAKEOFF:
-            if altitude_agl > p.nav_altitude:
+            if altitude_agl > p.rwto_nav_alt:
                 self.state = s.CLIMBOUT
-                if p.heading_mode == 0:
+                if p.rwto_hdg == 0:
                     # Navigation to the takeoff waypoint starts from here.
                     self.start_position = (position[0], position[1])
-        elif self.state == s.CLIMBOUT and altitude_agl > p.climbout_altitude:
+        elif self.state == s.CLIMBOUT and altitude_agl > p.fw_clmbout_diff:
             self.climbout = False
             self.state = s.FLY
         return self.state
@@ -158,26 +121,27 @@ class RunwayTakeoff:
     def throttle(self, time_us: int, tecs_throttle: float) -> float:
         p = self.params
         if self.state == RunwayTakeoffState.THROTTLE_RAMP:
-            ramp = self._elapsed(time_us) / p.ramp_time if p.ramp_time > 0.0 else 1.0
-            return min(ramp * p.max_throttle, p.max_throttle)
+            ramp = self._elapsed(time_us) / p.rwto_ramp_time if p.rwto_ramp_time > 0.0 else 1.0
+            return min(ramp * p.rwto_max_thr, p.rwto_max_thr)
         if self.state == RunwayTakeoffState.CLAMPED_TO_RUNWAY:
-            return p.max_throttle
+            return p.rwto_max_thr
         return tecs_throttle
 
     def pitch(self, tecs_pitch: float) -> float:
         if self.state <= RunwayTakeoffState.CLAMPED_TO_RUNWAY:
-            return self.params.runway_pitch
+            return math.radians(self.params.rwto_psp)
         return tecs_pitch
 
     def roll(self, nav_roll: float) -> float:
         if self.state < RunwayTakeoffState.CLIMBOUT:
             return 0.0
         if self.state < RunwayTakeoffState.FLY:
-            return constrain(nav_roll, -self.params.max_roll, self.params.max_roll)
+            max_roll = math.radians(self.params.rwto_max_roll)
+            return constrain(nav_roll, -max_roll, max_roll)
         return nav_roll
 
     def yaw(self, nav_yaw: float) -> float:
-        if self.params.heading_mode == 0 and self.state < RunwayTakeoffState.CLIMBOUT:
+        if self.params.rwto_hdg == 0 and self.state < RunwayTakeoffState.CLIMBOUT:
             return self.initial_yaw
         return nav_yaw
 
@@ -187,8 +151,9 @@ class RunwayTakeoff:
 
     def max_pitch(self, pitch_max: float) -> float:
         """TECS' upper pitch limit: RWTO_MAX_PITCH (when set) until FLY."""
-        if self.state < RunwayTakeoffState.FLY and self.params.max_pitch > MAX_PITCH_USED:
-            return self.params.max_pitch
+        max_pitch = math.radians(self.params.rwto_max_pitch)
+        if self.state < RunwayTakeoffState.FLY and max_pitch > MAX_PITCH_USED:
+            return max_pitch
         return pitch_max
 
     def _elapsed(self, time_us: int) -> float:

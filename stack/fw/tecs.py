@@ -35,14 +35,13 @@ Units: SI, angles in radians, altitude positive up, airspeeds equivalent (EAS) u
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
-from dataclasses import dataclass, fields
 from enum import IntEnum
 from typing import NamedTuple
 
 from stack.mathlib.filters import AlphaFilter
 from stack.mathlib.scalar import CONSTANTS_ONE_G, FLT_EPSILON, constrain
 from stack.msg.fixedwing import TecsStatus
+from stack.params.binding import ParamSet
 from stack.posctl.position_smoothing import max_speed_from_distance
 from stack.posctl.velocity_smoothing import VelocitySmoothing
 
@@ -67,9 +66,8 @@ CLIMBOUT_THROTTLE_MARGIN = 0.01
 LOAD_FACTOR_COS_MIN = 0.1
 
 
-@dataclass(frozen=True, slots=True)
-class TecsParams:
-    """TECS' tunables under their PX4 names (the catalogue's ``stack/params/fw_pos.py`` and ``fw_att.py``)."""
+class TecsParams(ParamSet):
+    """TECS' tunables (the catalogue's, ``stack/params/fw_pos.py`` and ``fw_att.py``)."""
 
     fw_t_clmb_max: float
     fw_t_sink_min: float
@@ -94,16 +92,6 @@ class TecsParams:
     fw_airspd_min: float
     fw_airspd_trim: float
     fw_airspd_max: float
-
-    @classmethod
-    def param_names(cls) -> tuple[str, ...]:
-        """The PX4 names of the fields, in order (for ``catalogue.params``)."""
-        return tuple(f.name.upper() for f in fields(cls))
-
-    @classmethod
-    def from_params(cls, values: Mapping[str, object]) -> TecsParams:
-        """From a module's parameter values, by PX4 name."""
-        return cls(**{f.name: float(values[f.name.upper()]) for f in fields(cls)})  # type: ignore[arg-type]
 
 
 class TecsMode(IntEnum):

@@ -19,11 +19,10 @@ ground track is the heading.
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
-from dataclasses import dataclass
 
 from stack.mathlib.quaternion import Quat, rotate_inv, to_dcm, yaw
 from stack.mathlib.vector import Vec3
+from stack.params.binding import ParamSet
 
 PREDICT_PERIOD_US = 1_000_000
 FUSE_PERIOD_US = 100_000
@@ -39,29 +38,15 @@ MIN_FORWARD_AIRSPEED = 0.1
 
 
 
-@dataclass(frozen=True, slots=True)
-class WindEstimatorParams:
-    """Noise and gates under the PX4 names (``stack/params/airspeed.py``)."""
+class WindEstimatorParams(ParamSet):
+    """Noise and gates (the catalogue's ASPD_*, ``stack/params/airspeed.py``)."""
 
     aspd_w_p_noise: float
     aspd_sc_p_noise: float
     aspd_tas_noise: float
     aspd_beta_noise: float
-    aspd_tas_gate: float
-    aspd_beta_gate: float
-
-    PARAM_NAMES = (
-        "ASPD_W_P_NOISE",
-        "ASPD_SC_P_NOISE",
-        "ASPD_TAS_NOISE",
-        "ASPD_BETA_NOISE",
-        "ASPD_TAS_GATE",
-        "ASPD_BETA_GATE",
-    )
-
-    @classmethod
-    def from_params(cls, values: Mapping[str, object]) -> WindEstimatorParams:
-        return cls(*(float(values[name]) for name in cls.PARAM_NAMES))  # type: ignore[arg-type]
+    aspd_tas_gate: int
+    aspd_beta_gate: int
 
 
 class WindEstimator:

@@ -14,23 +14,32 @@ from collections.abc import Mapping
 
 from stack.mission.items import MAV_CMD_NAV_LAND, MAV_CMD_NAV_TAKEOFF, Mission
 from stack.mission.transfer import too_many_items
-from stack.params import catalogue
+from stack.params.binding import ParamSet
 from stack.params.param import Param
 
-PARAMS: tuple[Param, ...] = catalogue.params("MIS_DIST_1WP", "MIS_DIST_WPS", "GF_MAX_HOR_DIST", "GF_MAX_VER_DIST")
-DEFAULTS: dict[str, object] = {p.name: p.default for p in PARAMS}
+
+class FeasibilityParams(ParamSet):
+    """The distances a mission may span (MIS_DIST_*) and the geofence it must stay within."""
+
+    mis_dist_1wp: float
+    mis_dist_wps: float
+    gf_max_hor_dist: float
+    gf_max_ver_dist: float
+
+
+PARAMS: tuple[Param, ...] = FeasibilityParams.PARAMS
 
 
 def mission_problem(mission: Mission, params: Mapping[str, object]) -> str:
     """Why the mission cannot be flown, or "" when it can. Positions are local NED about home."""
-    p = {**DEFAULTS, **params}
+    p = FeasibilityParams.from_params(params)
     if len(mission) == 0:
         return "the mission has no items"
     too_many = too_many_items(len(mission))
     if too_many:
         return too_many
-    max_hor, max_ver = float(p["GF_MAX_HOR_DIST"]), float(p["GF_MAX_VER_DIST"])
-    first_limit, leg_limit = float(p["MIS_DIST_1WP"]), float(p["MIS_DIST_WPS"])
+    max_hor, max_ver = p.gf_max_hor_dist, p.gf_max_ver_dist
+    first_limit, leg_limit = p.mis_dist_1wp, p.mis_dist_wps
     previous: tuple[float, float] | None = None
     after_landing = False
     for item in mission:

@@ -42,14 +42,23 @@ from stack.mission.items import (
     Mission,
     MissionItem,
 )
-from stack.params import catalogue
+from stack.params.binding import ParamSet
 from stack.params.param import Param
 
-PARAMS: tuple[Param, ...] = catalogue.params(
-    "NAV_ACC_RAD", "NAV_MC_ALT_RAD", "NAV_FW_ALT_RAD", "NAV_LOITER_RAD", "MIS_YAW_ERR", "MIS_YAW_TMT"
-)
+
+class TrackerParams(ParamSet):
+    """The acceptance radii, the loiter radius and the heading alignment of mission items (the catalogue's)."""
+
+    nav_acc_rad: float
+    nav_mc_alt_rad: float
+    nav_fw_alt_rad: float
+    nav_loiter_rad: float
+    mis_yaw_err: float
+    mis_yaw_tmt: float
+
+
+PARAMS: tuple[Param, ...] = TrackerParams.PARAMS
 LOITER_ON_CIRCLE_FRACTION = 0.2
-DEFAULTS: dict[str, object] = {p.name: p.default for p in PARAMS}
 
 
 class MissionProgress(NamedTuple):
@@ -119,8 +128,7 @@ class MissionTracker:
         self.set_params(params or {})
 
     def set_params(self, params: Mapping[str, object]) -> None:
-        p = {**DEFAULTS, **params}
-        self._p = {name: float(value) for name, value in p.items()}
+        self._p = TrackerParams.from_params(params)
 
     @property
     def current(self) -> MissionItem | None:
@@ -209,21 +217,21 @@ class MissionTracker:
 
     def loiter_radius(self, item: MissionItem) -> float:
         """The item's loiter radius [m] (sign: + clockwise), NAV_LOITER_RAD when it gives none."""
-        return item.loiter_radius if math.isfinite(item.loiter_radius) else self._p["NAV_LOITER_RAD"]
+        return item.loiter_radius if math.isfinite(item.loiter_radius) else self._p.nav_loiter_rad
 
     def _item_complete(
         self, item: MissionItem, now_us: int, position: Vec3, yaw: float, landed: bool, guidance_radius: float
     ) -> bool:
         p = self._p
         target = self._target
-        altitude_radius = p["NAV_FW_ALT_RAD"] if self._fixed_wing else p["NAV_MC_ALT_RAD"]
+        altitude_radius = p.nav_fw_alt_rad if self._fixed_wing else p.nav_mc_alt_rad
         if item.command == MAV_CMD_NAV_LAND:
             return landed
         if item.command == MAV_CMD_NAV_TAKEOFF:
             return position[2] <= target[2] + altitude_radius
         orbiting = self._fixed_wing and item.command in LOITER_COMMANDS
         if self._position_reached_us < 0:
-            radius = item.acceptance_radius if item.acceptance_radius > 0.0 else p["NAV_ACC_RAD"]
+            radius = item.acceptance_radius if item.acceptance_radius > 0.0 else p.nav_acc_rad
             horizontal = math.hypot(position[0] - target[0], position[1] - target[1])
             if orbiting:
                 circle = abs(self.loiter_radius(item))
@@ -246,8 +254,8 @@ class MissionTracker:
                 return False
         if self._yaw_reached_us < 0:
             if math.isfinite(item.yaw):
-                aligned = abs(wrap_pi(yaw - item.yaw)) <= math.radians(p["MIS_YAW_ERR"])
-                timeout = p["MIS_YAW_TMT"]
+                aligned = abs(wrap_pi(yaw - item.yaw)) <= math.radians(p.mis_yaw_err)
+                timeout = p.mis_yaw_tmt
                 timed_out = timeout >= 0.0 and now_us - self._position_reached_us >= timeout * 1e6
                 if not (aligned or timed_out):
                     return False

@@ -28,11 +28,15 @@ from stack.mathlib.scalar import FLT_EPSILON
 from stack.mathlib.vector import Vec3
 from stack.mixer.effectiveness import effectiveness_from_params
 from stack.msg.system import VehicleLandDetected
-from stack.params import catalogue
+from stack.params.binding import ParamSet
 from stack.params.param import Param
 
-PARAMS: tuple[Param, ...] = catalogue.params("MC_AIRMODE")
-DEFAULTS: dict[str, object] = {p.name: p.default for p in PARAMS}
+
+class AllocatorParams(ParamSet):
+    mc_airmode: int
+
+
+PARAMS: tuple[Param, ...] = AllocatorParams.PARAMS
 
 WEAK_ROW_THRESHOLD = 0.05
 """An effectiveness row whose entries are all at most this is zeroed (the axis is not controlled)."""
@@ -158,8 +162,7 @@ class ControlAllocator:
     @classmethod
     def from_params(cls, params: Mapping[str, object]) -> ControlAllocator:
         """Build from CA_ROTOR* geometry and MC_AIRMODE (missing → PX4 defaults)."""
-        p = {**DEFAULTS, **params}
-        return cls(effectiveness_from_params(p), int(p["MC_AIRMODE"]))
+        return cls(effectiveness_from_params(params), AllocatorParams.from_params(params).mc_airmode)
 
     def set_airmode(self, airmode: int) -> None:
         if airmode not in (0, 1, 2):

@@ -18,11 +18,11 @@ import numpy as np
 
 from stack.mathlib.scalar import FLT_EPSILON
 from stack.params import ca
+from stack.params.binding import with_defaults
 from stack.params.ca import MAX_ROTORS
 from stack.params.param import Param
 
 PARAMS: tuple[Param, ...] = ca.ROTOR_PARAMS
-DEFAULTS: dict[str, object] = {p.name: p.default for p in PARAMS}
 
 
 def rotor_effectiveness(positions: np.ndarray, axes: np.ndarray, ct: np.ndarray, km: np.ndarray) -> np.ndarray:
@@ -48,7 +48,7 @@ def rotor_effectiveness(positions: np.ndarray, axes: np.ndarray, ct: np.ndarray,
 
 def effectiveness_from_params(params: Mapping[str, object]) -> np.ndarray:
     """6 × CA_ROTOR_COUNT effectiveness from CA_ROTOR* parameters (missing → PX4 defaults)."""
-    p = {**DEFAULTS, **params}
+    p = with_defaults(PARAMS, params)
     n = int(p["CA_ROTOR_COUNT"])
     if not 0 <= n <= MAX_ROTORS:
         raise ValueError(f"CA_ROTOR_COUNT must be in [0, {MAX_ROTORS}], got {n}")

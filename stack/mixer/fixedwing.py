@@ -29,11 +29,12 @@ from stack.mixer.allocation import (
 )
 from stack.mixer.effectiveness import rotor_effectiveness
 from stack.params import ca
+from stack.params.binding import combine, with_defaults
 from stack.params.ca import MAX_ROTORS, MAX_SURFACES, SURFACE_TYPES_WITHOUT_TORQUE
 from stack.params.param import Param
 
 PARAMS: tuple[Param, ...] = ca.SURFACE_PARAMS
-DEFAULTS: dict[str, object] = {p.name: p.default for p in ca.ROTOR_PARAMS + ca.SURFACE_PARAMS}
+_GEOMETRY: tuple[Param, ...] = combine(ca.ROTOR_PARAMS, ca.SURFACE_PARAMS)
 
 FORWARD = (1.0, 0.0, 0.0)
 """A fixed-wing motor's thrust axis (body +x)."""
@@ -45,7 +46,7 @@ SERVO_MAX = 1.0
 
 def surface_torques(params: Mapping[str, object]) -> np.ndarray:
     """CA_SV_CS_COUNT × 3 torques (roll, pitch, yaw) at full deflection from the CA_SV_CS* parameters."""
-    p = {**DEFAULTS, **params}
+    p = with_defaults(_GEOMETRY, params)
     n = int(p["CA_SV_CS_COUNT"])
     if not 0 <= n <= MAX_SURFACES:
         raise ValueError(f"CA_SV_CS_COUNT must be in [0, {MAX_SURFACES}], got {n}")
@@ -59,7 +60,7 @@ def surface_torques(params: Mapping[str, object]) -> np.ndarray:
 def fixed_wing_effectiveness(params: Mapping[str, object]) -> np.ndarray:
     """6 × (CA_ROTOR_COUNT + CA_SV_CS_COUNT) effectiveness: the forward motors (CA_ROTOR<i>_PX/PY/PZ, CT; the axis
     and KM parameters do not apply), then the surfaces."""
-    p = {**DEFAULTS, **params}
+    p = with_defaults(_GEOMETRY, params)
     n = int(p["CA_ROTOR_COUNT"])
     if not 0 <= n <= MAX_ROTORS:
         raise ValueError(f"CA_ROTOR_COUNT must be in [0, {MAX_ROTORS}], got {n}")
@@ -107,8 +108,8 @@ class FixedWingAllocator:
 
     @classmethod
     def from_params(cls, params: Mapping[str, object]) -> FixedWingAllocator:
-        p = {**DEFAULTS, **params}
-        return cls(fixed_wing_effectiveness(p), int(p["CA_ROTOR_COUNT"]))
+        p = with_defaults(_GEOMETRY, params)
+        return cls(fixed_wing_effectiveness(p), int(p["CA_ROTOR_COUNT"]))  # type: ignore[call-overload]
 
     @property
     def num_motors(self) -> int:

@@ -25,6 +25,7 @@ from stack.msg.fixedwing import SERVO_SLOTS, ActuatorServos
 from stack.msg.registry import ORB_ID
 from stack.msg.setpoints import VehicleTorqueSetpoint
 from stack.params import ca
+from stack.params.binding import combine
 from stack.runtime.module import Module, Trigger
 from stack.runtime.priority import RATE_CTRL
 
@@ -35,7 +36,7 @@ class ControlAllocatorModule(Module):
     DESCRIPTION = "Control allocation (PX4 control_allocator) and motor and servo outputs"
     TRIGGER = Trigger(ORB_ID.vehicle_torque_setpoint)
     DT_RANGE = (0.0002, 0.02)
-    PARAMS = effectiveness.PARAMS + allocation.PARAMS + output.PARAMS + ca.AIRFRAME_PARAMS + fixedwing.PARAMS
+    PARAMS = combine(effectiveness.PARAMS, allocation.PARAMS, output.PARAMS, ca.AIRFRAME_PARAMS, fixedwing.PARAMS)
 
     def __init__(self, rt) -> None:
         super().__init__(rt)

@@ -25,14 +25,21 @@ from collections.abc import Mapping, Sequence
 from typing import NamedTuple
 
 from stack.mathlib.scalar import FLT_EPSILON
-from stack.params import ca, catalogue
+from stack.params import ca
+from stack.params.binding import ParamSet, combine, with_defaults
 from stack.params.param import Param
 
-PARAMS: tuple[Param, ...] = (
-    *catalogue.params("THR_MDL_FAC", "PWM_MAIN_DIS", "PWM_MAIN_MIN", "PWM_MAIN_MAX"),
-    *ca.SLEW_PARAMS,
-)
-DEFAULTS: dict[str, object] = {p.name: p.default for p in PARAMS}
+
+class MotorOutputParams(ParamSet):
+    """The thrust curve and the PWM range (the motors' slew limits are the CA_R<n>_SLEW family)."""
+
+    thr_mdl_fac: float
+    pwm_main_dis: int
+    pwm_main_min: int
+    pwm_main_max: int
+
+
+PARAMS: tuple[Param, ...] = combine(MotorOutputParams.PARAMS, ca.SLEW_PARAMS)
 
 ESC_RANGE_MIN_US = 1000.0
 """ESC calibration endpoints: the pulse widths the simulator reads as 0 and 1 (pwm_out_sim's range)."""
@@ -84,12 +91,13 @@ class MotorOutput:
         self.set_params(params or {})
 
     def set_params(self, params: Mapping[str, object]) -> None:
-        p = {**DEFAULTS, **params}
-        self._factor = float(p["THR_MDL_FAC"])
-        self._slew_time = [float(p[f"CA_R{i}_SLEW"]) for i in range(len(self._prev))]
-        self._pwm_dis = float(p["PWM_MAIN_DIS"])
-        self._pwm_min = float(p["PWM_MAIN_MIN"]) if self._idle else ESC_RANGE_MIN_US
-        self._pwm_max = float(p["PWM_MAIN_MAX"])
+        p = MotorOutputParams.from_params(params)
+        slew = with_defaults(ca.SLEW_PARAMS, params)
+        self._factor = p.thr_mdl_fac
+        self._slew_time = [float(slew[f"CA_R{i}_SLEW"]) for i in range(len(self._prev))]  # type: ignore[arg-type]
+        self._pwm_dis = float(p.pwm_main_dis)
+        self._pwm_min = float(p.pwm_main_min) if self._idle else ESC_RANGE_MIN_US
+        self._pwm_max = float(p.pwm_main_max)
 
     def update(self, thrusts: Sequence[float], armed: bool, dt: float) -> MotorOutputs:
         """Map allocated motor thrusts (normalised, [0, 1]; NaN or < 0 stops that motor) to the outputs."""

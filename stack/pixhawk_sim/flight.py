@@ -27,7 +27,7 @@ from stack.attctl.attitude_control import AttitudeControl
 from stack.attctl.rate_control import RateControl, YawTorqueLowPass, saturation_from_allocator
 from stack.commander.home import HomePosition
 from stack.estimator.acceleration import VelocityDerivative
-from stack.estimator.angular_velocity import AngularVelocityFilter
+from stack.estimator.angular_velocity import AngularVelocityFilter, GyroFilterParams
 from stack.estimator.position_module import PERIOD_US as POSITION_PERIOD_US
 from stack.mathlib import quaternion as quat
 from stack.mathlib.quaternion import Quat
@@ -39,8 +39,7 @@ from stack.mixer.output import MotorOutput
 from stack.pixhawk_sim.offboard import OffboardSetpoint
 from stack.posctl import flight_task
 from stack.posctl.flight_mode_manager import FlightModeManager, NavigatorInputs
-from stack.posctl.pos_module import control_params
-from stack.posctl.position_control import PositionControl, failsafe_setpoint
+from stack.posctl.position_control import PositionControl, PositionControlParams, failsafe_setpoint
 
 NAN3: Vec3 = (math.nan, math.nan, math.nan)
 ZERO3: Vec3 = (0.0, 0.0, 0.0)
@@ -78,14 +77,12 @@ class FlightControl:
     """PX4's rate, attitude and position loops with the allocator, for one vehicle (see the module docstring)."""
 
     def __init__(self, params: Mapping[str, object], imu_period_us: int) -> None:
-        self.rates = AngularVelocityFilter(
-            float(params["IMU_GYRO_CUTOFF"]), float(params["IMU_DGYRO_CUTOFF"]), sample_rate_hz=1e6 / imu_period_us
-        )
+        self.rates = AngularVelocityFilter(GyroFilterParams.from_params(params), sample_rate_hz=1e6 / imu_period_us)
         self.rate_control = RateControl(params)
         self.yaw_filter = YawTorqueLowPass(float(params["MC_YAW_TQ_CUTOFF"]))
         self.attitude_control = AttitudeControl(params)
         self.navigator = FlightModeManager(params)
-        self.position_control = PositionControl(control_params(params))
+        self.position_control = PositionControl(PositionControlParams.from_params(params))
         self.velocity_derivative = VelocityDerivative(float(params["MPC_VELD_LP"]))
         self.allocator = ControlAllocator.from_params(params)
         self.output = MotorOutput(self.allocator.num_motors, params)

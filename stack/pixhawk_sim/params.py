@@ -11,7 +11,7 @@ profile's ``airframe`` gives it to the allocator.
 from __future__ import annotations
 
 import tomllib
-from collections.abc import Iterable, Mapping
+from collections.abc import Mapping
 from enum import IntEnum
 from pathlib import Path
 
@@ -22,6 +22,7 @@ from stack.commander import state_machine as commander
 from stack.commander.module import OFFBOARD_PARAMS
 from stack.estimator.attitude_module import GYRO_PARAMS
 from stack.mixer import allocation, effectiveness, output
+from stack.params.binding import combine
 from stack.params.param import Param, ParamError, ParamValue
 from stack.posctl import flight_mode_manager, pos_module
 from stack.sim import battery
@@ -73,32 +74,22 @@ _COMMANDER_NAMES = ("COM_DISARM_LAND", "COM_DISARM_PRFLT")
 _SIMULATOR_NAMES = ("SIH_LOC_LAT0", "SIH_LOC_LON0", "SIH_LOC_H0")
 
 
-def _unique(groups: Iterable[Iterable[Param]]) -> tuple[Param, ...]:
-    """The first definition of each name (the land detector repeats a few MPC_* of position control)."""
-    seen: dict[str, Param] = {}
-    for group in groups:
-        for p in group:
-            seen.setdefault(p.name, p)
-    return tuple(seen.values())
-
-
-PARAMS: tuple[Param, ...] = _unique(
-    (
-        OWN_PARAMS,
-        OFFBOARD_PARAMS,
-        (p for p in commander.OWN_PARAMS if p.name in _COMMANDER_NAMES),
-        (p for p in SimulatorModule.PARAMS if p.name in _SIMULATOR_NAMES),
-        GYRO_PARAMS,
-        rate_control.PARAMS,
-        attitude_control.PARAMS,
-        pos_module.PARAMS,
-        flight_mode_manager.PARAMS,
-        land_detector.PARAMS,
-        effectiveness.PARAMS,
-        allocation.PARAMS,
-        output.PARAMS,
-        battery.PARAMS,
-    )
+# The first definition of each name (the land detector repeats a few MPC_* of position control).
+PARAMS: tuple[Param, ...] = combine(
+    OWN_PARAMS,
+    OFFBOARD_PARAMS,
+    (p for p in commander.PARAMS if p.name in _COMMANDER_NAMES),
+    (p for p in SimulatorModule.PARAMS if p.name in _SIMULATOR_NAMES),
+    GYRO_PARAMS,
+    rate_control.PARAMS,
+    attitude_control.PARAMS,
+    pos_module.PARAMS,
+    flight_mode_manager.PARAMS,
+    land_detector.PARAMS,
+    effectiveness.PARAMS,
+    allocation.PARAMS,
+    output.PARAMS,
+    battery.PARAMS,
 )
 DEFINITIONS: dict[str, Param] = {p.name: p for p in PARAMS}
 

@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
+from dataclasses import replace
 from typing import NamedTuple
 
 from stack.commander import rtl
@@ -41,7 +42,7 @@ from stack.mission.tracker import MissionTracker
 from stack.msg.navigation import NavigationRequest
 from stack.msg.setpoints import ManualControlSetpoint
 from stack.msg.system import VehicleStatus
-from stack.params import catalogue
+from stack.params.binding import ParamSet, combine
 from stack.params.param import Param
 from stack.posctl.flight_task import NAN, TrajectoryCommand, VehicleState, YawSlew, stopping_point
 from stack.posctl.manual_tasks import ManualAltitudeTask, ManualPositionTask
@@ -58,17 +59,32 @@ _AUTO_NAV_STATES = (
 )
 _YAW_ALONG_MIN_SPEED = 0.5
 
-OWN_PARAMS: tuple[Param, ...] = catalogue.params(
-    "MPC_XY_CRUISE", "MPC_XY_VEL_MAX", "MPC_Z_V_AUTO_UP", "MPC_Z_V_AUTO_DN", "MPC_ACC_HOR", "MPC_ACC_UP_MAX",
-    "MPC_ACC_DOWN_MAX", "MPC_JERK_AUTO", "MPC_XY_ERR_MAX", "MPC_XY_TRAJ_P", "MPC_TKO_SPEED", "MIS_TAKEOFF_ALT",
-    "MPC_LAND_SPEED", "MPC_LAND_ALT1", "MPC_LAND_ALT2", "MPC_YAW_MODE", "MPC_YAWRAUTO_MAX", "MPC_VEL_MANUAL",
-    "MPC_MAN_Y_MAX", "MPC_MAN_TILT_MAX", "MPC_HOLD_DZ", "MPC_HOLD_MAX_XY", "MPC_HOLD_MAX_Z", "MPC_Z_VEL_MAX_UP",
-    "MPC_Z_VEL_MAX_DN", "GF_MAX_HOR_DIST", "GF_MAX_VER_DIST",
-)
-PARAMS: tuple[Param, ...] = tuple(
-    {p.name: p for p in (*OWN_PARAMS, *tracker.PARAMS, *rtl.PARAMS, *feasibility.PARAMS)}.values()
-)
-DEFAULTS: dict[str, object] = {p.name: p.default for p in PARAMS}
+
+class FlightModeManagerParams(ParamSet):
+    """What the manager reads itself, and its position smoothing's (the return, the mission and the manual modes
+    take theirs from the same values)."""
+
+    mpc_tko_speed: float
+    mis_takeoff_alt: float
+    mpc_land_speed: float
+    mpc_land_alt1: float
+    mpc_land_alt2: float
+    mpc_yaw_mode: int
+    mpc_yawrauto_max: float
+    mpc_vel_manual: float
+    mpc_man_y_max: float
+    mpc_man_tilt_max: float
+    mpc_hold_dz: float
+    mpc_hold_max_xy: float
+    mpc_hold_max_z: float
+    mpc_z_vel_max_up: float
+    mpc_z_vel_max_dn: float
+    gf_max_hor_dist: float
+    gf_max_ver_dist: float
+    smoothing: PositionSmoothingParams
+
+
+PARAMS: tuple[Param, ...] = combine(FlightModeManagerParams.PARAMS, tracker.PARAMS, rtl.PARAMS, feasibility.PARAMS)
 
 
 class NavigatorInputs(NamedTuple):
@@ -84,12 +100,14 @@ class FlightModeManager:
     """``load_mission`` on upload, ``update(inputs, dt)`` every cycle (see the module docstring)."""
 
     def __init__(self, params: Mapping[str, object] | None = None) -> None:
-        self._p: dict[str, float] = {}
+        self._p = FlightModeManagerParams()
+        self._values: dict[str, object] = {}
+        """The values given so far, by PX4 name (a later ``set_params`` may give only some)."""
         self.smoothing = PositionSmoothing()
         self.rtl = ReturnToLaunch()
         self.yaw = YawSlew()
-        self.manual_position = ManualPositionTask(DEFAULTS)
-        self.manual_altitude = ManualAltitudeTask(DEFAULTS)
+        self.manual_position = ManualPositionTask({})
+        self.manual_altitude = ManualAltitudeTask({})
         self.missions = MissionStore(on_replaced=self._mission_replaced)
         self._active: tuple[int, bool] | None = None
         self._reposition_counter = 0
@@ -106,12 +124,12 @@ class FlightModeManager:
     # ------------------------------------------------------------------ configuration
 
     def set_params(self, params: Mapping[str, object]) -> None:
-        merged = {**DEFAULTS, **self._p, **params}
-        self._p = {name: float(value) for name, value in merged.items()}  # type: ignore[arg-type]
-        self.rtl.set_params(merged)
-        self.manual_position.set_params(merged)
-        self.manual_altitude.set_params(merged)
-        self.missions.set_params(merged)
+        self._values.update(params)
+        self._p = FlightModeManagerParams.from_params(self._values)
+        self.rtl.set_params(self._values)
+        self.manual_position.set_params(self._values)
+        self.manual_altitude.set_params(self._values)
+        self.missions.set_params(self._values)
         self._smoothing_key = None
 
     def _configure_smoothing(self, cruise: float = NAN, climb: float = NAN, radius: float = NAN) -> None:
@@ -121,19 +139,11 @@ class FlightModeManager:
         p = self._p
         self._smoothing_key = key
         self.smoothing.set_params(
-            PositionSmoothingParams(
-                mpc_xy_cruise=cruise if math.isfinite(cruise) and cruise > 0.0 else p["MPC_XY_CRUISE"],
-                mpc_xy_vel_max=p["MPC_XY_VEL_MAX"],
-                mpc_z_v_auto_up=climb if math.isfinite(climb) else p["MPC_Z_V_AUTO_UP"],
-                mpc_z_v_auto_dn=p["MPC_Z_V_AUTO_DN"],
-                mpc_acc_hor=p["MPC_ACC_HOR"],
-                mpc_acc_up_max=p["MPC_ACC_UP_MAX"],
-                mpc_acc_down_max=p["MPC_ACC_DOWN_MAX"],
-                mpc_jerk_auto=p["MPC_JERK_AUTO"],
-                mpc_xy_err_max=p["MPC_XY_ERR_MAX"],
-                mpc_xy_traj_p=p["MPC_XY_TRAJ_P"],
-                nav_acc_rad=radius if math.isfinite(radius) and radius > 0.0 else p["NAV_ACC_RAD"],
-                nav_mc_alt_rad=p["NAV_MC_ALT_RAD"],
+            replace(
+                p.smoothing,
+                mpc_xy_cruise=cruise if math.isfinite(cruise) and cruise > 0.0 else p.smoothing.mpc_xy_cruise,
+                mpc_z_v_auto_up=climb if math.isfinite(climb) else p.smoothing.mpc_z_v_auto_up,
+                nav_acc_rad=radius if math.isfinite(radius) and radius > 0.0 else p.smoothing.nav_acc_rad,
             )
         )
 
@@ -149,7 +159,7 @@ class FlightModeManager:
 
     def load_mission(self, mission: Mission, mission_id: int) -> str:
         """Take an uploaded mission; returns why it was refused ("" when accepted)."""
-        return self.missions.load(mission, mission_id, self._p)
+        return self.missions.load(mission, mission_id, self._values)
 
     def load_mission_refused(self, mission_id: int, reason: str) -> None:
         """An upload that could not even be read: no mission, and the reason for ``mission_result``."""
@@ -211,7 +221,7 @@ class FlightModeManager:
         if nav == NS.NAVIGATION_STATE_AUTO_TAKEOFF:
             self._start_takeoff(inp)
         elif nav == NS.NAVIGATION_STATE_AUTO_LOITER:
-            self._target = stopping_point(state.position, state.velocity, self._p["MPC_ACC_HOR"])
+            self._target = self._stopping_point(state)
             self._take_reposition(inp)
         elif nav == NS.NAVIGATION_STATE_AUTO_MISSION:
             self._start_mission(inp)
@@ -275,7 +285,7 @@ class FlightModeManager:
         )
         if not math.isfinite(yaw):
             yaw = self._heading(yaw_mode, state, target, point.velocity, home)
-        yaw_sp, yawspeed = self.yaw.update(yaw, dt, math.radians(self._p["MPC_YAWRAUTO_MAX"]))
+        yaw_sp, yawspeed = self.yaw.update(yaw, dt, math.radians(self._p.mpc_yawrauto_max))
         return TrajectoryCommand(point.position, point.velocity, point.acceleration, point.jerk, yaw_sp, yawspeed)
 
     def _heading(
@@ -284,10 +294,10 @@ class FlightModeManager:
         px, py = state.position[0], state.position[1]
         if mode == YAW_TOWARD_WAYPOINT:
             dx, dy = target[0] - px, target[1] - py
-            return math.atan2(dy, dx) if math.hypot(dx, dy) > self._p["NAV_ACC_RAD"] else NAN
+            return math.atan2(dy, dx) if math.hypot(dx, dy) > self._p.smoothing.nav_acc_rad else NAN
         if mode in (YAW_TOWARD_HOME, YAW_AWAY_FROM_HOME) and home is not None:
             dx, dy = home.x - px, home.y - py
-            if math.hypot(dx, dy) <= self._p["NAV_ACC_RAD"]:
+            if math.hypot(dx, dy) <= self._p.smoothing.nav_acc_rad:
                 return NAN
             bearing = math.atan2(dy, dx)
             return bearing if mode == YAW_TOWARD_HOME else bearing + math.pi
@@ -296,7 +306,7 @@ class FlightModeManager:
         return NAN
 
     def _hold_heading(self, dt: float, target: float = NAN) -> tuple[float, float]:
-        return self.yaw.update(target, dt, math.radians(self._p["MPC_YAWRAUTO_MAX"]))
+        return self.yaw.update(target, dt, math.radians(self._p.mpc_yawrauto_max))
 
     # ------------------------------------------------------------------ takeoff
 
@@ -304,7 +314,7 @@ class FlightModeManager:
         state, home, request = inp.state, inp.home, inp.request
         altitude = request.takeoff_altitude if request is not None else NAN
         if not (math.isfinite(altitude) and altitude > 0.0):
-            altitude = self._p["MIS_TAKEOFF_ALT"]
+            altitude = self._p.mis_takeoff_alt
         ground_z = home.z if home is not None else state.position[2]
         self._target = (state.position[0], state.position[1], ground_z - altitude)
         self._target_yaw = request.takeoff_yaw if request is not None else NAN
@@ -318,11 +328,11 @@ class FlightModeManager:
             yaw, yawspeed = self._hold_heading(dt, self._target_yaw)
             return TrajectoryCommand(
                 position=(target[0], target[1], NAN),
-                velocity=(NAN, NAN, -self._p["MPC_TKO_SPEED"]),
+                velocity=(NAN, NAN, -self._p.mpc_tko_speed),
                 yaw=yaw,
                 yawspeed=yawspeed,
             )
-        return self._fly_to(state, target, dt, yaw=self._target_yaw, climb=self._p["MPC_TKO_SPEED"])
+        return self._fly_to(state, target, dt, yaw=self._target_yaw, climb=self._p.mpc_tko_speed)
 
     # ------------------------------------------------------------------ hold and go-to
 
@@ -355,7 +365,7 @@ class FlightModeManager:
     def _mission(self, inp: NavigatorInputs, dt: float) -> TrajectoryCommand:
         state = inp.state
         if self.tracker is None or self.mission is None:
-            return self._fly_to(state, stopping_point(state.position, state.velocity, self._p["MPC_ACC_HOR"]), dt)
+            return self._fly_to(state, self._stopping_point(state), dt)
         if self._mission_returning:
             return self._return(inp, dt)
         progress = self.tracker.update(state.now_us, state.position, state.yaw, state.landed)
@@ -381,7 +391,7 @@ class FlightModeManager:
             previous=progress.previous if _finite3(progress.previous) else None,
             following=following,
             radius=item.acceptance_radius,
-            yaw_mode=int(self._p["MPC_YAW_MODE"]),
+            yaw_mode=self._p.mpc_yaw_mode,
             home=inp.home,
         )
 
@@ -410,11 +420,11 @@ class FlightModeManager:
     def _return(self, inp: NavigatorInputs, dt: float) -> TrajectoryCommand:
         state, home = inp.state, inp.home
         if home is None:
-            return self._fly_to(state, stopping_point(state.position, state.velocity, self._p["MPC_ACC_HOR"]), dt)
+            return self._fly_to(state, self._stopping_point(state), dt)
         sp = self.rtl.update(state.now_us, state.position, state.landed)
         if sp.phase in (RtlPhase.LAND, RtlPhase.LANDED):
             return self._land(state, home, dt, yaw=home.yaw, at=(home.x, home.y))
-        mode = int(self._p["MPC_YAW_MODE"]) if sp.phase == RtlPhase.RETURN else YAW_HOLD
+        mode = self._p.mpc_yaw_mode if sp.phase == RtlPhase.RETURN else YAW_HOLD
         return self._fly_to(state, sp.position, dt, yaw=sp.yaw, yaw_mode=mode, home=home)
 
     def _land(
@@ -427,7 +437,7 @@ class FlightModeManager:
     ) -> TrajectoryCommand:
         """Land at ``at`` (default: where the vehicle can stop), chosen when the landing starts."""
         if self._land_xy is None:
-            stop = stopping_point(state.position, state.velocity, self._p["MPC_ACC_HOR"])
+            stop = self._stopping_point(state)
             self._land_xy = at or (stop[0], stop[1])
             self._land_vz = _descent_rate(state)
         # The trajectory keeps its own height; the descent is a velocity setpoint below it.
@@ -441,21 +451,24 @@ class FlightModeManager:
             jerk=(point.jerk[0], point.jerk[1], NAN),
         )
 
+    def _stopping_point(self, state: VehicleState) -> Vec3:
+        return stopping_point(state.position, state.velocity, self._p.smoothing.mpc_acc_hor)
+
     def _land_speed(self, state: VehicleState, home: HomePosition | None) -> float:
         p = self._p
         if home is None or not math.isfinite(state.position[2]):
-            return p["MPC_LAND_SPEED"]
+            return p.mpc_land_speed
         height = home.z - state.position[2]
-        return interpolate(height, p["MPC_LAND_ALT2"], p["MPC_LAND_ALT1"], p["MPC_LAND_SPEED"], p["MPC_Z_V_AUTO_DN"])
+        return interpolate(height, p.mpc_land_alt2, p.mpc_land_alt1, p.mpc_land_speed, p.smoothing.mpc_z_v_auto_dn)
 
     def _slew_descent(self, target: float, dt: float) -> float:
-        step = self._p["MPC_ACC_DOWN_MAX"] * dt
+        step = self._p.smoothing.mpc_acc_down_max * dt
         return max(self._land_vz - step, min(self._land_vz + step, target))
 
     def _descend(self, state: VehicleState, home: HomePosition | None, dt: float) -> TrajectoryCommand:
         """Descending at the landing rate with no horizontal acceleration: all that is left without a position
         (the position controller still leans into the wind it had learned)."""
-        self._land_vz = self._slew_descent(self._p["MPC_LAND_SPEED"], dt)
+        self._land_vz = self._slew_descent(self._p.mpc_land_speed, dt)
         yaw, yawspeed = self._hold_heading(dt)
         return TrajectoryCommand(
             velocity=(NAN, NAN, self._land_vz), acceleration=(0.0, 0.0, NAN), yaw=yaw, yawspeed=yawspeed

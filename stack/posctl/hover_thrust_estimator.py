@@ -11,11 +11,11 @@ inflates the state variance so a real change of hover thrust (payload) is picked
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 from typing import NamedTuple
 
 from stack.mathlib.scalar import CONSTANTS_ONE_G
 from stack.mathlib.vector import Vec3
+from stack.params.binding import ParamSet
 
 _G = CONSTANTS_ONE_G
 
@@ -34,24 +34,17 @@ _DT_MIN = 0.001
 _DT_MAX = 1.0
 
 
-@dataclass(slots=True)
-class HoverThrustEstimatorParams:
-    """Tunables under their PX4 names (defaults and ranges from PX4 main)."""
+class HoverThrustEstimatorParams(ParamSet):
+    """Tunables of the estimator (the catalogue's): MPC_THR_HOVER, where the estimate starts and the centre of its
+    range, and the HTE_* noise, gates and range."""
 
-    mpc_thr_hover: float = 0.5
-    """MPC_THR_HOVER, initial hover thrust and centre of the allowed range [normalised], 0.1–0.8."""
-    hte_ht_noise: float = 0.0036
-    """HTE_HT_NOISE, hover-thrust process noise [normalised/s], 0.0001–1."""
-    hte_acc_gate: float = 3.0
-    """HTE_ACC_GATE, innovation gate [standard deviations], 1–10."""
-    hte_ht_err_init: float = 0.1
-    """HTE_HT_ERR_INIT, 1-σ initial hover-thrust uncertainty [normalised], 0–1."""
-    hte_vxy_thr: float = 10.0
-    """HTE_VXY_THR, horizontal speed above which measurements are de-weighted [m/s], 1–20."""
-    hte_vz_thr: float = 2.0
-    """HTE_VZ_THR, vertical speed above which measurements are de-weighted [m/s], 1–10."""
-    hte_thr_range: float = 0.2
-    """HTE_THR_RANGE, maximum deviation of the estimate from MPC_THR_HOVER [normalised], 0.01–0.4."""
+    mpc_thr_hover: float
+    hte_ht_noise: float
+    hte_acc_gate: float
+    hte_ht_err_init: float
+    hte_vxy_thr: float
+    hte_vz_thr: float
+    hte_thr_range: float
 
 
 class HoverThrustEstimate(NamedTuple):

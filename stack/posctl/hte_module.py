@@ -10,15 +10,11 @@ from __future__ import annotations
 
 from stack.msg.registry import ORB_ID
 from stack.msg.setpoints import HoverThrustEstimate
-from stack.params import catalogue
 from stack.posctl.hover_thrust_estimator import HoverThrustEstimator, HoverThrustEstimatorParams
 from stack.runtime.module import Module, Trigger
 from stack.runtime.priority import NAV_AND_CONTROLLERS
 
-PARAMS = catalogue.params(
-    "MPC_THR_HOVER", "HTE_HT_NOISE", "HTE_ACC_GATE", "HTE_HT_ERR_INIT", "HTE_VXY_THR", "HTE_VZ_THR",
-    "HTE_THR_RANGE",
-)
+PARAMS = HoverThrustEstimatorParams.PARAMS
 
 
 class HoverThrustEstimatorModule(Module):
@@ -35,22 +31,10 @@ class HoverThrustEstimatorModule(Module):
         self.subscribe(ORB_ID.vehicle_land_detected)
         self.subscribe(ORB_ID.actuator_armed)
         self.advertise(ORB_ID.hover_thrust_estimate)
-        self.estimator = HoverThrustEstimator(self._estimator_params())
-
-    def _estimator_params(self) -> HoverThrustEstimatorParams:
-        p = self.params
-        return HoverThrustEstimatorParams(
-            mpc_thr_hover=float(p["MPC_THR_HOVER"]),
-            hte_ht_noise=float(p["HTE_HT_NOISE"]),
-            hte_acc_gate=float(p["HTE_ACC_GATE"]),
-            hte_ht_err_init=float(p["HTE_HT_ERR_INIT"]),
-            hte_vxy_thr=float(p["HTE_VXY_THR"]),
-            hte_vz_thr=float(p["HTE_VZ_THR"]),
-            hte_thr_range=float(p["HTE_THR_RANGE"]),
-        )
+        self.estimator = HoverThrustEstimator(HoverThrustEstimatorParams.from_params(self.params))
 
     def on_params_changed(self, changed: set[str]) -> None:
-        self.estimator.set_params(self._estimator_params())
+        self.estimator.set_params(HoverThrustEstimatorParams.from_params(self.params))
 
     def run(self, lpos, dt: float) -> None:
         armed = self.latest(ORB_ID.actuator_armed)

@@ -19,6 +19,7 @@ from stack.msg.estimation import VehicleLocalPosition
 from stack.msg.registry import ORB_ID
 from stack.msg.setpoints import TakeoffState, TakeoffStatus, VehicleAttitudeSetpoint, VehicleLocalPositionSetpoint
 from stack.params import catalogue
+from stack.params.binding import combine
 from stack.posctl.position_control import PositionControl, PositionControlParams, failsafe_setpoint
 from stack.posctl.takeoff import Takeoff, TakeoffParams, wants_takeoff
 from stack.runtime.module import Module, Trigger
@@ -31,46 +32,11 @@ SETPOINT_TIMEOUT_US = 500_000
 """A trajectory setpoint older than this no longer counts (its producer stopped)."""
 TAKEOFF_STATUS_REPUBLISH_US = 1_000_000
 
-PARAMS = catalogue.params(
-    "MPC_XY_P", "MPC_Z_P", "MPC_XY_VEL_P_ACC", "MPC_XY_VEL_I_ACC", "MPC_XY_VEL_D_ACC", "MPC_Z_VEL_P_ACC",
-    "MPC_Z_VEL_I_ACC", "MPC_Z_VEL_D_ACC", "MPC_XY_VEL_MAX", "MPC_Z_VEL_MAX_UP", "MPC_Z_VEL_MAX_DN",
-    "MPC_TILTMAX_AIR", "MPC_TILTMAX_LND", "MPC_THR_MIN", "MPC_THR_MAX", "MPC_THR_HOVER", "MPC_THR_XY_MARG",
-    "MPC_ACC_DECOUPLE", "MPC_USE_HTE", "MPC_VELD_LP", "MPC_TKO_SPEED", "MPC_TKO_RAMP_T", "MPC_LAND_SPEED",
-    "COM_SPOOLUP_TIME",
+PARAMS = combine(
+    PositionControlParams.PARAMS,
+    TakeoffParams.PARAMS,
+    catalogue.params("MPC_USE_HTE", "MPC_VELD_LP", "MPC_LAND_SPEED"),
 )
-
-
-def control_params(p) -> PositionControlParams:
-    return PositionControlParams(
-        mpc_xy_p=float(p["MPC_XY_P"]),
-        mpc_z_p=float(p["MPC_Z_P"]),
-        mpc_xy_vel_p_acc=float(p["MPC_XY_VEL_P_ACC"]),
-        mpc_xy_vel_i_acc=float(p["MPC_XY_VEL_I_ACC"]),
-        mpc_xy_vel_d_acc=float(p["MPC_XY_VEL_D_ACC"]),
-        mpc_z_vel_p_acc=float(p["MPC_Z_VEL_P_ACC"]),
-        mpc_z_vel_i_acc=float(p["MPC_Z_VEL_I_ACC"]),
-        mpc_z_vel_d_acc=float(p["MPC_Z_VEL_D_ACC"]),
-        mpc_xy_vel_max=float(p["MPC_XY_VEL_MAX"]),
-        mpc_z_vel_max_up=float(p["MPC_Z_VEL_MAX_UP"]),
-        mpc_z_vel_max_dn=float(p["MPC_Z_VEL_MAX_DN"]),
-        mpc_tiltmax_air=float(p["MPC_TILTMAX_AIR"]),
-        mpc_thr_min=float(p["MPC_THR_MIN"]),
-        mpc_thr_max=float(p["MPC_THR_MAX"]),
-        mpc_thr_hover=float(p["MPC_THR_HOVER"]),
-        mpc_thr_xy_marg=float(p["MPC_THR_XY_MARG"]),
-        mpc_acc_decouple=bool(p["MPC_ACC_DECOUPLE"]),
-    )
-
-
-def takeoff_params(p) -> TakeoffParams:
-    return TakeoffParams(
-        com_spoolup_time=float(p["COM_SPOOLUP_TIME"]),
-        mpc_tko_ramp_t=float(p["MPC_TKO_RAMP_T"]),
-        mpc_tko_speed=float(p["MPC_TKO_SPEED"]),
-        mpc_z_vel_p_acc=float(p["MPC_Z_VEL_P_ACC"]),
-        mpc_tiltmax_lnd=float(p["MPC_TILTMAX_LND"]),
-        mpc_tiltmax_air=float(p["MPC_TILTMAX_AIR"]),
-    )
 
 
 class MulticopterPositionControl(Module):
@@ -93,8 +59,8 @@ class MulticopterPositionControl(Module):
         self.advertise(ORB_ID.vehicle_attitude_setpoint)
         self.advertise(ORB_ID.vehicle_local_position_setpoint)
         self.advertise(ORB_ID.takeoff_status)
-        self.control = PositionControl(control_params(self.params))
-        self.takeoff = Takeoff(takeoff_params(self.params))
+        self.control = PositionControl(PositionControlParams.from_params(self.params))
+        self.takeoff = Takeoff(TakeoffParams.from_params(self.params))
         self.velocity_derivative = VelocityDerivative(float(self.params["MPC_VELD_LP"]))
         self._enabled_since_us = 0
         self._first_run = True
@@ -105,8 +71,8 @@ class MulticopterPositionControl(Module):
         self._kept_integral = kept.get("velocity_integral") if kept is not None else None
 
     def on_params_changed(self, changed: set[str]) -> None:
-        self.control.set_params(control_params(self.params))
-        self.takeoff.set_params(takeoff_params(self.params))
+        self.control.set_params(PositionControlParams.from_params(self.params))
+        self.takeoff.set_params(TakeoffParams.from_params(self.params))
         if "MPC_VELD_LP" in changed:
             self.velocity_derivative = VelocityDerivative(float(self.params["MPC_VELD_LP"]))
 

@@ -12,12 +12,12 @@ be given or omitted together. Also holds ``failsafe_setpoint``, the setpoint PX4
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 from typing import NamedTuple
 
 from stack.mathlib.quaternion import Quat
 from stack.mathlib.scalar import CONSTANTS_ONE_G, FLT_EPSILON
 from stack.mathlib.vector import NAN3, Vec3
+from stack.params.binding import ParamSet
 from stack.posctl.control_math import (
     add_if_not_nan,
     constrain_xy,
@@ -32,44 +32,27 @@ _G = CONSTANTS_ONE_G
 _isfinite = math.isfinite
 
 
-@dataclass(slots=True)
-class PositionControlParams:
-    """Tunables of ``PositionControl`` under their PX4 names (defaults and ranges from PX4 main)."""
+class PositionControlParams(ParamSet):
+    """Tunables of ``PositionControl``: the catalogue's MPC_* gains and limits (:mod:`stack.params.mpc`)."""
 
-    mpc_xy_p: float = 0.95
-    """MPC_XY_P, horizontal position gain [1/s], 0–2."""
-    mpc_z_p: float = 1.0
-    """MPC_Z_P, vertical position gain [1/s], 0.1–1.5."""
-    mpc_xy_vel_p_acc: float = 1.8
-    """MPC_XY_VEL_P_ACC, horizontal velocity P gain [1/s], 1.2–5."""
-    mpc_xy_vel_i_acc: float = 0.4
-    """MPC_XY_VEL_I_ACC, horizontal velocity I gain [1/s²], 0–60."""
-    mpc_xy_vel_d_acc: float = 0.2
-    """MPC_XY_VEL_D_ACC, horizontal velocity D gain [-], 0.1–2."""
-    mpc_z_vel_p_acc: float = 4.0
-    """MPC_Z_VEL_P_ACC, vertical velocity P gain [1/s], 2–15."""
-    mpc_z_vel_i_acc: float = 2.0
-    """MPC_Z_VEL_I_ACC, vertical velocity I gain [1/s²], 0.2–3."""
-    mpc_z_vel_d_acc: float = 0.0
-    """MPC_Z_VEL_D_ACC, vertical velocity D gain [-], 0–2."""
-    mpc_xy_vel_max: float = 12.0
-    """MPC_XY_VEL_MAX, horizontal speed limit [m/s], 0–20."""
-    mpc_z_vel_max_up: float = 3.0
-    """MPC_Z_VEL_MAX_UP, climb-rate limit [m/s], 0.5–8."""
-    mpc_z_vel_max_dn: float = 1.5
-    """MPC_Z_VEL_MAX_DN, descent-rate limit [m/s], 0.5–4."""
-    mpc_tiltmax_air: float = 45.0
-    """MPC_TILTMAX_AIR, tilt limit in flight [deg], 20–89."""
-    mpc_thr_min: float = 0.12
-    """MPC_THR_MIN, minimum collective thrust [normalised], 0.05–0.5."""
-    mpc_thr_max: float = 1.0
-    """MPC_THR_MAX, maximum collective thrust [normalised], 0–1."""
-    mpc_thr_hover: float = 0.5
-    """MPC_THR_HOVER, hover thrust [normalised], 0.1–0.8."""
-    mpc_thr_xy_marg: float = 0.3
-    """MPC_THR_XY_MARG, horizontal thrust kept in reserve at vertical saturation [normalised], 0–0.5."""
-    mpc_acc_decouple: bool = True
-    """MPC_ACC_DECOUPLE, tilt computed without the vertical acceleration setpoint."""
+    mpc_xy_p: float
+    mpc_z_p: float
+    mpc_xy_vel_p_acc: float
+    mpc_xy_vel_i_acc: float
+    mpc_xy_vel_d_acc: float
+    mpc_z_vel_p_acc: float
+    mpc_z_vel_i_acc: float
+    mpc_z_vel_d_acc: float
+    mpc_xy_vel_max: float
+    mpc_z_vel_max_up: float
+    mpc_z_vel_max_dn: float
+    mpc_tiltmax_air: float
+    mpc_thr_min: float
+    mpc_thr_max: float
+    mpc_thr_hover: float
+    mpc_thr_xy_marg: float
+    mpc_acc_decouple: int
+    """Tilt computed without the vertical acceleration setpoint (an enabled/disabled integer)."""
 
 
 class LocalPositionSetpoint(NamedTuple):
@@ -92,13 +75,13 @@ class FailsafeSetpoint(NamedTuple):
     action: str
 
 
-def failsafe_setpoint(velocity_estimate: Vec3, land_speed: float = 0.7) -> FailsafeSetpoint:
+def failsafe_setpoint(velocity_estimate: Vec3, land_speed: float) -> FailsafeSetpoint:
     """Setpoint to fly when the requested one cannot be executed (PX4 ``generateFailsafeSetpoint``).
 
     In order of preference: stop horizontally (velocity 0) when the horizontal velocity estimate is
-    valid, otherwise zero horizontal acceleration and descend at ``land_speed`` (MPC_LAND_SPEED,
-    0.7 m/s, 0.6–…); vertically hold velocity 0 (or the land speed) when the vertical velocity
-    estimate is valid, otherwise command a_z = +0.3 m/s² ("blind descent", slightly below hover).
+    valid, otherwise zero horizontal acceleration and descend at ``land_speed`` (MPC_LAND_SPEED);
+    vertically hold velocity 0 (or the land speed) when the vertical velocity estimate is valid, otherwise
+    command a_z = +0.3 m/s² ("blind descent", slightly below hover).
     """
     nan = math.nan
     vx = vy = vz = nan

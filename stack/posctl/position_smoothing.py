@@ -25,11 +25,10 @@ The output (position, velocity, acceleration, jerk) is kinematically consistent,
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 from stack.mathlib.scalar import FLT_EPSILON
 from stack.mathlib.vector import Vec3, line_crossing_point
-from stack.params import catalogue
+from stack.params.binding import ParamSet
 from stack.posctl.velocity_smoothing import TrajectoryPoint, VelocitySmoothing3D
 
 Waypoints = tuple[Vec3, Vec3, Vec3]
@@ -78,39 +77,23 @@ def _angle_at_corner(ux: float, uy: float, wx: float, wy: float) -> float:
     return min(alpha, math.pi - FLT_EPSILON)
 
 
-def _default(name: str) -> float:
-    return float(catalogue.get(name).default)
+class PositionSmoothingParams(ParamSet):
+    """Tunables of ``PositionSmoothing`` (the catalogue's). ``mpc_xy_vel_max`` is the per-axis horizontal speed
+    limit of the profiles, ``mpc_xy_traj_p`` the share of MPC_ACC_HOR used as lateral acceleration in turns;
+    ``nav_acc_rad`` is the navigator's horizontal acceptance radius (a mission item's own when it has one)."""
 
-
-@dataclass(slots=True)
-class PositionSmoothingParams:
-    """Tunables of ``PositionSmoothing`` under their PX4 names; defaults and ranges are the catalogue's
-    (:mod:`stack.params.catalogue`)."""
-
-    mpc_xy_cruise: float = _default("MPC_XY_CRUISE")
-    """Horizontal cruise speed [m/s]."""
-    mpc_xy_vel_max: float = _default("MPC_XY_VEL_MAX")
-    """Per-axis horizontal speed limit of the profiles [m/s]."""
-    mpc_z_v_auto_up: float = _default("MPC_Z_V_AUTO_UP")
-    """Climb speed [m/s]."""
-    mpc_z_v_auto_dn: float = _default("MPC_Z_V_AUTO_DN")
-    """Descent speed [m/s]."""
-    mpc_acc_hor: float = _default("MPC_ACC_HOR")
-    """Horizontal acceleration [m/s²]."""
-    mpc_acc_up_max: float = _default("MPC_ACC_UP_MAX")
-    """Vertical acceleration while climbing [m/s²]."""
-    mpc_acc_down_max: float = _default("MPC_ACC_DOWN_MAX")
-    """Vertical acceleration while descending [m/s²]."""
-    mpc_jerk_auto: float = _default("MPC_JERK_AUTO")
-    """Jerk limit [m/s³]."""
-    mpc_xy_err_max: float = _default("MPC_XY_ERR_MAX")
-    """Horizontal lag at which the trajectory stops [m]."""
-    mpc_xy_traj_p: float = _default("MPC_XY_TRAJ_P")
-    """Share of MPC_ACC_HOR used as lateral acceleration in turns [-]."""
-    nav_acc_rad: float = _default("NAV_ACC_RAD")
-    """Horizontal waypoint acceptance radius [m] (the navigator's: a mission item's own radius when it has one)."""
-    nav_mc_alt_rad: float = _default("NAV_MC_ALT_RAD")
-    """Vertical waypoint acceptance radius [m]."""
+    mpc_xy_cruise: float
+    mpc_xy_vel_max: float
+    mpc_z_v_auto_up: float
+    mpc_z_v_auto_dn: float
+    mpc_acc_hor: float
+    mpc_acc_up_max: float
+    mpc_acc_down_max: float
+    mpc_jerk_auto: float
+    mpc_xy_err_max: float
+    mpc_xy_traj_p: float
+    nav_acc_rad: float
+    nav_mc_alt_rad: float
 
 
 class PositionSmoothing:

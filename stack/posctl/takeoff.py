@@ -12,12 +12,12 @@ is 0. The tilt limit then slews to MPC_TILTMAX_AIR at 0.2 rad/s.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 from typing import NamedTuple
 
 from stack.mathlib.scalar import CONSTANTS_ONE_G
 from stack.mathlib.vector import NAN3, Vec3
 from stack.msg.setpoints import TakeoffState
+from stack.params.binding import ParamSet
 
 IDLE_ACCELERATION: Vec3 = (0.0, 0.0, 100.0)
 """Acceleration setpoint that drives the collective thrust to zero (far more than gravity, down)."""
@@ -26,22 +26,16 @@ TILT_LIMIT_SLEW_RATE = 0.2
 """Slew rate of the tilt limit [rad/s] (MulticopterPositionControl)."""
 
 
-@dataclass(slots=True)
-class TakeoffParams:
-    """Tunables under their PX4 names (defaults and ranges from PX4 main)."""
+class TakeoffParams(ParamSet):
+    """Tunables of ``Takeoff`` (the catalogue's): COM_SPOOLUP_TIME, the ramp (MPC_TKO_RAMP_T, MPC_TKO_SPEED, its
+    start −g/MPC_Z_VEL_P_ACC: zero thrust) and the tilt limits on the ground and in flight."""
 
-    com_spoolup_time: float = 1.0
-    """COM_SPOOLUP_TIME, time from arming until takeoff is allowed [s], 0–30."""
-    mpc_tko_ramp_t: float = 3.0
-    """MPC_TKO_RAMP_T, duration of the takeoff velocity-limit ramp [s], 0–5 (0 = no ramp)."""
-    mpc_tko_speed: float = 1.5
-    """MPC_TKO_SPEED, takeoff climb rate [m/s], 1–5 (used when no speed is requested)."""
-    mpc_z_vel_p_acc: float = 4.0
-    """MPC_Z_VEL_P_ACC, vertical velocity gain [1/s]; sets the ramp start −g/gain (zero thrust)."""
-    mpc_tiltmax_lnd: float = 12.0
-    """MPC_TILTMAX_LND, tilt limit on the ground and during takeoff [deg], 10–89."""
-    mpc_tiltmax_air: float = 45.0
-    """MPC_TILTMAX_AIR, tilt limit in flight [deg], 20–89."""
+    com_spoolup_time: float
+    mpc_tko_ramp_t: float
+    mpc_tko_speed: float
+    mpc_z_vel_p_acc: float
+    mpc_tiltmax_lnd: float
+    mpc_tiltmax_air: float
 
 
 class TakeoffSetpoint(NamedTuple):

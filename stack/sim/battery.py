@@ -25,14 +25,26 @@ from collections.abc import Iterable, Mapping
 from typing import NamedTuple
 
 from stack.msg.system import BatteryWarning
-from stack.params import catalogue
+from stack.params.binding import ParamSet
 from stack.params.param import Param
 
-PARAMS: tuple[Param, ...] = catalogue.params(
-    "SIM_BAT_DRAIN", "SIM_BAT_MIN_PCT", "BAT1_N_CELLS", "BAT1_CAPACITY", "BAT1_V_EMPTY", "BAT1_V_CHARGED",
-    "BAT1_R_INTERNAL", "BAT_LOW_THR", "BAT_CRIT_THR", "BAT_EMERGEN_THR",
-)
-DEFAULTS: dict[str, object] = {p.name: p.default for p in PARAMS}
+
+class SimBatteryParams(ParamSet):
+    """The simulated pack (the catalogue's BAT*), its warning thresholds and the simulator's drain."""
+
+    sim_bat_drain: float
+    sim_bat_min_pct: float
+    bat1_n_cells: int
+    bat1_capacity: float
+    bat1_v_empty: float
+    bat1_v_charged: float
+    bat1_r_internal: float
+    bat_low_thr: float
+    bat_crit_thr: float
+    bat_emergen_thr: float
+
+
+PARAMS: tuple[Param, ...] = SimBatteryParams.PARAMS
 
 AVERAGE_CURRENT_TAU = 2.0
 """Time constant [s] of the average current used for the time-remaining estimate."""
@@ -89,30 +101,29 @@ class BatteryModel:
         self.set_params(params or {})
 
     def set_params(self, params: Mapping[str, object]) -> None:
-        p = {**DEFAULTS, **params}
-        self._p = {name: float(value) for name, value in p.items()}
+        self._p = SimBatteryParams.from_params(params)
 
     def open_circuit_voltage(self, state_of_charge: float) -> float:
         """Pack voltage [V] with no load at the given state of charge."""
         p = self._p
-        cell = p["BAT1_V_EMPTY"] + state_of_charge * (p["BAT1_V_CHARGED"] - p["BAT1_V_EMPTY"])
-        return cell * p["BAT1_N_CELLS"]
+        cell = p.bat1_v_empty + state_of_charge * (p.bat1_v_charged - p.bat1_v_empty)
+        return cell * p.bat1_n_cells
 
     def warning_for(self, remaining: float) -> BatteryWarning:
         p = self._p
-        if remaining < p["BAT_EMERGEN_THR"]:
+        if remaining < p.bat_emergen_thr:
             return BatteryWarning.EMERGENCY
-        if remaining < p["BAT_CRIT_THR"]:
+        if remaining < p.bat_crit_thr:
             return BatteryWarning.CRITICAL
-        if remaining < p["BAT_LOW_THR"]:
+        if remaining < p.bat_low_thr:
             return BatteryWarning.LOW
         return BatteryWarning.NONE
 
     def update(self, dt_s: float, armed: bool, current_a: float = math.nan) -> BatteryState:
         p = self._p
-        capacity = p["BAT1_CAPACITY"]
-        floor = p["SIM_BAT_MIN_PCT"] / 100.0
-        drain_s = p["SIM_BAT_DRAIN"]
+        capacity = p.bat1_capacity
+        floor = p.sim_bat_min_pct / 100.0
+        drain_s = p.sim_bat_drain
         if math.isfinite(current_a):
             current = max(current_a, 0.0)
             if self._charge > floor:
@@ -136,7 +147,7 @@ class BatteryModel:
         if not armed or new_warning > self._warning:
             self._warning = new_warning
 
-        voltage = self.open_circuit_voltage(remaining) - current * p["BAT1_R_INTERNAL"] * p["BAT1_N_CELLS"]
+        voltage = self.open_circuit_voltage(remaining) - current * p.bat1_r_internal * p.bat1_n_cells
         time_remaining = remaining * capacity * 3.6 / self._average_a if self._average_a > 0.1 else math.nan
         return BatteryState(
             connected=True,
@@ -146,7 +157,7 @@ class BatteryModel:
             discharged_mah=self._discharged_mah,
             remaining=remaining,
             time_remaining_s=time_remaining,
-            cell_count=int(p["BAT1_N_CELLS"]),
+            cell_count=p.bat1_n_cells,
             capacity=capacity,
             warning=int(self._warning),
         )

@@ -24,6 +24,7 @@ from stack.msg.sensors import SensorAccel, SensorBaro, SensorGps, SensorGyro, Se
 from stack.msg.simulation import SimGroundtruth
 from stack.msg.system import BatteryStatus, VehicleCommand
 from stack.params import catalogue
+from stack.params.binding import combine
 from stack.runtime.module import Arg, Module
 from stack.runtime.priority import PLANT
 from stack.sim import battery
@@ -56,12 +57,12 @@ class SimulatorModule(Module):
         Arg("gps_rate_hz", 10.0),
         Arg("gps_delay_s", 0.0, "GPS measurement delay"),
     )
-    PARAMS = (
-        *catalogue.params(
+    PARAMS = combine(
+        catalogue.params(
             "SIH_LOC_LAT0", "SIH_LOC_LON0", "SIH_LOC_H0", "SIM_GPS_USED", "SIM_WIND_SPD", "SIM_WIND_DIR",
             "SIM_WIND_GUST", "SIM_WIND_GUST_T", "SIM_WIND_HREF", "SYS_FAILURE_EN", "MAV_SYS_ID", "MAV_COMP_ID",
         ),
-        *battery.PARAMS,
+        battery.PARAMS,
     )
 
     def __init__(self, rt) -> None:

@@ -7,7 +7,7 @@ import random
 
 import pytest
 
-from stack.estimator.angular_velocity import AngularVelocityFilter
+from stack.estimator.angular_velocity import AngularVelocityFilter, GyroFilterParams
 
 RATE_HZ = 250.0
 DT_US = 4000
@@ -50,7 +50,7 @@ def test_passes_low_and_attenuates_high_frequencies() -> None:
 
 def test_reduces_white_noise() -> None:
     rng = random.Random(0)
-    filt = AngularVelocityFilter(IMU_GYRO_CUTOFF=20.0)
+    filt = AngularVelocityFilter(GyroFilterParams(imu_gyro_cutoff=20.0))
     out = []
     for i in range(5000):
         xyz, _ = filt.update(1_000_000 + i * DT_US, (rng.gauss(0.0, 1.0), 0.0, 0.0))
@@ -79,14 +79,14 @@ def test_bias_is_subtracted_without_disturbing_the_derivative() -> None:
 
 
 def test_derivative_uses_the_measured_interval() -> None:
-    filt = AngularVelocityFilter(IMU_GYRO_CUTOFF=0.0, IMU_DGYRO_CUTOFF=0.0)
+    filt = AngularVelocityFilter(GyroFilterParams(imu_gyro_cutoff=0.0, imu_dgyro_cutoff=0.0))
     filt.update(1_000_000, (0.0, 0.0, 0.0))
     _, dxyz = filt.update(1_010_000, (0.1, 0.0, 0.0))  # one late sample: 10 ms
     assert dxyz[0] == pytest.approx(10.0)
 
 
 def test_zero_cutoffs_disable_the_filters() -> None:
-    filt = AngularVelocityFilter(IMU_GYRO_CUTOFF=0.0, IMU_DGYRO_CUTOFF=0.0)
+    filt = AngularVelocityFilter(GyroFilterParams(imu_gyro_cutoff=0.0, imu_dgyro_cutoff=0.0))
     rng = random.Random(1)
     prev = 0.0
     filt.update(1_000_000, (prev, 0.0, 0.0))
@@ -130,7 +130,7 @@ def test_non_finite_samples_are_ignored() -> None:
 
 
 def test_repeated_timestamp_assumes_one_nominal_interval() -> None:
-    filt = AngularVelocityFilter(IMU_GYRO_CUTOFF=0.0, IMU_DGYRO_CUTOFF=0.0)
+    filt = AngularVelocityFilter(GyroFilterParams(imu_gyro_cutoff=0.0, imu_dgyro_cutoff=0.0))
     filt.update(1_000_000, (0.0, 0.0, 0.0))
     _, dxyz = filt.update(1_000_000, (0.04, 0.0, 0.0))
     assert dxyz[0] == pytest.approx(0.04 * RATE_HZ)
@@ -138,7 +138,7 @@ def test_repeated_timestamp_assumes_one_nominal_interval() -> None:
 
 def test_set_params_changes_the_cutoff() -> None:
     filt = AngularVelocityFilter()
-    filt.set_params(IMU_GYRO_CUTOFF=10.0)
+    filt.set_params(GyroFilterParams(imu_gyro_cutoff=10.0))
     assert run_sine(filt, 40.0, 2.0) < 0.1
 
 

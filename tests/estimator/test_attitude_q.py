@@ -8,7 +8,7 @@ import random
 import pytest
 
 from stack.estimator import attitude_q
-from stack.estimator.attitude_q import AttitudeEstimatorQ
+from stack.estimator.attitude_q import AttitudeEstimatorParams, AttitudeEstimatorQ
 from stack.mathlib import quaternion as quat
 from stack.mathlib.quaternion import Quat
 from stack.mathlib.scalar import CONSTANTS_ONE_G
@@ -100,14 +100,14 @@ def test_motion_restarts_the_alignment() -> None:
 
 def test_without_magnetometer_starts_at_yaw_zero() -> None:
     q_true = quat.from_euler(math.radians(15.0), 0.0, 0.0)
-    est = AttitudeEstimatorQ(ATT_W_MAG=0.0)
+    est = AttitudeEstimatorQ(AttitudeEstimatorParams(att_w_mag=0.0))
     align(est, q_true, random.Random(0), accel_sigma=0.0)
     assert error_deg(est.q, q_true) < 1e-4
 
 
 def test_declination_is_applied_at_initialisation() -> None:
     q_true = quat.from_euler(math.radians(20.0), math.radians(-10.0), math.radians(30.0))
-    est = AttitudeEstimatorQ(ATT_MAG_DECL=12.0)
+    est = AttitudeEstimatorQ(AttitudeEstimatorParams(att_mag_decl=12.0))
     align(est, q_true, random.Random(0), gyro_sigma=0.0, accel_sigma=0.0, mag_sigma=0.0, field=earth_field(12.0))
     assert error_deg(est.q, q_true) < 1e-4
 
@@ -115,7 +115,7 @@ def test_declination_is_applied_at_initialisation() -> None:
 def test_declination_change_rotates_the_estimate() -> None:
     est = AttitudeEstimatorQ()
     est.reset(quat.from_euler(0.0, 0.0, math.radians(40.0)))
-    est.set_params(ATT_MAG_DECL=5.0)
+    est.set_params(AttitudeEstimatorParams(att_mag_decl=5.0))
     assert math.degrees(quat.yaw(est.q)) == pytest.approx(45.0, abs=1e-9)
 
 
@@ -160,7 +160,7 @@ def test_converges_while_rotating() -> None:
 
 def test_fast_spin_boosts_the_heading_correction() -> None:
     def heading_error_after(spin_rate: float) -> float:
-        est = AttitudeEstimatorQ(ATT_W_ACC=0.0)
+        est = AttitudeEstimatorQ(AttitudeEstimatorParams(att_w_acc=0.0))
         q_true = quat.IDENTITY
         est.reset(quat.from_euler(0.0, 0.0, math.radians(20.0)))
         rng = random.Random(3)
@@ -207,17 +207,17 @@ def test_bias_is_not_learned_while_rotating_fast() -> None:
 
 def test_bias_is_clamped_to_att_bias_max() -> None:
     rng = random.Random(6)
-    est = AttitudeEstimatorQ(ATT_BIAS_MAX=0.03)
+    est = AttitudeEstimatorQ(AttitudeEstimatorParams(att_bias_max=0.03))
     for _ in range(int(60.0 / DT)):
         gyro, accel, mag = measure(quat.IDENTITY, rng, bias=(0.1, 0.0, 0.0), gyro_sigma=0.0)
         est.update(DT, gyro, accel, mag)
     assert est.gyro_bias[0] == pytest.approx(0.03, abs=1e-12)
-    est.set_params(ATT_BIAS_MAX=0.01)
+    est.set_params(AttitudeEstimatorParams(att_bias_max=0.01))
     assert est.gyro_bias[0] == pytest.approx(0.01, abs=1e-12)
 
 
 def test_accel_outside_gate_is_ignored() -> None:
-    est = AttitudeEstimatorQ(ATT_W_MAG=0.0, ATT_W_GYRO_BIAS=0.0)
+    est = AttitudeEstimatorQ(AttitudeEstimatorParams(att_w_mag=0.0, att_w_gyro_bias=0.0))
     q0 = quat.from_euler(math.radians(20.0), 0.0, 0.0)
     est.reset(q0)
     # 1.5 g straight down in body: outside the 0.9–1.1 g gate, so no tilt correction at all.
@@ -235,7 +235,7 @@ def test_acceleration_compensation_removes_the_manoeuvre_tilt() -> None:
 
     def final_error(compensate: bool) -> float:
         rng = random.Random(7)
-        est = AttitudeEstimatorQ(ATT_ACC_COMP=int(compensate))
+        est = AttitudeEstimatorQ(AttitudeEstimatorParams(att_acc_comp=int(compensate)))
         est.reset(quat.IDENTITY)
         for _ in range(int(30.0 / DT)):
             gyro, accel, mag = measure(quat.IDENTITY, rng, accel_ned=accel_ned)
@@ -276,7 +276,7 @@ def test_non_finite_result_reverts_and_resets_bias(monkeypatch: pytest.MonkeyPat
 
 
 def test_dt_is_clamped_to_20_ms() -> None:
-    est = AttitudeEstimatorQ(ATT_W_ACC=0.0, ATT_W_MAG=0.0)
+    est = AttitudeEstimatorQ(AttitudeEstimatorParams(att_w_acc=0.0, att_w_mag=0.0))
     est.reset(quat.IDENTITY)
     assert est.update(1.0, (0.0, 0.0, 1.0), (0.0, 0.0, -CONSTANTS_ONE_G))
     assert quat.yaw(est.q) == pytest.approx(0.02, abs=1e-12)

@@ -12,7 +12,7 @@ import math
 
 import pytest
 
-from stack.estimator.attitude_q import AttitudeEstimatorQ
+from stack.estimator.attitude_q import AttitudeEstimatorParams, AttitudeEstimatorQ
 from stack.mathlib import quaternion as quat
 from stack.sim.sensors import ImuSample, MagSample
 from stack.sim.simulator import Simulator
@@ -34,7 +34,7 @@ def test_converges_from_30_deg_roll_and_90_deg_yaw_off(airborne: bool, yaw_deg: 
     commands = (model.hover_command if airborne else 0.0,) * model.rotor_count
     sim.reset_pose((0.0, 0.0, -20.0 if airborne else 0.0), attitude, motor_states=commands)
     declination = sim.magnetometer.params.declination_deg
-    estimator = AttitudeEstimatorQ(ATT_MAG_DECL=declination)
+    estimator = AttitudeEstimatorQ(AttitudeEstimatorParams(att_mag_decl=declination))
     estimator.reset(quat.mul(attitude, OFFSET))
     dt = sim.imu_period_us * 1e-6
     errors, tilt_errors = [], []

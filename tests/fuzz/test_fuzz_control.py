@@ -29,7 +29,7 @@ def test_position_control_takes_any_state_and_setpoint(pos, vel, vel_dot, yaw, s
     control.set_setpoint(sp_pos, sp_vel, sp_acc, sp_yaw, sp_yawspeed)
     executed = control.update(dt)
     if not executed:
-        fs = failsafe_setpoint(vel)
+        fs = failsafe_setpoint(vel, land_speed=0.7)
         control.set_setpoint(fs.position, fs.velocity, fs.acceleration, math.nan, math.nan)
         executed = control.update(0.02)
     q_d, thrust, yawspeed = control.attitude_setpoint()

@@ -17,14 +17,11 @@ from stack.msg.estimation import VehicleAttitude, VehicleLocalPosition
 from stack.msg.fixedwing import Airspeed
 from stack.msg.registry import ORB_ID
 from stack.msg.system import VehicleLandDetected
-from stack.params import catalogue
 from stack.runtime.inprocess import InProcessStack
 from stack.runtime.module import Arg, Module
 from stack.supervisor.profile import load_profile
 
-DEFAULTS = AirspeedValidatorParams.from_params(
-    {n: catalogue.get(n).default for n in AirspeedValidatorParams.PARAM_NAMES}
-)
+DEFAULTS = AirspeedValidatorParams()
 AIRSPEED = 15.0
 OMEGA = AIRSPEED / 80.0
 ROLL = math.atan(AIRSPEED * OMEGA / G)
@@ -83,7 +80,7 @@ def test_missing_data_invalidates_at_once_and_for_good():
 
 
 def test_data_returning_is_used_again_after_the_start_delay():
-    validator = AirspeedValidator(dataclasses.replace(DEFAULTS, clear_delay=3.0))
+    validator = AirspeedValidator(dataclasses.replace(DEFAULTS, aspd_fs_t_start=3))
     fly(validator, 0.0, 1.0)
     validator.check_timeout(2_100_001)
     fly(validator, 3.0, 5.0)
@@ -112,7 +109,7 @@ def test_an_inconsistent_airspeed_fails_the_innovation_check():
 
 
 def test_without_checks_only_missing_data_counts():
-    validator = AirspeedValidator(dataclasses.replace(DEFAULTS, checks_enabled=False))
+    validator = AirspeedValidator(dataclasses.replace(DEFAULTS, aspd_do_checks=0))
     assert fly(validator, 0.0, 20.0, indicated=lambda t: 0.3 * AIRSPEED) is None
 
 

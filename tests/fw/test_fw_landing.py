@@ -5,8 +5,7 @@ import pytest
 from stack.fw.landing import Landing, LandingParams
 from stack.params import catalogue
 
-VALUES = {n: catalogue.get(n).default for n in LandingParams.PARAM_NAMES}
-DEFAULTS = LandingParams.from_params(VALUES)
+DEFAULTS = LandingParams()
 TAN5 = math.tan(math.radians(5.0))
 LAND = (0.0, 0.0)
 PREVIOUS = (-500.0, 0.0)  # approaching northbound, from 30 m
@@ -26,14 +25,14 @@ def flare(landing, t0=10.0, down_speed=1.2, throttle=0.4):
 
 
 def test_parameters_are_px4_v1_14s():
-    assert DEFAULTS.flare_altitude == 0.5 and DEFAULTS.flare_time == 1.0 and DEFAULTS.flare_sink_rate == 0.25
-    assert DEFAULTS.touchdown_time == -1.0
-    assert DEFAULTS.airspeed == pytest.approx(1.3 * 10.0)
-    assert (DEFAULTS.flare_pitch_min, DEFAULTS.flare_pitch_max) == pytest.approx(
-        (math.radians(2.5), math.radians(15.0))
+    assert DEFAULTS.fw_lnd_flalt == 0.5 and DEFAULTS.fw_lnd_fl_time == 1.0 and DEFAULTS.fw_lnd_fl_sink == 0.25
+    assert DEFAULTS.fw_lnd_td_time == -1.0
+    assert (DEFAULTS.fw_lnd_airspd_sc, DEFAULTS.fw_airspd_min) == (1.3, 10.0)
+    assert (DEFAULTS.fw_lnd_fl_pmin, DEFAULTS.fw_lnd_fl_pmax) == (2.5, 15.0)
+    assert (DEFAULTS.fw_p_lim_min, DEFAULTS.fw_p_lim_max) == pytest.approx(
+        (math.degrees(P_LIM_MIN), math.degrees(P_LIM_MAX))
     )
-    assert (DEFAULTS.pitch_min, DEFAULTS.pitch_max) == pytest.approx((P_LIM_MIN, P_LIM_MAX))
-    assert (DEFAULTS.throttle_max, DEFAULTS.throttle_idle) == (1.0, 0.0)
+    assert (DEFAULTS.fw_thr_max, DEFAULTS.fw_thr_idle) == (1.0, 0.0)
     for removed in ("FW_LND_HVIRT", "FW_LND_TLALT", "FW_THR_LND_MAX"):
         assert removed not in catalogue.CATALOGUE
 
@@ -70,7 +69,7 @@ def test_the_flare_starts_at_the_higher_of_the_flare_altitude_and_the_flare_time
     landing = Landing(DEFAULTS)
     assert not update(landing, -30.0, 2.05, down_speed=2.0).flaring
     assert update(landing, -29.0, 1.95, down_speed=2.0).flaring
-    landing = Landing(LandingParams.from_params(VALUES | {"FW_LND_FL_TIME": 2.0, "FW_LND_FLALT": 3.0}))
+    landing = Landing(LandingParams(fw_lnd_fl_time=2.0, fw_lnd_flalt=3.0))
     assert not update(landing, -30.0, 3.1, down_speed=1.0).flaring
     assert update(landing, -29.0, 2.9, down_speed=1.0).flaring
 
@@ -98,7 +97,7 @@ def test_the_flare_ramps_height_rate_pitch_limits_and_throttle_over_the_flare_ti
 
 
 def test_the_throttle_goes_to_idle_even_with_a_non_zero_idle():
-    landing = Landing(LandingParams.from_params(VALUES | {"FW_THR_IDLE": 0.15, "FW_THR_MAX": 0.9}))
+    landing = Landing(LandingParams(fw_thr_idle=0.15, fw_thr_max=0.9))
     flare(landing)
     sp = update(landing, -1.0, 0.2, now=10.25)
     assert sp.throttle_min == 0.15 and sp.throttle_max == pytest.approx(0.5 * 0.15 + 0.5 * 0.9)
@@ -130,8 +129,7 @@ def test_the_flare_latches_until_reset():
 
 
 def test_the_touchdown_time_clamps_the_pitch_to_the_runway_pitch():
-    values = VALUES | {"FW_LND_TD_TIME": 2.0, "RWTO_PSP": 1.0}
-    landing = Landing(LandingParams.from_params(values))
+    landing = Landing(LandingParams(fw_lnd_td_time=2.0, rwto_psp=1.0))
     flare(landing)
     assert update(landing, 2.0, 0.1, now=12.0).pitch_min == pytest.approx(math.radians(2.5))
     sp = update(landing, 3.0, 0.05, now=12.25)  # half way through the 0.5 s clamp
@@ -140,8 +138,7 @@ def test_the_touchdown_time_clamps_the_pitch_to_the_runway_pitch():
     sp = update(landing, 4.0, 0.0, now=12.5)
     assert (sp.pitch_min, sp.pitch_max) == pytest.approx((math.radians(1.0), math.radians(1.0)))
     # It waits for the flare to have ramped in: at least FW_LND_FL_TIME after its start.
-    values = VALUES | {"FW_LND_TD_TIME": 0.5, "FW_LND_FL_TIME": 2.0, "RWTO_PSP": 1.0}
-    landing = Landing(LandingParams.from_params(values))
+    landing = Landing(LandingParams(fw_lnd_td_time=0.5, fw_lnd_fl_time=2.0, rwto_psp=1.0))
     flare(landing)
     assert update(landing, 2.0, 0.1, now=12.0).pitch_min == pytest.approx(math.radians(2.5))
 
@@ -151,7 +148,7 @@ def test_heading_hold_from_the_hold_distance_or_the_flare():
     assert not update(landing, -16.0, 4.0).heading_hold
     sp = update(landing, -14.0, 4.0, yaw=0.3)
     assert sp.heading_hold and sp.target_bearing == 0.0 and sp.roll_limit == pytest.approx(math.radians(10.0))
-    landing = Landing(LandingParams.from_params(VALUES | {"FW_LND_HHDIST": 0.0}))
+    landing = Landing(LandingParams(fw_lnd_hhdist=0.0))
     assert not flare(landing).heading_hold
     landing = Landing(DEFAULTS)
     update(landing, -60.0, 5.0)

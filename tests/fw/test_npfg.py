@@ -6,9 +6,8 @@ import pytest
 from stack.fw.l1_guidance import L1Guidance
 from stack.fw.npfg import NPFG, NpfgParams
 from stack.mathlib.scalar import CONSTANTS_ONE_G as G
-from stack.params import catalogue
 
-DEFAULTS = NpfgParams.from_params({n: catalogue.get(n).default for n in NpfgParams.PARAM_NAMES})
+DEFAULTS = NpfgParams()
 A = (0.0, 0.0)
 B = (1000.0, 0.0)  # a northbound leg
 P_GAIN = 4.0 * math.pi * 0.7 / 10.0  # nominal period 10 s, damping 0.7
@@ -16,9 +15,9 @@ TIME_CONSTANT = 10.0 * 0.7
 
 
 def test_defaults_come_from_the_catalogue():
-    assert (DEFAULTS.period, DEFAULTS.damping, DEFAULTS.switch_distance_multiplier) == (10.0, 0.7, 0.32)
-    assert DEFAULTS.roll_limit == pytest.approx(math.radians(50.0))
-    assert (DEFAULTS.airspeed_nominal, DEFAULTS.airspeed_max, DEFAULTS.min_ground_speed) == (15.0, 20.0, 5.0)
+    assert (DEFAULTS.fw_npfg_period, DEFAULTS.fw_npfg_damping, DEFAULTS.fw_npfg_sw_dst_mlt) == (10.0, 0.7, 0.32)
+    assert DEFAULTS.fw_r_lim == 50.0
+    assert (DEFAULTS.fw_airspd_trim, DEFAULTS.fw_airspd_max, DEFAULTS.fw_gnd_spd_min) == (15.0, 20.0, 5.0)
 
 
 def test_on_the_track_heading_along_it_no_lateral_acceleration():
@@ -94,7 +93,7 @@ def test_roll_limit_and_slew_rate():
     npfg = NPFG(DEFAULTS)
     npfg.navigate_waypoints(A, B, (100.0, 500.0), (15.0, 0.0), dt=0.1)
     assert npfg.roll_setpoint == pytest.approx(-math.radians(9.0))  # 90 °/s for 0.1 s
-    limited = NPFG(dataclasses.replace(DEFAULTS, roll_limit=math.radians(5.0), roll_slew_rate=0.0))
+    limited = NPFG(dataclasses.replace(DEFAULTS, fw_r_lim=5.0, fw_l1_r_slew_max=0.0))
     limited.navigate_waypoints(A, B, (100.0, 500.0), (15.0, 0.0), dt=0.1)
     assert limited.roll_setpoint == pytest.approx(-math.radians(5.0))
 
@@ -177,7 +176,7 @@ def test_in_a_head_wind_beyond_the_maximum_airspeed_it_does_not_run_away():
 def test_excess_head_wind_regulation_flies_into_the_wind():
     # No ground speed keeping: between the nominal and the maximum airspeed the reference is the wind speed,
     # nose into the wind (zero ground speed), not downwind.
-    params = dataclasses.replace(DEFAULTS, min_ground_speed_enabled=False, track_keeping=False)
+    params = dataclasses.replace(DEFAULTS, fw_npfg_en_min_gsp=0, fw_npfg_track_keep=0)
     npfg = NPFG(params)
     npfg.navigate_waypoints(A, B, (100.0, 0.0), (-3.0, 0.0), wind=(-18.0, 0.0))
     assert npfg.airspeed_reference == pytest.approx(18.0)

@@ -4,9 +4,8 @@ import math
 import pytest
 
 from stack.fw.runway_takeoff import RunwayTakeoff, RunwayTakeoffParams, RunwayTakeoffState
-from stack.params import catalogue
 
-DEFAULTS = RunwayTakeoffParams.from_params({n: catalogue.get(n).default for n in RunwayTakeoffParams.PARAM_NAMES})
+DEFAULTS = RunwayTakeoffParams()
 S = RunwayTakeoffState
 NAV_ROLL = math.radians(40.0)
 NAV_YAW = 1.2
@@ -15,10 +14,10 @@ TECS_THROTTLE = 0.8
 
 
 def test_parameters():
-    assert DEFAULTS.rotation_airspeed == pytest.approx(1.3 * 10.0)
-    assert (DEFAULTS.ramp_time, DEFAULTS.nav_altitude, DEFAULTS.climbout_altitude) == (2.0, 5.0, 10.0)
-    assert DEFAULTS.max_pitch == pytest.approx(math.radians(20.0))
-    assert DEFAULTS.max_roll == pytest.approx(math.radians(25.0))
+    assert (DEFAULTS.rwto_airspd_scl, DEFAULTS.fw_airspd_min) == (1.3, 10.0)
+    assert (DEFAULTS.rwto_ramp_time, DEFAULTS.rwto_nav_alt, DEFAULTS.fw_clmbout_diff) == (2.0, 5.0, 10.0)
+    assert DEFAULTS.rwto_max_pitch == 20.0
+    assert DEFAULTS.rwto_max_roll == 25.0
 
 
 def fly(params):
@@ -87,7 +86,7 @@ def test_pitch_limits_until_flying():
     takeoff.init(0, 0.0, (0.0, 0.0))
     assert takeoff.max_pitch(0.7) == pytest.approx(math.radians(20.0))
     assert takeoff.min_pitch(0.17, -0.5) == 0.17
-    no_limit = RunwayTakeoff(dataclasses.replace(DEFAULTS, max_pitch=0.0))
+    no_limit = RunwayTakeoff(dataclasses.replace(DEFAULTS, rwto_max_pitch=0.0))
     no_limit.init(0, 0.0, (0.0, 0.0))
     assert no_limit.max_pitch(0.7) == 0.7
     takeoff.state = S.FLY
@@ -102,7 +101,7 @@ def test_a_fast_acceleration_ends_the_ramp_early():
 
 
 def test_heading_to_the_waypoint_on_the_ground():
-    takeoff = RunwayTakeoff(dataclasses.replace(DEFAULTS, heading_mode=1))
+    takeoff = RunwayTakeoff(dataclasses.replace(DEFAULTS, rwto_hdg=1))
     takeoff.init(0, 0.5, (0.0, 0.0))
     assert takeoff.yaw(NAV_YAW) == NAV_YAW and takeoff.wheel_steering
     takeoff.update(3_000_000, 14.0, 6.0, (50.0, 0.0))

@@ -5,9 +5,8 @@ import pytest
 
 from stack.fw.wind_estimator import WindEstimator, WindEstimatorParams
 from stack.mathlib.quaternion import from_euler
-from stack.params import catalogue
 
-DEFAULTS = WindEstimatorParams.from_params({n: catalogue.get(n).default for n in WindEstimatorParams.PARAM_NAMES})
+DEFAULTS = WindEstimatorParams()
 AIRSPEED = 15.0
 RADIUS = 80.0
 OMEGA = AIRSPEED / RADIUS

@@ -9,7 +9,6 @@ import pytest
 from stack.mathlib.scalar import CONSTANTS_ONE_G
 from stack.mathlib.vector import Vec3
 from stack.msg.setpoints import ManualControlSetpoint
-from stack.posctl.flight_mode_manager import DEFAULTS
 from stack.posctl.flight_task import TrajectoryCommand, VehicleState
 from stack.posctl.manual_tasks import ManualAltitudeTask, ManualPositionTask, Sticks, heading_to_ned
 
@@ -28,13 +27,13 @@ def state(position: Vec3 = START, velocity: Vec3 = (0.0, 0.0, 0.0), yaw: float =
 
 
 def position_task(params: dict[str, object] | None = None, at: VehicleState | None = None) -> ManualPositionTask:
-    task = ManualPositionTask({**DEFAULTS, **(params or {})})
+    task = ManualPositionTask(params or {})
     task.activate(at or state())
     return task
 
 
 def altitude_task(at: VehicleState | None = None) -> ManualAltitudeTask:
-    task = ManualAltitudeTask(DEFAULTS)
+    task = ManualAltitudeTask({})
     task.activate(at or state())
     return task
 
@@ -219,7 +218,7 @@ def test_altitude_mode_throttle_commands_the_climb_rate():
 
 def test_set_params_rescales_the_sticks():
     task = altitude_task()
-    task.set_params({**DEFAULTS, "MPC_MAN_TILT_MAX": 20.0, "MPC_Z_VEL_MAX_UP": 2.0})
+    task.set_params({"MPC_MAN_TILT_MAX": 20.0, "MPC_Z_VEL_MAX_UP": 2.0})
     command = fly(task, sticks(pitch=1.0, throttle=1.0))
     assert command.acceleration[0] == pytest.approx(CONSTANTS_ONE_G * math.tan(math.radians(20.0)))
     assert command.velocity[2] == pytest.approx(-2.0)

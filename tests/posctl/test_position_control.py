@@ -276,7 +276,7 @@ def test_yaw_falls_back_to_current_heading():
 
 
 def test_failsafe_setpoints_follow_px4_order():
-    stop = failsafe_setpoint((0.1, 0.2, 0.3))
+    stop = failsafe_setpoint((0.1, 0.2, 0.3), land_speed=0.7)
     assert stop.action == "stop and wait"
     assert stop.velocity == (0.0, 0.0, 0.0)
     assert all(math.isnan(c) for c in stop.position + stop.acceleration)
@@ -287,7 +287,7 @@ def test_failsafe_setpoints_follow_px4_order():
     assert blind_land.velocity[2] == 0.7
     assert math.isnan(blind_land.velocity[0])
 
-    blind_descent = failsafe_setpoint((NAN, NAN, NAN))
+    blind_descent = failsafe_setpoint((NAN, NAN, NAN), land_speed=0.7)
     assert blind_descent.action == "blind descent"
     assert blind_descent.acceleration == (0.0, 0.0, 0.3)
     assert all(math.isnan(c) for c in blind_descent.velocity)
@@ -296,7 +296,7 @@ def test_failsafe_setpoints_follow_px4_order():
 @pytest.mark.parametrize("vel", [(0.5, -0.2, 0.1), (NAN, NAN, 0.1), (NAN, NAN, NAN)])
 def test_failsafe_setpoints_are_executable(vel):
     pc = PositionControl()
-    fs = failsafe_setpoint(vel)
+    fs = failsafe_setpoint(vel, land_speed=0.7)
     assert _run(pc, fs.position, fs.velocity, fs.acceleration, pos=NAN3, vel=vel, vel_dot=ZERO3)
     if math.isnan(vel[2]):
         # a_z = +0.3 m/s²: slightly less than hover thrust.
