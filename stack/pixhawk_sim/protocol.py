@@ -5,8 +5,8 @@
 
 * the HEARTBEAT content (the link sends it at 1 Hz): MAV_TYPE from the rotor count, MAV_AUTOPILOT_PX4, PX4's
   base mode flags and custom mode, system status STANDBY, ACTIVE, CRITICAL in a failsafe or FLIGHT_TERMINATION;
-* the streams at their intervals (:mod:`~stack.pixhawk_sim.streams`), and the commander's notices as STATUSTEXT
-  (split into 50-character chunks with an id, as MAVLink 2 allows);
+* the streams at their intervals (:class:`~stack.mavlink.streams.StreamScheduler` with :data:`STREAM_RATES_HZ`),
+  and the commander's notices as STATUSTEXT (split into 50-character chunks with an id, as MAVLink 2 allows);
 * a COMMAND_ACK for every COMMAND_LONG and COMMAND_INT addressed to it (target 0 or its own ids):
   COMPONENT_ARM_DISARM (400), DO_SET_MODE (176) with PX4 custom modes, NAV_LAND (21) and NAV_LOITER_UNLIM (17) as
   mode changes, SET_MESSAGE_INTERVAL (511), GET_MESSAGE_INTERVAL (510), REQUEST_MESSAGE (512),
@@ -27,10 +27,10 @@ from pymavlink.dialects.v20 import common as mavlink
 
 from stack.mavlink import px4_modes
 from stack.mavlink.px4_modes import Px4Mode
+from stack.mavlink.streams import ONBOARD_RATES_HZ, StreamScheduler
 from stack.msg.system import VehicleCommand
 from stack.pixhawk_sim.commander import Verdict
 from stack.pixhawk_sim.modes import base_mode_flags
-from stack.pixhawk_sim.streams import StreamScheduler
 from stack.pixhawk_sim.telemetry import Message, Telemetry
 from stack.pixhawk_sim.vehicle import SimulatedPixhawk
 
@@ -38,6 +38,16 @@ STATUSTEXT_CHUNK = mavlink.MAVLink_statustext_message.array_lengths[1]
 """STATUSTEXT.text length: 50 characters."""
 MAV_TYPES = {4: mavlink.MAV_TYPE_QUADROTOR, 6: mavlink.MAV_TYPE_HEXAROTOR, 8: mavlink.MAV_TYPE_OCTOROTOR}
 """MAV_TYPE by rotor count (PX4's MAV_TYPE of the multicopter airframes)."""
+STREAM_RATES_HZ: dict[int, float] = {**ONBOARD_RATES_HZ, mavlink.MAVLINK_MSG_ID_SIM_STATE: 50.0}
+"""PX4's ONBOARD-mode rates, and SIM_STATE: not a PX4 stream; the simulated Pixhawk sends its truth at 50 Hz so a
+scenario can be judged."""
+MIN_STREAM_INTERVAL_US = 1
+"""SET_MESSAGE_INTERVAL may ask for any rate; faster than the 250 Hz loop means every loop."""
+
+
+def stream_scheduler() -> StreamScheduler:
+    """The simulated Pixhawk's streams (GPS_RAW_INT is sent on every new GPS sample, as PX4's unlimited rate)."""
+    return StreamScheduler(STREAM_RATES_HZ, MIN_STREAM_INTERVAL_US)
 
 
 class Px4Protocol:
@@ -56,7 +66,7 @@ class Px4Protocol:
         self.system_id = system_id
         self.component_id = component_id
         self.telemetry = telemetry or Telemetry(vehicle)
-        self.streams = StreamScheduler()
+        self.streams = stream_scheduler()
         self.mav_type = MAV_TYPES.get(vehicle.sim.model.rotor_count, mavlink.MAV_TYPE_GENERIC)
         self.commands = 0
         self.setpoints = 0
