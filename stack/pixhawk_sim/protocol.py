@@ -25,8 +25,9 @@ from collections.abc import Callable
 
 from pymavlink.dialects.v20 import common as mavlink
 
-from stack.mavlink import px4_modes
+from stack.mavlink import commands, px4_modes
 from stack.mavlink.px4_modes import Px4Mode
+from stack.mavlink.statustext import StatustextSender
 from stack.mavlink.streams import ONBOARD_RATES_HZ, StreamScheduler
 from stack.msg.system import VehicleCommand
 from stack.pixhawk_sim.commander import Verdict
@@ -34,8 +35,6 @@ from stack.pixhawk_sim.modes import base_mode_flags
 from stack.pixhawk_sim.telemetry import Message, Telemetry
 from stack.pixhawk_sim.vehicle import SimulatedPixhawk
 
-STATUSTEXT_CHUNK = mavlink.MAVLink_statustext_message.array_lengths[1]
-"""STATUSTEXT.text length: 50 characters."""
 MAV_TYPES = {4: mavlink.MAV_TYPE_QUADROTOR, 6: mavlink.MAV_TYPE_HEXAROTOR, 8: mavlink.MAV_TYPE_OCTOROTOR}
 """MAV_TYPE by rotor count (PX4's MAV_TYPE of the multicopter airframes)."""
 STREAM_RATES_HZ: dict[int, float] = {**ONBOARD_RATES_HZ, mavlink.MAVLINK_MSG_ID_SIM_STATE: 50.0}
@@ -70,7 +69,7 @@ class Px4Protocol:
         self.mav_type = MAV_TYPES.get(vehicle.sim.model.rotor_count, mavlink.MAV_TYPE_GENERIC)
         self.commands = 0
         self.setpoints = 0
-        self._statustext_id = 0
+        self._texts = StatustextSender(max_chunks=None, one_full_message=True)
         self._handlers: dict[int, Callable[[tuple[float, ...]], Verdict]] = {
             mavlink.MAV_CMD_COMPONENT_ARM_DISARM: self._arm_disarm,
             mavlink.MAV_CMD_DO_SET_MODE: self._set_mode,
@@ -112,16 +111,8 @@ class Px4Protocol:
                 self.send(msg)
 
     def statustext(self, severity: int, text: str) -> None:
-        data = text.encode()
-        if len(data) <= STATUSTEXT_CHUNK:
-            self.send(mavlink.MAVLink_statustext_message(severity, data, 0, 0))
-            return
-        self._statustext_id = self._statustext_id % 0xFFFF + 1
-        chunks = [data[i : i + STATUSTEXT_CHUNK] for i in range(0, len(data), STATUSTEXT_CHUNK)]
-        if len(chunks[-1]) == STATUSTEXT_CHUNK:
-            chunks.append(b"")  # a text of whole chunks ends with an empty (NUL-terminated) one
-        for seq, chunk in enumerate(chunks):
-            self.send(mavlink.MAVLink_statustext_message(severity, chunk, self._statustext_id, seq))
+        for msg in self._texts.messages(severity, text):
+            self.send(msg)
 
     # ------------------------------------------------------------------ inbound
 
@@ -139,7 +130,7 @@ class Px4Protocol:
             self._command(msg, params)
 
     def _addressed(self, system: int, component: int) -> bool:
-        return system in (0, self.system_id) and component in (0, self.component_id)
+        return commands.addressed_to(system, component, (self.system_id, self.component_id))
 
     def _command(self, msg: Message, params: tuple[float, ...]) -> None:
         if not self._addressed(msg.target_system, msg.target_component):
@@ -148,11 +139,7 @@ class Px4Protocol:
         handler = self._handlers.get(msg.command)
         verdict = handler(params) if handler is not None else Verdict(mavlink.MAV_RESULT_UNSUPPORTED)
         self.publish_notices()
-        self.send(
-            mavlink.MAVLink_command_ack_message(
-                msg.command, verdict.result, 0, 0, msg.get_srcSystem(), msg.get_srcComponent()
-            )
-        )
+        self.send(commands.command_ack(msg.command, verdict.result, (msg.get_srcSystem(), msg.get_srcComponent())))
 
     def publish_notices(self) -> None:
         for notice in self.vehicle.commander.take_notices():
