@@ -73,6 +73,7 @@ from collections.abc import Callable, Mapping
 from enum import IntEnum
 from typing import NamedTuple
 
+from stack.commander.auto_disarm import AutoDisarm
 from stack.commander.command_checks import addressed_to, goto_refusal, takeoff_altitude_refusal
 from stack.commander.control_chain import CHAIN, FW_CHAIN, ChainFault, ControlChainMonitor, Loss
 from stack.commander.failsafe import ACTION_NAMES, Failsafe, FailsafeAction, FailsafeConditions
@@ -91,7 +92,6 @@ from stack.commander.health import (
     vehicle_type_name,
 )
 from stack.commander.home import HomePosition, home_from_local_position
-from stack.commander.hysteresis import Hysteresis
 from stack.commander.modes import (
     FIXED_WING,
     MAV_MODE_FLAG_CUSTOM_MODE_ENABLED,
@@ -291,7 +291,7 @@ class Commander:
         self._failsafe_delayed = FailsafeAction.NONE
         self._failsafe_cause = ""
         self._failsafe_takeover = False
-        self._auto_disarm = Hysteresis(False)
+        self._auto_disarm = AutoDisarm()
         self._takeoff_altitude = math.nan
         self._takeoff_yaw = math.nan
         self._reposition: tuple[float, float, float, float] | None = None
@@ -333,8 +333,7 @@ class Commander:
     def set_params(self, params: Mapping[str, object]) -> None:
         p = {**DEFAULTS, **params}
         self._p = p
-        self._disarm_land_us = round(float(p["COM_DISARM_LAND"]) * 1e6)
-        self._disarm_preflight_us = round(float(p["COM_DISARM_PRFLT"]) * 1e6)
+        self._auto_disarm.set_params(p)
         self._failsafe.set_params(p)
         self._geofence.set_params(p)
         self._health = HealthParams(
@@ -698,18 +697,11 @@ class Commander:
 
     def _update_auto_disarm(self, now_us: int) -> None:
         if not self.armed:
-            self._auto_disarm.force(False)
+            self._auto_disarm.reset()
             return
         inp = self._inputs
-        land_us, preflight_us = self._disarm_land_us, self._disarm_preflight_us
         amid_mission = self.nav_state == NS.NAVIGATION_STATE_AUTO_MISSION and not inp.mission_finished
-        if land_us > 0 and self._have_taken_off and not amid_mission:
-            self._auto_disarm.set_hysteresis_time_from(False, land_us)
-            self._auto_disarm.set_state_and_update(inp.landed, now_us)
-        elif preflight_us > 0 and not self._have_taken_off:
-            self._auto_disarm.set_hysteresis_time_from(False, preflight_us)
-            self._auto_disarm.set_state_and_update(True, now_us)
-        if self._auto_disarm.state:
+        if self._auto_disarm.update(now_us, inp.landed, self._have_taken_off, hold_landed=amid_mission):
             reason = ArmDisarmReason.AUTO_DISARM_LAND if self._have_taken_off else ArmDisarmReason.AUTO_DISARM_PREFLIGHT
             self._disarm(now_us, reason, forced=False)
 
@@ -736,7 +728,7 @@ class Commander:
         self._takeoff_time_us = 0
         self._have_taken_off = False
         self._latest_arming_reason = int(reason)
-        self._auto_disarm.force(False)
+        self._auto_disarm.reset()
         lpos = self._inputs.local_position
         position_known = not int(self._failing) & _POSITION_KNOWN
         if position_known and lpos is not None:
@@ -760,7 +752,7 @@ class Commander:
         self._takeoff_time_us = 0
         self._have_taken_off = False
         self._latest_disarming_reason = int(reason)
-        self._auto_disarm.force(False)
+        self._auto_disarm.reset()
         self._events.append(f"Disarmed ({reason.name.lower()})")
         self._take_vehicle_type()
         return ""
