@@ -74,7 +74,13 @@ from enum import IntEnum
 from typing import NamedTuple
 
 from stack.commander.auto_disarm import AutoDisarm
-from stack.commander.command_checks import addressed_to, goto_refusal, takeoff_altitude_refusal
+from stack.commander.command_checks import (
+    addressed_to,
+    arm_action,
+    arm_forced,
+    goto_refusal,
+    takeoff_altitude_refusal,
+)
 from stack.commander.control_chain import CHAIN, FW_CHAIN, ChainFault, ControlChainMonitor, Loss
 from stack.commander.failsafe import ACTION_NAMES, Failsafe, FailsafeAction, FailsafeConditions
 from stack.commander.failsafe import PARAMS as FAILSAFE_PARAMS
@@ -820,14 +826,15 @@ class Commander:
     # ------------------------------------------------------------------ command handlers
 
     def _cmd_arm_disarm(self, cmd: VehicleCommand, now_us: int) -> _Verdict:
-        if not math.isfinite(cmd.param1) or round(cmd.param1) not in (0, 1):
+        action = arm_action(cmd.param1)
+        if action is None:
             return _denied(f"Arm/disarm: param1 must be 1 (arm) or 0 (disarm), got {cmd.param1:g}", 1)
         refusal = _flag_refusal("Arm/disarm", 2, cmd.param2)
         if refusal is not None:
             return refusal
-        forced = math.isfinite(cmd.param2) and round(cmd.param2) == CMD.ARM_FORCE_MAGIC
+        forced = arm_forced(cmd.param2)
         reason = ArmDisarmReason.COMMAND_EXTERNAL if cmd.from_external else ArmDisarmReason.COMMAND_INTERNAL
-        if round(cmd.param1) == CMD.ARMING_ACTION_ARM:
+        if action == CMD.ARMING_ACTION_ARM:
             refusal = self._arm(now_us, reason, forced=forced)
         else:
             refusal = self._disarm(now_us, reason, forced=forced)

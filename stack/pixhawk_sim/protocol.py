@@ -25,6 +25,7 @@ from collections.abc import Callable
 
 from pymavlink.dialects.v20 import common as mavlink
 
+from stack.commander.command_checks import arm_action, arm_forced
 from stack.mavlink import commands, px4_modes
 from stack.mavlink.px4_modes import Px4Mode
 from stack.mavlink.statustext import StatustextSender
@@ -146,11 +147,10 @@ class Px4Protocol:
             self.statustext(notice.severity, notice.text)
 
     def _arm_disarm(self, p: tuple[float, ...]) -> Verdict:
-        action = round(p[0]) if math.isfinite(p[0]) else -1
-        if action not in (0, 1):
+        action = arm_action(p[0])
+        if action is None:
             return Verdict(mavlink.MAV_RESULT_DENIED, f"unsupported ARM_DISARM param1 {p[0]}")
-        force = math.isfinite(p[1]) and round(p[1]) == VehicleCommand.ARM_FORCE_MAGIC
-        return self.vehicle.arm_disarm(action == 1, force)
+        return self.vehicle.arm_disarm(action == VehicleCommand.ARMING_ACTION_ARM, arm_forced(p[1]))
 
     def _set_mode(self, p: tuple[float, ...]) -> Verdict:
         base = int(p[0]) if math.isfinite(p[0]) else 0
