@@ -127,7 +127,10 @@ class StreamScheduler:
             return UNSUPPORTED
         if not math.isfinite(interval_us) or (interval_us < 0 and interval_us != DISABLED):
             return DENIED
-        return ACCEPTED if self.set_interval(int(msg_id), interval_us) else UNSUPPORTED
+        if not self.set_interval(int(msg_id), interval_us):
+            return UNSUPPORTED
+        self._next[int(msg_id)] = 0  # due at once; then one interval after time 0, or after now when that is past
+        return ACCEPTED
 
     def restart(self, now_us: int) -> None:
         """Everything is due at once (a link that was idle)."""
