@@ -3,6 +3,9 @@
 * Addressing, as PX4 ``Commander::handle_command`` (``src/modules/commander/Commander.cpp``): a command is for
   this vehicle when its ``target_system`` is MAV_SYS_ID or 0 (broadcast) and its ``target_component`` is
   MAV_COMP_ID or 0; any other is ignored, without an acknowledgement (it is another vehicle's to answer).
+* Arming and disarming (MAV_CMD_COMPONENT_ARM_DISARM, PX4 ``Commander::handle_command``): param1 rounds to 1 (arm)
+  or 0 (disarm), anything else is refused; param2 = 21196 forces it (skips the checks). The simulated Pixhawk's
+  commander reads the command the same way.
 * Takeoff altitude: above home within MIS_TAKEOFF_ALT's range (its minimum excluded, a takeoff must climb).
 * Go-to target (DO_REPOSITION): at most MIS_DIST_1WP from home horizontally and vertically (PX4's sanity limit
   for the first waypoint against a mistyped coordinate; a go-to is a one-waypoint flight) and, when it gives an
@@ -23,6 +26,17 @@ BROADCAST = 0
 def addressed_to(cmd: VehicleCommand, system_id: int, component_id: int) -> bool:
     """Whether ``cmd`` is for this system and component (0 addresses all)."""
     return cmd.target_system in (BROADCAST, system_id) and cmd.target_component in (BROADCAST, component_id)
+
+
+def arm_action(param1: float) -> int | None:
+    """COMPONENT_ARM_DISARM param1 as ARMING_ACTION_ARM (1) or ARMING_ACTION_DISARM (0), None for anything else."""
+    action = round(param1) if math.isfinite(param1) else -1
+    return action if action in (VehicleCommand.ARMING_ACTION_DISARM, VehicleCommand.ARMING_ACTION_ARM) else None
+
+
+def arm_forced(param2: float) -> bool:
+    """Whether COMPONENT_ARM_DISARM param2 forces the arming or disarming (PX4's magic number 21196)."""
+    return math.isfinite(param2) and round(param2) == VehicleCommand.ARM_FORCE_MAGIC
 
 
 def takeoff_altitude_refusal(altitude: float) -> str:

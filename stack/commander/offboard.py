@@ -17,9 +17,15 @@ from stack.msg.system import OffboardControlMode, VehicleCommand, VehicleCommand
 NO_SIGNAL_REASON = "Switching to Offboard denied: no offboard signal (offboard_control_mode)"
 
 
+def signal_alive(last_us: int | None, now_us: int, loss_timeout_s: float) -> bool:
+    """Whether the offboard signal's last proof of life (at ``last_us``; None: none yet) is at most COM_OF_LOSS_T
+    old at ``now_us``: the rule of the stack's commander and of the simulated Pixhawk's."""
+    return last_us is not None and now_us - last_us <= loss_timeout_s * 1e6
+
+
 def signal_present(ocm: OffboardControlMode | None, now_us: int, loss_timeout_s: float) -> bool:
     """Whether the last ``offboard_control_mode`` (None: none yet) is at most COM_OF_LOSS_T old at ``now_us``."""
-    return ocm is not None and now_us - ocm.timestamp <= loss_timeout_s * 1e6
+    return signal_alive(ocm.timestamp if ocm is not None else None, now_us, loss_timeout_s)
 
 
 def control_flags(ocm: OffboardControlMode) -> dict[str, bool]:

@@ -74,7 +74,14 @@ from dataclasses import replace
 from enum import IntEnum
 from typing import NamedTuple
 
-from stack.commander.command_checks import addressed_to, goto_refusal, takeoff_altitude_refusal
+from stack.commander.auto_disarm import AutoDisarm, AutoDisarmParams
+from stack.commander.command_checks import (
+    addressed_to,
+    arm_action,
+    arm_forced,
+    goto_refusal,
+    takeoff_altitude_refusal,
+)
 from stack.commander.control_chain import CHAIN, FW_CHAIN, ChainFault, ControlChainMonitor, Loss
 from stack.commander.failsafe import ACTION_NAMES, Failsafe, FailsafeAction, FailsafeConditions, FailsafeParams
 from stack.commander.geofence import CylinderGeofence, GeofenceParams
@@ -90,7 +97,6 @@ from stack.commander.health import (
     vehicle_type_name,
 )
 from stack.commander.home import HomePosition, home_from_local_position
-from stack.commander.hysteresis import Hysteresis
 from stack.commander.modes import (
     FIXED_WING,
     MAV_MODE_FLAG_CUSTOM_MODE_ENABLED,
@@ -143,8 +149,6 @@ _POSITION_AND_ALTITUDE = int(Requirement.LOCAL_POSITION | Requirement.LOCAL_ALT)
 class CommanderParams(ParamSet):
     """What the state machine reads itself (the health checks' among them), and its failsafe's and geofence's."""
 
-    com_disarm_land: float
-    com_disarm_prflt: float
     com_dl_loss_t: int
     com_rc_loss_t: float
     com_takeoff_act: int
@@ -164,6 +168,7 @@ class CommanderParams(ParamSet):
     nav_fw_alt_rad: float
     sys_has_num_aspd: int
     fw_airspd_max: float
+    auto_disarm: AutoDisarmParams
     failsafe: FailsafeParams
     geofence: GeofenceParams
 
@@ -311,7 +316,7 @@ class Commander:
         self._failsafe_delayed = FailsafeAction.NONE
         self._failsafe_cause = ""
         self._failsafe_takeover = False
-        self._auto_disarm = Hysteresis(False)
+        self._auto_disarm = AutoDisarm()
         self._takeoff_altitude = math.nan
         self._takeoff_yaw = math.nan
         self._reposition: tuple[float, float, float, float] | None = None
@@ -352,8 +357,7 @@ class Commander:
 
     def set_params(self, params: Mapping[str, object]) -> None:
         self._p = p = CommanderParams.from_params(params)
-        self._disarm_land_us = round(p.com_disarm_land * 1e6)
-        self._disarm_preflight_us = round(p.com_disarm_prflt * 1e6)
+        self._auto_disarm.set_params(p.auto_disarm)
         self._failsafe.set_params(params)
         self._geofence.set_params(params)
         self._health = replace(HealthParams.from_params(params), vehicle_type=self.vehicle_type)
@@ -707,18 +711,11 @@ class Commander:
 
     def _update_auto_disarm(self, now_us: int) -> None:
         if not self.armed:
-            self._auto_disarm.force(False)
+            self._auto_disarm.reset()
             return
         inp = self._inputs
-        land_us, preflight_us = self._disarm_land_us, self._disarm_preflight_us
         amid_mission = self.nav_state == NS.NAVIGATION_STATE_AUTO_MISSION and not inp.mission_finished
-        if land_us > 0 and self._have_taken_off and not amid_mission:
-            self._auto_disarm.set_hysteresis_time_from(False, land_us)
-            self._auto_disarm.set_state_and_update(inp.landed, now_us)
-        elif preflight_us > 0 and not self._have_taken_off:
-            self._auto_disarm.set_hysteresis_time_from(False, preflight_us)
-            self._auto_disarm.set_state_and_update(True, now_us)
-        if self._auto_disarm.state:
+        if self._auto_disarm.update(now_us, inp.landed, self._have_taken_off, hold_landed=amid_mission):
             reason = ArmDisarmReason.AUTO_DISARM_LAND if self._have_taken_off else ArmDisarmReason.AUTO_DISARM_PREFLIGHT
             self._disarm(now_us, reason, forced=False)
 
@@ -745,7 +742,7 @@ class Commander:
         self._takeoff_time_us = 0
         self._have_taken_off = False
         self._latest_arming_reason = int(reason)
-        self._auto_disarm.force(False)
+        self._auto_disarm.reset()
         lpos = self._inputs.local_position
         position_known = not int(self._failing) & _POSITION_KNOWN
         if position_known and lpos is not None:
@@ -769,7 +766,7 @@ class Commander:
         self._takeoff_time_us = 0
         self._have_taken_off = False
         self._latest_disarming_reason = int(reason)
-        self._auto_disarm.force(False)
+        self._auto_disarm.reset()
         self._events.append(f"Disarmed ({reason.name.lower()})")
         self._take_vehicle_type()
         return ""
@@ -837,14 +834,15 @@ class Commander:
     # ------------------------------------------------------------------ command handlers
 
     def _cmd_arm_disarm(self, cmd: VehicleCommand, now_us: int) -> _Verdict:
-        if not math.isfinite(cmd.param1) or round(cmd.param1) not in (0, 1):
+        action = arm_action(cmd.param1)
+        if action is None:
             return _denied(f"Arm/disarm: param1 must be 1 (arm) or 0 (disarm), got {cmd.param1:g}", 1)
         refusal = _flag_refusal("Arm/disarm", 2, cmd.param2)
         if refusal is not None:
             return refusal
-        forced = math.isfinite(cmd.param2) and round(cmd.param2) == CMD.ARM_FORCE_MAGIC
+        forced = arm_forced(cmd.param2)
         reason = ArmDisarmReason.COMMAND_EXTERNAL if cmd.from_external else ArmDisarmReason.COMMAND_INTERNAL
-        if round(cmd.param1) == CMD.ARMING_ACTION_ARM:
+        if action == CMD.ARMING_ACTION_ARM:
             refusal = self._arm(now_us, reason, forced=forced)
         else:
             refusal = self._disarm(now_us, reason, forced=forced)

@@ -462,7 +462,7 @@ class MavlinkModule(Module):
         self._publish(ORB_ID.vehicle_command, cmd)
 
     def _set_message_interval(self, msg_id: float, interval_us: float) -> _Answer:
-        result = self.streams.set_interval(msg_id, interval_us)
+        result = self.streams.set_message_interval(msg_id, interval_us)
         return result, (2 if result == M.MAV_RESULT_DENIED else 0), []
 
     def _get_message_interval(self, msg_id: float, unused: float) -> _Answer:

@@ -13,6 +13,11 @@ SYS_STATUS's sensor bits follow PX4's health reporting: a sensor is present once
 while it publishes (within the commander's SENSOR_TIMEOUT_US); the control bits are enabled as
 ``vehicle_control_mode`` says; PREARM_CHECK is healthy when the commander's pre-arm checks pass
 (``vehicle_status.pre_flight_checks_pass``), which is what MAVSDK's ``is_armable`` reads.
+
+The encodings the simulated Pixhawk shares (it builds from the simulator's truth rather than from topics):
+:func:`time_boot_ms`, :func:`deg_e7`, :func:`cdeg`, and the ATTITUDE, ATTITUDE_QUATERNION, LOCAL_POSITION_NED and
+EXTENDED_SYS_STATE messages from their values (:func:`attitude_message`, :func:`attitude_quaternion_message`,
+:func:`local_position_ned_message`, :func:`extended_sys_state_message` with :func:`landed_state_of`).
 """
 
 from __future__ import annotations
@@ -92,7 +97,12 @@ def _fresh(now_us: int, stamp_us: int) -> bool:
     return stamp_us > 0 and now_us - stamp_us < SENSOR_TIMEOUT_US
 
 
-def _cdeg(angle_rad: float) -> int:
+def deg_e7(deg: float) -> int:
+    """Degrees as MAVLink's degE7 integer (0 when unknown)."""
+    return _clamp_int(deg * 1e7, -INT32_MAX, INT32_MAX)
+
+
+def cdeg(angle_rad: float) -> int:
     """An angle as centidegrees in [0, 36000), UINT16_MAX when unknown."""
     if not math.isfinite(angle_rad):
         return UINT16_MAX
@@ -121,21 +131,29 @@ def _attitude_q(view: VehicleView, now_us: int) -> tuple[float, float, float, fl
     return est.q
 
 
+def attitude_message(
+    now_us: int, q: tuple[float, float, float, float], rates: tuple[float, float, float]
+) -> mavlink2.MAVLink_attitude_message:
+    """ATTITUDE: the attitude (w, x, y, z, body FRD → NED) as Euler angles, and the body rates [rad/s]."""
+    roll, pitch, yaw = quat.to_euler(q)
+    return mavlink2.MAVLink_attitude_message(time_boot_ms(now_us), roll, pitch, yaw, *rates)
+
+
+def attitude_quaternion_message(
+    now_us: int, q: tuple[float, float, float, float], rates: tuple[float, float, float]
+) -> mavlink2.MAVLink_attitude_quaternion_message:
+    """ATTITUDE_QUATERNION: the attitude and the body rates; no representation offset."""
+    return mavlink2.MAVLink_attitude_quaternion_message(time_boot_ms(now_us), *q, *rates, [0.0, 0.0, 0.0, 0.0])
+
+
 def attitude(view: VehicleView, now_us: int) -> mavlink2.MAVLink_attitude_message | None:
     q = _attitude_q(view, now_us)
-    if q is None:
-        return None
-    roll, pitch, yaw = quat.to_euler(q)
-    p, r, y = _rates(view)
-    return mavlink2.MAVLink_attitude_message(time_boot_ms(now_us), roll, pitch, yaw, p, r, y)
+    return attitude_message(now_us, q, _rates(view)) if q is not None else None
 
 
 def attitude_quaternion(view: VehicleView, now_us: int) -> mavlink2.MAVLink_attitude_quaternion_message | None:
     q = _attitude_q(view, now_us)
-    if q is None:
-        return None
-    p, r, y = _rates(view)
-    return mavlink2.MAVLink_attitude_quaternion_message(time_boot_ms(now_us), *q, p, r, y, [0.0, 0.0, 0.0, 0.0])
+    return attitude_quaternion_message(now_us, q, _rates(view)) if q is not None else None
 
 
 # -- position -------------------------------------------------------------------------------------
@@ -165,24 +183,29 @@ def global_position_int(view: VehicleView, now_us: int) -> mavlink2.MAVLink_glob
     home_z = view.home.z if view.home is not None and view.home.valid_lpos else 0.0
     return mavlink2.MAVLink_global_position_int_message(
         time_boot_ms(now_us),
-        _clamp_int(lat * 1e7, -INT32_MAX, INT32_MAX),
-        _clamp_int(lon * 1e7, -INT32_MAX, INT32_MAX),
+        deg_e7(lat),
+        deg_e7(lon),
         _clamp_int(alt * 1000.0, -INT32_MAX, INT32_MAX),
         _clamp_int((home_z - lpos.z) * 1000.0, -INT32_MAX, INT32_MAX),
         _clamp_int(lpos.vx * 100.0, -INT16_MAX, INT16_MAX),
         _clamp_int(lpos.vy * 100.0, -INT16_MAX, INT16_MAX),
         _clamp_int(lpos.vz * 100.0, -INT16_MAX, INT16_MAX),
-        _cdeg(lpos.heading),
+        cdeg(lpos.heading),
     )
+
+
+def local_position_ned_message(
+    now_us: int, position: tuple[float, float, float], velocity: tuple[float, float, float]
+) -> mavlink2.MAVLink_local_position_ned_message:
+    """LOCAL_POSITION_NED: position [m] and velocity [m/s] in the local NED frame."""
+    return mavlink2.MAVLink_local_position_ned_message(time_boot_ms(now_us), *position, *velocity)
 
 
 def local_position_ned(view: VehicleView, now_us: int) -> mavlink2.MAVLink_local_position_ned_message | None:
     lpos = _fresh_position(view, now_us)
     if lpos is None or not (lpos.xy_valid or lpos.z_valid):
         return None
-    return mavlink2.MAVLink_local_position_ned_message(
-        time_boot_ms(now_us), lpos.x, lpos.y, lpos.z, lpos.vx, lpos.vy, lpos.vz
-    )
+    return local_position_ned_message(now_us, (lpos.x, lpos.y, lpos.z), (lpos.vx, lpos.vy, lpos.vz))
 
 
 def gps_raw_int(view: VehicleView, now_us: int) -> mavlink2.MAVLink_gps_raw_int_message | None:
@@ -199,13 +222,13 @@ def gps_raw_int(view: VehicleView, now_us: int) -> mavlink2.MAVLink_gps_raw_int_
     return mavlink2.MAVLink_gps_raw_int_message(
         gps.timestamp,
         gps.fix_type,
-        _clamp_int(gps.latitude_deg * 1e7, -INT32_MAX, INT32_MAX),
-        _clamp_int(gps.longitude_deg * 1e7, -INT32_MAX, INT32_MAX),
+        deg_e7(gps.latitude_deg),
+        deg_e7(gps.longitude_deg),
         _clamp_int(gps.altitude_msl_m * 1000.0, -INT32_MAX, INT32_MAX),
         dop(gps.hdop),
         dop(gps.vdop),
         _clamp_int(gps.vel_m_s * 100.0, 0, UINT16_MAX - 1),
-        _cdeg(gps.cog_rad) if gps.vel_ned_valid else UINT16_MAX,
+        cdeg(gps.cog_rad) if gps.vel_ned_valid else UINT16_MAX,
         min(gps.satellites_used, 254),
         _clamp_int(gps.altitude_ellipsoid_m * 1000.0, -INT32_MAX, INT32_MAX),
         mm(gps.eph),
@@ -221,8 +244,8 @@ def home_position(view: VehicleView, now_us: int) -> mavlink2.MAVLink_home_posit
     if home is None or not home.valid_hpos:
         return None
     return mavlink2.MAVLink_home_position_message(
-        _clamp_int(home.lat * 1e7, -INT32_MAX, INT32_MAX),
-        _clamp_int(home.lon * 1e7, -INT32_MAX, INT32_MAX),
+        deg_e7(home.lat),
+        deg_e7(home.lon),
         _clamp_int(home.alt * 1000.0, -INT32_MAX, INT32_MAX),
         home.x,
         home.y,
@@ -240,12 +263,16 @@ def landed_state(view: VehicleView) -> int:
     land, status = view.land, view.status
     if land is None:
         return mavlink2.MAV_LANDED_STATE_UNDEFINED
-    if land.landed:
+    return landed_state_of(land.landed, status.nav_state if status is not None else -1)
+
+
+def landed_state_of(landed: bool, nav_state: int) -> int:
+    """MAV_LANDED_STATE of a vehicle landed or not, in ``nav_state`` (PX4 ``streams/EXTENDED_SYS_STATE.hpp``)."""
+    if landed:
         return mavlink2.MAV_LANDED_STATE_ON_GROUND
-    nav = status.nav_state if status is not None else -1
-    if nav == NS.NAVIGATION_STATE_AUTO_TAKEOFF:
+    if nav_state == NS.NAVIGATION_STATE_AUTO_TAKEOFF:
         return mavlink2.MAV_LANDED_STATE_TAKEOFF
-    if nav in (NS.NAVIGATION_STATE_AUTO_LAND, NS.NAVIGATION_STATE_DESCEND):
+    if nav_state in (NS.NAVIGATION_STATE_AUTO_LAND, NS.NAVIGATION_STATE_DESCEND):
         return mavlink2.MAV_LANDED_STATE_LANDING
     return mavlink2.MAV_LANDED_STATE_IN_AIR
 
@@ -253,7 +280,12 @@ def landed_state(view: VehicleView) -> int:
 def extended_sys_state(view: VehicleView, now_us: int) -> mavlink2.MAVLink_extended_sys_state_message | None:
     if view.land is None:
         return None
-    return mavlink2.MAVLink_extended_sys_state_message(mavlink2.MAV_VTOL_STATE_UNDEFINED, landed_state(view))
+    return extended_sys_state_message(landed_state(view))
+
+
+def extended_sys_state_message(landed_state: int) -> mavlink2.MAVLink_extended_sys_state_message:
+    """EXTENDED_SYS_STATE of a multicopter (no VTOL state)."""
+    return mavlink2.MAVLink_extended_sys_state_message(mavlink2.MAV_VTOL_STATE_UNDEFINED, landed_state)
 
 
 def vfr_hud(view: VehicleView, now_us: int) -> mavlink2.MAVLink_vfr_hud_message | None:

@@ -11,13 +11,14 @@ caller and free of I/O:
 * Mode changes (MAV_CMD_DO_SET_MODE): PX4 takes any mode while disarmed; armed, only a mode that can run now
   (Offboard needs the setpoint stream: it must exist before the switch). Modes that need PX4's navigator
   (takeoff, mission, return...) are not simulated and are DENIED.
-* The Offboard signal is alive while a setpoint arrived within COM_OF_LOSS_T. When it is lost in Offboard the
+* The Offboard signal is alive while a setpoint arrived within COM_OF_LOSS_T (the stack's commander's rule,
+  :func:`stack.commander.offboard.signal_alive`). When it is lost in Offboard the
   failsafe flies COM_OBL_RC_ACT: Position, Altitude and Stabilized fall through to Hold, as PX4's
   ``FailsafeBase::getSelectedAction`` does when the stick modes cannot run; Land; Hold; Terminate (motors off
   until restart); Disarm. Like PX4's mode fallback it clears when the signal returns: the vehicle flies
   Offboard again. Armed in a mode it cannot fly (only by forced arming) it holds.
 * Auto-disarm: COM_DISARM_LAND after landing once it has taken off, COM_DISARM_PRFLT after arming without
-  taking off (``Commander::checkForAutoDisarm``).
+  taking off (``Commander::checkForAutoDisarm``, the stack's commander's :mod:`stack.commander.auto_disarm`).
 
 Not modelled: RC, geofence, battery and data-link failsafes, COM_FAIL_ACT_T's delay, the pre-arm checks of
 sensors and estimators (the simulated sensors and the estimate, which is the simulator's truth, are healthy).
@@ -31,7 +32,8 @@ from typing import NamedTuple
 
 from pymavlink.dialects.v20 import common as mavlink
 
-from stack.commander.hysteresis import Hysteresis
+from stack.commander import offboard
+from stack.commander.auto_disarm import AutoDisarm, AutoDisarmParams
 from stack.mavlink.px4_modes import Px4Mode, name
 from stack.pixhawk_sim.modes import ARMING_PREVENTED_MODES, FLOWN_MODES, MANUAL_CONTROL_MODES, SELECTABLE_MODES
 from stack.pixhawk_sim.params import OffboardLossAction
@@ -92,15 +94,14 @@ class Px4Commander:
         self.have_taken_off = False
         self._last_setpoint_us: int | None = None
         self._armed_us = 0
-        self._auto_disarm = Hysteresis(False)
+        self._auto_disarm = AutoDisarm()
         self._notices: list[Notice] = []
         self.set_params(params)
 
     def set_params(self, params: Mapping[str, object]) -> None:
-        self._offboard_loss_us = round(float(params["COM_OF_LOSS_T"]) * 1e6)
+        self._offboard_loss_s = float(params["COM_OF_LOSS_T"])
         self._loss_action = OffboardLossAction(int(params["COM_OBL_RC_ACT"]))
-        self._disarm_land_us = round(float(params["COM_DISARM_LAND"]) * 1e6)
-        self._disarm_preflight_us = round(float(params["COM_DISARM_PRFLT"]) * 1e6)
+        self._auto_disarm.set_params(AutoDisarmParams.from_params(params))
         self._fail_roll = math.radians(float(params["FD_FAIL_R"]))
         self._fail_pitch = math.radians(float(params["FD_FAIL_P"]))
 
@@ -118,8 +119,7 @@ class Px4Commander:
         self._last_setpoint_us = now_us
 
     def offboard_signal(self, now_us: int) -> bool:
-        last = self._last_setpoint_us
-        return last is not None and now_us - last <= self._offboard_loss_us
+        return offboard.signal_alive(self._last_setpoint_us, now_us, self._offboard_loss_s)
 
     # ------------------------------------------------------------------ commands
 
@@ -145,7 +145,7 @@ class Px4Commander:
         self.armed = True
         self._armed_us = now_us
         self.have_taken_off = False
-        self._auto_disarm.force(False)
+        self._auto_disarm.reset()
         self._notify(mavlink.MAV_SEVERITY_INFO, "Armed by external command" + (" (forced)" if force else ""))
         self._update_mode(now_us)
         return ACCEPTED
@@ -201,18 +201,12 @@ class Px4Commander:
         self._update_mode(now_us)
 
     def _check_auto_disarm(self, now_us: int, condition: Condition) -> None:
-        if self._disarm_land_us > 0 and self.have_taken_off:
-            self._auto_disarm.set_hysteresis_time_from(False, self._disarm_land_us)
-            self._auto_disarm.set_state_and_update(condition.landed, now_us)
-        elif self._disarm_preflight_us > 0 and not self.have_taken_off:
-            self._auto_disarm.set_hysteresis_time_from(False, self._disarm_preflight_us)
-            self._auto_disarm.set_state_and_update(True, now_us)
-        if self._auto_disarm.state:
+        if self._auto_disarm.update(now_us, condition.landed, self.have_taken_off):
             self._disarm("landed" if self.have_taken_off else "no takeoff after arming")
 
     def _disarm(self, why: str) -> None:
         self.armed = False
-        self._auto_disarm.force(False)
+        self._auto_disarm.reset()
         self._notify(mavlink.MAV_SEVERITY_INFO, f"Disarmed ({why})")
 
     def _update_mode(self, now_us: int) -> None:

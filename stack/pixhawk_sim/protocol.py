@@ -5,8 +5,8 @@
 
 * the HEARTBEAT content (the link sends it at 1 Hz): MAV_TYPE from the rotor count, MAV_AUTOPILOT_PX4, PX4's
   base mode flags and custom mode, system status STANDBY, ACTIVE, CRITICAL in a failsafe or FLIGHT_TERMINATION;
-* the streams at their intervals (:mod:`~stack.pixhawk_sim.streams`), and the commander's notices as STATUSTEXT
-  (split into 50-character chunks with an id, as MAVLink 2 allows);
+* the streams at their intervals (:class:`~stack.mavlink.streams.StreamScheduler` with :data:`STREAM_RATES_HZ`),
+  and the commander's notices as STATUSTEXT (split into 50-character chunks with an id, as MAVLink 2 allows);
 * a COMMAND_ACK for every COMMAND_LONG and COMMAND_INT addressed to it (target 0 or its own ids):
   COMPONENT_ARM_DISARM (400), DO_SET_MODE (176) with PX4 custom modes, NAV_LAND (21) and NAV_LOITER_UNLIM (17) as
   mode changes, SET_MESSAGE_INTERVAL (511), GET_MESSAGE_INTERVAL (510), REQUEST_MESSAGE (512),
@@ -25,19 +25,29 @@ from collections.abc import Callable
 
 from pymavlink.dialects.v20 import common as mavlink
 
-from stack.mavlink import px4_modes
+from stack.commander.command_checks import arm_action, arm_forced
+from stack.mavlink import commands, px4_modes
 from stack.mavlink.px4_modes import Px4Mode
+from stack.mavlink.statustext import StatustextSender
+from stack.mavlink.streams import ONBOARD_RATES_HZ, StreamScheduler
 from stack.msg.system import VehicleCommand
 from stack.pixhawk_sim.commander import Verdict
 from stack.pixhawk_sim.modes import base_mode_flags
-from stack.pixhawk_sim.streams import StreamScheduler
 from stack.pixhawk_sim.telemetry import Message, Telemetry
 from stack.pixhawk_sim.vehicle import SimulatedPixhawk
 
-STATUSTEXT_CHUNK = mavlink.MAVLink_statustext_message.array_lengths[1]
-"""STATUSTEXT.text length: 50 characters."""
 MAV_TYPES = {4: mavlink.MAV_TYPE_QUADROTOR, 6: mavlink.MAV_TYPE_HEXAROTOR, 8: mavlink.MAV_TYPE_OCTOROTOR}
 """MAV_TYPE by rotor count (PX4's MAV_TYPE of the multicopter airframes)."""
+STREAM_RATES_HZ: dict[int, float] = {**ONBOARD_RATES_HZ, mavlink.MAVLINK_MSG_ID_SIM_STATE: 50.0}
+"""PX4's ONBOARD-mode rates, and SIM_STATE: not a PX4 stream; the simulated Pixhawk sends its truth at 50 Hz so a
+scenario can be judged."""
+MIN_STREAM_INTERVAL_US = 1
+"""SET_MESSAGE_INTERVAL may ask for any rate; faster than the 250 Hz loop means every loop."""
+
+
+def stream_scheduler() -> StreamScheduler:
+    """The simulated Pixhawk's streams (GPS_RAW_INT is sent on every new GPS sample, as PX4's unlimited rate)."""
+    return StreamScheduler(STREAM_RATES_HZ, MIN_STREAM_INTERVAL_US)
 
 
 class Px4Protocol:
@@ -56,11 +66,11 @@ class Px4Protocol:
         self.system_id = system_id
         self.component_id = component_id
         self.telemetry = telemetry or Telemetry(vehicle)
-        self.streams = StreamScheduler()
+        self.streams = stream_scheduler()
         self.mav_type = MAV_TYPES.get(vehicle.sim.model.rotor_count, mavlink.MAV_TYPE_GENERIC)
         self.commands = 0
         self.setpoints = 0
-        self._statustext_id = 0
+        self._texts = StatustextSender(max_chunks=None, one_full_message=True)
         self._handlers: dict[int, Callable[[tuple[float, ...]], Verdict]] = {
             mavlink.MAV_CMD_COMPONENT_ARM_DISARM: self._arm_disarm,
             mavlink.MAV_CMD_DO_SET_MODE: self._set_mode,
@@ -102,16 +112,8 @@ class Px4Protocol:
                 self.send(msg)
 
     def statustext(self, severity: int, text: str) -> None:
-        data = text.encode()
-        if len(data) <= STATUSTEXT_CHUNK:
-            self.send(mavlink.MAVLink_statustext_message(severity, data, 0, 0))
-            return
-        self._statustext_id = self._statustext_id % 0xFFFF + 1
-        chunks = [data[i : i + STATUSTEXT_CHUNK] for i in range(0, len(data), STATUSTEXT_CHUNK)]
-        if len(chunks[-1]) == STATUSTEXT_CHUNK:
-            chunks.append(b"")  # a text of whole chunks ends with an empty (NUL-terminated) one
-        for seq, chunk in enumerate(chunks):
-            self.send(mavlink.MAVLink_statustext_message(severity, chunk, self._statustext_id, seq))
+        for msg in self._texts.messages(severity, text):
+            self.send(msg)
 
     # ------------------------------------------------------------------ inbound
 
@@ -129,7 +131,7 @@ class Px4Protocol:
             self._command(msg, params)
 
     def _addressed(self, system: int, component: int) -> bool:
-        return system in (0, self.system_id) and component in (0, self.component_id)
+        return commands.addressed_to(system, component, (self.system_id, self.component_id))
 
     def _command(self, msg: Message, params: tuple[float, ...]) -> None:
         if not self._addressed(msg.target_system, msg.target_component):
@@ -138,22 +140,17 @@ class Px4Protocol:
         handler = self._handlers.get(msg.command)
         verdict = handler(params) if handler is not None else Verdict(mavlink.MAV_RESULT_UNSUPPORTED)
         self.publish_notices()
-        self.send(
-            mavlink.MAVLink_command_ack_message(
-                msg.command, verdict.result, 0, 0, msg.get_srcSystem(), msg.get_srcComponent()
-            )
-        )
+        self.send(commands.command_ack(msg.command, verdict.result, (msg.get_srcSystem(), msg.get_srcComponent())))
 
     def publish_notices(self) -> None:
         for notice in self.vehicle.commander.take_notices():
             self.statustext(notice.severity, notice.text)
 
     def _arm_disarm(self, p: tuple[float, ...]) -> Verdict:
-        action = round(p[0]) if math.isfinite(p[0]) else -1
-        if action not in (0, 1):
+        action = arm_action(p[0])
+        if action is None:
             return Verdict(mavlink.MAV_RESULT_DENIED, f"unsupported ARM_DISARM param1 {p[0]}")
-        force = math.isfinite(p[1]) and round(p[1]) == VehicleCommand.ARM_FORCE_MAGIC
-        return self.vehicle.arm_disarm(action == 1, force)
+        return self.vehicle.arm_disarm(action == VehicleCommand.ARMING_ACTION_ARM, arm_forced(p[1]))
 
     def _set_mode(self, p: tuple[float, ...]) -> Verdict:
         base = int(p[0]) if math.isfinite(p[0]) else 0

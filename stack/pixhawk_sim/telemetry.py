@@ -23,7 +23,17 @@ from pymavlink.dialects.v20 import common as mavlink
 
 from stack.mathlib import quaternion as quat
 from stack.mathlib.atmosphere import isa_altitude_m
-from stack.mavlink.px4_modes import Px4Mode
+from stack.mavlink import px4_modes
+from stack.mavlink.telemetry import (
+    attitude_message,
+    attitude_quaternion_message,
+    cdeg,
+    deg_e7,
+    extended_sys_state_message,
+    landed_state_of,
+    local_position_ned_message,
+    time_boot_ms,
+)
 from stack.pixhawk_sim.vehicle import SimulatedPixhawk
 from stack.sim.sensors import BaroSample, GpsSample, ImuSample, MagSample
 
@@ -68,19 +78,6 @@ _BARO_FIELDS = (
 )
 UINT16_UNKNOWN = 65535
 INT16_UNKNOWN = 32767
-DEG_E7 = 1e7
-
-
-def _ms(time_us: int) -> int:
-    return (time_us // 1000) & 0xFFFFFFFF
-
-
-def _deg_e7(deg: float) -> int:
-    return round(deg * DEG_E7) if math.isfinite(deg) else 0
-
-
-def _heading_cdeg(q: tuple[float, float, float, float]) -> int:
-    return round(math.degrees(quat.yaw(q)) % 360.0 * 100.0) % 36000
 
 
 class Telemetry:
@@ -185,7 +182,7 @@ class Telemetry:
             return None
         value: BaroSample = baro.value
         return mavlink.MAVLink_scaled_pressure_message(
-            _ms(baro.boot_us), value.pressure_pa / 100.0, 0.0, round(value.temperature * 100.0), 0
+            time_boot_ms(baro.boot_us), value.pressure_pa / 100.0, 0.0, round(value.temperature * 100.0), 0
         )
 
     def gps_raw_int(self) -> Message | None:
@@ -199,8 +196,8 @@ class Telemetry:
         return mavlink.MAVLink_gps_raw_int_message(
             time_usec=gps.boot_us,
             fix_type=s.fix_type,
-            lat=_deg_e7(s.lat),
-            lon=_deg_e7(s.lon),
+            lat=deg_e7(s.lat),
+            lon=deg_e7(s.lon),
             alt=alt_mm,
             eph=round(s.hdop * 100.0),
             epv=round(s.vdop * 100.0),
@@ -219,18 +216,15 @@ class Telemetry:
 
     def attitude(self) -> Message:
         v = self.vehicle
-        roll, pitch, yaw = quat.to_euler(v.truth.q)
-        p, q, r = v.control.body_rates
-        return mavlink.MAVLink_attitude_message(_ms(v.time_us), roll, pitch, yaw, p, q, r)
+        return attitude_message(v.time_us, v.truth.q, v.control.body_rates)
 
     def attitude_quaternion(self) -> Message:
         v = self.vehicle
-        p, q, r = v.control.body_rates
-        return mavlink.MAVLink_attitude_quaternion_message(_ms(v.time_us), *v.truth.q, p, q, r, (0.0, 0.0, 0.0, 0.0))
+        return attitude_quaternion_message(v.time_us, v.truth.q, v.control.body_rates)
 
     def local_position_ned(self) -> Message:
         v = self.vehicle
-        return mavlink.MAVLink_local_position_ned_message(_ms(v.time_us), *v.truth.position, *v.truth.velocity)
+        return local_position_ned_message(v.time_us, v.truth.position, v.truth.velocity)
 
     def odometry(self) -> Message:
         """PX4's ODOMETRY: pose in LOCAL_NED, velocity and rates in BODY_FRD; covariances unknown (NaN first)."""
@@ -266,15 +260,15 @@ class Telemetry:
         t = v.truth
         vn, ve, vd = t.velocity
         return mavlink.MAVLink_global_position_int_message(
-            time_boot_ms=_ms(v.time_us),
-            lat=_deg_e7(t.lat),
-            lon=_deg_e7(t.lon),
+            time_boot_ms=time_boot_ms(v.time_us),
+            lat=deg_e7(t.lat),
+            lon=deg_e7(t.lon),
             alt=round(t.alt * 1000.0),
             relative_alt=round((t.alt - v.home.alt) * 1000.0),
             vx=round(vn * 100.0),
             vy=round(ve * 100.0),
             vz=round(vd * 100.0),
-            hdg=_heading_cdeg(t.q),
+            hdg=cdeg(quat.yaw(t.q)),
         )
 
     def vfr_hud(self) -> Message:
@@ -285,7 +279,7 @@ class Telemetry:
         return mavlink.MAVLink_vfr_hud_message(
             airspeed=speed,
             groundspeed=speed,
-            heading=_heading_cdeg(t.q) // 100,
+            heading=cdeg(quat.yaw(t.q)) // 100,
             throttle=throttle,
             alt=t.alt,
             climb=-t.velocity[2],
@@ -300,7 +294,7 @@ class Telemetry:
         if q[0] != q[0]:
             q, mask = quat.IDENTITY, mavlink.ATTITUDE_TARGET_TYPEMASK_ATTITUDE_IGNORE
         rates = tuple(r if r == r else 0.0 for r in out.rates_sp)
-        return mavlink.MAVLink_attitude_target_message(_ms(v.time_us), mask, q, *rates, -out.thrust_body[2])
+        return mavlink.MAVLink_attitude_target_message(time_boot_ms(v.time_us), mask, q, *rates, -out.thrust_body[2])
 
     def sim_state(self) -> Message:
         """The truth (see the module docstring for where the NED position is)."""
@@ -332,8 +326,8 @@ class Telemetry:
             vn=vn,
             ve=ve,
             vd=vd,
-            lat_int=_deg_e7(t.lat),
-            lon_int=_deg_e7(t.lon),
+            lat_int=deg_e7(t.lat),
+            lon_int=deg_e7(t.lon),
         )
 
     # ------------------------------------------------------------------ system
@@ -393,20 +387,16 @@ class Telemetry:
 
     def extended_sys_state(self) -> Message:
         v = self.vehicle
-        if v.landed.landed:
-            state = mavlink.MAV_LANDED_STATE_ON_GROUND
-        elif v.commander.mode is Px4Mode.AUTO_LAND:
-            state = mavlink.MAV_LANDED_STATE_LANDING
-        else:
-            state = mavlink.MAV_LANDED_STATE_IN_AIR
-        return mavlink.MAVLink_extended_sys_state_message(mavlink.MAV_VTOL_STATE_UNDEFINED, state)
+        nav_state = px4_modes.to_nav_state(v.commander.mode)
+        landed_state = landed_state_of(v.landed.landed, nav_state if nav_state is not None else -1)
+        return extended_sys_state_message(landed_state)
 
     def home_position(self) -> Message:
         v = self.vehicle
         h = v.home
         return mavlink.MAVLink_home_position_message(
-            latitude=_deg_e7(h.lat),
-            longitude=_deg_e7(h.lon),
+            latitude=deg_e7(h.lat),
+            longitude=deg_e7(h.lon),
             altitude=round(h.alt * 1000.0),
             x=h.x,
             y=h.y,
@@ -422,7 +412,7 @@ class Telemetry:
         """The NED origin: the simulator's home (SIH_LOC_LAT0, SIH_LOC_LON0, SIH_LOC_H0)."""
         v = self.vehicle
         lat, lon, alt = v.sim.home
-        return mavlink.MAVLink_gps_global_origin_message(_deg_e7(lat), _deg_e7(lon), round(alt * 1000.0), v.time_us)
+        return mavlink.MAVLink_gps_global_origin_message(deg_e7(lat), deg_e7(lon), round(alt * 1000.0), v.time_us)
 
     def servo_output_raw(self) -> Message:
         v = self.vehicle
@@ -431,7 +421,7 @@ class Telemetry:
         return mavlink.MAVLink_servo_output_raw_message(v.time_us & 0xFFFFFFFF, 0, *pwm)
 
     def system_time(self) -> Message:
-        return mavlink.MAVLink_system_time_message(self._unix_time_us(), _ms(self.vehicle.time_us))
+        return mavlink.MAVLink_system_time_message(self._unix_time_us(), time_boot_ms(self.vehicle.time_us))
 
     def autopilot_version(self) -> Message:
         major, minor, patch = PX4_VERSION_MODELLED

@@ -29,24 +29,24 @@ def test_each_message_goes_out_at_px4s_normal_mode_rate():
 
 def test_set_message_interval_changes_disables_and_restores_a_stream():
     streams = StreamScheduler()
-    assert streams.set_interval(ATTITUDE, 20_000) == M.MAV_RESULT_ACCEPTED
+    assert streams.set_message_interval(ATTITUDE, 20_000) == M.MAV_RESULT_ACCEPTED
     assert streams.interval_us(ATTITUDE) == 20_000
     assert abs(_sent_in(streams, 2.0)[ATTITUDE] - 100) <= 1
-    assert streams.set_interval(ATTITUDE, -1) == M.MAV_RESULT_ACCEPTED
+    assert streams.set_message_interval(ATTITUDE, -1) == M.MAV_RESULT_ACCEPTED
     assert streams.interval_us(ATTITUDE) == -1 and ATTITUDE not in _sent_in(streams, 2.0)
-    assert streams.set_interval(ATTITUDE, 0) == M.MAV_RESULT_ACCEPTED
+    assert streams.set_message_interval(ATTITUDE, 0) == M.MAV_RESULT_ACCEPTED
     assert streams.interval_us(ATTITUDE) == round(1e6 / 15.0)
-    assert streams.set_interval(ATTITUDE, 10) == M.MAV_RESULT_ACCEPTED
+    assert streams.set_message_interval(ATTITUDE, 10) == M.MAV_RESULT_ACCEPTED
     assert streams.interval_us(ATTITUDE) == MIN_INTERVAL_US
 
 
 def test_a_message_not_provided_is_unsupported_and_a_bad_interval_denied():
     streams = StreamScheduler()
-    assert streams.set_interval(M.MAVLINK_MSG_ID_HIGHRES_IMU, 10_000) == M.MAV_RESULT_UNSUPPORTED
-    assert streams.set_interval(math.nan, 10_000) == M.MAV_RESULT_UNSUPPORTED
-    assert streams.set_interval(ATTITUDE + 0.5, 10_000) == M.MAV_RESULT_UNSUPPORTED
+    assert streams.set_message_interval(M.MAVLINK_MSG_ID_HIGHRES_IMU, 10_000) == M.MAV_RESULT_UNSUPPORTED
+    assert streams.set_message_interval(math.nan, 10_000) == M.MAV_RESULT_UNSUPPORTED
+    assert streams.set_message_interval(ATTITUDE + 0.5, 10_000) == M.MAV_RESULT_UNSUPPORTED
     for bad in (math.nan, math.inf, -5.0):
-        assert streams.set_interval(ATTITUDE, bad) == M.MAV_RESULT_DENIED
+        assert streams.set_message_interval(ATTITUDE, bad) == M.MAV_RESULT_DENIED
     assert streams.interval_us(ATTITUDE) == round(1e6 / 15.0)
     assert streams.interval_us(M.MAVLINK_MSG_ID_HIGHRES_IMU) == 0
 

@@ -15,8 +15,7 @@ from stack.mathlib.geo import MapProjection
 from stack.mavlink import px4_modes
 from stack.mavlink.px4_modes import Px4Mode
 from stack.pixhawk_sim.params import parameter_values
-from stack.pixhawk_sim.protocol import Px4Protocol
-from stack.pixhawk_sim.streams import ONBOARD_RATES_HZ, StreamScheduler
+from stack.pixhawk_sim.protocol import STREAM_RATES_HZ, Px4Protocol, stream_scheduler
 from stack.pixhawk_sim.telemetry import Telemetry
 from stack.pixhawk_sim.vehicle import SimulatedPixhawk
 from stack.sim.sensors import ImuSample
@@ -73,7 +72,7 @@ def test_default_stream_rates_are_px4_onboard_rates() -> None:
     bench = Bench()
     bench.run(10.0)
     counts = Counter(m.get_msgId() for m in bench.sent)
-    for msg_id, rate in ONBOARD_RATES_HZ.items():
+    for msg_id, rate in STREAM_RATES_HZ.items():
         if msg_id == mavlink.MAVLINK_MSG_ID_GPS_RAW_INT:
             assert counts[msg_id] == pytest.approx(100, abs=2)  # every GPS sample (10 Hz)
         else:
@@ -82,7 +81,7 @@ def test_default_stream_rates_are_px4_onboard_rates() -> None:
 
 def test_every_stream_has_a_builder() -> None:
     bench = Bench()
-    assert set(StreamScheduler().streams()) <= set(Telemetry(bench.vehicle).builders)
+    assert set(stream_scheduler().streams()) <= set(Telemetry(bench.vehicle).builders)
 
 
 def test_set_message_interval_changes_disables_and_restores_a_stream() -> None:

@@ -7,8 +7,9 @@ import math
 import pytest
 from pymavlink.dialects.v20 import common as mavlink
 
+from stack.mavlink.streams import StreamScheduler
 from stack.pixhawk_sim.offboard import decode_attitude_target
-from stack.pixhawk_sim.streams import ONBOARD_RATES_HZ, StreamScheduler
+from stack.pixhawk_sim.protocol import STREAM_RATES_HZ, stream_scheduler
 
 ATTITUDE_IGNORE = mavlink.ATTITUDE_TARGET_TYPEMASK_ATTITUDE_IGNORE
 THROTTLE_IGNORE = mavlink.ATTITUDE_TARGET_TYPEMASK_THROTTLE_IGNORE
@@ -54,7 +55,7 @@ def test_throttle_ignore_keeps_the_previous_thrust() -> None:
 
 
 def test_streams_average_their_rate_on_a_4_ms_loop() -> None:
-    streams = StreamScheduler()
+    streams = stream_scheduler()
     counts: dict[int, int] = {}
     for step in range(1, 2501):  # 10 s at 250 Hz
         for msg_id in streams.due(step * 4000):
@@ -62,7 +63,7 @@ def test_streams_average_their_rate_on_a_4_ms_loop() -> None:
     assert counts[mavlink.MAVLINK_MSG_ID_LOCAL_POSITION_NED] == 300  # 30 Hz, not 250/9 = 27.8 Hz
     assert counts[mavlink.MAVLINK_MSG_ID_ATTITUDE] == 1000
     assert counts[mavlink.MAVLINK_MSG_ID_GPS_RAW_INT] == 2500  # unlimited: offered every loop
-    assert set(counts) == set(ONBOARD_RATES_HZ)
+    assert set(counts) == set(STREAM_RATES_HZ)
 
 
 def test_a_stream_resynchronises_after_a_stall_instead_of_bursting() -> None:
@@ -75,7 +76,7 @@ def test_a_stream_resynchronises_after_a_stall_instead_of_bursting() -> None:
 
 
 def test_intervals() -> None:
-    streams = StreamScheduler()
+    streams = stream_scheduler()
     imu = mavlink.MAVLINK_MSG_ID_HIGHRES_IMU
     assert streams.interval_us(imu) == 20000
     assert streams.set_interval(imu, 2500.4) and streams.interval_us(imu) == 2500
