@@ -6,6 +6,7 @@ import math
 import pytest
 
 from stack.attctl.att_module import MulticopterAttitudeControl
+from stack.attctl.attitude_control import AttitudeControl
 from stack.mathlib import quaternion as quat
 from stack.msg.estimation import VehicleAttitude
 from stack.msg.registry import ORB_ID
@@ -73,12 +74,12 @@ def test_stabilized_publishes_the_stick_setpoint_it_flies():
     assert bench.sent(ORB_ID.vehicle_rates_setpoint)[-1].roll > 0.0
 
 
-def test_an_estimator_reset_reaches_the_controller_once():
+def test_an_estimator_reset_reaches_the_controller_once(monkeypatch):
     bench = ModuleBench(MulticopterAttitudeControl)
     bench.put(ORB_ID.vehicle_control_mode, ATTITUDE)
     bench.put(ORB_ID.vehicle_attitude_setpoint, VehicleAttitudeSetpoint())
     resets = []
-    bench.module.control.adapt_to_reset = resets.append
+    monkeypatch.setattr(AttitudeControl, "adapt_to_reset", lambda self, delta_q: resets.append(delta_q))
     delta = quat.from_euler(0.0, 0.0, 0.5)
     step(bench)
     step(bench, quat_reset_counter=1, delta_q_reset=delta)
