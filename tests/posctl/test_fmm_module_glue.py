@@ -14,7 +14,7 @@ from stack.msg.system import VehicleLandDetected, VehicleStatus
 from stack.posctl.flight_mode_manager import FlightModeManager
 from stack.posctl.flight_task import TrajectoryCommand
 from stack.posctl.fmm_module import FlightModeManagerModule
-from tests.support.bench import ModuleBench
+from tests.support.bench import ModuleBench, stand_in
 
 DT = 0.02
 LPOS = VehicleLocalPosition(timestamp_sample=555, xy_valid=True, z_valid=False, v_xy_valid=False, v_z_valid=True,
@@ -23,19 +23,8 @@ LPOS = VehicleLocalPosition(timestamp_sample=555, xy_valid=True, z_valid=False, 
 
 @pytest.fixture
 def answers(monkeypatch):
-    """What the manager was asked (inputs, dt) and the command it answers with (set ``answers.command``)."""
-
-    class Answers(list):
-        command: TrajectoryCommand | None = None
-
-    seen = Answers()
-
-    def update(self, inputs, dt):
-        seen.append((inputs, dt))
-        return seen.command
-
-    monkeypatch.setattr(FlightModeManager, "update", update)
-    return seen
+    """What the manager was asked (inputs, dt); it answers ``answers.returns``."""
+    return stand_in(monkeypatch, FlightModeManager, "update")
 
 
 def test_reads_and_writes_the_topics_of_px4s_modules():
@@ -82,7 +71,7 @@ def test_mode_arming_takeoff_stage_and_a_valid_home_reach_the_manager(answers):
 
 def test_the_managers_command_is_published_as_the_trajectory_setpoint_stamped_now(answers):
     bench = ModuleBench(FlightModeManagerModule)
-    answers.command = TrajectoryCommand(position=(1.0, 2.0, -3.0), yaw=0.5, yawspeed=0.1)
+    answers.returns = TrajectoryCommand(position=(1.0, 2.0, -3.0), yaw=0.5, yawspeed=0.1)
     bench.run(LPOS, DT)
     sp = bench.sent(ORB_ID.trajectory_setpoint)[-1]
     assert sp.timestamp == bench.now

@@ -89,3 +89,24 @@ class ModuleBench:
 
     def sent(self, topic: Topic[M], instance: int = 0) -> list[M]:
         return self.outputs[(topic.name, instance)].sent
+
+
+class Calls(list):
+    """The arguments of each call to a method stood in for by :func:`stand_in` (a tuple each, ``self`` left out);
+    each call answers ``returns``."""
+
+    returns: Any = None
+
+
+def stand_in(monkeypatch: Any, cls: type, method: str, returns: Any = None) -> Calls:
+    """Replace ``cls.method`` for the test by one recording its calls and answering ``returns``: to see what a
+    module's glue hands its algorithm, and what it makes of a given answer."""
+    calls = Calls()
+    calls.returns = returns
+
+    def record(self: Any, *args: Any) -> Any:
+        calls.append(args)
+        return calls.returns
+
+    monkeypatch.setattr(cls, method, record)
+    return calls
