@@ -98,15 +98,17 @@ class Calls(list):
     returns: Any = None
 
 
-def stand_in(monkeypatch: Any, cls: type, method: str, returns: Any = None) -> Calls:
-    """Replace ``cls.method`` for the test by one recording its calls and answering ``returns``: to see what a
-    module's glue hands its algorithm, and what it makes of a given answer."""
+def stand_in(monkeypatch: Any, cls: type, method: str, returns: Any = None, *, through: bool = False) -> Calls:
+    """Replace ``cls.method`` for the test by one recording its calls and answering ``returns`` (with ``through``,
+    what the method itself answers): to see what a module's glue hands its algorithm, and what it makes of an
+    answer."""
     calls = Calls()
     calls.returns = returns
+    original = getattr(cls, method)
 
     def record(self: Any, *args: Any) -> Any:
         calls.append(args)
-        return calls.returns
+        return original(self, *args) if through else calls.returns
 
     monkeypatch.setattr(cls, method, record)
     return calls
