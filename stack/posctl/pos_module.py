@@ -13,12 +13,10 @@ from stack.msg.registry import ORB_ID
 from stack.msg.setpoints import TakeoffStatus, VehicleAttitudeSetpoint, VehicleLocalPositionSetpoint
 from stack.params import catalogue
 from stack.posctl.position_control import PositionControlParams
-from stack.posctl.position_loop import SETPOINT_TIMEOUT_US, SETPOINT_WAIT_US, PositionLoop
+from stack.posctl.position_loop import PositionLoop
 from stack.posctl.takeoff import TakeoffParams
 from stack.runtime.module import Module, Trigger
 from stack.runtime.priority import NAV_AND_CONTROLLERS
-
-__all__ = ["PARAMS", "SETPOINT_TIMEOUT_US", "SETPOINT_WAIT_US", "MulticopterPositionControl", "control_params"]
 
 TAKEOFF_STATUS_REPUBLISH_US = 1_000_000
 

@@ -11,7 +11,8 @@ from stack.msg.estimation import VehicleLocalPosition
 from stack.msg.registry import ORB_ID
 from stack.msg.setpoints import HoverThrustEstimate, TakeoffStatus, TrajectorySetpoint
 from stack.msg.system import VehicleControlMode, VehicleLandDetected
-from stack.posctl.pos_module import SETPOINT_TIMEOUT_US, SETPOINT_WAIT_US, MulticopterPositionControl
+from stack.posctl.pos_module import MulticopterPositionControl
+from stack.posctl.position_loop import SETPOINT_TIMEOUT_US, SETPOINT_WAIT_US
 from tests.support.bench import ModuleBench
 
 DT = 0.02
