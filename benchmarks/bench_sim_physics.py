@@ -16,11 +16,11 @@ import argparse
 import math
 import time
 
+from stack.airframe.model import FixedwingModel, load_vehicle
 from stack.mathlib import quaternion as quat
 from stack.sim.fixedwing_physics import level_trim
 from stack.sim.physics import MulticopterPhysics
 from stack.sim.simulator import Simulator
-from stack.airframe.model import FixedwingModel, load_vehicle
 from stack.sim.wind import WindParams
 
 
