@@ -31,9 +31,11 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 
 from stack.commander.hysteresis import Hysteresis
-from stack.commander.land_detector import LandDetectorState
+from stack.commander.land_detector import LandDetectorState, throttle_in_mode
 from stack.mathlib.vector import ZERO3, Vec3
-from stack.msg.fixedwing import AIRSPEED_TIMEOUT_US
+from stack.msg.estimation import VehicleImuStatus, VehicleLocalPosition
+from stack.msg.fixedwing import AIRSPEED_TIMEOUT_US, AirspeedValidated
+from stack.msg.setpoints import VehicleThrustSetpoint
 from stack.params.binding import ParamSet
 from stack.params.param import Param
 
@@ -86,6 +88,31 @@ class FixedwingLandDetectorInputs:
     acceleration: Vec3 = (0.0, 0.0, -9.80665)
     angular_velocity: Vec3 = ZERO3
     throttle: float = 0.0
+
+
+def fixedwing_inputs(
+    armed: bool,
+    nav_state: int,
+    lpos: VehicleLocalPosition | None,
+    airspeed: AirspeedValidated | None,
+    imu: VehicleImuStatus | None,
+    thrust: VehicleThrustSetpoint | None,
+) -> FixedwingLandDetectorInputs:
+    """The detector's inputs from the latest messages (None: none received), as ``FixedwingLandDetector.cpp``
+    reads its topics."""
+    inp = FixedwingLandDetectorInputs(armed=armed)
+    if lpos is not None:
+        inp.local_position_timestamp_us = lpos.timestamp
+        inp.v_xy_valid, inp.vx, inp.vy, inp.vz = lpos.v_xy_valid, lpos.vx, lpos.vy, lpos.vz
+    if airspeed is not None:
+        inp.airspeed_timestamp_us, inp.true_airspeed = airspeed.timestamp, airspeed.true_airspeed_m_s
+    if imu is not None:
+        inp.angular_velocity = imu.mean_gyro
+        inp.acceleration = imu.mean_accel
+    if thrust is not None:
+        inp.throttle = thrust.xyz[0]
+    inp.throttle = throttle_in_mode(inp.throttle, nav_state)
+    return inp
 
 
 def _landed_state(landed: bool, at_rest: bool) -> LandDetectorState:

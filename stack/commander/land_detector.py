@@ -30,7 +30,15 @@ from typing import NamedTuple
 
 from stack.commander.hysteresis import Hysteresis
 from stack.mathlib.vector import ZERO3, Vec3
-from stack.msg.setpoints import TakeoffState
+from stack.msg.estimation import VehicleImuStatus, VehicleLocalPosition
+from stack.msg.setpoints import (
+    HoverThrustEstimate,
+    TakeoffState,
+    TakeoffStatus,
+    TrajectorySetpoint,
+    VehicleThrustSetpoint,
+)
+from stack.msg.system import VehicleStatus
 from stack.params.binding import ParamSet
 from stack.params.param import Param
 
@@ -105,6 +113,62 @@ def takeoff_state(value: int) -> TakeoffState | None:
     """The takeoff state a ``takeoff_status`` reports, or None for "uninitialized" or a value that names none
     (dropped: the land detector keeps the state it had)."""
     return TakeoffState(value) if value in _TAKEOFF_STATES else None
+
+
+_NO_CLIMB_RATE_CONTROL = frozenset((
+    VehicleStatus.NAVIGATION_STATE_MANUAL,
+    VehicleStatus.NAVIGATION_STATE_STAB,
+    VehicleStatus.NAVIGATION_STATE_ACRO,
+    VehicleStatus.NAVIGATION_STATE_RATTITUDE,
+    VehicleStatus.NAVIGATION_STATE_OFFBOARD,
+    VehicleStatus.NAVIGATION_STATE_TERMINATION,  # no loop runs, nothing commands a descent
+))
+
+
+def climb_rate_controlled(nav_state: int) -> bool:
+    """Whether a loop controls the climb rate in ``nav_state`` (PX4 reads ``flag_control_climb_rate_enabled``)."""
+    return nav_state not in _NO_CLIMB_RATE_CONTROL
+
+
+def throttle_in_mode(throttle: float, nav_state: int) -> float:
+    """The thrust the detector counts: none in termination, where the motors are stopped whatever the controllers
+    still ask."""
+    return 0.0 if nav_state == VehicleStatus.NAVIGATION_STATE_TERMINATION else throttle
+
+
+def multicopter_inputs(
+    armed: bool,
+    nav_state: int,
+    lpos: VehicleLocalPosition | None,
+    imu: VehicleImuStatus | None,
+    thrust: VehicleThrustSetpoint | None,
+    trajectory: TrajectorySetpoint | None,
+    hover: HoverThrustEstimate | None,
+    takeoff: TakeoffStatus | None,
+) -> LandDetectorInputs:
+    """The detector's inputs from the latest messages (None: none received), as ``MulticopterLandDetector.cpp``
+    reads its topics."""
+    inp = LandDetectorInputs()
+    inp.armed = armed
+    if lpos is not None:
+        inp.local_position_timestamp_us = lpos.timestamp
+        inp.z_valid, inp.v_xy_valid, inp.v_z_valid = lpos.z_valid, lpos.v_xy_valid, lpos.v_z_valid
+        inp.vx, inp.vy, inp.vz, inp.z_deriv = lpos.vx, lpos.vy, lpos.vz, lpos.z_deriv
+        inp.dist_bottom_valid, inp.dist_bottom = lpos.dist_bottom_valid, lpos.dist_bottom
+    if imu is not None:
+        inp.angular_velocity = imu.mean_gyro
+        inp.acceleration = imu.mean_accel
+    if thrust is not None:
+        inp.throttle = -thrust.xyz[2]
+    inp.throttle = throttle_in_mode(inp.throttle, nav_state)
+    inp.climb_rate_control = climb_rate_controlled(nav_state)
+    inp.velocity_setpoint_z = trajectory.velocity[2] if trajectory is not None else math.nan
+    if hover is not None and hover.valid:
+        inp.hover_thrust, inp.hover_thrust_timestamp_us = hover.hover_thrust, hover.timestamp
+    state = takeoff_state(takeoff.takeoff_state) if takeoff is not None else None
+    if state is not None:
+        inp.takeoff_state = state
+    return inp
 
 
 class LandDetectorState(NamedTuple):

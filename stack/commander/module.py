@@ -353,60 +353,24 @@ class CommanderModule(Module):
 
     def _land_inputs(self) -> LandDetectorInputs:
         latest = self.latest
-        inp = LandDetectorInputs()
-        inp.armed = self.commander.armed
-        lpos = latest(ORB_ID.vehicle_local_position)
-        if lpos is not None:
-            inp.local_position_timestamp_us = lpos.timestamp
-            inp.z_valid, inp.v_xy_valid, inp.v_z_valid = lpos.z_valid, lpos.v_xy_valid, lpos.v_z_valid
-            inp.vx, inp.vy, inp.vz, inp.z_deriv = lpos.vx, lpos.vy, lpos.vz, lpos.z_deriv
-            inp.dist_bottom_valid, inp.dist_bottom = lpos.dist_bottom_valid, lpos.dist_bottom
-        imu = latest(ORB_ID.vehicle_imu_status)
-        if imu is not None:
-            inp.angular_velocity = imu.mean_gyro
-            inp.acceleration = imu.mean_accel
-        thrust = latest(ORB_ID.vehicle_thrust_setpoint)
-        if thrust is not None:
-            inp.throttle = -thrust.xyz[2]
-        mode = self.commander.nav_state
-        if mode == NS.NAVIGATION_STATE_TERMINATION:
-            inp.throttle = 0.0  # the motors are stopped, whatever the controllers still ask
-        inp.climb_rate_control = mode not in (
-            NS.NAVIGATION_STATE_MANUAL,
-            NS.NAVIGATION_STATE_STAB,
-            NS.NAVIGATION_STATE_ACRO,
-            NS.NAVIGATION_STATE_RATTITUDE,
-            NS.NAVIGATION_STATE_OFFBOARD,
-            NS.NAVIGATION_STATE_TERMINATION,  # no loop runs, nothing commands a descent
+        return land_detector.multicopter_inputs(
+            self.commander.armed,
+            self.commander.nav_state,
+            latest(ORB_ID.vehicle_local_position),
+            latest(ORB_ID.vehicle_imu_status),
+            latest(ORB_ID.vehicle_thrust_setpoint),
+            latest(ORB_ID.trajectory_setpoint),
+            latest(ORB_ID.hover_thrust_estimate),
+            latest(ORB_ID.takeoff_status),
         )
-        trajectory = latest(ORB_ID.trajectory_setpoint)
-        inp.velocity_setpoint_z = trajectory.velocity[2] if trajectory is not None else math.nan
-        hover = latest(ORB_ID.hover_thrust_estimate)
-        if hover is not None and hover.valid:
-            inp.hover_thrust, inp.hover_thrust_timestamp_us = hover.hover_thrust, hover.timestamp
-        takeoff = latest(ORB_ID.takeoff_status)
-        state = land_detector.takeoff_state(takeoff.takeoff_state) if takeoff is not None else None
-        if state is not None:
-            inp.takeoff_state = state
-        return inp
 
     def _fw_land_inputs(self) -> FixedwingLandDetectorInputs:
         latest = self.latest
-        inp = FixedwingLandDetectorInputs(armed=self.commander.armed)
-        lpos = latest(ORB_ID.vehicle_local_position)
-        if lpos is not None:
-            inp.local_position_timestamp_us = lpos.timestamp
-            inp.v_xy_valid, inp.vx, inp.vy, inp.vz = lpos.v_xy_valid, lpos.vx, lpos.vy, lpos.vz
-        validated = latest(ORB_ID.airspeed_validated)
-        if validated is not None:
-            inp.airspeed_timestamp_us, inp.true_airspeed = validated.timestamp, validated.true_airspeed_m_s
-        imu = latest(ORB_ID.vehicle_imu_status)
-        if imu is not None:
-            inp.angular_velocity = imu.mean_gyro
-            inp.acceleration = imu.mean_accel
-        thrust = latest(ORB_ID.vehicle_thrust_setpoint)
-        if thrust is not None:
-            inp.throttle = thrust.xyz[0]
-        if self.commander.nav_state == NS.NAVIGATION_STATE_TERMINATION:
-            inp.throttle = 0.0  # the motors are stopped, whatever the controllers still ask
-        return inp
+        return fw_land_detector.fixedwing_inputs(
+            self.commander.armed,
+            self.commander.nav_state,
+            latest(ORB_ID.vehicle_local_position),
+            latest(ORB_ID.airspeed_validated),
+            latest(ORB_ID.vehicle_imu_status),
+            latest(ORB_ID.vehicle_thrust_setpoint),
+        )

@@ -3,8 +3,17 @@ import math
 
 import pytest
 
-from stack.commander.land_detector import LandDetectorInputs, MulticopterLandDetector
-from stack.msg.setpoints import TakeoffState
+from stack.commander.fw_land_detector import fixedwing_inputs
+from stack.commander.land_detector import LandDetectorInputs, MulticopterLandDetector, multicopter_inputs
+from stack.msg.estimation import VehicleLocalPosition
+from stack.msg.setpoints import (
+    HoverThrustEstimate,
+    TakeoffState,
+    TakeoffStatus,
+    TrajectorySetpoint,
+    VehicleThrustSetpoint,
+)
+from stack.msg.system import VehicleStatus
 
 DT_US = 10_000
 STAGE_US = 333_333  # LNDMC_TRIG_TIME / 3
@@ -173,3 +182,26 @@ def test_a_parameter_change_on_the_ground_keeps_it_landed_and_times_the_next_lan
     flight.run(1.0, vz=0.7, throttle=0.45, velocity_setpoint_z=0.7)
     state, first = flight.run(4.0, vz=0.0, throttle=0.1)
     assert state.landed and first["landed"] == pytest.approx(3 * 1_000_000, abs=4 * DT_US)
+
+
+def test_inputs_from_the_messages_with_the_modes_climb_rate_control_and_no_throttle_in_termination():
+    lpos = VehicleLocalPosition(timestamp=5, z_valid=True, v_z_valid=True, vz=0.3, z_deriv=0.2)
+    thrust = VehicleThrustSetpoint(xyz=(0.4, 0.0, -0.6))
+    mission, termination = VehicleStatus.NAVIGATION_STATE_AUTO_MISSION, VehicleStatus.NAVIGATION_STATE_TERMINATION
+    nothing = multicopter_inputs(False, VehicleStatus.NAVIGATION_STATE_MANUAL, None, None, None, None, None, None)
+    assert nothing.throttle == 0.0 and not nothing.climb_rate_control and math.isnan(nothing.velocity_setpoint_z)
+    inp = multicopter_inputs(
+        True, mission, lpos, None, thrust, TrajectorySetpoint(velocity=(0.0, 0.0, 0.7)),
+        HoverThrustEstimate(timestamp=9, hover_thrust=0.45, valid=True),
+        TakeoffStatus(takeoff_state=TakeoffStatus.TAKEOFF_STATE_FLIGHT),
+    )
+    assert (inp.armed, inp.local_position_timestamp_us, inp.vz, inp.z_deriv, inp.throttle) == (True, 5, 0.3, 0.2, 0.6)
+    assert inp.climb_rate_control and inp.velocity_setpoint_z == 0.7
+    assert (inp.hover_thrust, inp.hover_thrust_timestamp_us, inp.takeoff_state) == (0.45, 9, TakeoffState.FLIGHT)
+    invalid_hover = multicopter_inputs(True, mission, None, None, None, None, HoverThrustEstimate(hover_thrust=0.45),
+                                       TakeoffStatus(takeoff_state=TakeoffStatus.TAKEOFF_STATE_UNINITIALIZED))
+    assert math.isnan(invalid_hover.hover_thrust) and invalid_hover.takeoff_state == TakeoffState.DISARMED
+    stopped = multicopter_inputs(True, termination, lpos, None, thrust, None, None, None)
+    assert stopped.throttle == 0.0 and not stopped.climb_rate_control
+    assert fixedwing_inputs(True, mission, lpos, None, None, thrust).throttle == 0.4
+    assert fixedwing_inputs(True, termination, lpos, None, None, thrust).throttle == 0.0

@@ -89,3 +89,26 @@ class ModuleBench:
 
     def sent(self, topic: Topic[M], instance: int = 0) -> list[M]:
         return self.outputs[(topic.name, instance)].sent
+
+
+class Calls(list):
+    """The arguments of each call to a method stood in for by :func:`stand_in` (a tuple each, ``self`` left out);
+    each call answers ``returns``."""
+
+    returns: Any = None
+
+
+def stand_in(monkeypatch: Any, cls: type, method: str, returns: Any = None, *, through: bool = False) -> Calls:
+    """Replace ``cls.method`` for the test by one recording its calls and answering ``returns`` (with ``through``,
+    what the method itself answers): to see what a module's glue hands its algorithm, and what it makes of an
+    answer."""
+    calls = Calls()
+    calls.returns = returns
+    original = getattr(cls, method)
+
+    def record(self: Any, *args: Any) -> Any:
+        calls.append(args)
+        return original(self, *args) if through else calls.returns
+
+    monkeypatch.setattr(cls, method, record)
+    return calls
