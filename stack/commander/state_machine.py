@@ -336,20 +336,6 @@ class Commander:
         self._can_set: dict[tuple[int, int], int] = {}
         """``can_set_nav_states_mask`` by vehicle type and failing requirements, which change rarely."""
         self._messages: tuple[VehicleStatus, VehicleControlMode, ActuatorArmed] | None = None
-        self._handlers: dict[int, Callable[[VehicleCommand, int], _Verdict]] = {
-            CMD.VEHICLE_CMD_COMPONENT_ARM_DISARM: self._cmd_arm_disarm,
-            CMD.VEHICLE_CMD_DO_SET_MODE: self._cmd_set_mode,
-            VEHICLE_CMD_SET_NAV_STATE: self._cmd_set_nav_state,
-            CMD.VEHICLE_CMD_NAV_TAKEOFF: self._cmd_takeoff,
-            CMD.VEHICLE_CMD_NAV_LAND: self._cmd_mode(NS.NAVIGATION_STATE_AUTO_LAND),
-            CMD.VEHICLE_CMD_NAV_RETURN_TO_LAUNCH: self._cmd_mode(NS.NAVIGATION_STATE_AUTO_RTL),
-            CMD.VEHICLE_CMD_NAV_LOITER_UNLIM: self._cmd_mode(NS.NAVIGATION_STATE_AUTO_LOITER),
-            CMD.VEHICLE_CMD_DO_REPOSITION: self._cmd_reposition_global,
-            VEHICLE_CMD_DO_REPOSITION_LOCAL: self._cmd_reposition_local,
-            CMD.VEHICLE_CMD_MISSION_START: self._cmd_mission_start,
-            CMD.VEHICLE_CMD_DO_SET_MISSION_CURRENT: self._cmd_set_mission_current,
-            CMD.VEHICLE_CMD_INJECT_FAILURE: self._cmd_inject_failure,
-        }
         self.set_params(params or {})
         self._takeoff_altitude = self._p.mis_takeoff_alt
 
@@ -394,11 +380,6 @@ class Commander:
     def failsafe_cause(self) -> str:
         return self._failsafe_cause
 
-    @property
-    def supported_commands(self) -> frozenset[int]:
-        """The ``vehicle_command`` ids this commander carries out (any other is answered UNSUPPORTED)."""
-        return frozenset(self._handlers)
-
     def can_run(self, nav_state: int) -> bool:
         """Whether the vehicle has the mode and its requirements are met now."""
         return can_run(nav_state, self._failing, self.vehicle_type)
@@ -429,13 +410,13 @@ class Commander:
             self.ignored_commands += 1
             return None
         self._command_time_us = now_us
-        handler = self._handlers.get(cmd.command)
+        handler = COMMAND_HANDLERS.get(cmd.command)
         awaiting = self._external_arming
         if handler is None:
             unsupported = f"Unsupported command {command_label(cmd.command)}"
             result, reason, param = (ACK.VEHICLE_CMD_RESULT_UNSUPPORTED, unsupported, 0)
         else:
-            result, reason, param = handler(cmd, now_us)
+            result, reason, param = handler(self, cmd, now_us)
         if result == ACK.VEHICLE_CMD_RESULT_ACCEPTED:
             self._step(now_us)
         elif reason:
@@ -874,12 +855,6 @@ class Commander:
             return _denied(f"Set mode: unknown mode id {value:g}", 1)
         return self._change_mode(round(value))
 
-    def _cmd_mode(self, nav_state: int) -> Callable[[VehicleCommand, int], _Verdict]:
-        def handler(cmd: VehicleCommand, now_us: int) -> _Verdict:
-            return self._change_mode(nav_state)
-
-        return handler
-
     def _ground_altitude_amsl(self) -> float:
         """Altitude AMSL [m] of home when armed, else of the vehicle now (NaN without a reference)."""
         if self.armed and self._home is not None:
@@ -1120,3 +1095,29 @@ class Commander:
             events=events,
             acks=acks,
         )
+
+
+def _mode_command(nav_state: int) -> Callable[[Commander, VehicleCommand, int], _Verdict]:
+    def handler(commander: Commander, cmd: VehicleCommand, now_us: int) -> _Verdict:
+        return commander._change_mode(nav_state)
+
+    return handler
+
+
+COMMAND_HANDLERS: dict[int, Callable[[Commander, VehicleCommand, int], _Verdict]] = {
+    CMD.VEHICLE_CMD_COMPONENT_ARM_DISARM: Commander._cmd_arm_disarm,
+    CMD.VEHICLE_CMD_DO_SET_MODE: Commander._cmd_set_mode,
+    VEHICLE_CMD_SET_NAV_STATE: Commander._cmd_set_nav_state,
+    CMD.VEHICLE_CMD_NAV_TAKEOFF: Commander._cmd_takeoff,
+    CMD.VEHICLE_CMD_NAV_LAND: _mode_command(NS.NAVIGATION_STATE_AUTO_LAND),
+    CMD.VEHICLE_CMD_NAV_RETURN_TO_LAUNCH: _mode_command(NS.NAVIGATION_STATE_AUTO_RTL),
+    CMD.VEHICLE_CMD_NAV_LOITER_UNLIM: _mode_command(NS.NAVIGATION_STATE_AUTO_LOITER),
+    CMD.VEHICLE_CMD_DO_REPOSITION: Commander._cmd_reposition_global,
+    VEHICLE_CMD_DO_REPOSITION_LOCAL: Commander._cmd_reposition_local,
+    CMD.VEHICLE_CMD_MISSION_START: Commander._cmd_mission_start,
+    CMD.VEHICLE_CMD_DO_SET_MISSION_CURRENT: Commander._cmd_set_mission_current,
+    CMD.VEHICLE_CMD_INJECT_FAILURE: Commander._cmd_inject_failure,
+}
+"""How the commander carries out each ``vehicle_command`` it supports (PX4 ``Commander::handle_command``)."""
+SUPPORTED_COMMANDS = frozenset(COMMAND_HANDLERS)
+"""The ``vehicle_command`` ids the commander carries out; any other is answered UNSUPPORTED."""

@@ -31,7 +31,7 @@ from pymavlink.dialects.v20 import common as mavlink2
 from stack.bus import keys
 from stack.bus.node import wall_clock_us
 from stack.bus.topics import TopicSubscriber
-from stack.commander.state_machine import Commander
+from stack.commander.state_machine import SUPPORTED_COMMANDS
 from stack.mathlib.geo import MapProjection
 from stack.mavlink import commands, identity, mission_items, offboard, params, signing, telemetry, transport
 from stack.mavlink.clock import StampClock
@@ -104,7 +104,6 @@ VIEW_FIELDS = {
     ORB_ID.sensor_baro: "baro",
 }
 QUEUED_TOPICS = {ORB_ID.vehicle_command_ack: 64, ORB_ID.mavlink_log: 64, ORB_ID.mission: 8, ORB_ID.mission_result: 16}
-SUPPORTED_COMMANDS = Commander().supported_commands
 M = mavlink2
 _Answer = tuple[int, int, list[mavlink2.MAVLink_message]]
 """A command answered by this module: MAV_RESULT, the offending parameter, the messages to send after the ACK."""

@@ -5,7 +5,7 @@ import math
 import pytest
 
 from stack.commander import commands as C
-from stack.commander.state_machine import Commander
+from stack.commander.state_machine import SUPPORTED_COMMANDS
 from stack.msg.system import VehicleCommand
 from stack.msg.system import VehicleCommandAck as ACK
 from stack.msg.system import VehicleStatus as NS
@@ -61,7 +61,7 @@ def test_in_mission_mode_the_vehicle_goes_there_at_once():
 
 
 def test_the_supported_commands_are_the_handled_ones():
-    supported = Commander().supported_commands
+    supported = SUPPORTED_COMMANDS
     assert CMD.VEHICLE_CMD_DO_SET_MISSION_CURRENT in supported
     assert CMD.VEHICLE_CMD_COMPONENT_ARM_DISARM in supported
     assert CMD.VEHICLE_CMD_DO_FLIGHTTERMINATION not in supported

@@ -14,7 +14,7 @@ from stack.commander.failsafe import Failsafe, FailsafeConditions
 from stack.commander.health import CommanderInputs
 from stack.commander.land_detector import LandDetectorInputs, MulticopterLandDetector, takeoff_state
 from stack.commander.modes import MODES, Requirement
-from stack.commander.state_machine import Commander
+from stack.commander.state_machine import SUPPORTED_COMMANDS, Commander
 from stack.msg.estimation import VehicleLocalPosition
 from stack.msg.system import VehicleCommand
 from stack.msg.system import VehicleCommandAck as ACK
@@ -23,7 +23,7 @@ from tests.fuzz.strategies import FUZZ, all_finite, any_int, finite_or_nan, nast
 
 CMD = VehicleCommand
 command_ids = st.one_of(
-    st.sampled_from(sorted(Commander().supported_commands)), st.integers(-(2**31), 2**31)
+    st.sampled_from(sorted(SUPPORTED_COMMANDS)), st.integers(-(2**31), 2**31)
 )
 commands = st.builds(
     CMD,

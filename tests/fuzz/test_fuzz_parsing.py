@@ -9,7 +9,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 from pymavlink.dialects.v20 import common as mavlink2
 
-from stack.commander.state_machine import Commander
+from stack.commander.state_machine import SUPPORTED_COMMANDS
 from stack.mavlink.commands import Refusal, from_command_int, from_command_long, from_set_mode
 from stack.mission.items import MissionError
 from stack.mission.plan import parse_plan
@@ -17,7 +17,7 @@ from stack.mission.waypoints import parse_waypoint_list, parse_wpl
 from stack.msg.system import VehicleCommand
 from tests.fuzz.strategies import FUZZ, nasty_float
 
-SUPPORTED = Commander().supported_commands
+SUPPORTED = SUPPORTED_COMMANDS
 OWN = (1, 1)
 json_values = st.recursive(
     st.one_of(st.none(), st.booleans(), nasty_float, st.integers(), st.text(max_size=8)),

@@ -5,7 +5,7 @@ import math
 import pytest
 from pymavlink.dialects.v20 import common as M
 
-from stack.commander.state_machine import Commander
+from stack.commander.state_machine import SUPPORTED_COMMANDS
 from stack.mavlink.commands import (
     INT32_MAX,
     PendingCommands,
@@ -20,7 +20,7 @@ from stack.msg.system import VehicleCommandAck as ACK
 
 OWN = (1, 1)
 GCS = (245, 190)
-SUPPORTED = Commander().supported_commands
+SUPPORTED = SUPPORTED_COMMANDS
 NAN = math.nan
 
 
