@@ -61,6 +61,8 @@ class LandDetectorParams(ParamSet):
 
 PARAMS: tuple[Param, ...] = LandDetectorParams.PARAMS
 
+PERIOD_US = 20_000
+"""How often the detector runs (PX4 ``LandDetector.h``: LAND_DETECTOR_UPDATE_INTERVAL, 20 ms)."""
 FREEFALL_SPECIFIC_FORCE = 2.0
 """Specific-force magnitude [m/s²] below which the vehicle is falling freely."""
 FREEFALL_TRIGGER_TIME_US = 300_000

@@ -47,7 +47,6 @@ from stack.msg.system import (
     VehicleStatus,
     command_label,
 )
-from stack.params import catalogue
 from stack.params.binding import combine
 from stack.runtime.module import Module, Timer
 from stack.runtime.priority import COMMANDER
@@ -55,9 +54,7 @@ from stack.runtime.priority import COMMANDER
 NS = VehicleStatus
 RATE_HZ = 100.0
 REPUBLISH_US = 500_000
-LAND_DETECTOR_PERIOD_US = 20_000
 LAND_DETECTED_REPUBLISH_US = 1_000_000
-OFFBOARD_PARAMS = catalogue.params("COM_OF_LOSS_T")
 
 
 def navigation_request(nav: Navigation) -> NavigationRequest:
@@ -98,7 +95,7 @@ class CommanderModule(Module):
     DESCRIPTION = "Arming, flight modes, commands and failsafes (PX4 commander)"
     TRIGGER = Timer(RATE_HZ)
     DT_RANGE = (0.001, 0.1)
-    PARAMS = combine(COMMANDER_PARAMS, OFFBOARD_PARAMS, land_detector.PARAMS, fw_land_detector.PARAMS)
+    PARAMS = combine(COMMANDER_PARAMS, offboard.PARAMS, land_detector.PARAMS, fw_land_detector.PARAMS)
 
     def __init__(self, rt) -> None:
         super().__init__(rt)
@@ -198,7 +195,7 @@ class CommanderModule(Module):
                 self.commander.chain.output_seen(topic, now)
         if now >= self._land_due:
             # On the first tick of each 20 ms interval, so every second tick at 100 Hz.
-            self._land_due = now - now % LAND_DETECTOR_PERIOD_US + LAND_DETECTOR_PERIOD_US
+            self._land_due = now - now % land_detector.PERIOD_US + land_detector.PERIOD_US
             self._detect_landing(now)
         inputs = self._inputs(now)
         commands = self.take(ORB_ID.vehicle_command)

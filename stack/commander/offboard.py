@@ -13,6 +13,10 @@ import math
 
 from stack.commander.modes import MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, nav_state_from_custom_mode
 from stack.msg.system import OffboardControlMode, VehicleCommand, VehicleCommandAck, VehicleStatus
+from stack.params import catalogue
+
+PARAMS = catalogue.params("COM_OF_LOSS_T")
+"""The Offboard signal's timeout, read by the commander and the simulated Pixhawk."""
 
 NO_SIGNAL_REASON = "Switching to Offboard denied: no offboard signal (offboard_control_mode)"
 

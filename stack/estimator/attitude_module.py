@@ -26,7 +26,6 @@ from stack.runtime.priority import INS
 
 ATTITUDE_PARAMS = AttitudeEstimatorParams.PARAMS
 COMPENSATION_PARAMS = catalogue.params("ATT_ACC_COMP_LP")
-GYRO_PARAMS = GyroFilterParams.PARAMS
 
 
 class AttitudeEstimatorModule(Module):
@@ -35,7 +34,7 @@ class AttitudeEstimatorModule(Module):
     DESCRIPTION = "Quaternion complementary filter (PX4 attitude_estimator_q) and gyro filtering"
     TRIGGER = Trigger(ORB_ID.sensor_gyro, every=True)
     DT_RANGE = (0.00001, 0.02)
-    PARAMS = combine(ATTITUDE_PARAMS, GYRO_PARAMS, COMPENSATION_PARAMS)
+    PARAMS = combine(ATTITUDE_PARAMS, GyroFilterParams.PARAMS, COMPENSATION_PARAMS)
 
     def __init__(self, rt) -> None:
         super().__init__(rt)

@@ -107,6 +107,9 @@ from stack.params import catalogue
 from stack.params.ekf2 import HGT_REF_BARO, HGT_REF_GPS
 from stack.params.param import Param
 
+PERIOD_US = 20_000
+"""The estimator's step: it predicts and fuses at 50 Hz."""
+
 N_X = 10
 X_X, X_Y, X_Z, X_VX, X_VY, X_VZ, X_BX, X_BY, X_BZ, X_HGT_OFS = range(N_X)
 

@@ -25,8 +25,6 @@ from stack.msg.registry import ORB_ID
 from stack.runtime.module import Module, Timer
 from stack.runtime.priority import INS
 
-PERIOD_US = 20_000
-
 
 def local_position_message(est: LocalPositionEstimate, heading: float, now_us: int) -> VehicleLocalPosition:
     x, y, z = est.position
@@ -96,7 +94,7 @@ class LocalPositionEstimatorModule(Module):
     NAME = "local_position_estimator"
     WORK_QUEUE = INS
     DESCRIPTION = "Position and velocity Kalman filter fusing IMU, GPS and barometer (PX4 LPE)"
-    TRIGGER = Timer(1e6 / PERIOD_US)
+    TRIGGER = Timer(1e6 / position_kf.PERIOD_US)
     DT_RANGE = (0.002, 0.05)
     PARAMS = position_kf.PARAMS
 

@@ -26,9 +26,9 @@ from typing import NamedTuple
 from stack.attctl.attitude_control import AttitudeControl
 from stack.attctl.rate_control import RateControl, YawTorqueLowPass, saturation_from_allocator
 from stack.commander.home import HomePosition
+from stack.estimator import position_kf
 from stack.estimator.acceleration import VelocityDerivative
 from stack.estimator.angular_velocity import AngularVelocityFilter, GyroFilterParams
-from stack.estimator.position_module import PERIOD_US as POSITION_PERIOD_US
 from stack.mathlib import quaternion as quat
 from stack.mathlib.quaternion import Quat
 from stack.mathlib.vector import Vec3
@@ -87,7 +87,7 @@ class FlightControl:
         self.allocator = ControlAllocator.from_params(params)
         self.output = MotorOutput(self.allocator.num_motors, params)
         self._dt = imu_period_us * 1e-6
-        self._position_every = POSITION_PERIOD_US // imu_period_us
+        self._position_every = position_kf.PERIOD_US // imu_period_us
         self._land_speed = float(params["MPC_LAND_SPEED"])
         self._mode: Px4Mode | None = None
         self._position_tick = 0
@@ -169,7 +169,7 @@ class FlightControl:
         if self._position_tick > 0:
             return self._position_sp
         self._position_tick = self._position_every
-        dt = POSITION_PERIOD_US * 1e-6
+        dt = position_kf.PERIOD_US * 1e-6
         command = self.navigator.update(self._navigator_inputs(state, mode, armed=True), dt)
         velocity_dot = self.velocity_derivative.update(state.time_us, state.velocity)
         control = self.position_control

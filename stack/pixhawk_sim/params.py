@@ -17,10 +17,9 @@ from pathlib import Path
 
 from stack.airframe.model import VehicleModel
 from stack.attctl import attitude_control, rate_control
-from stack.commander import land_detector
+from stack.commander import land_detector, offboard
 from stack.commander import state_machine as commander
-from stack.commander.module import OFFBOARD_PARAMS
-from stack.estimator.attitude_module import GYRO_PARAMS
+from stack.estimator.angular_velocity import GyroFilterParams
 from stack.mixer import allocation, effectiveness, output
 from stack.params.binding import combine
 from stack.params.param import Param, ParamError, ParamValue
@@ -77,10 +76,10 @@ _SIMULATOR_NAMES = ("SIH_LOC_LAT0", "SIH_LOC_LON0", "SIH_LOC_H0")
 # The first definition of each name (the land detector repeats a few MPC_* of position control).
 PARAMS: tuple[Param, ...] = combine(
     OWN_PARAMS,
-    OFFBOARD_PARAMS,
+    offboard.PARAMS,
     (p for p in commander.PARAMS if p.name in _COMMANDER_NAMES),
     (p for p in SimulatorModule.PARAMS if p.name in _SIMULATOR_NAMES),
-    GYRO_PARAMS,
+    GyroFilterParams.PARAMS,
     rate_control.PARAMS,
     attitude_control.PARAMS,
     pos_module.PARAMS,

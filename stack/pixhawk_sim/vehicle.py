@@ -15,16 +15,16 @@ from typing import NamedTuple
 from pymavlink.dialects.v20 import common as mavlink
 
 from stack.airframe.model import VehicleModel
+from stack.commander import land_detector
 from stack.commander.home import HomePosition
 from stack.commander.land_detector import LandDetectorInputs, LandDetectorState, MulticopterLandDetector
-from stack.commander.module import LAND_DETECTOR_PERIOD_US
 from stack.mathlib import quaternion as quat
 from stack.mavlink.px4_modes import Px4Mode
 from stack.pixhawk_sim.commander import Condition, Px4Commander, Verdict
 from stack.pixhawk_sim.flight import ControlOutput, FlightControl, VehicleState
 from stack.pixhawk_sim.offboard import OffboardSetpoint, decode_attitude_target
+from stack.sim import battery
 from stack.sim.battery import BatteryModel, BatteryState
-from stack.sim.module import BATTERY_PERIOD_US
 from stack.sim.sensors import BaroSample, GpsSample, ImuSample, MagSample
 from stack.sim.simulator import GroundTruth, Simulator
 
@@ -48,8 +48,8 @@ class SimulatedPixhawk:
             home=(float(params["SIH_LOC_LAT0"]), float(params["SIH_LOC_LON0"]), float(params["SIH_LOC_H0"])),
         )
         period_us = self.sim.imu_period_us
-        self._land_detector_every = LAND_DETECTOR_PERIOD_US // period_us
-        self._battery_every = BATTERY_PERIOD_US // period_us
+        self._land_detector_every = land_detector.PERIOD_US // period_us
+        self._battery_every = battery.PERIOD_US // period_us
         self.commander = Px4Commander(params)
         self.control = FlightControl(params, period_us)
         self.land_detector = MulticopterLandDetector(params)
@@ -111,7 +111,7 @@ class SimulatedPixhawk:
         )
         self._motors = out.motors
         if self.steps % self._battery_every == 0:
-            self.battery_state = self.battery.update(BATTERY_PERIOD_US * 1e-6, commander.armed)
+            self.battery_state = self.battery.update(battery.PERIOD_US * 1e-6, commander.armed)
         self.steps += 1
 
     def _detect_landing(self, now: int, truth: GroundTruth) -> None:

@@ -28,6 +28,9 @@ from stack.msg.system import BatteryWarning
 from stack.params.binding import ParamSet
 from stack.params.param import Param
 
+PERIOD_US = 100_000
+"""How often the simulated battery is stepped and published (PX4's battery_status at 10 Hz)."""
+
 
 class SimBatteryParams(ParamSet):
     """The simulated pack (the catalogue's BAT*), its warning thresholds and the simulator's drain."""

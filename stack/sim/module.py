@@ -36,7 +36,6 @@ from stack.sim.wind import WindParams
 
 # Device ids as PX4's simulated drivers report them (SIH's IMU id; the others distinct).
 IMU_DEVICE_ID = 1310988
-BATTERY_PERIOD_US = 100_000
 MAG_DEVICE_ID = 197388
 BARO_DEVICE_ID = 6620172
 GPS_DEVICE_ID = 11469064
@@ -217,7 +216,7 @@ class SimulatorModule(Module):
                 self._publish_airspeed(sample, epoch)
         self._publish_truth(epoch)
         if self.sim.time_us >= self._battery_due_us:
-            self._battery_due_us = self.sim.time_us + BATTERY_PERIOD_US
+            self._battery_due_us = self.sim.time_us + battery.PERIOD_US
             self._publish_battery(epoch)
 
     def _publish_imu(self, s: ImuSample, epoch: int) -> None:
@@ -293,7 +292,7 @@ class SimulatorModule(Module):
 
     def _publish_battery(self, epoch: int) -> None:
         armed = self.latest(ORB_ID.actuator_armed)
-        state = self.battery.update(BATTERY_PERIOD_US * 1e-6, armed is not None and armed.armed)
+        state = self.battery.update(battery.PERIOD_US * 1e-6, armed is not None and armed.armed)
         self.publish(ORB_ID.battery_status, BatteryStatus(**state._asdict()))
 
     def _publish_truth(self, epoch: int) -> None:
