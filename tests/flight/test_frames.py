@@ -29,9 +29,9 @@ def context(home_error: tuple[float, float], xy_global: bool = True) -> SimpleNa
     north, east = MapProjection(*REF).project(at_arming.lat, at_arming.lon)
     home = HomePosition(x=north + home_error[0], y=east + home_error[1], z=0.2)
     lpos = VehicleLocalPosition(xy_global=xy_global, ref_lat=REF[0], ref_lon=REF[1])
-    series = {"sim_groundtruth": Series([0.0, 1.0], [truth(0.0, 0.0, 0.0), at_arming])}
+    series = {ORB_ID.sim_groundtruth: Series([0.0, 1.0], [truth(0.0, 0.0, 0.0), at_arming])}
     return SimpleNamespace(
-        latest={"home_position": home, "vehicle_local_position": lpos}, series=series, state={"armed_at": 1.0}
+        latest={ORB_ID.home_position: home, ORB_ID.vehicle_local_position: lpos}, series=series, state={"armed_at": 1.0}
     )
 
 
