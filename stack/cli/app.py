@@ -38,7 +38,6 @@ from stack.cli.observers import add_observers
 from stack.runtime.pacing import SPEED_ENV, describe_speed, parse_speed
 from stack.supervisor import state as run_state
 from stack.supervisor.profile import DEFAULT_PROFILE, Profile, ProfileError, load_profile
-from stack.supervisor.supervisor import Supervisor, UpOptions
 
 SUMMARY_WAIT_S = 2.0
 """Wall-clock seconds `stack status` waits for the vehicle's messages (vehicle_status comes at 2 Hz at least)."""
@@ -118,6 +117,8 @@ def up(
     run_dir = run_state.new_run_dir(prof.name, prof.vehicle)
     # The web viewer's URL is shown even with --quiet: the bridge's few lines are echoed.
     shown = ("rerun_bridge",) if web else ()
+    from stack.supervisor.supervisor import Supervisor, UpOptions  # what starts processes, only when it will
+
     options = UpOptions(
         duration=duration,
         log_level=log_level,

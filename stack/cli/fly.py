@@ -14,7 +14,6 @@ from stack.scenario.catalogue import scenarios, unknown_scenario
 from stack.scenario.flight import WIND_SPEED, prepare_flight
 from stack.supervisor import state as run_state
 from stack.supervisor.profile import DEFAULT_PROFILE, ProfileError, load_profile
-from stack.supervisor.supervisor import Supervisor, UpOptions
 
 
 def fly(
@@ -77,6 +76,8 @@ def fly(
         fail(f"scenario {scenario}: {e}", code=2)
     add_observers(prof, plot=plot_, web=web, save=save, record=record, own_ports=True)
     shown = ("scenario", "rerun_bridge") if web else ("scenario",)  # the web viewer's URL, even with --quiet
+    from stack.supervisor.supervisor import Supervisor, UpOptions  # what starts processes, only when it will
+
     options = UpOptions(log_level=log_level, echo_logs=not quiet, echo_only=shown, kind=run_state.FLY)
     typer.echo(f"[stack] flight '{name}' (another terminal addresses it with --vehicle {name})")
     code = Supervisor(prof, options, run_dir).run()

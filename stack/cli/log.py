@@ -13,17 +13,19 @@ from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
 from types import FrameType
+from typing import TYPE_CHECKING
 
 import typer
 
 from stack.cli.common import JsonOption, command_group, fail, print_table, to_jsonable
-from stack.cli.replay_stack import ReplayStack
-from stack.record.csvexport import export_csv
-from stack.record.overview import overview
-from stack.record.recorder import RecordingError, RecordingReader
-from stack.record.replay import BusReplayer, replay_pass
 from stack.record.selection import TopicSelection
 from stack.runtime.pacing import Pacer, describe_speed, parse_speed
+
+if TYPE_CHECKING:
+    from stack.record.recorder import RecordingReader
+
+# The recording code (mcap and the readers) is imported by the commands that read a recording, so that every
+# other `stack` command starts without it.
 
 app = command_group(
     help="Inspect and convert flight recordings (MCAP files written by --record).", no_args_is_help=True
@@ -38,6 +40,8 @@ TopicsOption = typer.Option(
 
 
 def _open(path: Path) -> RecordingReader:
+    from stack.record.recorder import RecordingError, RecordingReader
+
     try:
         return RecordingReader(path)
     except RecordingError as e:
@@ -76,6 +80,8 @@ def _check_selection(reader: RecordingReader, selection: TopicSelection) -> None
 @app.command()
 def info(file: Path = FileArgument, as_json: bool = JsonOption) -> None:
     """Vehicle, profile, seed, time span, and each topic's message count and rate."""
+    from stack.record.overview import overview
+
     with _open(file) as reader:
         ov = overview(reader)
     if as_json:
@@ -119,6 +125,8 @@ def export(
     topics: list[str] = TopicsOption,
 ) -> None:
     """Convert a recording: --csv DIR (one file per topic instance), --rrd OUT.rrd (Rerun). --topics: CSV only."""
+    from stack.record.csvexport import export_csv
+
     if csv_dir is None and rrd is None:
         fail("nothing to export: give --csv DIR and/or --rrd OUT.rrd", code=2)
     selection = _selection(topics)
@@ -177,6 +185,9 @@ def replay(
 ) -> None:
     """Republish a recording on a bus of its own, the stack <vehicle>-replay-<pid>, which `stack topic`,
     `stack plot` and scripts attach to with --vehicle and see as live. It never touches a running stack."""
+    from stack.cli.replay_stack import ReplayStack
+    from stack.record.replay import BusReplayer, replay_pass
+
     try:
         speed = parse_speed(speed_text)
     except ValueError as e:

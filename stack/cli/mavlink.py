@@ -7,7 +7,6 @@ import json
 import typer
 
 from stack.cli.common import JsonOption, command_group, fail
-from stack.mavlink.inspect import NoHeartbeat, format_summary, inspect_endpoint
 
 app = command_group(help="Tools for a MAVLink autopilot (a Pixhawk, a simulated one, any MAVLink system).")
 
@@ -22,6 +21,8 @@ def inspect(
 ) -> None:
     """Connect to an autopilot and print its ids, type, firmware, armed state and mode, message rates and link
     errors. Exits non-zero if no autopilot heartbeat arrives."""
+    from stack.mavlink.inspect import NoHeartbeat, format_summary, inspect_endpoint  # pymavlink, only when asked
+
     try:
         summary = inspect_endpoint(endpoint, seconds)
     except ValueError as e:

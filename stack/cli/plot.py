@@ -20,7 +20,6 @@ from stack.bus import keys
 from stack.bus.config import BusConfig
 from stack.bus.node import Node
 from stack.cli.common import EndpointOption, VehicleOption, fail, find_stack, query_json
-from stack.runtime.runner import Runtime, Shutdown, shutdown_behind
 from stack.runtime.spec import ModuleSpec
 from stack.viz.display import DEFAULT_GRPC_PORT, has_display
 
@@ -34,6 +33,8 @@ def _stack_is_lockstep(vehicle: str, bus: BusConfig) -> bool:
 
 def _stop_on_signals() -> None:
     """SIGINT, SIGTERM and the --duration alarm unwind the bridge once; repeats are ignored meanwhile."""
+    from stack.runtime.runner import Shutdown
+
     stopping: list[bool] = []
 
     def on_signal(signum: int, frame: FrameType | None) -> None:
@@ -61,6 +62,8 @@ def plot(
     endpoint: str | None = EndpointOption,
 ) -> None:
     """Live plots of a running stack in Rerun: attitude, rates, motors, position, estimator, 3D view."""
+    from stack.runtime.runner import Runtime, Shutdown, shutdown_behind  # the module runtime, only when plotting
+
     if not web and not save and not has_display():
         fail("no display here for the Rerun viewer: use --web (a viewer in the browser) or --save FILE.rrd")
     vehicle_name, bus = find_stack(vehicle, endpoint)

@@ -6,15 +6,12 @@ from __future__ import annotations
 import math
 
 from stack.commander.modes import MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, MODES, nav_state_from_name
-from stack.commander.state_machine import (
-    TAKEOFF_ALTITUDE_RELATIVE,
-    VEHICLE_CMD_DO_REPOSITION_LOCAL,
-    VEHICLE_CMD_SET_NAV_STATE,
-)
 from stack.msg.system import VehicleCommand
 
 NAN = math.nan
 CMD = VehicleCommand
+TAKEOFF_ALTITUDE_RELATIVE = 1
+"""NAV_TAKEOFF param2 value saying param7 is metres above home rather than AMSL (our extension)."""
 
 
 def arm_command(force: bool = False) -> VehicleCommand:
@@ -39,7 +36,7 @@ def set_mode_command(name: str) -> VehicleCommand:
 
 def set_nav_state_command(nav_state: int) -> VehicleCommand:
     """The PX4-internal SET_NAV_STATE command: switch straight to a ``vehicle_status`` nav_state."""
-    return CMD(command=VEHICLE_CMD_SET_NAV_STATE, param1=float(nav_state))
+    return CMD(command=CMD.VEHICLE_CMD_SET_NAV_STATE, param1=float(nav_state))
 
 
 def takeoff_command(altitude: float = NAN, relative: bool = True, yaw_deg: float = NAN) -> VehicleCommand:
@@ -69,7 +66,7 @@ def goto_local_command(
 ) -> VehicleCommand:
     """Go to a local NED position [m] (NaN components keep the current value)."""
     return CMD(
-        command=VEHICLE_CMD_DO_REPOSITION_LOCAL,
+        command=CMD.VEHICLE_CMD_DO_REPOSITION_LOCAL,
         param1=speed,
         param2=1.0,
         param4=yaw_deg,

@@ -82,6 +82,7 @@ from stack.commander.command_checks import (
     goto_refusal,
     takeoff_altitude_refusal,
 )
+from stack.commander.commands import TAKEOFF_ALTITUDE_RELATIVE
 from stack.commander.control_chain import CHAIN, FW_CHAIN, ChainFault, ControlChainMonitor, Loss
 from stack.commander.failsafe import ACTION_NAMES, Failsafe, FailsafeAction, FailsafeConditions, FailsafeParams
 from stack.commander.geofence import CylinderGeofence, GeofenceParams
@@ -129,8 +130,6 @@ ACK = VehicleCommandAck
 
 VEHICLE_CMD_SET_NAV_STATE = CMD.VEHICLE_CMD_SET_NAV_STATE
 VEHICLE_CMD_DO_REPOSITION_LOCAL = CMD.VEHICLE_CMD_DO_REPOSITION_LOCAL
-TAKEOFF_ALTITUDE_RELATIVE = 1
-"""NAV_TAKEOFF param2 value saying param7 is metres above home rather than AMSL (our extension)."""
 PREFLIGHT_CHECK_PERIOD_US = 100_000
 EXTERNAL_ARM_TIMEOUT_US = 1_500_000
 """How long the external autopilot has to confirm an arming (a stack command's answer waits for it)."""

@@ -17,7 +17,7 @@ NOWHERE = "tcp/127.0.0.1:9"
 def stack(tmp_path_factory):
     tmp = tmp_path_factory.mktemp("cmd")
     home = tmp / "home"
-    running = RunningStack(home, attitude_only_profile(tmp / "first_flight.toml"), "--quiet")
+    running = RunningStack(home, attitude_only_profile(tmp / "first_flight.toml"), "--quiet", "--speed", "1")
     running.wait_up()
     wait_sim_time(running, 10.0)
     yield running

@@ -15,7 +15,7 @@ from tests.support.harness import RunningStack, attitude_only_profile, run_cli, 
 def stack(tmp_path_factory):
     tmp = tmp_path_factory.mktemp("param")
     home = tmp / "home"
-    running = RunningStack(home, attitude_only_profile(tmp / "first_flight.toml"))
+    running = RunningStack(home, attitude_only_profile(tmp / "first_flight.toml"), "--speed", "1")
     running.wait_up()
     yield running
     assert running.stop() == 0

@@ -42,7 +42,7 @@ def test_two_flights_and_a_stack_up_of_the_same_vehicle_run_side_by_side(
 ) -> None:
     home = tmp_path / "home"
     monkeypatch.setenv("STACK_HOME", str(home))
-    up = RunningStack(home, launch_profile(tmp_path / "profile"), "--quiet")
+    up = RunningStack(home, launch_profile(tmp_path / "profile"), "--quiet", "--speed", "1")  # it stays on the ground
     flights: list[RunningStack] = []
     try:
         up.wait_up()
