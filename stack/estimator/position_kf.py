@@ -55,8 +55,8 @@ The origin (ref lat/lon) is set at the 10th consecutive GPS fix passing LPE's in
 checks (3-D fix, ≥ 6 satellites, eph ≤ LPE_EPH_MAX, epv ≤ LPE_EPV_MAX): the horizontal position is
 reset to zero there and the velocity to the GPS velocity; z does not jump.
 
-Parameters, in :data:`PARAMS` (defined in :mod:`stack.params.lpe` and :mod:`stack.params.ekf2`). LPE names
-carry PX4's LPE defaults.
+Parameters, in :class:`PositionEstimatorParams` (defined in :mod:`stack.params.lpe` and
+:mod:`stack.params.ekf2`). LPE names carry PX4's LPE defaults.
 Additions, with the reason:
 
 - ``EKF2_HGT_REF`` 0 (barometer): the height reference, see above. PX4 also offers 2 (range
@@ -101,11 +101,10 @@ import numpy as np
 from stack.mathlib import quaternion as quat
 from stack.mathlib.geo import MapProjection
 from stack.mathlib.quaternion import Quat
-from stack.mathlib.scalar import CONSTANTS_ONE_G, constrain
+from stack.mathlib.scalar import CONSTANTS_ONE_G
 from stack.mathlib.vector import Vec3
-from stack.params import catalogue
+from stack.params.binding import ParamSet
 from stack.params.ekf2 import HGT_REF_BARO, HGT_REF_GPS
-from stack.params.param import Param
 
 PERIOD_US = 20_000
 """The estimator's step: it predicts and fuses at 50 Hz."""
@@ -113,13 +112,39 @@ PERIOD_US = 20_000
 N_X = 10
 X_X, X_Y, X_Z, X_VX, X_VY, X_VZ, X_BX, X_BY, X_BZ, X_HGT_OFS = range(N_X)
 
-PARAMS: tuple[Param, ...] = catalogue.params(
-    "EKF2_HGT_REF", "LPE_GPS_XY", "LPE_GPS_Z", "LPE_GPS_VXY", "LPE_GPS_VZ", "LPE_GPS_DELAY", "LPE_BAR_Z",
-    "LPE_ACC_XY", "LPE_ACC_Z", "LPE_PN_P", "LPE_PN_V", "LPE_PN_VZ", "LPE_PN_B", "LPE_PN_BARO", "LPE_PN_GPS_Z",
-    "LPE_LAND_VXY", "LPE_AIRSPD_VXY", "LPE_EPH_MAX", "LPE_EPV_MAX", "LPE_XY_PUB", "LPE_VXY_PUB", "LPE_Z_PUB",
-    "EKF2_GPS_P_GATE", "EKF2_GPS_V_GATE", "EKF2_BARO_GATE", "EKF2_TAS_GATE", "EKF2_ABL_LIM", "EKF2_ABIAS_INIT",
-)
-_DEFINITIONS = {p.name: p for p in PARAMS}
+class PositionEstimatorParams(ParamSet):
+    """The LPE_* and EKF2_* parameters the filter reads (the catalogue's, see the module docstring)."""
+
+    ekf2_hgt_ref: int
+    lpe_gps_xy: float
+    lpe_gps_z: float
+    lpe_gps_vxy: float
+    lpe_gps_vz: float
+    lpe_gps_delay: float
+    lpe_bar_z: float
+    lpe_acc_xy: float
+    lpe_acc_z: float
+    lpe_pn_p: float
+    lpe_pn_v: float
+    lpe_pn_vz: float
+    lpe_pn_b: float
+    lpe_pn_baro: float
+    lpe_pn_gps_z: float
+    lpe_land_vxy: float
+    lpe_airspd_vxy: float
+    lpe_eph_max: float
+    lpe_epv_max: float
+    lpe_xy_pub: float
+    lpe_vxy_pub: float
+    lpe_z_pub: float
+    ekf2_gps_p_gate: float
+    ekf2_gps_v_gate: float
+    ekf2_baro_gate: float
+    ekf2_tas_gate: float
+    ekf2_abl_lim: float
+    ekf2_abias_init: float
+
+
 
 _HVEL_ROWS = np.array((X_VX, X_VY))
 GPS_DELAY_MAX_US = 500_000  # LPE: history length; older measurements are dropped
@@ -136,10 +161,10 @@ AIRSPEED_MAX = 150.0  # m/s: beyond any airframe this filter serves
 
 # Innovation groups of a GPS sample: (rows of the measurement vector, gate parameter).
 _GPS_GROUPS = (
-    ((0, 1), "EKF2_GPS_P_GATE"),
-    ((2,), "EKF2_GPS_P_GATE"),
-    ((3, 4), "EKF2_GPS_V_GATE"),
-    ((5,), "EKF2_GPS_V_GATE"),
+    ((0, 1), "ekf2_gps_p_gate"),
+    ((2,), "ekf2_gps_p_gate"),
+    ((3, 4), "ekf2_gps_v_gate"),
+    ((5,), "ekf2_gps_v_gate"),
 )
 _G_HPOS, _G_VPOS, _G_HVEL, _G_VVEL = range(4)
 _ROW_ALT = 2  # GPS measurement row of the altitude
@@ -275,35 +300,28 @@ class LocalPositionKF:
         "z_reset_counter",
     )
 
-    def __init__(self, **params: float) -> None:
-        self.params: dict[str, float] = {p.name: p.default for p in PARAMS}
+    def __init__(self, params: PositionEstimatorParams | None = None) -> None:
         self._map: MapProjection | None = None
         self._hgt_ref = HGT_REF_BARO
         self._baro_initialised = False
-        self.set_params(**params)
+        self.set_params(params or PositionEstimatorParams())
         self.reset()
 
-    def set_params(self, **params: float) -> None:
-        """Set parameters by PX4 name (see :data:`PARAMS`); values are clamped to their range.
-        ``EKF2_HGT_REF`` is rounded to its enum value and applies from the next :meth:`reset`."""
-        for name, value in params.items():
-            p = _DEFINITIONS.get(name)
-            if p is None:
-                raise KeyError(f"unknown parameter {name}")
-            value = constrain(float(value), float(p.min), float(p.max))
-            self.params[name] = float(round(value)) if name == "EKF2_HGT_REF" else value
-        self._abl_lim = self.params["EKF2_ABL_LIM"]
+    def set_params(self, params: PositionEstimatorParams) -> None:
+        """Take new parameters; ``EKF2_HGT_REF`` applies from the next :meth:`reset`."""
+        self.params = params
+        self._abl_lim = params.ekf2_abl_lim
         self._update_process_noise()
 
     def reset(self) -> None:
         """Return to the power-on state: no time base, no altitude reference, no origin."""
         p = self.params
-        self._hgt_ref = int(p["EKF2_HGT_REF"])
+        self._hgt_ref = int(p.ekf2_hgt_ref)
         self.x = np.zeros(N_X)
         self.P = np.diag(
             [8.0, 8.0, 8.0]  # LPE: twice its 2 m validity limit, squared
-            + [2.0 * p["LPE_VXY_PUB"] ** 2] * 3
-            + [p["EKF2_ABIAS_INIT"] ** 2] * 3
+            + [2.0 * p.lpe_vxy_pub**2] * 3
+            + [p.ekf2_abias_init**2] * 3
             + [0.0]
         )
         self._t_us: int | None = None
@@ -481,14 +499,14 @@ class LocalPositionKF:
 
     def _update_process_noise(self) -> None:
         p = self.params
-        vxy = p["LPE_PN_V"] ** 2 + p["LPE_ACC_XY"] ** 2
-        vz = p["LPE_PN_VZ"] ** 2 + p["LPE_ACC_Z"] ** 2
+        vxy = p.lpe_pn_v**2 + p.lpe_acc_xy**2
+        vz = p.lpe_pn_vz**2 + p.lpe_acc_z**2
         # The offset is only a state while both height sensors are in use.
         if self._hgt_ref == HGT_REF_GPS:
-            ofs = p["LPE_PN_BARO"] ** 2 if self._map is not None else 0.0
+            ofs = p.lpe_pn_baro**2 if self._map is not None else 0.0
         else:
-            ofs = p["LPE_PN_GPS_Z"] ** 2 if self._map is not None and self._baro_initialised else 0.0
-        self._q_c = np.array([p["LPE_PN_P"] ** 2] * 3 + [vxy, vxy, vz] + [p["LPE_PN_B"] ** 2] * 3 + [ofs])
+            ofs = p.lpe_pn_gps_z**2 if self._map is not None and self._baro_initialised else 0.0
+        self._q_c = np.array([p.lpe_pn_p**2] * 3 + [vxy, vxy, vz] + [p.lpe_pn_b**2] * 3 + [ofs])
         self._q_dt_s = math.nan
 
     # ------------------------------------------------------------------ barometer
@@ -531,12 +549,12 @@ class LocalPositionKF:
         if self._hgt_ref == HGT_REF_GPS:
             innov = alt - (self._ref_alt - x[X_Z] + x[X_HGT_OFS])
             pht = P[:, X_HGT_OFS] - P[:, X_Z]
-            s = pht[X_HGT_OFS] - pht[X_Z] + p["LPE_BAR_Z"] ** 2
+            s = pht[X_HGT_OFS] - pht[X_Z] + p.lpe_bar_z**2
         else:
             innov = alt - (self._ref_alt - x[X_Z])
             pht = -P[:, X_Z]
-            s = -pht[X_Z] + p["LPE_BAR_Z"] ** 2
-        ratio = innov * innov / (p["EKF2_BARO_GATE"] ** 2 * s)
+            s = -pht[X_Z] + p.lpe_bar_z**2
+        ratio = innov * innov / (p.ekf2_baro_gate**2 * s)
         if ratio > 1.0:
             return x, P, ratio
         k = pht / s
@@ -547,7 +565,7 @@ class LocalPositionKF:
     def _init_baro(self, alt: float, t_now: int) -> None:
         x = self.x.copy()
         P = self.P.copy()
-        r = self.params["LPE_BAR_Z"] ** 2
+        r = self.params.lpe_bar_z**2
         if not self._z_initialised:
             self._ref_alt = alt
             x[X_Z] = 0.0
@@ -585,7 +603,7 @@ class LocalPositionKF:
         has changed, otherwise the height estimate is wrong and is reset to the baro."""
         x = self.x.copy()
         P = self.P.copy()
-        r = self.params["LPE_BAR_Z"] ** 2
+        r = self.params.lpe_bar_z**2
         gps_height_recent = self._map is not None and t_now - self._last_fused_us[_G_VPOS] < FUSION_RESET_TIMEOUT_US
         if gps_height_recent:
             x[X_HGT_OFS] = alt - (self._ref_alt - x[X_Z])
@@ -608,7 +626,7 @@ class LocalPositionKF:
         with it, so the GPS altitude prediction ``z − offset`` and the global altitude do not jump."""
         x = self.x.copy()
         P = self.P.copy()
-        r = self.params["LPE_BAR_Z"] ** 2
+        r = self.params.lpe_bar_z**2
         z_new = self._ref_alt - alt
         dz = z_new - x[X_Z]
         pz = P[X_Z, :].copy()
@@ -657,7 +675,7 @@ class LocalPositionKF:
         # A receiver reached through MAVLink's GPS_RAW_INT gives ground speed and course, no vertical velocity.
         hvel_ok = not gps.vel_ned_valid and math.isfinite(vel[0]) and math.isfinite(vel[1])
 
-        t_meas = min(gps.timestamp_sample - round(self.params["LPE_GPS_DELAY"] * 1e6), t_now)
+        t_meas = min(gps.timestamp_sample - round(self.params.lpe_gps_delay * 1e6), t_now)
         if self._last_gps_meas_us is not None and t_meas <= self._last_gps_meas_us:
             return False
         hist = self._hist
@@ -673,18 +691,18 @@ class LocalPositionKF:
                 and gps.satellites_used >= GPS_INIT_MIN_SATS
                 and math.isfinite(gps.eph)
                 and math.isfinite(gps.epv)
-                and gps.eph <= p["LPE_EPH_MAX"]
-                and gps.epv <= p["LPE_EPV_MAX"]
+                and gps.eph <= p.lpe_eph_max
+                and gps.epv <= p.lpe_epv_max
             )
             self._gps_init_count = self._gps_init_count + 1 if init_ok else 0
             if self._gps_init_count < GPS_INIT_COUNT:
                 return False
 
         var = np.array(
-            [max(p["LPE_GPS_XY"], eph) ** 2] * 2
-            + [max(p["LPE_GPS_Z"], epv) ** 2]
-            + [p["LPE_GPS_VXY"] ** 2] * 2
-            + [p["LPE_GPS_VZ"] ** 2]
+            [max(p.lpe_gps_xy, eph) ** 2] * 2
+            + [max(p.lpe_gps_z, epv) ** 2]
+            + [p.lpe_gps_vxy**2] * 2
+            + [p.lpe_gps_vz**2]
         )
         k = bisect.bisect_right(hist, t_meas, key=_step_time) - 1
         base = hist[k]
@@ -792,7 +810,7 @@ class LocalPositionKF:
         for g, (rows, gate_name) in enumerate(_GPS_GROUPS):
             if rows[0] >= n:
                 continue
-            ratio = max(norm_sq[i] for i in rows) / p[gate_name] ** 2
+            ratio = max(norm_sq[i] for i in rows) / getattr(p, gate_name) ** 2
             ratios[g] = float(ratio)
             if ratio <= 1.0:
                 accepted.extend(rows)
@@ -880,7 +898,7 @@ class LocalPositionKF:
         and its position wanders by decimetres. True when fused (after the origin is set)."""
         if self._t_us is None or self._map is None:
             return False
-        var = self.params["LPE_LAND_VXY"] ** 2
+        var = self.params.lpe_land_vxy**2
         self._fuse_velocity((0.0, 0.0, var, var))
         return True
 
@@ -893,7 +911,7 @@ class LocalPositionKF:
         GPS aiding for ``GPS_TIMEOUT_US``, ``LPE_AIRSPD_VXY`` positive, every input finite and plausible, and the
         innovation within ``EKF2_TAS_GATE``."""
         t_now = self._t_us
-        sigma = self.params["LPE_AIRSPD_VXY"]
+        sigma = self.params.lpe_airspd_vxy
         if t_now is None or self._map is None or sigma <= 0.0 or not self._gps_lost(t_now):
             return False
         numbers = (true_airspeed, *q, *wind_ne, *wind_var_ne)
@@ -910,7 +928,7 @@ class LocalPositionKF:
         )
         innovation = np.array(measured[:2]) - self.x[_HVEL_ROWS]
         s = self.P[_HVEL_ROWS, _HVEL_ROWS] + np.array(measured[2:])
-        if np.any(innovation * innovation > self.params["EKF2_TAS_GATE"] ** 2 * s):
+        if np.any(innovation * innovation > self.params.ekf2_tas_gate**2 * s):
             return False
         self._fuse_velocity(measured)
         return True
@@ -972,9 +990,9 @@ class LocalPositionKF:
         evv = math.sqrt(d[X_VZ])
         origin = self._map is not None
         t_now = self._t_us or 0
-        xy_valid = origin and eph <= p["LPE_XY_PUB"]
-        v_xy_valid = origin and max(d[X_VX], d[X_VY]) <= p["LPE_VXY_PUB"] ** 2
-        z_valid = self._z_initialised and epv <= p["LPE_Z_PUB"]
+        xy_valid = origin and eph <= p.lpe_xy_pub
+        v_xy_valid = origin and max(d[X_VX], d[X_VY]) <= p.lpe_vxy_pub**2
+        z_valid = self._z_initialised and epv <= p.lpe_z_pub
         if self._hgt_ref == HGT_REF_GPS:
             ref_alt, baro_offset = self._ref_alt, ofs
         else:

@@ -17,7 +17,7 @@ from __future__ import annotations
 import math
 
 from stack.estimator import position_kf
-from stack.estimator.position_kf import LocalPositionEstimate, LocalPositionKF
+from stack.estimator.position_kf import LocalPositionEstimate, LocalPositionKF, PositionEstimatorParams
 from stack.mathlib.atmosphere import isa_altitude_m
 from stack.mathlib.quaternion import yaw
 from stack.msg.estimation import VehicleGlobalPosition, VehicleLocalPosition
@@ -96,7 +96,7 @@ class LocalPositionEstimatorModule(Module):
     DESCRIPTION = "Position and velocity Kalman filter fusing IMU, GPS and barometer (PX4 LPE)"
     TRIGGER = Timer(1e6 / position_kf.PERIOD_US)
     DT_RANGE = (0.002, 0.05)
-    PARAMS = position_kf.PARAMS
+    PARAMS = PositionEstimatorParams.PARAMS
 
     def __init__(self, rt) -> None:
         super().__init__(rt)
@@ -109,7 +109,7 @@ class LocalPositionEstimatorModule(Module):
         self.subscribe(ORB_ID.wind)
         self.advertise(ORB_ID.vehicle_local_position)
         self.advertise(ORB_ID.vehicle_global_position)
-        self.kf = LocalPositionKF(**self._kf_params())
+        self.kf = LocalPositionKF(PositionEstimatorParams.from_params(self.params))
         kept = self.kept_state()
         if kept is not None:
             try:
@@ -119,11 +119,8 @@ class LocalPositionEstimatorModule(Module):
             else:
                 self.log.info("restarted: resuming the estimate in the same frame")
 
-    def _kf_params(self) -> dict[str, float]:
-        return {p.name: float(self.params[p.name]) for p in position_kf.PARAMS}
-
     def on_params_changed(self, changed: set[str]) -> None:
-        self.kf.set_params(**self._kf_params())
+        self.kf.set_params(PositionEstimatorParams.from_params(self.params))
 
     def run(self, msg: None, dt: float) -> None:
         attitude = self.latest(ORB_ID.vehicle_attitude)

@@ -173,7 +173,8 @@ def test_nothing_sent_on_the_bus_stops_the_lockstep(tmp_path, transport):
 def test_a_member_that_is_never_triggered_never_holds_up_the_clock(tmp_path):
     """It reads no clock for more steps than its Zenoh clock queue holds: the clocks must not pile up until they
     block the coordinator's (an idle `stack up` on the Zenoh transport froze after 88 s that way, its allocator
-    never triggered). On shared memory a member's ticks are a counter in the shared region (stack.fastpath.layout), not a queue."""
+    never triggered). On shared memory a member's ticks are a counter in the shared region (stack.fastpath.layout),
+    not a queue."""
     home = tmp_path / "home"
     profile = chain_profile(
         tmp_path / "chain.toml",

@@ -10,11 +10,19 @@ from dataclasses import dataclass, replace
 import numpy as np
 import pytest
 
-from stack.estimator.position_kf import HGT_REF_BARO, HGT_REF_GPS, X_HGT_OFS, X_Z, LocalPositionKF
+from stack.estimator.position_kf import (
+    HGT_REF_BARO,
+    HGT_REF_GPS,
+    X_HGT_OFS,
+    X_Z,
+    LocalPositionKF,
+    PositionEstimatorParams,
+)
 from stack.mathlib import quaternion as quat
 from stack.mathlib.geo import MapProjection
 from stack.mathlib.quaternion import Quat
 from stack.mathlib.scalar import CONSTANTS_ONE_G
+from stack.params import catalogue
 
 LAT0, LON0, ALT0 = 47.397742, 8.545594, 488.0
 IMU_DT_US = 4000  # 250 Hz
@@ -26,7 +34,12 @@ GPS_EVERY_10HZ = 25
 # The values recommended for launch/sitl_quad.toml: the simulator's GPS fixes carry their true sample
 # time, and its barometer is good to 0.09 m (0.2 m leaves margin), where LPE's 3 m default assumes a
 # real sensor in prop wash.
-SIM_PROFILE = {"LPE_GPS_DELAY": 0.0, "LPE_BAR_Z": 0.2}
+SIM_PROFILE = {"lpe_gps_delay": 0.0, "lpe_bar_z": 0.2}
+
+
+def sim_profile_filter(**params: float) -> LocalPositionKF:
+    """The filter with the simulator's sensor parameters (SIM_PROFILE) and ``params``."""
+    return LocalPositionKF(PositionEstimatorParams(**{**SIM_PROFILE, **params}))
 
 BOTH_REFS = pytest.mark.parametrize("hgt_ref", (HGT_REF_BARO, HGT_REF_GPS), ids=("baro_ref", "gps_ref"))
 
@@ -279,7 +292,7 @@ def horizontal(run: Run, t_from: float, t_to: float = math.inf) -> np.ndarray:
 
 @BOTH_REFS
 def test_static_convergence(hgt_ref: int) -> None:
-    kf = LocalPositionKF(EKF2_HGT_REF=hgt_ref, LPE_GPS_DELAY=0.0)
+    kf = LocalPositionKF(PositionEstimatorParams(ekf2_hgt_ref=hgt_ref, lpe_gps_delay=0.0))
     run = simulate(kf, 30.0, trajectory=hover)
     est = kf.estimate()
     assert kf.hgt_ref == hgt_ref
@@ -301,7 +314,7 @@ def test_static_convergence(hgt_ref: int) -> None:
 
 @BOTH_REFS
 def test_origin_is_set_at_the_first_good_fixes_without_a_height_jump(hgt_ref: int) -> None:
-    kf = LocalPositionKF(EKF2_HGT_REF=hgt_ref, LPE_GPS_DELAY=0.0)
+    kf = LocalPositionKF(PositionEstimatorParams(ekf2_hgt_ref=hgt_ref, lpe_gps_delay=0.0))
     simulate(kf, 1.0, trajectory=hover, use_gps=False)
     z_before = kf.estimate().position[2]
     assert not kf.estimate().xy_global
@@ -326,7 +339,7 @@ def test_noise_free_origin_gives_the_same_global_altitude_with_either_reference(
     level = quat.IDENTITY
     still = (0.0, 0.0, -CONSTANTS_ONE_G)
     for hgt_ref, offset_state in ((HGT_REF_BARO, 3.0), (HGT_REF_GPS, -3.0)):
-        kf = LocalPositionKF(EKF2_HGT_REF=hgt_ref, LPE_GPS_DELAY=0.0)
+        kf = LocalPositionKF(PositionEstimatorParams(ekf2_hgt_ref=hgt_ref, lpe_gps_delay=0.0))
         t = T0_US
         assert kf.predict(t, still, level)
         assert kf.fuse_baro(500.0)
@@ -347,7 +360,7 @@ def test_noise_free_origin_gives_the_same_global_altitude_with_either_reference(
 
 @BOTH_REFS
 def test_tracks_a_climbing_circle(hgt_ref: int) -> None:
-    kf = LocalPositionKF(EKF2_HGT_REF=hgt_ref, LPE_GPS_DELAY=0.0)
+    kf = LocalPositionKF(PositionEstimatorParams(ekf2_hgt_ref=hgt_ref, lpe_gps_delay=0.0))
     run = simulate(kf, 60.0, accel_bias_body=(0.05, -0.05, 0.1))
     assert run.xy_valid[run.t > 5.0].all() and run.z_valid[run.t > 5.0].all()
     assert rms(horizontal(run, 10.0)) < 0.15
@@ -359,7 +372,7 @@ def test_tracks_a_climbing_circle(hgt_ref: int) -> None:
 
 
 def test_accel_bias_estimate_is_limited_to_ekf2_abl_lim() -> None:
-    kf = LocalPositionKF(LPE_GPS_DELAY=0.0, EKF2_ABL_LIM=0.3)
+    kf = LocalPositionKF(PositionEstimatorParams(lpe_gps_delay=0.0, ekf2_abl_lim=0.3))
     simulate(kf, 20.0, trajectory=hover, accel_bias_body=(0.0, 0.0, 1.0))
     assert kf.estimate().accel_bias[2] == 0.3
 
@@ -369,7 +382,7 @@ def test_delayed_gps_is_fused_at_its_sample_time(hgt_ref: int) -> None:
     latency = 0.25  # 0.5 m of travel at 2 m/s
 
     def kf(delay: float) -> LocalPositionKF:
-        return LocalPositionKF(EKF2_HGT_REF=hgt_ref, LPE_GPS_DELAY=delay)
+        return LocalPositionKF(PositionEstimatorParams(ekf2_hgt_ref=hgt_ref, lpe_gps_delay=delay))
 
     fused_at_sample = simulate(kf(0.0), 40.0, gps_latency_s=latency)
     via_parameter = simulate(kf(latency), 40.0, gps_latency_s=latency, gps_stamp="arrival")
@@ -391,8 +404,8 @@ def test_delayed_fusion_equals_fusing_on_time(hgt_ref: int) -> None:
     filter that received every fix without latency, once both have seen the same fixes."""
     latency_steps = 25  # 0.1 s, shorter than the GPS interval
     seconds = (GPS_EVERY * 40 + latency_steps + 1) * IMU_DT_US * 1e-6  # ends on an arrival
-    on_time = LocalPositionKF(EKF2_HGT_REF=hgt_ref, LPE_GPS_DELAY=0.0)
-    late = LocalPositionKF(EKF2_HGT_REF=hgt_ref, LPE_GPS_DELAY=0.0)
+    on_time = LocalPositionKF(PositionEstimatorParams(ekf2_hgt_ref=hgt_ref, lpe_gps_delay=0.0))
+    late = LocalPositionKF(PositionEstimatorParams(ekf2_hgt_ref=hgt_ref, lpe_gps_delay=0.0))
     simulate(on_time, seconds)
     simulate(late, seconds, gps_latency_s=latency_steps * IMU_DT_US * 1e-6)
     assert on_time.x[X_HGT_OFS] != 0.0  # the offset state took part
@@ -402,7 +415,7 @@ def test_delayed_fusion_equals_fusing_on_time(hgt_ref: int) -> None:
 
 @BOTH_REFS
 def test_gps_outage_dead_reckons_then_recovers(hgt_ref: int) -> None:
-    kf = LocalPositionKF(EKF2_HGT_REF=hgt_ref, LPE_GPS_DELAY=0.0)
+    kf = LocalPositionKF(PositionEstimatorParams(ekf2_hgt_ref=hgt_ref, lpe_gps_delay=0.0))
     run = simulate(kf, 50.0, gps_outage=(20.0, 30.0), accel_bias_body=(0.02, 0.0, 0.05))
     before = run.t < 20.0
     during = (run.t >= 20.0) & (run.t < 30.0)
@@ -415,7 +428,7 @@ def test_gps_outage_dead_reckons_then_recovers(hgt_ref: int) -> None:
     assert horizontal(run, 20.0, 30.0).max() < 1.0
     assert np.abs(run.pos_err[during, 2]).max() < 0.5  # the baro holds the height
     # xy is flagged invalid exactly while eph exceeds LPE_XY_PUB.
-    limit = kf.params["LPE_XY_PUB"]
+    limit = kf.params.lpe_xy_pub
     assert not run.xy_valid[during].all()
     assert np.array_equal(run.xy_valid[during], eph <= limit)
     # GPS is back: the estimate converges without a reset.
@@ -427,7 +440,7 @@ def test_gps_outage_dead_reckons_then_recovers(hgt_ref: int) -> None:
 
 @BOTH_REFS
 def test_persistent_gps_jump_is_rejected_then_reset_to(hgt_ref: int) -> None:
-    kf = LocalPositionKF(EKF2_HGT_REF=hgt_ref, LPE_GPS_DELAY=0.0)
+    kf = LocalPositionKF(PositionEstimatorParams(ekf2_hgt_ref=hgt_ref, lpe_gps_delay=0.0))
     run = simulate(kf, 40.0, gps_offset_ne=(30.0, -40.0), gps_offset_from=20.0)
     # Rejected by the gate for 7 s: the estimate follows the IMU and the consistent GPS velocity.
     assert horizontal(run, 20.0, 26.9).max() < 0.5
@@ -455,7 +468,7 @@ def climb_10m(t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 @BOTH_REFS
 def test_baro_only_altitude(hgt_ref: int) -> None:
-    kf = LocalPositionKF(EKF2_HGT_REF=hgt_ref)
+    kf = LocalPositionKF(PositionEstimatorParams(ekf2_hgt_ref=hgt_ref))
     run = simulate(kf, 25.0, trajectory=climb_10m, use_gps=False, baro_offset=0.0)
     est = kf.estimate()
     assert est.z_valid and est.v_z_valid
@@ -470,7 +483,7 @@ def test_baro_only_altitude(hgt_ref: int) -> None:
 
 @BOTH_REFS
 def test_persistent_baro_step_resets_height_without_gps(hgt_ref: int) -> None:
-    kf = LocalPositionKF(EKF2_HGT_REF=hgt_ref)
+    kf = LocalPositionKF(PositionEstimatorParams(ekf2_hgt_ref=hgt_ref))
     run = simulate(kf, 25.0, trajectory=hover, use_gps=False, baro_offset=0.0, baro_step=(10.0, 100.0))
     # The 100 m step stays beyond the 5σ gate: z holds on the IMU until the 7 s reset timeout.
     assert np.abs(run.pos_err[run.t < 16.9, 2]).max() < 1.0
@@ -483,7 +496,7 @@ def test_persistent_baro_step_resets_height_without_gps(hgt_ref: int) -> None:
 
 @BOTH_REFS
 def test_unaided_variance_stops_growing_at_p_max(hgt_ref: int) -> None:
-    kf = LocalPositionKF(EKF2_HGT_REF=hgt_ref)
+    kf = LocalPositionKF(PositionEstimatorParams(ekf2_hgt_ref=hgt_ref))
     level = quat.IDENTITY
     t_us = 1_000_000
     for _ in range(int(600.0 / 0.05)):  # 10 min at DT_MAX_S steps, no aiding at all
@@ -497,7 +510,7 @@ def test_unaided_variance_stops_growing_at_p_max(hgt_ref: int) -> None:
 
 def test_vertical_velocity_grows_with_lpe_pn_vz_and_horizontal_with_lpe_pn_v() -> None:
     def velocity_variances(**params: float) -> np.ndarray:
-        kf = LocalPositionKF(**params)
+        kf = LocalPositionKF(PositionEstimatorParams(**params))
         t_us = 1_000_000
         for _ in range(21):  # 1 s unaided (the first prediction starts the clock)
             t_us += 50_000
@@ -505,7 +518,7 @@ def test_vertical_velocity_grows_with_lpe_pn_vz_and_horizontal_with_lpe_pn_v() -
         return np.diagonal(kf.P)[3:6]
 
     same = velocity_variances()  # PX4's LPE: one LPE_PN_V for every axis
-    quiet = velocity_variances(LPE_PN_VZ=0.01)
+    quiet = velocity_variances(lpe_pn_vz=0.01)
     assert quiet[:2] == pytest.approx(same[:2])
     assert same[2] - quiet[2] == pytest.approx(0.1**2 - 0.01**2, rel=0.05)  # 1 s of the difference
 
@@ -521,19 +534,19 @@ def test_landed_vehicle_holds_still_instead_of_following_gps_velocity_noise() ->
 
     free, held = [], []
     for seed in range(6):
-        on_ground = flight_like(LocalPositionKF(**SIM_PROFILE), 20.0, seed=seed, trajectory=hover)
-        landed = flight_like(LocalPositionKF(**SIM_PROFILE), 20.0, seed=seed, trajectory=hover, landed_until=20.0)
+        on_ground = flight_like(sim_profile_filter(), 20.0, seed=seed, trajectory=hover)
+        landed = flight_like(sim_profile_filter(), 20.0, seed=seed, trajectory=hover, landed_until=20.0)
         ground = landed.t >= 5.0
         assert rms(landed.vel_err[ground, :2]) < 0.005 and rms(on_ground.vel_err[ground, :2]) > 0.01
         free.append(wander(on_ground, ground))
         held.append(wander(landed, ground))
     assert math.sqrt(np.mean(held)) < 0.75 * math.sqrt(np.mean(free))
-    flown = flight_like(LocalPositionKF(**SIM_PROFILE), 14.0, landed_until=5.0)
+    flown = flight_like(sim_profile_filter(), 14.0, landed_until=5.0)
     assert rms(flown.vel_err[flown.t > 8.0, :2]) < 0.05
 
 
 def test_land_fusion_needs_the_origin_and_survives_a_delayed_gps_replay() -> None:
-    kf = LocalPositionKF(LPE_GPS_DELAY=0.1)
+    kf = LocalPositionKF(PositionEstimatorParams(lpe_gps_delay=0.1))
     assert not kf.fuse_land()  # no time base
     flight_like(kf, 0.5, gps_latency_s=0.1)
     assert not kf.fuse_land()  # no origin yet: nothing to hold still in
@@ -543,7 +556,7 @@ def test_land_fusion_needs_the_origin_and_survives_a_delayed_gps_replay() -> Non
 
 @BOTH_REFS
 def test_garbage_inputs_are_rejected_without_corrupting_the_state(hgt_ref: int) -> None:
-    kf = LocalPositionKF(EKF2_HGT_REF=hgt_ref, LPE_GPS_DELAY=0.0)
+    kf = LocalPositionKF(PositionEstimatorParams(ekf2_hgt_ref=hgt_ref, lpe_gps_delay=0.0))
     simulate(kf, 10.0, trajectory=hover)
     x, P = kf.x.copy(), kf.P.copy()
     t = kf.estimate().timestamp_sample
@@ -583,21 +596,19 @@ def test_garbage_inputs_are_rejected_without_corrupting_the_state(hgt_ref: int) 
     assert np.all(np.isfinite(kf.x)) and np.all(np.isfinite(kf.P))
 
 
-def test_set_params_validates_names_and_ranges() -> None:
-    kf = LocalPositionKF()
-    kf.set_params(LPE_GPS_DELAY=5.0, LPE_BAR_Z=0.0, EKF2_HGT_REF=7.0)
-    assert kf.params["LPE_GPS_DELAY"] == 0.4 and kf.params["LPE_BAR_Z"] == 0.01
-    assert kf.params["EKF2_HGT_REF"] == HGT_REF_GPS
-    kf.set_params(EKF2_HGT_REF=0.4)
-    assert kf.params["EKF2_HGT_REF"] == HGT_REF_BARO
-    with pytest.raises(KeyError):
-        kf.set_params(LPE_NOT_A_PARAM=1.0)
+def test_the_parameters_are_the_catalogues_read_by_px4_name() -> None:
+    assert LocalPositionKF().params == PositionEstimatorParams()
+    assert PositionEstimatorParams().lpe_gps_delay == catalogue.get("LPE_GPS_DELAY").default
+    values = {"LPE_GPS_DELAY": 0.3, "EKF2_HGT_REF": HGT_REF_GPS, "MPC_XY_VEL_MAX": 1.0}  # a module's, by PX4 name
+    params = PositionEstimatorParams.from_params(values)
+    assert (params.lpe_gps_delay, params.ekf2_hgt_ref) == (0.3, HGT_REF_GPS)
+    assert {p.name for p in PositionEstimatorParams.PARAMS} >= {"LPE_GPS_DELAY", "EKF2_HGT_REF", "EKF2_ABL_LIM"}
 
 
 def test_height_reference_is_baro_by_default_and_changes_at_reset_only() -> None:
     kf = LocalPositionKF()
     assert kf.hgt_ref == HGT_REF_BARO
-    kf.set_params(EKF2_HGT_REF=HGT_REF_GPS)  # PX4: reboot required
+    kf.set_params(PositionEstimatorParams(ekf2_hgt_ref=HGT_REF_GPS))  # PX4: reboot required
     assert kf.hgt_ref == HGT_REF_BARO
     kf.reset()
     assert kf.hgt_ref == HGT_REF_GPS
@@ -607,7 +618,7 @@ def test_height_reference_is_baro_by_default_and_changes_at_reset_only() -> None
 
 
 def test_gps_reference_gps_alone_initialises_height_and_a_late_baro_brings_its_offset() -> None:
-    kf = LocalPositionKF(EKF2_HGT_REF=HGT_REF_GPS, LPE_GPS_DELAY=0.0)
+    kf = LocalPositionKF(PositionEstimatorParams(ekf2_hgt_ref=HGT_REF_GPS, lpe_gps_delay=0.0))
     simulate(kf, 10.0, trajectory=hover, use_baro=False)
     est = kf.estimate()
     assert est.z_valid and est.z_global
@@ -622,7 +633,7 @@ def test_gps_reference_gps_alone_initialises_height_and_a_late_baro_brings_its_o
 
 
 def test_gps_reference_persistent_baro_step_moves_the_offset_not_the_height() -> None:
-    kf = LocalPositionKF(EKF2_HGT_REF=HGT_REF_GPS, LPE_GPS_DELAY=0.0)
+    kf = LocalPositionKF(PositionEstimatorParams(ekf2_hgt_ref=HGT_REF_GPS, lpe_gps_delay=0.0))
     run = simulate(kf, 30.0, trajectory=hover, baro_step=(10.0, 20.0))
     est = kf.estimate()
     assert est.z_reset_counter == 0
@@ -631,7 +642,7 @@ def test_gps_reference_persistent_baro_step_moves_the_offset_not_the_height() ->
 
 
 def test_gps_reference_persistent_gps_altitude_jump_resets_z() -> None:
-    kf = LocalPositionKF(EKF2_HGT_REF=HGT_REF_GPS, **SIM_PROFILE)
+    kf = sim_profile_filter(ekf2_hgt_ref=HGT_REF_GPS)
     flight_like(kf, 40.0, gps_alt_step=(20.0, 50.0))
     est = kf.estimate()
     assert est.z_reset_counter == 1 and est.alt_reset_counter == 1
@@ -649,8 +660,8 @@ def test_baro_reference_holds_the_height_of_a_takeoff_against_gps_altitude_noise
     on the noise draw. Referenced to the baro (σ 0.09 m) it stays within 0.15 m for every draw."""
     baro_worst, gps_worst = [], []
     for seed in range(8):
-        baro_ref = flight_like(LocalPositionKF(**SIM_PROFILE), 40.0, seed=seed)
-        gps_ref = flight_like(LocalPositionKF(EKF2_HGT_REF=HGT_REF_GPS, **SIM_PROFILE), 40.0, seed=seed)
+        baro_ref = flight_like(sim_profile_filter(), 40.0, seed=seed)
+        gps_ref = flight_like(sim_profile_filter(ekf2_hgt_ref=HGT_REF_GPS), 40.0, seed=seed)
         assert baro_ref.z_valid[baro_ref.t > 1.0].all()
         baro_worst.append(np.abs(height_error_since(baro_ref, 4.0)).max())
         gps_worst.append(np.abs(height_error_since(gps_ref, 4.0)).max())
@@ -663,8 +674,8 @@ def test_baro_reference_z_does_not_see_a_constant_gps_altitude_bias() -> None:
     """Hand-worked: with a +3 m GPS altitude bias from the start, every GPS altitude innovation
     z − offset is unchanged once the offset has taken the bias, so z (and every other state) is the
     same as without the bias, and the bias ends in the offset and in the global altitude."""
-    unbiased_kf = LocalPositionKF(**SIM_PROFILE)
-    biased_kf = LocalPositionKF(**SIM_PROFILE)
+    unbiased_kf = sim_profile_filter()
+    biased_kf = sim_profile_filter()
     unbiased = flight_like(unbiased_kf, 30.0)
     biased = flight_like(biased_kf, 30.0, gps_alt_step=(-math.inf, 3.0))
     np.testing.assert_allclose(biased.z, unbiased.z, rtol=0.0, atol=1e-9)
@@ -682,9 +693,9 @@ def test_gps_altitude_jump_inside_the_gate_moves_the_offset_with_the_baro_refere
     """A +3 m GPS altitude jump (inside the gate) against the same flight without it: with the baro
     reference it goes to the offset, so alt follows GPS altitude and z moves by millimetres; with
     the GPS reference z itself is pulled toward it."""
-    kf = LocalPositionKF(EKF2_HGT_REF=hgt_ref, **SIM_PROFILE)
+    kf = sim_profile_filter(ekf2_hgt_ref=hgt_ref)
     jumped = flight_like(kf, 60.0, gps_alt_step=(20.0, 3.0))
-    steady = flight_like(LocalPositionKF(EKF2_HGT_REF=hgt_ref, **SIM_PROFILE), 60.0)
+    steady = flight_like(sim_profile_filter(ekf2_hgt_ref=hgt_ref), 60.0)
     est = kf.estimate()
     assert est.z_reset_counter == 0 and est.alt_reset_counter == 0
     z_moved = np.abs(jumped.z - steady.z).max()
@@ -698,7 +709,7 @@ def test_gps_altitude_jump_inside_the_gate_moves_the_offset_with_the_baro_refere
 
 
 def test_baro_reference_persistent_baro_step_resets_z_and_keeps_the_global_altitude() -> None:
-    kf = LocalPositionKF(LPE_GPS_DELAY=0.0)
+    kf = LocalPositionKF(PositionEstimatorParams(lpe_gps_delay=0.0))
     run = simulate(kf, 30.0, trajectory=hover, baro_step=(10.0, 20.0))
     est = kf.estimate()
     # Rejected for 7 s, then z follows its reference, the baro; the GPS offset moves with z.
@@ -711,7 +722,7 @@ def test_baro_reference_persistent_baro_step_resets_z_and_keeps_the_global_altit
 
 
 def test_baro_reference_persistent_gps_altitude_jump_resets_the_offset_not_z() -> None:
-    kf = LocalPositionKF(**SIM_PROFILE)
+    kf = sim_profile_filter()
     run = flight_like(kf, 40.0, gps_alt_step=(20.0, 50.0))
     est = kf.estimate()
     assert est.z_reset_counter == 0
@@ -726,7 +737,7 @@ def test_baro_reference_persistent_gps_altitude_jump_resets_the_offset_not_z() -
 
 
 def test_baro_reference_gps_loss_keeps_z_on_the_baro() -> None:
-    kf = LocalPositionKF(**SIM_PROFILE)
+    kf = sim_profile_filter()
     run = flight_like(kf, 20.0)
     var_offset_before = kf.P[X_HGT_OFS, X_HGT_OFS]
     outage = flight_like(kf, 10.0, start_s=20.0, seed=1, use_gps=False)
@@ -741,14 +752,14 @@ def test_baro_reference_gps_loss_keeps_z_on_the_baro() -> None:
     assert np.abs((z[arm:] - z[arm]) - (true_down[arm:] - true_down[arm])).max() < 0.15
     # Without GPS the offset is a random walk only: its variance grows by LPE_PN_GPS_Z²·10 s.
     grown = var_offset_lost - var_offset_before
-    assert grown == pytest.approx(kf.params["LPE_PN_GPS_Z"] ** 2 * 10.0, rel=0.01)
+    assert grown == pytest.approx(kf.params.lpe_pn_gps_z**2 * 10.0, rel=0.01)
     assert kf.P[X_HGT_OFS, X_HGT_OFS] < var_offset_lost
     est = kf.estimate()
     assert est.z_reset_counter == 0 and est.alt_reset_counter == 0 and not est.dead_reckoning
 
 
 def test_baro_reference_late_baro_takes_over_from_gps_without_a_height_jump() -> None:
-    kf = LocalPositionKF(LPE_GPS_DELAY=0.0)
+    kf = LocalPositionKF(PositionEstimatorParams(lpe_gps_delay=0.0))
     simulate(kf, 10.0, trajectory=hover, use_baro=False)
     est = kf.estimate()
     assert est.z_valid and est.z_global  # GPS stood in as the height reference
@@ -781,7 +792,7 @@ def baro_reference_filter_and_fix(alt_above_prediction: float) -> tuple[LocalPos
     """A baro-referenced filter after 10 s of hover, and a fix at its current time that agrees with
     its position and velocity and reads ``alt_above_prediction`` above its GPS altitude prediction.
     epv is 0.05 m, so that the offset's share of the altitude innovation variance matters."""
-    kf = LocalPositionKF(LPE_GPS_Z=0.01, **SIM_PROFILE)
+    kf = sim_profile_filter(lpe_gps_z=0.01)
     simulate(kf, 10.0, trajectory=hover)
     est = kf.estimate()
     x = kf.x
@@ -792,7 +803,7 @@ def baro_reference_filter_and_fix(alt_above_prediction: float) -> tuple[LocalPos
     fix = Gps(est.timestamp_sample, lat, lon, alt, x[3], x[4], x[5], eph=0.9, epv=0.05)
     y = np.array((*local.project(lat, lon), baro_ref_alt - alt, x[3], x[4], x[5]))
     p = kf.params
-    var = [max(p["LPE_GPS_XY"], 0.9) ** 2] * 2 + [0.05**2] + [p["LPE_GPS_VXY"] ** 2] * 2 + [p["LPE_GPS_VZ"] ** 2]
+    var = [max(p.lpe_gps_xy, 0.9) ** 2] * 2 + [0.05**2] + [p.lpe_gps_vxy**2] * 2 + [p.lpe_gps_vz**2]
     return kf, fix, y, var
 
 
@@ -814,7 +825,7 @@ def test_baro_reference_gps_altitude_gate_includes_the_offset_variance(factor: f
     P = kf.P
     s_alt = P[X_Z, X_Z] + P[X_HGT_OFS, X_HGT_OFS] - 2.0 * P[X_Z, X_HGT_OFS] + 0.05**2
     assert P[X_HGT_OFS, X_HGT_OFS] - 2.0 * P[X_Z, X_HGT_OFS] > 0.01 * s_alt  # the offset's share matters
-    kf, fix, y, var = baro_reference_filter_and_fix(factor * kf.params["EKF2_GPS_P_GATE"] * math.sqrt(s_alt))
+    kf, fix, y, var = baro_reference_filter_and_fix(factor * kf.params.ekf2_gps_p_gate * math.sqrt(s_alt))
     x, P = kf.x.copy(), kf.P.copy()
     assert kf.fuse_gps(fix)  # position and velocity agree, so those rows are fused in any case
     assert kf.gps_pos_test_ratio == pytest.approx(factor**2, rel=1e-6)
@@ -826,10 +837,10 @@ def test_baro_reference_gps_altitude_gate_includes_the_offset_variance(factor: f
 
 @BOTH_REFS
 def test_a_filter_resumed_from_a_snapshot_carries_on_in_the_same_frame(hgt_ref: int) -> None:
-    kf = LocalPositionKF(EKF2_HGT_REF=hgt_ref, LPE_GPS_DELAY=0.0)
+    kf = LocalPositionKF(PositionEstimatorParams(ekf2_hgt_ref=hgt_ref, lpe_gps_delay=0.0))
     simulate(kf, 20.0, trajectory=hover)
     before = kf.estimate()
-    resumed = LocalPositionKF(EKF2_HGT_REF=hgt_ref, LPE_GPS_DELAY=0.0)
+    resumed = LocalPositionKF(PositionEstimatorParams(ekf2_hgt_ref=hgt_ref, lpe_gps_delay=0.0))
     resumed.resume(kf.snapshot())
     run = simulate(resumed, 5.0, start_s=20.0, trajectory=hover)
     after = resumed.estimate()
@@ -843,10 +854,10 @@ def test_a_filter_resumed_from_a_snapshot_carries_on_in_the_same_frame(hgt_ref: 
     [{}, {"x": [0.0] * 3}, {"x": [math.nan] * 10}, {"origin": "here"}, {"hgt_ref": 7}, {"z_initialised": 1}],
 )
 def test_a_snapshot_that_is_not_one_is_refused_and_changes_nothing(broken: dict) -> None:
-    kf = LocalPositionKF(LPE_GPS_DELAY=0.0)
+    kf = LocalPositionKF(PositionEstimatorParams(lpe_gps_delay=0.0))
     simulate(kf, 5.0, trajectory=hover)
     snap = kf.snapshot()
-    other = LocalPositionKF(LPE_GPS_DELAY=0.0)
+    other = LocalPositionKF(PositionEstimatorParams(lpe_gps_delay=0.0))
     with pytest.raises(ValueError):
         other.resume({} if not broken else snap | broken)
     assert other.snapshot()["origin"] is None
@@ -881,7 +892,7 @@ def tilt_error(t: float) -> Quat:
 
 
 def plane_run(seed: int, air: bool, **kwargs) -> Run:
-    kf = LocalPositionKF(**SIM_PROFILE, LPE_AIRSPD_VXY=1.0 if air else 0.0)
+    kf = sim_profile_filter(lpe_airspd_vxy=1.0 if air else 0.0)
     options = {
         "trajectory": plane_circle,
         "attitude_of": plane_attitude,
@@ -914,7 +925,7 @@ def test_a_plane_without_gps_dead_reckons_on_airspeed_and_wind() -> None:
 
 
 def test_airspeed_is_fused_only_without_gps_and_never_when_it_is_garbage() -> None:
-    kf = LocalPositionKF(**SIM_PROFILE)
+    kf = sim_profile_filter()
     wind, var = (0.0, 5.0), (0.04, 0.04)
     assert not kf.fuse_airspeed(15.0, plane_attitude(0.0), wind, var)  # no time base
     simulate(kf, 10.0, trajectory=plane_circle, attitude_of=plane_attitude, gps_every=GPS_EVERY_10HZ)
@@ -939,7 +950,7 @@ def test_airspeed_is_fused_only_without_gps_and_never_when_it_is_garbage() -> No
     _, v, _ = plane_circle(13.0)
     air = quat.rotate_inv(q, tuple(v - PLANE_WIND))
     assert kf.fuse_airspeed(math.sqrt(sum(c * c for c in air)), q, wind, var)
-    off = LocalPositionKF(**SIM_PROFILE, LPE_AIRSPD_VXY=0.0)
+    off = sim_profile_filter(lpe_airspd_vxy=0.0)
     simulate(off, 13.0, trajectory=plane_circle, attitude_of=plane_attitude, gps_outage=(10.0, 20.0))
     assert not off.fuse_airspeed(15.0, q, wind, var)
 
