@@ -71,7 +71,7 @@ def test_every_check_passed(fly_here: FlyHere, seed: int) -> None:
 
 @pytest.mark.parametrize("seed", SEEDS)
 @pytest.mark.parametrize("metric", list(TARGETS))
-def test_meets_the_issue_target(fly_here: FlyHere, metric: str, seed: int) -> None:
+def test_meets_the_scenarios_own_limit(fly_here: FlyHere, metric: str, seed: int) -> None:
     report = fly_here("attitude_step", seed).report
     value = report["metrics"][metric]
     assert math.isfinite(value)

@@ -23,6 +23,8 @@ pytestmark = pytest.mark.flight
 
 FLY_TIMEOUT_S = 900.0
 SKIPPED_STEPS_MAX = 0.01
+# What these wall-clock flights are judged by: the scenarios' own limits, but for mission_box's waypoint error,
+# 0.5 m here where a lockstep flight is held to 0.3 m (the link's latency and loss come on top).
 TARGETS: dict[str, dict[str, object]] = {
     "takeoff_land": {"hover_alt_error_max_m": 0.30, "hover_pos_error_rms_m": 0.20, "landed_and_disarmed": True},
     "mission_box": {"waypoint_error_max_m": 0.5, "land_error_m": 0.5, "landed_and_disarmed": True},
@@ -105,7 +107,7 @@ def assert_meets(result: dict, scenario: str) -> None:
     assert result["passed"] is True and result["returncode"] == 0, result["output"]
 
 
-def test_a_mission_through_the_pixhawk_meets_the_issue_limits(tmp_path: Path):
+def test_a_mission_through_the_pixhawk_is_flown_within_its_limits(tmp_path: Path):
     result = fly(tmp_path, "mission_box", "pixhawk_sim_pty", 1)
     assert result["profile"] == "pixhawk_sim_pty"
     assert_meets(result, "mission_box")
