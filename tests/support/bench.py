@@ -119,7 +119,8 @@ class _Output:
 
 
 class ModuleBench:
-    """``bench = ModuleBench(MyModule, {"PARAM": 1})``; ``bench.put(ORB_ID.topic, msg)``; ``bench.run(msg, dt)``;
+    """``bench = ModuleBench(MyModule, {"PARAM": 1}, {"arg": "x"}, vehicle="v2")`` (the last: ModuleSpec fields);
+    ``bench.put(ORB_ID.topic, msg)``; ``bench.run(msg, dt)``;
     ``bench.sent(ORB_ID.topic)`` lists what the module published there, oldest first.
 
     A module that opens subscribers on the node itself, or talks to the Zenoh session, gets stand-ins
@@ -128,12 +129,16 @@ class ModuleBench:
     fast: Any = None
 
     def __init__(
-        self, cls: type[Module], params: dict[str, object] | None = None, args: dict[str, Any] | None = None
+        self,
+        cls: type[Module],
+        params: dict[str, object] | None = None,
+        args: dict[str, Any] | None = None,
+        **spec: Any,
     ) -> None:
         self.name = cls.NAME
         self.params = ParamStore(cls.PARAMS, params)
         self.args: dict[str, Any] = resolve_args(cls.ARGS, args or {})
-        self.spec = ModuleSpec(name=cls.NAME, module=cls.NAME)
+        self.spec = ModuleSpec(name=cls.NAME, module=cls.NAME, **spec)
         self.inputs: dict[tuple[str, int], _Input] = {}
         self.outputs: dict[tuple[str, int], _Output] = {}
         self.rejected = 0
