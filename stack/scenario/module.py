@@ -11,11 +11,15 @@ import json
 import math
 import time
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from stack.msg.registry import ORB_ID
 from stack.runtime.module import Arg, Module, Timer
 from stack.scenario.catalogue import get_scenario
 from stack.scenario.script import ScenarioError, ScriptContext
+
+if TYPE_CHECKING:
+    from stack.runtime.runner import Runtime
 
 
 class ScenarioModule(Module):
@@ -29,7 +33,7 @@ class ScenarioModule(Module):
         Arg("options", "{}", 'JSON object choosing the scenario\'s options, e.g. {"mission": "c172_rectangle"}'),
     )
 
-    def __init__(self, rt) -> None:
+    def __init__(self, rt: Runtime) -> None:
         super().__init__(rt)
         self.scenario = get_scenario(str(self.args["name"]))
         self.limits = json.loads(str(self.args["limits"]))
