@@ -11,7 +11,7 @@ import json
 import math
 import time
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from stack.msg.registry import ORB_ID
 from stack.runtime.module import Arg, Module, Timer
@@ -36,7 +36,10 @@ class ScenarioModule(Module):
     def __init__(self, rt: Runtime) -> None:
         super().__init__(rt)
         self.scenario = get_scenario(str(self.args["name"]))
-        self.limits = json.loads(str(self.args["limits"]))
+        self.limits = _json_object("limits", str(self.args["limits"]))
+        bad = [name for name, value in self.limits.items() if not _is_limit(value)]
+        if bad:
+            raise ValueError(f"limits: {', '.join(sorted(bad))} must be finite numbers or true/false")
         for topic in self.scenario.record + self.scenario.watch:
             self.subscribe(topic, queue=topic in self.scenario.record)
         self.subscribe(ORB_ID.vehicle_command_ack, queue=True)
@@ -45,7 +48,7 @@ class ScenarioModule(Module):
         self._pids: dict[str, int] = {}
         self.watch_modules(self._on_module)
         self.ctx = ScriptContext(self.publish, lambda: self.now_us() * 1e-6, lambda: dict(self._pids))
-        self.ctx.options = {**self.scenario.options, **json.loads(str(self.args["options"]))}
+        self.ctx.options = {**self.scenario.options, **_json_object("options", str(self.args["options"]))}
         self.script = self.scenario.script(self.ctx)
         self.waiting = None
         self.started_wall: float | None = None
@@ -124,3 +127,16 @@ def _plain(value: object) -> object:
     if isinstance(value, float) and not math.isfinite(value):
         return None
     return value
+
+
+def _json_object(arg: str, text: str) -> dict[str, Any]:
+    """``text`` as a JSON object; ValueError (json.JSONDecodeError for bad JSON) naming ``arg`` otherwise."""
+    value = json.loads(text)
+    if not isinstance(value, dict):
+        raise ValueError(f"{arg}: a JSON object is wanted, not {text!r}")
+    return value
+
+
+def _is_limit(value: object) -> bool:
+    """A check's limit: a finite number, or a flag the metric must equal."""
+    return isinstance(value, bool) or (isinstance(value, int | float) and math.isfinite(value))

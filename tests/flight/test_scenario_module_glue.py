@@ -158,6 +158,12 @@ def test_malformed_limits_or_options_are_refused(flight):
         flight(limits="{not json")
     with pytest.raises(json.JSONDecodeError):
         flight(options="[1,")
+    with pytest.raises(ValueError, match="limits: a JSON object is wanted"):
+        flight(limits="[1]")
+    with pytest.raises(ValueError, match="options: a JSON object is wanted"):
+        flight(options='"fast"')
+    with pytest.raises(ValueError, match="limits: samples must be finite numbers or true/false"):
+        flight(limits='{"samples": "ten"}')
 
 
 def test_an_unknown_scenario_is_refused_with_the_catalogues_message():
