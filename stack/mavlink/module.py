@@ -431,12 +431,7 @@ class MavlinkModule(Module):
             for reply in replies:  # after the acknowledgement, as the MAVLink command protocol has it
                 self._send(reply)
             return
-        if msg.get_type() == "COMMAND_INT":
-            home = self.view.home
-            home_alt = home.alt if home is not None and home.valid_alt else math.nan
-            cmd = commands.from_command_int(msg, source, self.own, SUPPORTED_COMMANDS, home_alt)
-        else:
-            cmd = commands.from_command_long(msg, source, self.own, SUPPORTED_COMMANDS)
+        cmd = commands.from_command(msg, source, self.own, SUPPORTED_COMMANDS, self.view.home)
         if isinstance(cmd, commands.Refusal):
             self.counts["unsupported" if cmd.result == M.MAV_RESULT_UNSUPPORTED else "refused"] += 1
             self._send(commands.command_ack(msg.command, cmd.result, source, cmd.param))

@@ -7,8 +7,10 @@ import math
 import pytest
 from pymavlink.dialects.v20 import common as M
 
+from stack.commander.state_machine import SUPPORTED_COMMANDS
 from stack.mathlib.geo import MapProjection
 from stack.mavlink import local_commands
+from stack.mavlink.commands import Refusal, from_command
 from stack.mavlink.mission_items import ItemRefused, download_items, mission_from_upload, mission_home
 from stack.mavlink.param_pacing import PARAM_VALUES_PER_S, ParamPacer, param_rate
 from stack.mavlink.presence import PEER_TIMEOUT_US, Presence, telemetry_status
@@ -153,3 +155,16 @@ def test_peers_count_while_they_sent_anything_lately():
     assert presence.peer_count(PEER_TIMEOUT_US - 1) == 2
     assert presence.peer_count(PEER_TIMEOUT_US) == 1
     assert presence.peer_count(PEER_TIMEOUT_US + 1_000_000) == 0
+
+
+def test_a_command_int_above_home_is_placed_with_homes_altitude_only_while_it_is_valid():
+    def reposition() -> M.MAVLink_command_int_message:
+        frame, command = M.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT, M.MAV_CMD_DO_REPOSITION
+        return M.MAVLink_command_int_message(1, 1, frame, command, 0, 0, -1, 0, 0, 0, 473977420, 85455940, 10)
+
+    cmd = from_command(reposition(), (255, 190), (1, 1), SUPPORTED_COMMANDS, _home(True))
+    assert cmd.param7 == HOME.alt + 10 and cmd.param5 == pytest.approx(47.397742)
+    refused = from_command(reposition(), (255, 190), (1, 1), SUPPORTED_COMMANDS, _home(False))
+    assert isinstance(refused, Refusal) and refused.result == M.MAV_RESULT_DENIED
+    arm = M.MAVLink_command_long_message(1, 1, M.MAV_CMD_COMPONENT_ARM_DISARM, 0, 1.0, 0, 0, 0, 0, 0, 0)
+    assert from_command(arm, (255, 190), (1, 1), SUPPORTED_COMMANDS, None).param1 == 1.0
