@@ -28,7 +28,7 @@ from dataclasses import dataclass
 from pymavlink.dialects.v20 import common as mavlink2
 
 from stack.mavlink import px4_modes
-from stack.msg.system import VehicleCommand, VehicleCommandAck, command_label
+from stack.msg.system import HomePosition, VehicleCommand, VehicleCommandAck, command_label
 
 CMD = VehicleCommand
 INT32_MAX = 0x7FFF_FFFF
@@ -128,6 +128,21 @@ def from_command_int(
             )
     params = [msg.param1, msg.param2, msg.param3, msg.param4, _degrees(msg.x), _degrees(msg.y), z]
     return _vehicle_command(msg.command, _px4_meaning(msg.command, params), source, own)
+
+
+def from_command(
+    msg: mavlink2.MAVLink_command_long_message | mavlink2.MAVLink_command_int_message,
+    source: tuple[int, int],
+    own: tuple[int, int],
+    supported: frozenset[int],
+    home: HomePosition | None,
+) -> VehicleCommand | Refusal:
+    """COMMAND_LONG or COMMAND_INT; a COMMAND_INT's altitudes above home are placed with ``home``'s altitude while
+    it is valid."""
+    if msg.get_type() == "COMMAND_INT":
+        home_alt = home.alt if home is not None and home.valid_alt else math.nan
+        return from_command_int(msg, source, own, supported, home_alt)
+    return from_command_long(msg, source, own, supported)
 
 
 def from_set_mode(

@@ -19,8 +19,12 @@ from pymavlink.dialects.v20 import common as mavlink2
 
 from stack.mathlib.geo import MapProjection
 from stack.mission import items as mi
-from stack.mission.items import GeoPoint, MissionItem
-from stack.msg.navigation import MissionItemEntry
+from stack.mission.items import GeoPoint, Mission, MissionItem
+from stack.mission.transfer import mission_from_message
+from stack.msg.estimation import VehicleLocalPosition
+from stack.msg.navigation import Mission as MissionMsg
+from stack.msg.navigation import MissionItemEntry, MissionResult
+from stack.msg.system import HomePosition
 
 INT32_MAX = 0x7FFF_FFFF
 LOCAL_FRAMES = frozenset({mi.MAV_FRAME_LOCAL_NED})
@@ -128,3 +132,35 @@ def mission_item_int(
         z,
         mavlink2.MAV_MISSION_TYPE_MISSION,
     )
+
+
+def mission_home(home: HomePosition | None, lpos: VehicleLocalPosition | None) -> GeoPoint | None:
+    """Where an uploaded mission's global positions are placed: the vehicle's home, failing that where it is (its
+    local position reprojected about the estimator's origin), failing that nowhere."""
+    if home is not None and home.valid_hpos and home.valid_alt:
+        return GeoPoint(home.lat, home.lon, home.alt)
+    if lpos is not None and lpos.xy_valid and lpos.z_valid and math.isfinite(lpos.ref_lat):
+        lat, lon = MapProjection(lpos.ref_lat, lpos.ref_lon).reproject(lpos.x, lpos.y)
+        return GeoPoint(lat, lon, lpos.ref_alt - lpos.z)
+    return None
+
+
+def mission_from_upload(
+    items: list[mavlink2.MAVLink_mission_item_int_message], home: GeoPoint | None, source: str
+) -> Mission:
+    """An uploaded mission, each item converted; raises :class:`ItemRefused` for the first item refused."""
+    return Mission(tuple(item_from_mission_item_int(m, home) for m in items), home, source=source)
+
+
+def download_items(
+    msg: MissionMsg | None, result: MissionResult | None
+) -> list[mavlink2.MAVLink_mission_item_int_message]:
+    """The items a download gets: those of the last ``mission`` message once the navigator has accepted it (its
+    ``mission_result`` valid for the same mission id), the current one flagged; none otherwise."""
+    if result is None or not result.valid or msg is None or msg.mission_id != result.mission_id:
+        return []
+    home = mission_from_message(msg).home
+    return [
+        mission_item_int(entry, seq, home, (0, 0), current=seq == result.seq_current)
+        for seq, entry in enumerate(msg.items)
+    ]

@@ -32,24 +32,34 @@ from stack.bus import keys
 from stack.bus.node import wall_clock_us
 from stack.bus.topics import TopicSubscriber
 from stack.commander.state_machine import SUPPORTED_COMMANDS
-from stack.mathlib.geo import MapProjection
-from stack.mavlink import commands, identity, mission_items, offboard, params, signing, telemetry, transport
+from stack.mavlink import (
+    commands,
+    identity,
+    local_commands,
+    mission_items,
+    offboard,
+    params,
+    signing,
+    telemetry,
+    transport,
+)
 from stack.mavlink.clock import StampClock
 from stack.mavlink.endpoint import Endpoint, parse_endpoint
 from stack.mavlink.link import MavlinkLink
 from stack.mavlink.manual import ManualInput, manual_control
 from stack.mavlink.mission_progress import MissionProgress
 from stack.mavlink.mission_transfer import Clear, MissionTransfer, Refused, SetCurrent, Upload
+from stack.mavlink.param_pacing import ParamPacer, param_rate
 from stack.mavlink.param_source import BusParamSource
-from stack.mavlink.presence import Presence
+from stack.mavlink.presence import Presence, telemetry_status
 from stack.mavlink.statustext import StatustextSender
 from stack.mavlink.streams import StreamScheduler
-from stack.mission.items import GeoPoint, Mission
-from stack.mission.transfer import mission_from_message, mission_id_for, mission_message
+from stack.mission.items import Mission
+from stack.mission.transfer import mission_id_for, mission_message
 from stack.msg.navigation import Mission as MissionMsg
 from stack.msg.navigation import MissionResult
 from stack.msg.registry import ORB_ID, fingerprint
-from stack.msg.system import TelemetryStatus, VehicleCommand, VehicleCommandAck
+from stack.msg.system import VehicleCommand, VehicleCommandAck
 from stack.msg.system import VehicleStatus as NS
 from stack.msg.topic import Topic
 from stack.params import catalogue
@@ -64,9 +74,6 @@ ACTIVE_WAIT_S = 0.01
 IDLE_WAIT_S = 0.1
 ACK_TIMEOUT_US = 3_000_000
 """A command the commander has not answered in this long is answered FAILED."""
-PARAM_VALUES_PER_S = 1000
-"""How fast a parameter list goes out on a UDP or TCP link; a serial link gets half its bytes at most."""
-PARAM_VALUE_BYTES = 37
 ERROR_LOG_EVERY = 100
 BASE_TOPICS = (
     ORB_ID.vehicle_status,
@@ -105,8 +112,6 @@ VIEW_FIELDS = {
 }
 QUEUED_TOPICS = {ORB_ID.vehicle_command_ack: 64, ORB_ID.mavlink_log: 64, ORB_ID.mission: 8, ORB_ID.mission_result: 16}
 M = mavlink2
-_Answer = tuple[int, int, list[mavlink2.MAVLink_message]]
-"""A command answered by this module: MAV_RESULT, the offending parameter, the messages to send after the ACK."""
 
 
 class _Subscriber(TopicSubscriber):
@@ -230,17 +235,11 @@ class MavlinkModule(Module):
         self._param_source = BusParamSource(rt.node.session, rt.node.vehicle)
         self._param_worker = ThreadPoolExecutor(max_workers=1, thread_name_prefix="params")
         self._param_results: queue.SimpleQueue[tuple[params.ListJob | params.SetJob, Any]] = queue.SimpleQueue()
-        self._param_budget = 0.0
-        self._param_rate = (
-            PARAM_VALUES_PER_S
-            if self.endpoint.kind != "serial"
-            else max(1.0, self.endpoint.baud / 10 / 2 / PARAM_VALUE_BYTES)
-        )
+        self._param_pacer = ParamPacer(param_rate(self.endpoint.kind, self.endpoint.baud), wall_clock_us())
         self._mission_msg: MissionMsg | None = None
         self._download_key: tuple[int | None, bool, int | None] | None = None
         self._verdict_id: int | None = None
         self._active = False
-        self._last_service_us = wall_clock_us()
         self._link_error: str | None = None
         self._builders = self._message_builders()
         self.link = MavlinkLink(
@@ -390,14 +389,7 @@ class MavlinkModule(Module):
         if key == self._download_key:
             return
         self._download_key = key
-        if result is None or not result.valid or msg is None or msg.mission_id != result.mission_id:
-            self.transfer.items = []
-            return
-        home = mission_from_message(msg).home
-        self.transfer.items = [
-            mission_items.mission_item_int(entry, seq, home, (0, 0), current=seq == result.seq_current)
-            for seq, entry in enumerate(msg.items)
-        ]
+        self.transfer.items = mission_items.download_items(msg, result)
 
     _bus_handlers: ClassVar[dict[str, Callable[[MavlinkModule, Any], None]]] = {
         ORB_ID.vehicle_command_ack: _on_ack,
@@ -432,19 +424,14 @@ class MavlinkModule(Module):
     def _on_command(self, msg: Any, source: tuple[int, int], now: int) -> None:
         if not commands.addressed_to(msg.target_system, msg.target_component, self.own):
             return
-        local = self._local_commands.get(msg.command)
+        local = local_commands.answer(msg.command, msg.param1, msg.param2, self.streams, self._builders)
         if local is not None:
-            result, param, replies = local(self, msg.param1, msg.param2)
+            result, param, replies = local
             self._send(commands.command_ack(msg.command, result, source, param))
             for reply in replies:  # after the acknowledgement, as the MAVLink command protocol has it
                 self._send(reply)
             return
-        if msg.get_type() == "COMMAND_INT":
-            home = self.view.home
-            home_alt = home.alt if home is not None and home.valid_alt else math.nan
-            cmd = commands.from_command_int(msg, source, self.own, SUPPORTED_COMMANDS, home_alt)
-        else:
-            cmd = commands.from_command_long(msg, source, self.own, SUPPORTED_COMMANDS)
+        cmd = commands.from_command(msg, source, self.own, SUPPORTED_COMMANDS, self.view.home)
         if isinstance(cmd, commands.Refusal):
             self.counts["unsupported" if cmd.result == M.MAV_RESULT_UNSUPPORTED else "refused"] += 1
             self._send(commands.command_ack(msg.command, cmd.result, source, cmd.param))
@@ -459,37 +446,6 @@ class MavlinkModule(Module):
             return
         self.counts["commands"] += 1
         self._publish(ORB_ID.vehicle_command, cmd)
-
-    def _set_message_interval(self, msg_id: float, interval_us: float) -> _Answer:
-        result = self.streams.set_message_interval(msg_id, interval_us)
-        return result, (2 if result == M.MAV_RESULT_DENIED else 0), []
-
-    def _get_message_interval(self, msg_id: float, unused: float) -> _Answer:
-        if not math.isfinite(msg_id) or msg_id != int(msg_id) or not 0 <= msg_id < 2**24:
-            return M.MAV_RESULT_DENIED, 1, []
-        interval = M.MAVLink_message_interval_message(int(msg_id), self.streams.interval_us(int(msg_id)))
-        return M.MAV_RESULT_ACCEPTED, 0, [interval]
-
-    def _request_message(self, msg_id: float, unused: float) -> _Answer:
-        if not math.isfinite(msg_id) or msg_id != int(msg_id):
-            return M.MAV_RESULT_DENIED, 1, []
-        build = self._builders.get(int(msg_id))
-        if build is None:
-            return M.MAV_RESULT_UNSUPPORTED, 0, []
-        message = build()
-        if message is None:
-            return M.MAV_RESULT_TEMPORARILY_REJECTED, 0, []  # provided, but there is no data for it yet
-        return M.MAV_RESULT_ACCEPTED, 0, [message]
-
-    def _request_capabilities(self, unused1: float, unused2: float) -> _Answer:
-        return M.MAV_RESULT_ACCEPTED, 0, [identity.autopilot_version(self.rt.node.vehicle, self.own[0])]
-
-    _local_commands: ClassVar[dict[int, Callable[[MavlinkModule, float, float], _Answer]]] = {
-        M.MAV_CMD_SET_MESSAGE_INTERVAL: _set_message_interval,
-        M.MAV_CMD_GET_MESSAGE_INTERVAL: _get_message_interval,
-        M.MAV_CMD_REQUEST_MESSAGE: _request_message,
-        M.MAV_CMD_REQUEST_AUTOPILOT_CAPABILITIES: _request_capabilities,
-    }
 
     def _on_set_mode(self, msg: Any, source: tuple[int, int], now: int) -> None:
         if msg.target_system == self.own[0]:
@@ -581,19 +537,13 @@ class MavlinkModule(Module):
             for sub in self._telemetry:
                 sub.close()
             self._telemetry = []
-            for field in ("local_position", "estimator", "imu", "gps", "battery", "mag", "baro"):
-                setattr(self.view, field, None)
+            self.view.clear_telemetry()
 
     def _periodic(self, now: int) -> None:
         self._activate(now)
         flags = self.presence.telemetry_due(now)
         if flags is not None:
-            status = TelemetryStatus(
-                type=TelemetryStatus.LINK_TYPE_UDP if self.endpoint.kind.startswith("udp") else 0,
-                heartbeat_type_gcs=flags[0],
-                heartbeat_type_onboard_controller=flags[1],
-            )
-            self._publish(ORB_ID.telemetry_status, status)
+            self._publish(ORB_ID.telemetry_status, telemetry_status(self.endpoint.kind, flags))
         if self._active:
             for msg_id in self.streams.due(now):
                 message = self._builders[msg_id]()
@@ -640,26 +590,14 @@ class MavlinkModule(Module):
         for msg in out:
             self._send(msg)
 
-    def _mission_home(self) -> GeoPoint | None:
-        """The vehicle's home, where the mission's global positions are placed (failing that, where it is)."""
-        home = self.view.home
-        if home is not None and home.valid_hpos and home.valid_alt:
-            return GeoPoint(home.lat, home.lon, home.alt)
-        lpos = self.view.local_position
-        if lpos is not None and lpos.xy_valid and lpos.z_valid and math.isfinite(lpos.ref_lat):
-            lat, lon = MapProjection(lpos.ref_lat, lpos.ref_lon).reproject(lpos.x, lpos.y)
-            return GeoPoint(lat, lon, lpos.ref_alt - lpos.z)
-        return None
-
     def _upload(self, items: list[Any]) -> None:
-        home = self._mission_home()
+        home = mission_items.mission_home(self.view.home, self.view.local_position)
         try:
-            converted = tuple(mission_items.item_from_mission_item_int(m, home) for m in items)
+            mission = mission_items.mission_from_upload(items, home, f"mavlink:{self.rt.name}")
         except mission_items.ItemRefused as e:
             self.transfer.verdict(False, e.mission_result)
             self._say(M.MAV_SEVERITY_CRITICAL, f"Mission rejected: {e}")
             return
-        mission = Mission(converted, home, source=f"mavlink:{self.rt.name}")
         self._verdict_id = mission_id_for(mission)
         self._publish(ORB_ID.mission, mission_message(mission, home, self._verdict_id))
 
@@ -683,17 +621,10 @@ class MavlinkModule(Module):
                 if reason:
                     self.counts["refused"] += 1
                     self._say(M.MAV_SEVERITY_ERROR, reason)
-        elapsed = (now - self._last_service_us) * 1e-6
-        self._last_service_us = now
-        if self.parameters.sending():
-            self._param_budget = min(self._param_budget + elapsed * self._param_rate, self._param_rate * 0.1)
-            count = int(self._param_budget)
-            if count:
-                self._param_budget -= count
-                for msg in self.parameters.take(count):
-                    self._send(msg)
-        else:
-            self._param_budget = 1.0
+        count = self._param_pacer.allow(now, self.parameters.sending())
+        if count:
+            for msg in self.parameters.take(count):
+                self._send(msg)
 
     def _run_param_job(self, job: params.ListJob | params.SetJob) -> Any:
         if isinstance(job, params.ListJob):
@@ -758,7 +689,7 @@ class MavlinkModule(Module):
                 "open_failures": c.open_failures,
                 "link_error": self.link.error or "",
                 "bus_in": sum(s.sub.received for s in (*self._subs.values(), *self._telemetry)),
-                "peers": sum(1 for p in self.presence.peers.values() if now - p.last_us < 5_000_000),
+                "peers": self.presence.peer_count(now),
                 "gcs": self.presence.gcs(now),
                 "active": self._active,
                 "pending_commands": len(self.pending),

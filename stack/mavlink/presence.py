@@ -17,6 +17,8 @@ from dataclasses import dataclass
 
 from pymavlink.dialects.v20 import common as mavlink2
 
+from stack.msg.system import TelemetryStatus
+
 HEARTBEAT_TIMEOUT_US = 2_500_000
 """PX4 ``TelemetryStatus.HEARTBEAT_TIMEOUT_US``."""
 PEER_TIMEOUT_US = 5_000_000
@@ -65,6 +67,10 @@ class Presence:
         """Some peer has sent anything lately: the link is in use."""
         return any(now_us - p.last_us < PEER_TIMEOUT_US for p in self.peers.values())
 
+    def peer_count(self, now_us: int) -> int:
+        """How many peers sent anything within PEER_TIMEOUT_US."""
+        return sum(1 for p in self.peers.values() if now_us - p.last_us < PEER_TIMEOUT_US)
+
     def telemetry_due(self, now_us: int) -> tuple[bool, bool] | None:
         """(ground station heard, onboard controller heard) to publish now, or None: every TELEMETRY_PERIOD_US
         while either is heard, and once more when both have gone."""
@@ -77,3 +83,13 @@ class Presence:
         self._reported = flags
         self._reported_us = now_us
         return flags
+
+
+def telemetry_status(endpoint_kind: str, flags: tuple[bool, bool]) -> TelemetryStatus:
+    """The ``telemetry_status`` message for :meth:`Presence.telemetry_due`'s flags (PX4's mavlink module publishes
+    it per link, ``src/modules/mavlink/mavlink_main.cpp``): the link type UDP for a UDP link, else 0."""
+    return TelemetryStatus(
+        type=TelemetryStatus.LINK_TYPE_UDP if endpoint_kind.startswith("udp") else 0,
+        heartbeat_type_gcs=flags[0],
+        heartbeat_type_onboard_controller=flags[1],
+    )

@@ -86,6 +86,16 @@ class VehicleView:
     mag: SensorMag | None = None
     baro: SensorBaro | None = None
 
+    def clear_telemetry(self) -> None:
+        """Forget what only a peer's telemetry reads (the topics read while a peer uses the link); keep what the
+        HEARTBEAT, the acknowledgements and the missions need."""
+        for field in TELEMETRY_FIELDS:
+            setattr(self, field, None)
+
+
+TELEMETRY_FIELDS = ("local_position", "estimator", "imu", "gps", "battery", "mag", "baro")
+"""The fields of :class:`VehicleView` filled only while a peer uses the link."""
+
 
 def _clamp_int(value: float, low: int, high: int) -> int:
     if not math.isfinite(value):

@@ -37,6 +37,14 @@ from stack.msg.system import ExternalAutopilotStatus, VehicleCommand, VehicleCom
 from stack.msg.topic import Topic
 from stack.params import catalogue
 from stack.pixhawk import convert, plant
+from stack.pixhawk.link_state import (
+    MAV_COMP_ID_ONBOARD_COMPUTER,
+    Liveness,
+    StreamWatch,
+    ack_for_adapter,
+    external_status,
+    sample_us,
+)
 from stack.runtime.module import Arg, Module, Timer
 
 if TYPE_CHECKING:
@@ -48,17 +56,9 @@ LINK_WAIT_S = 0.02
 PROOF_OF_LIFE_US = 100_000
 """The idle setpoint's period (10 Hz: PX4 wants at least 2 Hz, ``docs/en/flight_modes/offboard.md``)."""
 STATUS_PERIOD_US = 200_000
-SILENCE_US = 500_000
-"""The link also counts as lost after this long without any message (the IMU streams at up to 250 Hz), so
-a cut shows in half a second (before the stack's estimates time out, in 1 s), while a lost heartbeat or two
-(1 Hz) does not drop the link."""
-STREAM_CHECK_US = 1_000_000
-STREAM_REQUESTS = 5
-"""How often a stream the Pixhawk does not deliver at half the asked rate is asked for again."""
 SYS_STATUS_BATTERY_AFTER_US = 3_000_000
 """SYS_STATUS gives the battery only if no BATTERY_STATUS came for this long."""
 REFUSAL_LOG_EVERY = 500
-MAV_COMP_ID_ONBOARD_COMPUTER = 191
 DEVICE_ID_BASE = 0x4D4C0000
 """Device ids of the Pixhawk's sensors as the stack sees them ("ML" + the MAVLink system id)."""
 MODE_COMMANDS = frozenset(
@@ -168,16 +168,13 @@ class PixhawkAdapterModule(Module):
         self.latency = plant.LatencyStats()
         self.device_id = DEVICE_ID_BASE | int(a["system_id"])
         self._estimate_sample_us = 0
-        self._last_rx_us = 0
-        self._data_resumed_us = 0
+        self.liveness = Liveness()
         self._last_target_us = 0
         self._battery_status_us = -SYS_STATUS_BATTERY_AFTER_US
         self._status_us = 0
         self._published_status: ExternalAutopilotStatus | None = None
         self._refused = 0
-        self._stream_counts: dict[int, int] = {}
-        self._stream_check_us = 0
-        self._stream_requests: dict[int, int] = {}
+        self.stream_watch = StreamWatch(self.streams)
         self._autopilot: tuple[int, int] | None = None
         self._estimator_status_us = 0
         self.log.info(
@@ -213,9 +210,7 @@ class PixhawkAdapterModule(Module):
         messages = self.link.poll(0.0)
         now = monotonic_us()
         if messages:
-            if now - self._last_rx_us >= SILENCE_US:
-                self._data_resumed_us = now
-            self._last_rx_us = now
+            self.liveness.on_receive(now)
         self.handoff.on_connection(now, self._connected(now))
         for msg in messages:
             self._on_message(msg, now)
@@ -229,9 +224,8 @@ class PixhawkAdapterModule(Module):
     def _connected(self, now: int) -> bool:
         """The Pixhawk is heard: data within SILENCE_US, and its heartbeat within the link timeout (counted from
         when data came back after a gap, as the next 1 Hz heartbeat may be a second away)."""
-        if self._autopilot is None or now - self._last_rx_us >= SILENCE_US:
-            return False
-        return self.link.connected or now - self._data_resumed_us < self.link.link_timeout_us
+        heard = self._autopilot is not None
+        return self.liveness.connected(now, heard, self.link.connected, self.link.link_timeout_us)
 
     def _track_estimate(self) -> None:
         while (item := self.estimates.poll()) is not None:
@@ -275,19 +269,14 @@ class PixhawkAdapterModule(Module):
             self.log.warning("%s (%d refused so far)", why, self._refused)
 
     def _sample_us(self, remote_us: int, now: int) -> int:
-        """The autopilot's sample time on the stack's clock (the receive time until the clocks are synced);
-        never later than its arrival."""
-        ts = self.link.timesync
-        if not ts.synced or convert.is_unix_time(remote_us):
-            return now
-        return min(ts.to_local_us(remote_us), now)
+        return sample_us(self.link.timesync, remote_us, now)
 
     def _on_message(self, msg: Any, now: int) -> None:
         source = (msg.get_srcSystem(), msg.get_srcComponent())
         if self.link.peer is None or source != self.link.peer:
             return
         kind = msg.get_msgId()
-        self._stream_counts[kind] = self._stream_counts.get(kind, 0) + 1
+        self.stream_watch.on_message(kind)
         handler = self._handlers.get(kind)
         if handler is None:
             return
@@ -373,10 +362,7 @@ class PixhawkAdapterModule(Module):
         self.log.log(STATUSTEXT_LEVELS.get(msg.severity, logging.INFO), "Pixhawk: %s", text)
 
     def _on_command_ack(self, msg: Any, now: int) -> None:
-        if msg.target_system not in (0, self.link.system_id) or msg.target_component not in (
-            0,
-            MAV_COMP_ID_ONBOARD_COMPUTER,
-        ):
+        if not ack_for_adapter(msg.target_system, msg.target_component, self.link.system_id):
             return
         self.handoff.on_ack(now, msg.command, msg.result)
 
@@ -429,45 +415,12 @@ class PixhawkAdapterModule(Module):
         self.link.mav.command_long_send(peer[0], peer[1], c.command, c.confirmation, *c.params)
 
     def _check_streams(self, now: int) -> None:
-        """(Re)ask for each stream not arriving at half its rate, at most STREAM_REQUESTS times per connection."""
-        if not self.link.connected or self._autopilot is None:
-            self._stream_requests.clear()
-            return
-        if now - self._stream_check_us < STREAM_CHECK_US:
-            return
-        span_s = (now - self._stream_check_us) * 1e-6 if self._stream_check_us else 0.0
-        self._stream_check_us = now
-        for stream in self.streams:
-            received = self._stream_counts.get(stream.msg_id, 0)
-            slow = stream.hz > 0 and (span_s == 0.0 or received < 0.5 * stream.hz * span_s)
-            stopped = stream.hz == 0 and received > 0
-            asked = self._stream_requests.get(stream.msg_id, 0)
-            if (slow or stopped or asked == 0) and asked < STREAM_REQUESTS:
-                self._stream_requests[stream.msg_id] = asked + 1
-                self._send_command(plant.message_interval_command(stream))
-        self._stream_counts.clear()
+        connected = self.link.connected and self._autopilot is not None
+        for command in self.stream_watch.check(now, connected):
+            self._send_command(command)
 
     def _status(self, now: int) -> ExternalAutopilotStatus:
-        h, v = self.handoff, self.handoff.view
-        peer = self._autopilot or (0, 0)
-        return ExternalAutopilotStatus(
-            timestamp=now,
-            connected=v.connected,
-            system_id=peer[0],
-            component_id=peer[1],
-            autopilot=mavlink2.MAV_AUTOPILOT_PX4 if self._autopilot else 0,
-            armed=v.armed,
-            custom_mode=v.custom_mode,
-            mode=px4_modes.describe(v.custom_mode) if v.heartbeat_us else "",
-            system_status=v.system_status,
-            armable=v.armable,
-            offboard=v.offboard,
-            in_control=h.in_control,
-            refusals=h.refusals,
-            refusal=h.refusal,
-            link_losses=self.link.counters.link_losses,
-            link_quality=self.link.counters.quality,
-        )
+        return external_status(now, self.handoff, self._autopilot, self.link.counters)
 
     # -- heartbeat figures and shutdown -----------------------------------------------------------------
 
