@@ -144,9 +144,13 @@ class ModuleBench:
         self.rejected = 0
         self.behind = False
         self.now = 0
-        self.node = _Node(self.spec.vehicle)
+        self.node = self.stand_in_node()
         self.module_watchers: list[Callable[[str, int, bool], None]] = []
         self.module = cls(self)  # type: ignore[arg-type]
+
+    def stand_in_node(self) -> Any:
+        """What the module gets as ``rt.node`` (a bench for other modules may give its own)."""
+        return _Node(self.spec.vehicle)
 
     def add_input(self, topic: str, instance: int, queue: bool, capacity: int) -> None:
         self.inputs[(topic, instance)] = _Input(queue)

@@ -82,9 +82,11 @@ class LinkBench(ModuleBench):
     def __init__(
         self, cls: type[Module], params: dict[str, object] | None = None, args: dict[str, Any] | None = None
     ) -> None:
-        self.node = BusStandIn(cls.NAME)
         self.errors = 0
         super().__init__(cls, params, args)
+
+    def stand_in_node(self) -> BusStandIn:
+        return BusStandIn(self.name)
 
 
 def wait_for(ok: Callable[[], Any], timeout: float = 5.0, what: str = "the condition") -> Any:
