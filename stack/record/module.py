@@ -362,6 +362,16 @@ class RecorderModule(Module):
             w = self.writer
             self.log.info("recorded %d messages (%d undecoded) to %s", w.messages, w.raw_messages, w.path.name)
 
+    def status(self) -> dict[str, float | int | str | bool]:
+        """The recording's figures for the heartbeat (``stack status``): what is in the file and what was not."""
+        w = self.writer
+        return {
+            "recorded": w.messages,
+            "undecoded": w.raw_messages,
+            "record_errors": self.pump.errors,
+            "fast_lost": self.fast.lost if self.fast is not None else 0,
+        }
+
     def _read_fast(self, final: bool) -> None:
         assert self.fast is not None
         self.fast.read(self.pump.fast.append, final)

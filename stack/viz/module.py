@@ -193,6 +193,16 @@ class RerunBridgeModule(Module):
         for _, topic, m in pending:
             log_message(topic, 0, m, wall)
 
+    def status(self) -> dict[str, float | int | str | bool]:
+        """The plots' figures for the heartbeat (``stack status``): what was drawn and what fell behind."""
+        lg = self.logger
+        return {
+            "plotted": lg.kept if lg is not None else 0,
+            "messages": lg.messages if lg is not None else 0,
+            "overruns": self.overruns,
+            "lost": self.lost,
+        }
+
     def close(self) -> None:
         if self.logger is not None:
             for topic in self.topics:

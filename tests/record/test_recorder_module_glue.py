@@ -77,6 +77,7 @@ def test_what_arrives_is_in_the_file_once_closed_logged_at_the_wall_clock_in_rea
     ]
     assert start <= messages[0].log_time_us <= messages[1].log_time_us <= end
     assert messages[0].msg == gyro and messages[1].msg.arming_state == 2
+    assert bench.module.status() == {"recorded": 2, "undecoded": 0, "record_errors": 0, "fast_lost": 0}
 
 
 def test_in_lockstep_a_message_is_logged_at_the_simulated_time_reached(tmp_path):

@@ -88,6 +88,9 @@ def test_a_buffer_found_full_is_an_overrun_reported_once_per_hundred(tmp_path, c
     full = [m for m in caplog.messages if "ring buffer of 16 full" in m]
     assert full == ["vehicle_torque_setpoint: ring buffer of 16 full, oldest samples dropped (1 overruns so far)"]
     assert bench.module.logger.messages == 16 + 16 + 1
+    status = bench.module.status()
+    assert (status["messages"], status["overruns"], status["lost"]) == (33, 2, 0)
+    assert status["plotted"] == bench.module.logger.kept > 0
     bench.module.close()
 
 
