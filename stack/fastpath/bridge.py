@@ -45,6 +45,7 @@ from stack.bus.topics import FLAG_LOCKSTEP_TIME, FLAG_PROBE, HEADER
 from stack.fastpath.attach import Attachment
 from stack.fastpath.layout import (
     H_NOW,
+    H_ROSTER,
     H_STEP,
     H_TOPOLOGY,
     P_FINGERPRINT,
@@ -70,10 +71,10 @@ from stack.runtime.lockstep import (
     supervisor_states,
     supervisor_word,
 )
+from stack.runtime.start_deadline import StartDeadline
 
 log = logging.getLogger("stack.lockstep")
 
-START_TIMEOUT_S = 60.0
 RESTART_POLL_S = 0.05
 WAKE_CHECK_S = 0.05
 """How often a wait for a member over Zenoh looks again whether it left or stalled."""
@@ -450,7 +451,7 @@ class ZenohBridge:
 
     def join(self) -> None:
         """Block until every member over Zenoh has a ready slot and has synced (see the module docstring)."""
-        deadline = time.monotonic() + START_TIMEOUT_S
+        deadline = StartDeadline()
         step0 = _encoder.encode(LockstepClock(timestamp=0, run=self.run_id, step=0, counts=[], members=[]))
         while True:
             self._clock_pub.put(step0)
@@ -485,7 +486,7 @@ class ZenohBridge:
                 if not waiting:
                     log.info("lockstep members over Zenoh: %s", ", ".join(m.name for m in self.members))
                     return
-            if time.monotonic() > deadline:
+            if deadline.passed(bool(self.region.words[H_ROSTER])):
                 raise LockstepError(f"lockstep start timed out waiting for {', '.join(waiting)} (over Zenoh)")
             time.sleep(0.02)
 

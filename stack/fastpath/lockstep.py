@@ -64,11 +64,11 @@ from stack.runtime.ledger import (
     Word,
     timer_due,
 )
+from stack.runtime.start_deadline import StartDeadline
 
 log = logging.getLogger("stack.lockstep")
 
 WAIT_MS = 5
-START_TIMEOUT_S = 60.0
 LAG_WAKE_STEPS = 32
 ADMIT_SCAN_STEPS = 250
 LAG_MAX_STEPS = 128
@@ -142,7 +142,7 @@ class FastCoordinator:
     def start(self) -> None:
         """Block until the supervisor has started every module and each has attached, then admit them."""
         region, w = self.region, self.w
-        deadline = time.monotonic() + START_TIMEOUT_S
+        deadline = StartDeadline()
         while True:
             missing = [
                 region.slot_name(s)
@@ -151,8 +151,8 @@ class FastCoordinator:
             ]
             if w[H_ROSTER] and not missing:
                 break
-            if time.monotonic() > deadline:
-                raise LockstepError(f"lockstep start timed out waiting for {', '.join(missing) or 'the supervisor'}")
+            if deadline.passed(bool(w[H_ROSTER])):
+                raise LockstepError(f"lockstep start timed out waiting for {', '.join(missing)}")
             self._reap(10)
         w[region.slot_word(self.att.slot, S_ADMITTED)] = self.att.incarnation
         self._admit_attached()

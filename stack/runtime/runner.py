@@ -37,6 +37,7 @@ from stack.runtime.pacing import Pacer
 from stack.runtime.priority import raise_priority
 from stack.runtime.services import Heartbeat, ParamService
 from stack.runtime.spec import ModuleSpec, load_module_class, resolve_args
+from stack.runtime.start_deadline import StartDeadline
 
 log = logging.getLogger("stack.runtime")
 
@@ -437,7 +438,7 @@ class Runtime:
         visible the member tokens are too; the coordinator must also have taken them in.
         """
         self.state = "waiting for modules"
-        deadline = time.monotonic() + startup.SYNC_TIMEOUT_S
+        deadline = StartDeadline()
         session, vehicle = self.node.session, self.node.vehicle
         while True:
             coordinator.announce()
@@ -455,8 +456,8 @@ class Runtime:
             missing = sorted((set(roster) - synced - {self.name}) | (members - coordinator.known_members()))
             if roster and not missing:
                 break
-            if time.monotonic() > deadline:
-                raise RuntimeError(f"lockstep start timed out waiting for {', '.join(missing) or 'the roster'}")
+            if deadline.passed(bool(roster)):
+                raise RuntimeError(f"lockstep start timed out waiting for {', '.join(missing)}")
             time.sleep(0.02)
         self.state = "running"
         log.info("lockstep starting with %s", ", ".join(sorted(roster)))

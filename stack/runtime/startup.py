@@ -32,10 +32,10 @@ from stack.bus.graph import read_graph
 from stack.bus.node import Node, stable_publisher_id
 from stack.runtime.inputs import InputBuffer
 from stack.runtime.lockstep import LockstepMember
+from stack.runtime.start_deadline import START_TIMEOUT_S, StartDeadline
 
 log = logging.getLogger("stack.runtime")
 
-SYNC_TIMEOUT_S = 60.0
 PROBE_PERIOD_S = 0.02
 LATE_JOIN_SETTLE_S = 0.5
 
@@ -81,7 +81,7 @@ def sync(
     over Zenoh in a shared-memory run waits for the sync of ``sync_with`` only (the others do not sync).
     """
     inputs = list(inputs)
-    deadline = time.monotonic() + SYNC_TIMEOUT_S
+    deadline = StartDeadline()
     roster: dict[str, int] | None = None
     declared = False
     problem = "no supervisor roster"
@@ -123,8 +123,8 @@ def sync(
                 if late_join or not pending:
                     return
                 problem = f"waiting for {', '.join(pending)} to sync"
-        if time.monotonic() > deadline:
-            raise RuntimeError(f"lockstep start-up timed out after {SYNC_TIMEOUT_S:.0f} s: {problem}")
+        if deadline.passed(roster is not None):
+            raise RuntimeError(f"lockstep start-up timed out {START_TIMEOUT_S:.0f} s after the roster: {problem}")
         time.sleep(PROBE_PERIOD_S)
 
 
