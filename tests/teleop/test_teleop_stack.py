@@ -104,7 +104,11 @@ def test_a_flight_by_keyboard(stack: RunningStack, sticks: SticksOnTheBus, teleo
     t.type("q")
     assert t.exit_code() == 0
     assert t.terminal_restored()
-    assert re.search(r"\x1b\[\?1049lteleop: quit; \d+ setpoints sent in [\d.]+ s \((4[5-9]|5\d)\.\d Hz\)", t.output)
+    summary = re.search(r"\x1b\[\?1049lteleop: quit; \d+ setpoints sent in [\d.]+ s \(([\d.]+) Hz\)", t.output)
+    assert summary, t.output
+    # The live rate above is the sending check; this average over the whole session also counts the stalls of
+    # a loaded machine, which the sender does not make up in a burst.
+    assert 20.0 < float(summary[1]) < 55.0, summary[0]
     sticks.settle()
     last = sticks.messages[-1]
     assert (last["roll"], last["pitch"], last["yaw"], last["throttle"]) == (0.0, 0.0, 0.0, 0.0)  # Position
