@@ -10,13 +10,11 @@ publishes the acknowledgements it held back until that autopilot armed or refuse
 changes, failsafes) and the reasons of the commands it refuses go out on ``mavlink_log`` for the operator, as
 PX4's commander does with ``mavlink_log_*``: ground-station links send them as STATUSTEXT.
 
-PX4's land detector runs in the same process on every second tick, at its 50 Hz
-(LAND_DETECTOR_UPDATE_INTERVAL in ``src/modules/land_detector/LandDetector.h``), and publishes
-``vehicle_land_detected`` when its result changes or at 1 Hz, as ``LandDetector.cpp`` does: the multicopter
-detector, or the fixed-wing one (:mod:`stack.commander.fw_land_detector`, on ``airspeed_validated``) when
-MAV_TYPE makes the vehicle a plane. In PX4 both
-read the 250 Hz attitude and IMU topics in-process for free; here they read the estimator's 10 Hz
-``estimator_status`` and ``vehicle_imu_status`` summaries.
+PX4's land detector runs in the same process on every second tick (:mod:`stack.commander.land_detection`):
+the multicopter detector, or the fixed-wing one (:mod:`stack.commander.fw_land_detector`, on
+``airspeed_validated``) when MAV_TYPE makes the vehicle a plane. In PX4 both read the 250 Hz attitude and IMU
+topics in-process for free; here they read the estimator's 10 Hz ``estimator_status`` and
+``vehicle_imu_status`` summaries.
 """
 
 from __future__ import annotations
@@ -27,10 +25,11 @@ import msgspec
 
 from stack.commander import control_chain, fw_land_detector, land_detector, offboard
 from stack.commander.events import event_severity
-from stack.commander.fw_land_detector import FixedwingLandDetector, FixedwingLandDetectorInputs
+from stack.commander.fw_land_detector import FixedwingLandDetectorInputs
 from stack.commander.health import CommanderInputs
 from stack.commander.home import HomePosition as Home
-from stack.commander.land_detector import LandDetectorInputs, MulticopterLandDetector
+from stack.commander.land_detection import LandDetection
+from stack.commander.land_detector import LandDetectorInputs
 from stack.commander.modes import FIXED_WING
 from stack.commander.state_machine import PARAMS as COMMANDER_PARAMS
 from stack.commander.state_machine import Commander
@@ -43,7 +42,6 @@ from stack.msg.system import (
     VehicleCommand,
     VehicleCommandAck,
     VehicleControlMode,
-    VehicleLandDetected,
     VehicleStatus,
     command_label,
 )
@@ -54,7 +52,6 @@ from stack.runtime.priority import COMMANDER
 NS = VehicleStatus
 RATE_HZ = 100.0
 REPUBLISH_US = 500_000
-LAND_DETECTED_REPUBLISH_US = 1_000_000
 
 
 def navigation_request(nav: Navigation) -> NavigationRequest:
@@ -135,10 +132,7 @@ class CommanderModule(Module):
         self.advertise(ORB_ID.navigation_request)
         self.advertise(ORB_ID.mavlink_log)
         self.commander = Commander(self.params.values())
-        self.land_detector = self._new_land_detector()
-        self._land_due = 0
-        self._land_published: tuple[bool, ...] | None = None
-        self._land_published_at = 0
+        self.land = LandDetection(self.params.values(), self.commander.vehicle_type == FIXED_WING)
         self._last_publish = 0
         self._home: Home | None = None
         self._home_count = 0
@@ -162,7 +156,7 @@ class CommanderModule(Module):
                 self.log.warning("restarted, but cannot resume (%s): starting afresh", e)
             else:
                 if self.commander.armed:
-                    self.land_detector.resume_in_air()
+                    self.land.resume_in_air()
 
     def _on_module(self, module: str, pid: int, alive: bool) -> None:
         if alive:
@@ -173,30 +167,25 @@ class CommanderModule(Module):
                 # A restarted module learns the vehicle's state at once. (Only a restart: modules first seen
                 # arrive on Zenoh's thread whenever it delivers them, and a lockstep flight must not depend on it.)
                 self._republish_now = True
-                self._land_published = None
+                self.land.republish()
         elif not self._lockstep:
             # In lockstep a dead module's silence is measured in simulated time, which stands still while the
             # supervisor restarts it; in real time its liveliness token says at once that it is gone.
             self.commander.chain.module_died(module)
 
-    def _new_land_detector(self) -> MulticopterLandDetector | FixedwingLandDetector:
-        if self.commander.vehicle_type == FIXED_WING:
-            return FixedwingLandDetector(self.params.values())
-        return MulticopterLandDetector(self.params.values())
-
     def on_params_changed(self, changed: set[str]) -> None:
         self.commander.set_params(self.params.values())
-        self.land_detector.set_params(self.params.values())
+        self.land.set_params(self.params.values())
 
     def run(self, msg: None, dt: float) -> None:
         now = self.now_us()
         for topic in control_chain.OUTPUTS:
             if self.update(topic) is not None:
                 self.commander.chain.output_seen(topic, now)
-        if now >= self._land_due:
-            # On the first tick of each 20 ms interval, so every second tick at 100 Hz.
-            self._land_due = now - now % land_detector.PERIOD_US + land_detector.PERIOD_US
-            self._detect_landing(now)
+        fixed_wing = self.commander.vehicle_type == FIXED_WING
+        landing = self.land.update(now, fixed_wing, self._land_inputs, self._fw_land_inputs)
+        if landing is not None:
+            self.publish(ORB_ID.vehicle_land_detected, landing)
         inputs = self._inputs(now)
         commands = self.take(ORB_ID.vehicle_command)
         if commands:
@@ -229,7 +218,7 @@ class CommanderModule(Module):
         # Late subscribers (a CLI, a restarted module) learn the state within REPUBLISH_US.
         if self.commander.chain.late:
             self._republish_now = True
-            self._land_published = None
+            self.land.republish()
         republish = self._republish_now or now - self._last_publish >= REPUBLISH_US
         if changed or home_changed or navigation != self._navigation or republish:
             self._republish_now = False
@@ -249,30 +238,6 @@ class CommanderModule(Module):
     def status(self) -> dict[str, float | int | str | bool]:
         """The failsafe in force and why, for `stack status` (PX4's `commander status`)."""
         return dict(self._failsafe)
-
-    def _detect_landing(self, now: int) -> None:
-        detector = self.land_detector
-        fixed_wing = self.commander.vehicle_type == FIXED_WING
-        if fixed_wing != isinstance(detector, FixedwingLandDetector):
-            # The vehicle type changed (only ever while disarmed, hence landed): its own detector from now on.
-            detector = self.land_detector = self._new_land_detector()
-        if isinstance(detector, FixedwingLandDetector):
-            state = detector.update(now, self._fw_land_inputs())
-        else:
-            state = detector.update(now, self._land_inputs())
-        # LandDetector.cpp publishes when one of these changes, or at 1 Hz.
-        key = (
-            state.landed,
-            state.freefall,
-            state.maybe_landed,
-            state.ground_contact,
-            state.in_ground_effect,
-            state.at_rest,
-        )
-        if key != self._land_published or now - self._land_published_at >= LAND_DETECTED_REPUBLISH_US:
-            self._land_published = key
-            self._land_published_at = now
-            self.publish(ORB_ID.vehicle_land_detected, VehicleLandDetected(timestamp=now, **state._asdict()))
 
     def _handle(self, cmd: VehicleCommand, now: int) -> None:
         if not self.commander.addressed_to_me(cmd):
@@ -310,7 +275,7 @@ class CommanderModule(Module):
         battery = latest(ORB_ID.battery_status)
         telemetry = latest(ORB_ID.telemetry_status)
         mission = latest(ORB_ID.mission_result)
-        land = self.land_detector.state
+        land = self.land.state
         if telemetry is not None and telemetry.heartbeat_type_gcs:
             # Only a ground station's heartbeat is the data link (PX4 Commander::dataLinkCheck); an onboard
             # controller's is not, and its going never calls for NAV_DLL_ACT.

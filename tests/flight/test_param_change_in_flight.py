@@ -26,14 +26,14 @@ def test_a_commander_parameter_change_in_flight_does_not_land_the_vehicle(tmp_pa
         airborne = 0
         while airborne < AIRBORNE_STEPS:
             stack.step()
-            airborne = 0 if commander.module.land_detector.state.landed else airborne + 1
+            airborne = 0 if commander.module.land.detector.state.landed else airborne + 1
             assert stack.now_us < 60_000_000, "no takeoff within 60 s"
-        detector = commander.module.land_detector
+        detector = commander.module.land.detector
         for name, value in CHANGES.items():
             commander.params.set(name, value)
         for _ in range(AIRBORNE_STEPS):
             stack.step()
-            assert commander.module.land_detector is detector, "the land detector was rebuilt, its state lost"
+            assert commander.module.land.detector is detector, "the land detector was rebuilt, its state lost"
             assert not (detector.state.landed or detector.state.maybe_landed), f"landed at {stack.now_us / 1e6} s"
             assert commander.module.commander.armed
         assert {commander.params[name] for name in CHANGES} == set(CHANGES.values())
