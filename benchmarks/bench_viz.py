@@ -37,9 +37,9 @@ REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
 from stack.bus.config import BusConfig  # noqa: E402
-from stack.bus.keys import heartbeat_all, supervisor_key  # noqa: E402
+from stack.bus.keys import heartbeat_all  # noqa: E402
 from stack.bus.node import Node  # noqa: E402
-from stack.cli.common import query_json  # noqa: E402
+from stack.bus.supervisors import vehicle_status  # noqa: E402
 from stack.mathlib.quaternion import from_euler  # noqa: E402
 from stack.msg import actuators, estimation, sensors, setpoints, simulation, system  # noqa: E402
 from stack.msg.internal import ModuleHeartbeat  # noqa: E402
@@ -153,7 +153,7 @@ def measure_rtf(profile: Path, home: Path, warmup_s: float, window_s: float) -> 
         bus = BusConfig(mode="client", connect=(str(found["endpoint"]),), listen=())
         with Node(bus, str(found["vehicle"]), "bench", stable_id=False) as node:
             sub = node.session.declare_subscriber(heartbeat_all(node.vehicle), on_heartbeat)
-            status = query_json(node.session, supervisor_key(node.vehicle, "status"))[0]
+            status = vehicle_status(node.session, node.vehicle)
             pids = {m["module"]: m["pid"] for m in status["modules"]}
             bridge = psutil.Process(pids["bench_plots"]) if "bench_plots" in pids else None
             time.sleep(warmup_s)

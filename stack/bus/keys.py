@@ -113,5 +113,11 @@ def synced_query(vehicle: str) -> str:
     return f"{ROOT}/{vehicle}/@synced/*"
 
 
-def supervisor_key(vehicle: str, what: str) -> str:
-    return f"{ROOT}/{vehicle}/@supervisor/{what}"
+def supervisor_key(vehicle: str, host: str, what: str) -> str:
+    """What the supervisor of one host of the vehicle answers (its roster, status...)."""
+    return f"{ROOT}/{vehicle}/@supervisor/{host}/{what}"
+
+
+def supervisor_query(vehicle: str, what: str) -> str:
+    """The same of every host's supervisor."""
+    return f"{ROOT}/{vehicle}/@supervisor/*/{what}"

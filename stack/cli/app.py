@@ -16,9 +16,9 @@ import psutil
 import typer
 
 import stack
-from stack.bus import keys
 from stack.bus.node import Node
-from stack.cli import cmd, fly, log, mavlink, param, pixhawk_sim, plot, teleop, topic, vehicle_summary
+from stack.bus.supervisors import vehicle_status
+from stack.cli import cmd, fly, log, mavlink, param, pixhawk_sim, plot, router, teleop, topic, vehicle_summary
 from stack.cli.common import (
     EndpointOption,
     JsonOption,
@@ -30,7 +30,6 @@ from stack.cli.common import (
     fail,
     name_value_placeholders,
     print_table,
-    query_json,
     to_jsonable,
     wait_until_sent,
 )
@@ -58,6 +57,7 @@ app.command("plot")(plot.plot)
 app.command("replay")(log.replay)
 app.command("pixhawk-sim")(pixhawk_sim.pixhawk_sim)
 app.command("teleop")(teleop.teleop)
+app.command("router")(router.router)
 
 
 def _print_version(value: bool) -> None:
@@ -101,16 +101,20 @@ def up(
         help="MAVLink endpoint of the Pixhawk (profiles with the pixhawk module), e.g. "
         "serial:/dev/ttyACM0:921600 or udp:0.0.0.0:14540",
     ),
+    host: str | None = typer.Option(
+        None, "--host", help="The host of a profile spread over machines ([hosts]) whose share this machine runs"
+    ),
 ) -> None:
     """Start a stack from a launch profile and supervise it until Ctrl-C, SIGTERM or --duration."""
     try:
         prof = load_profile(profile, flags={"realtime": realtime, "plot": plot_ or web, "record": record is not None})
+        prof.check_host(host)
     except ProfileError as e:
         fail(str(e), code=2)
     choose_transport(prof, transport)
     pace = _speed(prof, speed, realtime)
     extra_args = _device_args(prof, device) if device is not None else {}
-    add_observers(prof, plot=plot_, web=web, save=save, record=record)
+    add_observers(prof, plot=plot_, web=web, save=save, record=record, host=host or "")
     running = run_state.addressed_stacks(prof.vehicle)
     if running:
         fail(f"a stack for vehicle '{prof.vehicle}' is already running (pid {running[0]['pid']}); `stack down` first")
@@ -127,7 +131,7 @@ def up(
         extra_args=extra_args,
         speed=pace,
     )
-    supervisor = Supervisor(prof, options, run_dir)
+    supervisor = Supervisor(prof, options, run_dir, host)
     if record is not None:
         typer.echo(f"[stack] recording to {record.resolve()}")
     raise typer.Exit(supervisor.run())
@@ -219,10 +223,9 @@ def status(
     """The vehicle (mode, armed, failsafe, position, battery, as PX4's `commander status`), then each
     module's state, pid, CPU, memory, restarts, trigger rate and counters."""
     with connect(vehicle, endpoint) as node:
-        answers = query_json(node.session, keys.supervisor_key(node.vehicle, "status"))
-        if not answers:
+        report = vehicle_status(node.session, node.vehicle)
+        if report is None:
             fail("the supervisor did not answer")
-        report = answers[0]
         commander = next((m["extra"] for m in report["modules"] if "failsafe_action" in m.get("extra", {})), None)
         if commander is not None:
             report["vehicle_summary"] = vehicle_summary.summary(_latest(node, vehicle_summary.TOPICS), commander)

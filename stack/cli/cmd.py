@@ -18,9 +18,8 @@ from typing import Any
 import msgspec
 import typer
 
-from stack.bus import keys
 from stack.bus.node import Node
-from stack.bus.query import query_json
+from stack.bus.supervisors import vehicle_status
 from stack.bus.topics import MessageTooLarge, TopicPublisher
 from stack.cli.common import EndpointOption, VehicleOption, command_group, connect, fail, wait_until_sent
 from stack.cli.follow import (
@@ -222,16 +221,16 @@ class _Link:
 
 def is_lockstep(node: Node) -> bool:
     """Whether the stack runs in lockstep (its supervisor says; a stack reached by endpoint alone may not)."""
-    status = query_json(node.session, keys.supervisor_key(node.vehicle, "status"))
-    return bool(status and status[0].get("lockstep"))
+    status = vehicle_status(node.session, node.vehicle)
+    return bool(status and status.get("lockstep"))
 
 
 def clock_of(node: Node) -> str:
     """How the stack's clock runs, for a person flying it: real time, or lockstep and its pace."""
-    status = query_json(node.session, keys.supervisor_key(node.vehicle, "status"))
-    if not (status and status[0].get("lockstep")):
+    status = vehicle_status(node.session, node.vehicle)
+    if not (status and status.get("lockstep")):
         return "real time"
-    speed = float(status[0].get("speed", MAX_SPEED))
+    speed = float(status.get("speed", MAX_SPEED))
     if speed == 1.0:
         return "lockstep at real speed"
     return f"lockstep {describe_speed(speed)}: simulated time does not run at the wall clock's pace"

@@ -15,10 +15,9 @@ import msgspec
 import typer
 import zenoh
 
-from stack.bus import keys
 from stack.bus.config import BusConfig
 from stack.bus.node import Node
-from stack.bus.query import query_json
+from stack.bus.supervisors import outside_ready
 from stack.supervisor import state as run_state
 from stack.supervisor.profile import LOCKSTEP_TRANSPORTS, Profile
 
@@ -112,8 +111,7 @@ def wait_until_sent(node: Node, topics: Iterable[tuple[str, int]], timeout: floa
     wanted = {f"{topic}/{instance}" for topic, instance in topics}
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline:
-        answers = query_json(node.session, keys.supervisor_key(node.vehicle, "outside"))
-        if not answers or not answers[0]["fast_path"] or wanted <= set(answers[0]["topics"]):
+        if outside_ready(node.session, node.vehicle, wanted):
             return
         time.sleep(0.01)
 

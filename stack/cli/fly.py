@@ -59,6 +59,9 @@ def fly(
         prof = load_profile(profile or known[scenario].profile or DEFAULT_PROFILE, flags=flags)
     except ProfileError as e:
         fail(str(e), code=2)
+    if prof.hosts:
+        hosts = ", ".join(prof.hosts)
+        fail(f"{prof.path}: a flight runs on one machine; this profile spreads the vehicle over {hosts}", code=2)
     choose_transport(prof, transport)
     if seed is not None:
         prof.seed = seed

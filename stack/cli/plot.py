@@ -16,10 +16,10 @@ from types import FrameType
 
 import typer
 
-from stack.bus import keys
 from stack.bus.config import BusConfig
 from stack.bus.node import Node
-from stack.cli.common import EndpointOption, VehicleOption, fail, find_stack, query_json
+from stack.bus.supervisors import vehicle_status
+from stack.cli.common import EndpointOption, VehicleOption, fail, find_stack
 from stack.runtime.spec import ModuleSpec
 from stack.viz.display import DEFAULT_GRPC_PORT, has_display
 
@@ -27,8 +27,8 @@ from stack.viz.display import DEFAULT_GRPC_PORT, has_display
 def _stack_is_lockstep(vehicle: str, bus: BusConfig) -> bool:
     """Whether the stack runs in lockstep (its timestamps are then simulated time from zero)."""
     with Node(bus, vehicle, "plot-probe", stable_id=False) as node:
-        answers = query_json(node.session, keys.supervisor_key(vehicle, "status"))
-    return bool(answers and answers[0].get("lockstep"))
+        status = vehicle_status(node.session, vehicle)
+    return bool(status and status.get("lockstep"))
 
 
 def _stop_on_signals() -> None:

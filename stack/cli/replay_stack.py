@@ -21,6 +21,7 @@ from stack.bus import keys
 from stack.bus.config import BusConfig
 from stack.bus.node import Node
 from stack.bus.ports import free_port, port_taken
+from stack.bus.supervisors import SINGLE_HOST
 from stack.supervisor import state as run_state
 
 ROUTER_PORT_ATTEMPTS = 5
@@ -35,7 +36,8 @@ class ReplayStack:
         self.source = source
         self.name = run_state.replay_name(vehicle, os.getpid())
         self.node = self._open()
-        self._status = self.node.session.declare_queryable(keys.supervisor_key(vehicle, "status"), self._on_status)
+        self._status_key = keys.supervisor_key(vehicle, SINGLE_HOST, "status")
+        self._status = self.node.session.declare_queryable(self._status_key, self._on_status)
         client = BusConfig(mode="client", connect=(self.endpoint,), listen=())
         run_state.write_state(
             vehicle,
@@ -63,7 +65,7 @@ class ReplayStack:
 
     def _on_status(self, query: zenoh.Query) -> None:
         report = {"vehicle": self.vehicle, "profile": f"replay of {self.source.name}", "lockstep": self.lockstep}
-        query.reply(keys.supervisor_key(self.vehicle, "status"), json.dumps({**report, "modules": []}))
+        query.reply(self._status_key, json.dumps({**report, "modules": []}))
 
     def __enter__(self) -> ReplayStack:
         return self

@@ -18,7 +18,7 @@ from stack.bus import keys
 from stack.bus.access import OPEN_TO_TOOLS, tool_may_publish
 from stack.bus.graph import read_graph
 from stack.bus.node import Node
-from stack.bus.query import query_json
+from stack.bus.supervisors import vehicle_status
 from stack.bus.topics import HEADER, Received
 from stack.cli.common import (
     EndpointOption,
@@ -325,8 +325,8 @@ def pub(
     except ValueError as e:
         fail(str(e), code=2)
     with connect(vehicle, endpoint) as node:
-        status = query_json(node.session, keys.supervisor_key(node.vehicle, "status"))
-        if not tool_may_publish(topic, status[0].get("open_topics", ()) if status else ()):
+        status = vehicle_status(node.session, node.vehicle)
+        if not tool_may_publish(topic, status.get("open_topics", ()) if status else ()):
             owners = read_graph(node.session, node.vehicle).get((topic, instance))
             by = f" (published by {', '.join(owners.publishers)})" if owners and owners.publishers else ""
             fail(

@@ -41,6 +41,7 @@ import zenoh
 
 from stack.bus import keys
 from stack.bus.node import Node, stable_publisher_id
+from stack.bus.supervisors import module_states
 from stack.bus.topics import FLAG_LOCKSTEP_TIME, FLAG_PROBE, HEADER
 from stack.fastpath.attach import Attachment
 from stack.fastpath.layout import (
@@ -68,7 +69,6 @@ from stack.runtime.lockstep import (
     MemberToken,
     ProtocolDecoder,
     parse_member,
-    supervisor_states,
     supervisor_word,
 )
 from stack.runtime.start_deadline import StartDeadline
@@ -255,7 +255,7 @@ class BridgedMember:
             now = time.monotonic()
             if word is Word.GONE and over_at is None:
                 over_at = now
-                state = supervisor_states(self.bridge.session, self.bridge.vehicle).get(self.name, "")
+                state = module_states(self.bridge.session, self.bridge.vehicle).get(self.name, "")
                 if supervisor_word(state) is Word.GONE:
                     over_at = -VERDICT_TIMEOUT_S  # it failed or exited for good
             if (over_at is not None and now - over_at > VERDICT_TIMEOUT_S) or (

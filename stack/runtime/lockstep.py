@@ -31,7 +31,6 @@ from another run, is counted and ignored, so nothing sent on the bus can stop th
 from __future__ import annotations
 
 import collections
-import json
 import logging
 import threading
 import time
@@ -44,6 +43,7 @@ import zenoh
 
 from stack.bus import keys
 from stack.bus.node import Node
+from stack.bus.supervisors import module_states
 from stack.bus.topics import TopicPublisher
 from stack.msg.internal import LockstepAck, LockstepClock
 from stack.runtime.inputs import InputBuffer
@@ -477,7 +477,7 @@ class LockstepCoordinator:
         started = time.monotonic()
         logged = False
         while self._departures:
-            states = supervisor_states(self.node.session, self.node.vehicle)
+            states = module_states(self.node.session, self.node.vehicle)
             words = {name: supervisor_word(state) for name, state in states.items()}
             waiting = self._departures.awaited(lambda d, said=words: said.get(d.name, Word.NONE), time.monotonic())
             for name in self._departures.silent:
@@ -575,18 +575,6 @@ class LockstepCoordinator:
         self._member_sub.undeclare()
         self._ack_sub.undeclare()
         self._clock_pub.undeclare()
-
-
-def supervisor_states(session: zenoh.Session, vehicle: str) -> dict[str, str]:
-    """Module name → state, from the supervisor's status."""
-    for reply in session.get(keys.supervisor_key(vehicle, "status"), timeout=1.0):
-        if reply.ok is not None:
-            try:
-                rows = json.loads(reply.ok.payload.to_string())["modules"]
-                return {str(r["module"]): str(r["state"]) for r in rows}
-            except (ValueError, KeyError, TypeError):
-                pass
-    return {}
 
 
 def supervisor_word(state: str) -> Word:

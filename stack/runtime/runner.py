@@ -241,17 +241,19 @@ class Runtime:
             return
         lockstep_part = self._lockstep = self._make_lockstep()
         node.declare_token(keys.alive_token(node.vehicle, self.name, os.getpid()))
-        # Over Zenoh the simulator starts once every module of the roster has synced; on the fast path
-        # it waits for the participants only, which an outside module is not. An observer joining a
-        # running stack (`stack plot`, or a restart) has nothing to wait for: nobody probes any more.
-        shm = spec.lockstep and spec.fastpath_fd >= 0
-        observer_joining = self.module_cls.PASSIVE and spec.late_join
-        if spec.lockstep and not (self.module_cls.OUTSIDE_LOCKSTEP and shm) and not observer_joining:
+        # Over Zenoh the simulator starts once every module of the roster has synced; in a shared-memory run
+        # it waits for the participants only, which a module outside the lockstep is not, nor an observer on
+        # a host without the shared memory. An observer joining a running stack (`stack plot`, or a restart)
+        # has nothing to wait for: nobody probes any more.
+        cls = self.module_cls
+        outside_run = spec.shm_run and (cls.OUTSIDE_LOCKSTEP or (cls.PASSIVE and spec.fastpath_fd < 0))
+        observer_joining = cls.PASSIVE and spec.late_join
+        if spec.lockstep and not outside_run and not observer_joining:
             self.state = "syncing"
             member = lockstep_part if isinstance(lockstep_part, LockstepMember) else None
             coordinator = lockstep_part if isinstance(lockstep_part, LockstepCoordinator) else None
             announce = coordinator.announce if coordinator is not None else None
-            startup.sync(node, self.inputs.values(), member, self.spec.late_join, announce, spec.sync_with)
+            startup.sync(node, self.inputs.values(), member, spec, announce)
         self.state = "running"
         log.info("%s ready (%s)", self.name, self.describe_trigger())
         if on_ready is not None:
@@ -442,7 +444,7 @@ class Runtime:
         session, vehicle = self.node.session, self.node.vehicle
         while True:
             coordinator.announce()
-            roster = startup.query_roster(session, vehicle) or {}
+            roster = startup.query_roster(self.node, self.spec.hosts) or {}
             synced = {
                 str(r.ok.key_expr).rsplit("/", 1)[-1]
                 for r in session.liveliness().get(keys.synced_query(vehicle), timeout=1.0)

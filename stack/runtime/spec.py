@@ -13,6 +13,7 @@ from dataclasses import asdict, dataclass, field
 from typing import TYPE_CHECKING
 
 from stack.bus.config import BusConfig
+from stack.bus.supervisors import SINGLE_HOST
 from stack.params.param import ParamError, ParamValue
 
 if TYPE_CHECKING:
@@ -180,6 +181,13 @@ class ModuleSpec:
     # A member over Zenoh in a shared-memory run: the modules whose start-up sync it waits for (the others do
     # not sync over Zenoh). None: every module of the roster.
     sync_with: list[str] | None = None
+    # The hosts whose supervisors start the vehicle's modules: the lockstep's roster is complete once each of
+    # them has started its own (stack.bus.supervisors).
+    hosts: list[str] = field(default_factory=lambda: [SINGLE_HOST])
+    # A shared-memory lockstep run, whose shared memory is on the coordinator's host (this module's or another).
+    shm_run: bool = False
+    # The vehicle's modules outside the lockstep (links, observers), wherever they run.
+    outside: list[str] = field(default_factory=list)
 
     def to_json(self) -> str:
         d = asdict(self)

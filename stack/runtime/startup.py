@@ -2,7 +2,7 @@
 
 A lost first message would stall a lockstep run forever (its subscriber's acknowledgement never
 comes), and Zenoh gives no way to ask a publisher which subscribers it knows. So each module, once
-the supervisor's roster is complete:
+the vehicle's roster is complete (every host's supervisor has started its modules, :mod:`stack.bus.supervisors`):
 
 1. sends probe samples on every topic it publishes (``TopicPublisher.probe``), repeatedly;
 2. waits until, for every topic it subscribes to, a probe has arrived from every roster module that
@@ -19,10 +19,9 @@ each topic it publishes that others subscribe to.
 
 from __future__ import annotations
 
-import json
 import logging
 import time
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Sequence
 
 import zenoh
 
@@ -30,8 +29,10 @@ from stack.bus import keys
 from stack.bus.alive import AliveTokens
 from stack.bus.graph import read_graph
 from stack.bus.node import Node, stable_publisher_id
+from stack.bus.supervisors import complete_roster, rosters
 from stack.runtime.inputs import InputBuffer
 from stack.runtime.lockstep import LockstepMember
+from stack.runtime.spec import ModuleSpec
 from stack.runtime.start_deadline import START_TIMEOUT_S, StartDeadline
 
 log = logging.getLogger("stack.runtime")
@@ -40,14 +41,10 @@ PROBE_PERIOD_S = 0.02
 LATE_JOIN_SETTLE_S = 0.5
 
 
-def query_roster(session: zenoh.Session, vehicle: str) -> dict[str, int] | None:
-    """The supervisor's list of started modules (name → pid), once all of them are up; else None."""
-    for reply in session.get(keys.supervisor_key(vehicle, "roster"), timeout=1.0):
-        if reply.ok is not None:
-            data = json.loads(reply.ok.payload.to_string())
-            if data.get("complete"):
-                return {str(k): int(v) for k, v in data["modules"].items()}
-    return None
+def query_roster(node: Node, hosts: Sequence[str]) -> dict[str, int] | None:
+    """The vehicle's started modules (name → pid), once every host's supervisor has started all of its own in
+    this run; else None."""
+    return complete_roster(rosters(node.session, node.vehicle), hosts, node.run_id)
 
 
 def alive_modules(session: zenoh.Session, tokens: AliveTokens) -> dict[str, int]:
@@ -71,16 +68,21 @@ def sync(
     node: Node,
     inputs: Iterable[InputBuffer],
     member: LockstepMember | None,
-    late_join: bool,
+    spec: ModuleSpec,
     announce: Callable[[], None] | None = None,
-    sync_with: Iterable[str] | None = None,
 ) -> None:
     """Block until this module may take part in the lockstep (see the module docstring).
 
-    The coordinator passes ``announce``, which sends its pre-start clocks: the members wait for them. A member
-    over Zenoh in a shared-memory run waits for the sync of ``sync_with`` only (the others do not sync).
+    The coordinator passes ``announce``, which sends its pre-start clocks: the members wait for them.
+
+    A member over Zenoh in a shared-memory run (``spec.sync_with``) waits for the sync of those modules only (the
+    others do not sync), and registers first: the fast path's publishers are probed for it by the coordinator's
+    process (:mod:`stack.fastpath.bridge`) once it knows the member. Modules outside the lockstep never probe in
+    such a run (their messages are not the lockstep's), and nothing waits for them.
     """
     inputs = list(inputs)
+    late_join, sync_with = spec.late_join, spec.sync_with
+    registers_first = member is not None and sync_with is not None
     deadline = StartDeadline()
     roster: dict[str, int] | None = None
     declared = False
@@ -88,7 +90,7 @@ def sync(
     tokens = AliveTokens(node.vehicle, log.warning)
     while True:
         if roster is None:
-            roster = query_roster(node.session, node.vehicle)
+            roster = query_roster(node, spec.hosts)
         if roster is not None:
             if announce is not None:
                 announce()
@@ -101,6 +103,9 @@ def sync(
                     buf.pull()
             alive = alive_modules(node.session, tokens)
             others = {name for name in roster if name != node.name}
+            probers = others - set(spec.outside) if sync_with is not None else others
+            if registers_first and not member.registered:
+                member.register()
             waiting_for = sorted(n for n in others if alive.get(n) != roster[n])
             if waiting_for:
                 problem = f"modules not seen: {', '.join(waiting_for)}"
@@ -109,7 +114,7 @@ def sync(
                     time.sleep(LATE_JOIN_SETTLE_S)
                     unreached = _unmatched(node, others)
                 else:
-                    unreached = _unprobed(node, inputs, others)
+                    unreached = _unprobed(node, inputs, probers)
                 if unreached:
                     problem = f"not connected yet: {', '.join(unreached)}"
                 elif member is not None and not _coordinator_reachable(member, late_join):

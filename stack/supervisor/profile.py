@@ -30,11 +30,18 @@ placeholders are replaced when the stack starts, so both ends of a link can name
 Python), ``{run_dir}`` (the run directory), ``{seed}`` (the run's seed), ``{udp_port}`` and
 ``{control_port}`` (two free 127.0.0.1 UDP ports, chosen per run). Every module and process also finds
 them in its environment as ``STACK_<NAME>`` (``STACK_CONTROL_PORT``...).
+
+One vehicle may be spread over several machines: ``[hosts.NAME] endpoint = "tcp/ADDR:PORT"`` declares a host
+and where its Zenoh router listens (the other hosts' routers connect there), and every ``[[module]]`` and
+``[[process]]`` then names the host that runs it (``host = "NAME"``). ``stack up PROFILE --host NAME`` on each
+machine starts that host's share; a host may run no module at all (a ground laptop: its router and the tools).
+The ``[params]`` are the vehicle's, wherever its modules run. A profile without ``[hosts]`` is one machine's.
 """
 
 from __future__ import annotations
 
 import ast
+import re
 import string
 import tomllib
 from dataclasses import dataclass, field
@@ -42,6 +49,7 @@ from pathlib import Path
 
 from stack.bus import keys
 from stack.bus.config import BusConfig
+from stack.bus.supervisors import SINGLE_HOST
 from stack.launch_files import find_mission, launch_dirs
 from stack.msg.registry import TOPICS
 from stack.names import suggestion
@@ -83,6 +91,8 @@ class ModuleEntry:
     """The process it shares with the other modules of the same ``process`` name; empty: a process of its own."""
     transport: str = "shm"
     """How it takes part in a shared-memory lockstep run: through the shared memory, or over Zenoh."""
+    host: str = ""
+    """The machine that runs it (``[hosts.NAME]``); empty in a profile of one machine."""
 
 
 @dataclass
@@ -96,6 +106,29 @@ class ProcessEntry:
     max_restarts: int
     critical: bool
     ready_after_s: float
+    host: str = ""
+
+
+@dataclass(frozen=True)
+class HostEntry:
+    """A machine the vehicle is spread over (``[hosts.NAME]``): its router listens on ``endpoint``, where the other
+    hosts' routers connect."""
+
+    name: str
+    endpoint: str
+
+
+_ENDPOINT = re.compile(r"^(tcp|tls|quic)/(\[[0-9A-Fa-f:.]+\]|[A-Za-z0-9.\-]+):(\d{1,5})$")
+
+
+def endpoint_problem(endpoint: str) -> str:
+    """Why ``endpoint`` cannot be where a host's router listens for the others, or '' if it can."""
+    m = _ENDPOINT.match(endpoint)
+    if m is None:
+        return f"{endpoint!r} is not a Zenoh endpoint like tcp/10.0.0.2:7447"
+    if not 0 < int(m[3]) <= 65535:
+        return f"{endpoint}: the port must be between 1 and 65535 (the other hosts connect to it)"
+    return ""
 
 
 def expand_placeholders(text: str, values: dict[str, str]) -> str:
@@ -123,10 +156,29 @@ class Profile:
     processes: list[ProcessEntry] = field(default_factory=list)
     scenario_limits: dict[str, dict[str, float | bool]] = field(default_factory=dict)
     scenario_options: dict[str, dict[str, str]] = field(default_factory=dict)
+    hosts: dict[str, HostEntry] = field(default_factory=dict)
 
     @property
     def name(self) -> str:
         return self.path.stem
+
+    def hosts_with_modules(self) -> list[str]:
+        """The hosts whose supervisors start modules (their rosters make the vehicle's), in profile order."""
+        if not self.hosts:
+            return [SINGLE_HOST]
+        return [h for h in self.hosts if any(m.host == h for m in self.modules)]
+
+    def check_host(self, host: str | None) -> None:
+        """``--host``: required, and one of the profile's hosts, when the profile spreads the vehicle over hosts;
+        refused when it does not. Raises ProfileError naming the file."""
+        known = ", ".join(self.hosts)
+        if host is None and self.hosts:
+            raise ProfileError(f"{self.path}: hosts: the vehicle is spread over hosts {known}; give --host NAME")
+        if host is not None and not self.hosts:
+            raise ProfileError(f"{self.path}: --host {host}: this profile runs on one machine (it has no [hosts])")
+        if host is not None and host not in self.hosts:
+            hint = suggestion(host, self.hosts)
+            raise ProfileError(f"{self.path}: --host {host}: no such host{hint}; hosts: {known}")
 
 
 def resolve_path(profile: str | Path) -> Path:
@@ -251,7 +303,7 @@ class _Loader:
             known = ", ".join(available_profiles())
             raise ProfileError(f"{self.path}: no such profile{hint} (available: {known})")
         doc = self._document(self.path, ())
-        self._only(doc, "", {"stack", "bus", "params", "module", "process", "scenario"})
+        self._only(doc, "", {"stack", "bus", "params", "module", "process", "scenario", "hosts"})
         stack = self._table(doc, "stack")
         self._only(
             stack,
@@ -290,6 +342,7 @@ class _Loader:
             stall_timeout_s=float(self._get(stack, "stack", "stall_timeout_s", float, 10.0)),
             lockstep_transport=transport,
             open_topics=self._open_topics(stack),
+            hosts=self._hosts(self._table(doc, "hosts")),
         )
         shared = self._airframe_params(airframe)
         given_shared = self._table(doc, "params")
@@ -326,12 +379,51 @@ class _Loader:
                 continue
             profile.processes.append(process)
         self._check_process_groups(profile)
+        self._check_placement(profile)
         for module in profile.modules:
             for aname, value in module.args.items():
                 if isinstance(value, str):
                     self._check_placeholders(f"module ({module.name}).args.{aname}", value, allow_json=True)
         profile.scenario_limits, profile.scenario_options = self._scenario_settings(self._table(doc, "scenario"))
         return profile
+
+    def _hosts(self, table: dict) -> dict[str, HostEntry]:
+        hosts = {}
+        for name, entry in table.items():
+            where = f"hosts.{name}"
+            try:
+                keys.check_name("host", name)
+            except ValueError as e:
+                raise self.fail(where, str(e)) from None
+            if not isinstance(entry, dict):
+                raise self.fail(where, 'expected a table with endpoint = "tcp/ADDR:PORT"')
+            self._only(entry, where, {"endpoint"})
+            endpoint = self._get(entry, where, "endpoint", str, None)
+            if endpoint is None:
+                raise self.fail(f"{where}.endpoint", 'missing (where its router listens: "tcp/ADDR:PORT")')
+            problem = endpoint_problem(endpoint)
+            if problem:
+                raise self.fail(f"{where}.endpoint", problem)
+            hosts[name] = HostEntry(name, endpoint)
+        seen: dict[str, str] = {}
+        for h in hosts.values():
+            if h.endpoint in seen:
+                raise self.fail(f"hosts.{h.name}.endpoint", f"{h.endpoint} is host {seen[h.endpoint]}'s endpoint too")
+            seen[h.endpoint] = h.name
+        return hosts
+
+    def _check_placement(self, profile: Profile) -> None:
+        """With ``[hosts]``, every module and process names one of them; without, none names a host."""
+        for kind, entries in (("module", profile.modules), ("process", profile.processes)):
+            for entry in entries:
+                where = f"{kind} ({entry.name}).host"
+                if not profile.hosts and entry.host:
+                    raise self.fail(where, f"'{entry.host}': this profile declares no [hosts.{entry.host}]")
+                if profile.hosts and not entry.host:
+                    raise self.fail(where, f"missing: say which host runs it ({', '.join(profile.hosts)})")
+                if profile.hosts and entry.host not in profile.hosts:
+                    hint = suggestion(entry.host, profile.hosts)
+                    raise self.fail(where, f"'{entry.host}' is not a host of this profile{hint}")
 
     def _check_process_groups(self, profile: Profile) -> None:
         """A process group's name is not another module's or a ``[[process]]``'s."""
@@ -432,6 +524,7 @@ class _Loader:
                 "critical",
                 "process",
                 "transport",
+                "host",
             },
         )
         ref = self._get(entry, where, "module", str, None)
@@ -501,6 +594,7 @@ class _Loader:
             critical=self._get(entry, where, "critical", bool, False),
             process=process,
             transport=transport,
+            host=self._get(entry, where, "host", str, ""),
         )
 
     def _process(self, i: int, entry: object, shared: dict[str, object], variables: dict[str, object]) -> ProcessEntry:
@@ -508,7 +602,9 @@ class _Loader:
         if not isinstance(entry, dict):
             raise self.fail(where, "expected a table")
         self._only(
-            entry, where, {"name", "command", "condition", "restart", "max_restarts", "critical", "ready_after_s"}
+            entry,
+            where,
+            {"name", "command", "condition", "restart", "max_restarts", "critical", "ready_after_s", "host"},
         )
         name = self._get(entry, where, "name", str, None)
         if name is None:
@@ -543,6 +639,7 @@ class _Loader:
             max_restarts=max_restarts,
             critical=self._get(entry, where, "critical", bool, False),
             ready_after_s=ready_after_s,
+            host=self._get(entry, where, "host", str, ""),
         )
 
     def _check_placeholders(self, key: str, text: str, allow_json: bool = False) -> None:

@@ -7,7 +7,8 @@ so ``stack status``, ``stack topic ...`` and ``stack down`` work from any termin
 is gone, a zombie, or a pid since reused by another program (a supervisor killed by SIGKILL cannot clean
 up) is removed when read.
 
-A stack is addressed by name: a ``stack up`` stack by its vehicle, a flight by ``<vehicle>-fly-<pid>``, a
+A stack is addressed by name: a ``stack up`` stack by its vehicle (as is a ``stack router``, a host's share of a
+vehicle spread over machines that runs no module), a flight by ``<vehicle>-fly-<pid>``, a
 replay by ``<vehicle>-replay-<pid>`` (each a stack of its own, on its own bus, beside any other). A command
 that names no stack addresses the ``stack up`` stacks, or the others when no ``stack up`` runs.
 """
@@ -24,6 +25,7 @@ import psutil
 UP = "up"
 FLY = "fly"
 REPLAY = "replay"
+ROUTER = "router"
 
 
 def stack_home() -> Path:
@@ -57,7 +59,7 @@ def replay_name(vehicle: str, pid: int) -> str:
 def stack_name(state: dict[str, object]) -> str:
     """The name a running stack is addressed by."""
     vehicle, kind = str(state["vehicle"]), state.get("kind", UP)
-    return vehicle if kind == UP else f"{vehicle}-{kind}-{state['pid']}"
+    return vehicle if kind in (UP, ROUTER) else f"{vehicle}-{kind}-{state['pid']}"
 
 
 def start_ticks(pid: int) -> int:
@@ -129,4 +131,4 @@ def addressed_stacks(name: str | None) -> list[dict[str, object]]:
     stacks = running_stacks()
     if name is not None:
         return [s for s in stacks if stack_name(s) == name]
-    return [s for s in stacks if s.get("kind", UP) == UP] or stacks
+    return [s for s in stacks if s.get("kind", UP) in (UP, ROUTER)] or stacks

@@ -33,6 +33,7 @@ from stack.bus import keys
 from stack.bus.alive import AliveTokens
 from stack.bus.config import LOOPBACK_ANY_PORT, BusConfig
 from stack.bus.ports import free_port, port_taken
+from stack.bus.supervisors import SINGLE_HOST, complete_roster, rosters
 from stack.fastpath.host import FastPathHost
 from stack.msg.internal import ModuleHeartbeat
 from stack.runtime.module import LINK_SUFFIX
@@ -107,20 +108,34 @@ class ProgramProcess:
 
 
 class Supervisor:
-    def __init__(self, profile: Profile, options: UpOptions, run_dir: Path) -> None:
+    """The supervisor of one host's share of the vehicle (``host``; the whole vehicle in a profile without hosts).
+
+    In a shared-memory lockstep run the shared memory is on the coordinator's host: the members on other hosts
+    take part over Zenoh (:mod:`stack.fastpath.bridge`), and that host's supervisor gives the run its id, which
+    the others ask for before they start anything.
+    """
+
+    def __init__(self, profile: Profile, options: UpOptions, run_dir: Path, host: str | None = None) -> None:
         self.profile = profile
         self.options = options
         self.run_dir = run_dir
         self.vehicle = profile.vehicle
+        self.host = host or SINGLE_HOST
+        here = [e for e in profile.modules if not profile.hosts or e.host == host]
         self._set_port(profile.port or free_port())
-        # Modules share a process only in a shared-memory lockstep run (see stack.supervisor.profile), where a
-        # member may also take part over Zenoh (stack.fastpath.bridge).
-        self.grouping = profile.lockstep and profile.lockstep_transport == "shm"
-        self.bridged = [e.name for e in profile.modules if e.transport == "zenoh"] if self.grouping else []
-        coordinator = next((e.name for e in profile.modules if e.cls.LOCKSTEP_COORDINATOR), None)
-        self.coordinator = coordinator if self.bridged else None
+        coordinator = next((e for e in profile.modules if e.cls.LOCKSTEP_COORDINATOR), None)
+        self.leads = coordinator is None or any(e is coordinator for e in here)
+        # A shared-memory lockstep run: modules share a process only in one (see stack.supervisor.profile), and a
+        # member may take part over Zenoh (stack.fastpath.bridge), as every member on another host does.
+        self.shm_run = profile.lockstep and profile.lockstep_transport == "shm"
+        self.grouping = self.shm_run and self.leads
+        self.bridged = []
+        if self.shm_run and coordinator is not None:
+            over_zenoh = [e for e in profile.modules if e.transport == "zenoh" or e.host != coordinator.host]
+            self.bridged = [e.name for e in over_zenoh if _is_member(e)]
+        self.coordinator = coordinator.name if self.bridged and coordinator is not None else None
         self.modules = []
-        for e in profile.modules:
+        for e in here:
             process = e.process if e.process and self.grouping else e.name
             self.modules.append(ModuleProcess(e, run_dir / f"{e.name}.spec.json", run_dir / f"{process}.log", process))
         self.groups: dict[str, list[ModuleProcess]] = {}
@@ -129,7 +144,11 @@ class Supervisor:
         local_mesh = profile.bus.mode == "peer" and profile.bus.listen == (LOOPBACK_ANY_PORT,)
         endpoints = {process: f"tcp/127.0.0.1:{free_port()}" for process in self.groups} if local_mesh else {}
         self.module_endpoints = {m.entry.name: endpoints[m.process] for m in self.modules} if local_mesh else {}
-        self.programs = [ProgramProcess(e, run_dir / f"{e.name}.log") for e in profile.processes]
+        self.programs = [
+            ProgramProcess(e, run_dir / f"{e.name}.log")
+            for e in profile.processes
+            if not profile.hosts or e.host == host
+        ]
         self.placeholders = {
             "python": sys.executable,
             "run_dir": str(run_dir),
@@ -156,6 +175,9 @@ class Supervisor:
         self.port = port
         self.endpoint = f"tcp/127.0.0.1:{port}"
         bus = self.profile.bus
+        own = self.profile.hosts.get(self.host)
+        self.router_listen = (self.endpoint, *((own.endpoint,) if own is not None else ()))
+        self.router_connect = (*bus.connect, *(h.endpoint for h in self.profile.hosts.values() if h is not own))
         self.module_bus = BusConfig(
             mode=bus.mode,
             connect=(self.endpoint, *bus.connect),
@@ -175,8 +197,8 @@ class Supervisor:
         for attempt in range(ROUTER_PORT_ATTEMPTS):
             bus = BusConfig(
                 mode="router",
-                connect=self.profile.bus.connect,
-                listen=(self.endpoint,),
+                connect=self.router_connect,
+                listen=self.router_listen,
                 low_latency=self.profile.bus.low_latency,
                 lease_ms=self.profile.bus.lease_ms,
             )
@@ -195,24 +217,28 @@ class Supervisor:
         signal.signal(signal.SIGTERM, self._on_signal)
         session = self._open_router()
         entities = []
-        if self.profile.lockstep and self.profile.lockstep_transport == "shm":
-            self.fast = FastPathHost([m.entry.name for m in self.modules if self._on_fast_path(m)], self.run_id)
+        if self.shm_run and self.leads:
+            remote = [name for name in self.bridged if name not in {m.entry.name for m in self.modules}]
+            fast = [m.entry.name for m in self.modules if self._on_fast_path(m)]
+            self.fast = FastPathHost([*fast, *remote], self.run_id)
             self.fast.watch_graph(session, self.vehicle)
         try:
             entities = [
-                session.declare_queryable(keys.supervisor_key(self.vehicle, "roster"), self._on_roster_query),
-                session.declare_queryable(keys.supervisor_key(self.vehicle, "status"), self._on_status_query),
+                session.declare_queryable(self._key("roster"), self._on_roster_query),
+                session.declare_queryable(self._key("status"), self._on_status_query),
                 session.liveliness().declare_subscriber(keys.alive_query(self.vehicle), self._on_alive, history=True),
                 session.declare_subscriber(keys.heartbeat_all(self.vehicle), self._on_heartbeat),
-                session.declare_queryable(keys.supervisor_key(self.vehicle, "outside"), self._on_outside_query),
+                session.declare_queryable(self._key("outside"), self._on_outside_query),
             ]
             run_state.write_state(self.vehicle, self.state_record())
             self._say(f"run directory {self.run_dir}")
             self._say_groups()
             self._say(f"bus rendezvous {self.endpoint}, vehicle '{self.vehicle}'")
-            if self._start_all():
+            if self.profile.hosts:
+                self._say(f"host {self.host}: router on {', '.join(self.router_listen)}")
+            if (self.leads or self._await_run_id(session)) and self._start_all():
                 self.roster_complete = True
-                if self.fast is not None:
+                if self.fast is not None and self._await_vehicle_roster(session):
                     self.fast.roster_complete()
                 self._say(f"all {len(self.modules)} modules up" + (" (lockstep)" if self.profile.lockstep else ""))
                 self._say_links()
@@ -237,6 +263,42 @@ class Supervisor:
         code = 1 if self.failed or any(r.failures for r in (*self.modules, *self.programs)) else 0
         self._say("stopped" + (" with failures" if code else ""))
         return code
+
+    def _key(self, what: str) -> str:
+        return keys.supervisor_key(self.vehicle, self.host, what)
+
+    def _await_run_id(self, session: zenoh.Session) -> bool:
+        """The run's id, from the supervisor of the coordinator's host (it may start after this one); False if
+        stopped meanwhile."""
+        said = False
+        while not self._stop.is_set():
+            answers = [a for a in rosters(session, self.vehicle) if a["host"] != self.host and a["run_id"]]
+            leader = next((a for a in answers if a.get("leads")), None)
+            if leader is not None:
+                self.run_id = leader["run_id"]
+                self._say(f"lockstep run of host {leader['host']}")
+                return True
+            if not said:
+                self._say("waiting for the host of the lockstep's coordinator to come up")
+                said = True
+            self._stop.wait(0.2)
+        return False
+
+    def _await_vehicle_roster(self, session: zenoh.Session) -> bool:
+        """Until every host's supervisor has started its modules for this run (the lockstep starts with all of
+        them); False if stopped meanwhile."""
+        hosts = self.profile.hosts_with_modules()
+        said = False
+        while not self._stop.is_set():
+            answers = rosters(session, self.vehicle) if len(hosts) > 1 else []
+            if len(hosts) == 1 or complete_roster(answers, hosts, self.run_id) is not None:
+                return True
+            if not said:
+                ready = {a["host"] for a in answers if a["run_id"] == self.run_id and a["complete"]}
+                self._say(f"waiting for hosts {', '.join(h for h in hosts if h not in ready)} to start their modules")
+                said = True
+            self._stop.wait(0.2)
+        return False
 
     def _say_interrupted(self, signum: int) -> None:
         """What a Ctrl-C or SIGTERM during start-up leaves: which modules had started, which was starting."""
@@ -271,6 +333,7 @@ class Supervisor:
             "vehicle": self.vehicle,
             "profile": str(self.profile.path),
             "endpoint": self.endpoint,
+            "host": self.host,
             "bus": json.loads(self.module_bus.to_json()),
             "run_dir": str(self.run_dir),
             "lockstep": self.profile.lockstep,
@@ -345,7 +408,10 @@ class Supervisor:
             late_join=m.restarts > 0,
             run_id=self.run_id,
             fastpath_fd=self.fast.region.fd if self.fast is not None and not bridged else -1,
-            peers=[r.entry.name for r in self.modules],
+            peers=[e.name for e in self.profile.modules],
+            hosts=self.profile.hosts_with_modules(),
+            shm_run=self.shm_run,
+            outside=[e.name for e in self.profile.modules if e.cls.OUTSIDE_LOCKSTEP or e.cls.PASSIVE],
             open_topics=list(self.profile.open_topics),
             bridged=self.bridged if e.name == self.coordinator else [],
             sync_with=[*self.bridged, self.coordinator] if bridged and self.coordinator else None,
@@ -526,7 +592,7 @@ class Supervisor:
                 if p.entry.critical and p.state in ("failed", "exited"):
                     self._say(f"critical process {p.entry.name} {p.state}: stopping the stack")
                     return
-            if all(m.state in ("exited", "failed") for m in self.modules):
+            if self.modules and all(m.state in ("exited", "failed") for m in self.modules):
                 self._say("all modules have exited")
                 return
 
@@ -656,17 +722,23 @@ class Supervisor:
 
     def _on_roster_query(self, query: zenoh.Query) -> None:
         modules = {m.entry.name: m.pid for m in self.modules if m.state == "running"}
-        reply = {"complete": self.roster_complete, "modules": modules}
-        query.reply(keys.supervisor_key(self.vehicle, "roster"), json.dumps(reply))
+        reply = {
+            "host": self.host,
+            "leads": self.leads,
+            "run_id": self.run_id,
+            "complete": self.roster_complete,
+            "modules": modules,
+        }
+        query.reply(self._key("roster"), json.dumps(reply))
 
     def _on_outside_query(self, query: zenoh.Query) -> None:
         """Which topics the stack puts on Zenoh for subscribers outside it: a tool that has just subscribed
         waits until its topics are among them (with no fast path, every topic always is)."""
         reply = {"fast_path": self.fast is not None, "topics": self.fast.outside_topics() if self.fast else []}
-        query.reply(keys.supervisor_key(self.vehicle, "outside"), json.dumps(reply))
+        query.reply(self._key("outside"), json.dumps(reply))
 
     def _on_status_query(self, query: zenoh.Query) -> None:
-        query.reply(keys.supervisor_key(self.vehicle, "status"), json.dumps(self.status()))
+        query.reply(self._key("status"), json.dumps(self.status()))
 
     def status(self) -> dict[str, object]:
         rows = []
@@ -674,6 +746,7 @@ class Supervisor:
             hb = self._heartbeats.get(m.entry.name)
             row: dict[str, object] = {
                 "module": m.entry.name,
+                "host": self.host,
                 "type": m.entry.module,
                 "process": m.process,
                 "state": m.state,
@@ -690,6 +763,7 @@ class Supervisor:
             rows.append(
                 {
                     "module": p.entry.name,
+                    "host": self.host,
                     "type": "process",
                     "state": p.state,
                     "pid": p.pid,
@@ -699,6 +773,8 @@ class Supervisor:
             )
         return {
             "vehicle": self.vehicle,
+            "host": self.host,
+            "host_order": list(self.profile.hosts).index(self.host) if self.profile.hosts else 0,
             "profile": self.profile.name,
             "lockstep": self.profile.lockstep,
             "speed": self.options.speed,
@@ -725,3 +801,10 @@ class Supervisor:
             print(f"[stack] {text}", flush=True)
         with (self.run_dir / "supervisor.log").open("a") as f:
             f.write(f"{time.strftime('%H:%M:%S')} {text}\n")
+
+
+def _is_member(entry: ModuleEntry) -> bool:
+    """Whether the module is a lockstep member: neither the coordinator nor outside the lockstep nor a passive
+    observer."""
+    cls = entry.cls
+    return not (cls.LOCKSTEP_COORDINATOR or cls.OUTSIDE_LOCKSTEP or cls.PASSIVE)

@@ -1,0 +1,68 @@
+"""``stack router PROFILE --host NAME``: a host's Zenoh router and nothing else.
+
+For a machine of the vehicle that runs no module, or only tools (a ground laptop with ``stack status``,
+``stack plot`` and QGroundControl): it listens where the profile's ``[hosts.NAME]`` says, connects to the
+other hosts' routers, and is the local rendezvous the tools of this machine find, as a ``stack up`` would be.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import threading
+import time
+
+import typer
+import zenoh
+
+from stack.bus.config import BusConfig
+from stack.bus.ports import free_port
+from stack.cli.common import fail
+from stack.supervisor import state as run_state
+from stack.supervisor.profile import ProfileError, load_profile
+
+
+def router(
+    profile: str = typer.Argument(..., help="Launch profile that spreads the vehicle over [hosts]"),
+    host: str = typer.Option(..., "--host", help="The host of the profile this machine is"),
+    duration: float | None = typer.Option(None, "--duration", "-d", help="Stop after this many seconds"),
+) -> None:
+    """Run this host's Zenoh router of a vehicle spread over several machines, until Ctrl-C or SIGTERM."""
+    try:
+        prof = load_profile(profile)
+        prof.check_host(host)
+    except ProfileError as e:
+        fail(str(e), code=2)
+    own = prof.hosts[host]
+    loopback = f"tcp/127.0.0.1:{free_port()}"
+    listen = (loopback, own.endpoint)
+    connect = (*prof.bus.connect, *(h.endpoint for h in prof.hosts.values() if h is not own))
+    bus = BusConfig(mode="router", listen=listen, connect=connect, lease_ms=prof.bus.lease_ms)
+    stop = threading.Event()
+    for signum in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(signum, lambda *_: stop.set())
+    try:
+        session = zenoh.open(bus.zenoh_config(f"router-{host}"))
+    except zenoh.ZError as e:
+        fail(f"host {host}: cannot open its router on {', '.join(listen)}: {e}")
+    client = BusConfig(mode="client", connect=(loopback,), listen=(), lease_ms=prof.bus.lease_ms)
+    record = {
+        **run_state.process_identity(),
+        "kind": run_state.ROUTER,
+        "vehicle": prof.vehicle,
+        "host": host,
+        "profile": str(prof.path),
+        "endpoint": loopback,
+        "bus": json.loads(client.to_json()),
+        "started": time.time(),
+    }
+    run_state.write_state(prof.vehicle, record)
+    try:
+        others = ", ".join(connect) or "no other host"
+        typer.echo(f"[stack] router of host {host}, vehicle '{prof.vehicle}': on {', '.join(listen)}; to {others}")
+        stop.wait(duration)
+    finally:
+        run_state.remove_state(prof.vehicle, os.getpid())
+        session.close()
+    typer.echo("[stack] router stopped")
