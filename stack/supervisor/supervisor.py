@@ -756,7 +756,7 @@ class Supervisor:
             }
             if hb is not None:
                 row.update(msgspec.structs.asdict(hb))
-                row["module"] = m.entry.name
+                row["module"], row["host"], row["hostname"] = m.entry.name, self.host, hb.host
                 row["state"] = m.state if m.state != "running" else hb.state
             rows.append(row)
         for p in self.programs:

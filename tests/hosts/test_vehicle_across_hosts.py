@@ -1,0 +1,86 @@
+"""One vehicle over three hosts (network namespaces joined by a bridge): the simulator and the estimators, the flight
+control, and a ground host with the MAVLink links. Each host runs ``stack up PROFILE --host NAME`` with a STACK_HOME
+of its own, as separate machines would; the lockstep spans them (its shared memory on the simulator's host, the
+others over Zenoh), and the ground host commands and watches the whole vehicle."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from tests.support.harness import REPO, eventually, stack_env, write_profile
+from tests.support.hosts import Host, Network
+
+pytestmark = pytest.mark.timeout(400)
+
+HOSTS = ("sim", "control", "ground")
+ROUTER_PORT = 7447  # inside namespaces of this test's own: nothing else listens there
+START_TIMEOUT_S = 240.0  # three stacks starting on a loaded two-core machine
+
+
+def split_profile(path: Path, net: Network) -> Path:
+    """``sitl_quad_hosts`` with the endpoints of this network's hosts."""
+    endpoints = "\n".join(f'[hosts.{h.name}]\nendpoint = "tcp/{h.address}:{ROUTER_PORT}"\n' for h in net.hosts.values())
+    return write_profile(path, f'extends = "sitl_quad_hosts"\n\n{endpoints}')
+
+
+def stack(host: Host, *args: str, timeout: float = 120.0) -> subprocess.CompletedProcess[str]:
+    """A ``stack`` command run on ``host``."""
+    return host.run(sys.executable, "-m", "stack", *args, env=stack_env(host.home), timeout=timeout, cwd=REPO)
+
+
+def status(host: Host) -> dict | None:
+    out = stack(host, "status", "--json", timeout=60.0)
+    return json.loads(out.stdout) if out.returncode == 0 else None
+
+
+def bring_up(net: Network, profile: Path, tmp_path: Path) -> dict[str, subprocess.Popen[str]]:
+    procs = {}
+    for name, host in net.hosts.items():
+        log = (tmp_path / f"{name}.log").open("w")
+        procs[name] = host.popen(
+            sys.executable, "-m", "stack", "up", str(profile), "--host", name, "--quiet",
+            env=stack_env(host.home), stdout=log, stderr=subprocess.STDOUT, cwd=REPO,
+        )  # fmt: skip
+    return procs
+
+
+def flying_lockstep(report: dict | None) -> bool:
+    if report is None or len(report["modules"]) != 12:
+        return False
+    modules = report["modules"]
+    return all(m["state"] == "running" for m in modules) and any(m.get("sim_time_us") for m in modules)
+
+
+def test_takeoff_hover_and_land_across_three_hosts_commanded_from_the_ground(network, tmp_path):
+    net = network(HOSTS)
+    profile = split_profile(tmp_path / "split.toml", net)
+    procs = bring_up(net, profile, tmp_path)
+    ground = net.hosts["ground"]
+    logs = lambda: "\n".join((tmp_path / f"{h}.log").read_text() for h in HOSTS)  # noqa: E731
+    eventually(lambda: flying_lockstep(status(ground)), START_TIMEOUT_S, "the vehicle up in lockstep on all hosts")
+
+    report = status(ground)
+    assert report is not None and report["hosts"] == list(HOSTS)
+    placed = {m["module"]: m["host"] for m in report["modules"]}
+    assert placed["simulator"] == placed["local_position_estimator"] == "sim"
+    assert placed["commander"] == placed["mc_pos_control"] == "control"
+    assert placed["mavlink_gcs"] == "ground"
+
+    takeoff = stack(ground, "cmd", "takeoff", "--alt", "3", "--wait")
+    assert takeoff.returncode == 0 and "takeoff complete" in takeoff.stdout, takeoff.stdout + takeoff.stderr + logs()
+    hover = status(net.hosts["control"])  # any host sees the whole vehicle
+    assert hover is not None and hover["vehicle_summary"]["armed"]
+    assert hover["vehicle_summary"]["position"]["altitude_above_home"] > 2.0
+    land = stack(ground, "cmd", "land", "--wait")
+    assert land.returncode == 0 and "landed and disarmed" in land.stdout, land.stdout + land.stderr + logs()
+
+    for name in reversed(HOSTS):
+        assert stack(net.hosts[name], "down").returncode == 0
+    codes = {name: p.wait(timeout=60) for name, p in procs.items()}
+    assert codes == dict.fromkeys(HOSTS, 0), logs()
+    assert "Traceback" not in logs()
