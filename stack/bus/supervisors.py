@@ -22,8 +22,9 @@ SINGLE_HOST = "local"
 
 
 def rosters(session: zenoh.Session, vehicle: str, timeout: float = ROSTER_TIMEOUT_S) -> list[dict]:
-    """Each answering supervisor's roster: ``{"host", "leads", "run_id", "complete", "modules": {name: pid}}``
-    (``leads``: its host runs the lockstep's coordinator and gave the run its id)."""
+    """Each answering supervisor's roster: ``{"host", "leads", "run_id", "complete", "modules": {name: pid}, "seed",
+    "params": {module: {name: value}}}`` (``leads``: its host runs the lockstep's coordinator and gave the run its
+    id; its seed and parameters are the run's)."""
     out = []
     for reply in session.get(
         keys.supervisor_query(vehicle, "roster"),
@@ -42,6 +43,8 @@ def rosters(session: zenoh.Session, vehicle: str, timeout: float = ROSTER_TIMEOU
                     "run_id": int(data["run_id"]),
                     "complete": bool(data["complete"]),
                     "modules": {str(k): int(v) for k, v in data["modules"].items()},
+                    "seed": int(data["seed"]),
+                    "params": {str(m): dict(p) for m, p in data["params"].items()},
                 }
             )
         except (ValueError, KeyError, TypeError, AttributeError):

@@ -40,6 +40,12 @@ def fly(
         None, "--wind-speed", min=0.0, max=30.0, help="Fly in this wind (m/s) instead of --wind's; implies --wind"
     ),
     transport: str | None = TransportOption,
+    host: str | None = typer.Option(
+        None,
+        "--host",
+        help="Of a profile spread over machines ([hosts]): the host this machine is, where the scenario runs "
+        "(the others run `stack up PROFILE --host NAME`)",
+    ),
 ) -> None:
     """Fly a scripted scenario (in lockstep, deterministic for a seed) and report how well the stack flew.
 
@@ -57,11 +63,9 @@ def fly(
     try:
         flags = {"plot": plot_ or web, "record": record is not None}
         prof = load_profile(profile or known[scenario].profile or DEFAULT_PROFILE, flags=flags)
+        prof.check_host(host)
     except ProfileError as e:
         fail(str(e), code=2)
-    if prof.hosts:
-        hosts = ", ".join(prof.hosts)
-        fail(f"{prof.path}: a flight runs on one machine; this profile spreads the vehicle over {hosts}", code=2)
     choose_transport(prof, transport)
     if seed is not None:
         prof.seed = seed
@@ -74,16 +78,17 @@ def fly(
     result_path = run_dir / "scenario_result.json"
     try:
         wind = wind or wind_speed is not None
-        prepare_flight(prof, scenario, result_path, wind, WIND_SPEED if wind_speed is None else wind_speed)
+        speed = WIND_SPEED if wind_speed is None else wind_speed
+        prepare_flight(prof, scenario, result_path, wind, speed, host or "")
     except ValueError as e:
         fail(f"scenario {scenario}: {e}", code=2)
-    add_observers(prof, plot=plot_, web=web, save=save, record=record, own_ports=True)
+    add_observers(prof, plot=plot_, web=web, save=save, record=record, own_ports=True, host=host or "")
     shown = ("scenario", "rerun_bridge") if web else ("scenario",)  # the web viewer's URL, even with --quiet
     from stack.supervisor.supervisor import Supervisor, UpOptions  # what starts processes, only when it will
 
     options = UpOptions(log_level=log_level, echo_logs=not quiet, echo_only=shown, kind=run_state.FLY)
     typer.echo(f"[stack] flight '{name}' (another terminal addresses it with --vehicle {name})")
-    code = Supervisor(prof, options, run_dir).run()
+    code = Supervisor(prof, options, run_dir, host).run()
     if not result_path.exists():
         fail(f"the scenario produced no result (supervisor exit code {code}); see the logs in {run_dir}")
     result = json.loads(result_path.read_text())

@@ -25,10 +25,11 @@ rule for SIM_WIND_GUST), 2 s correlation time."""
 
 
 def prepare_flight(
-    prof: Profile, scenario: str, result_path: Path, wind: bool, wind_speed: float = WIND_SPEED
+    prof: Profile, scenario: str, result_path: Path, wind: bool, wind_speed: float = WIND_SPEED, host: str = ""
 ) -> None:
     """Set the scenario's parameters (and the wind's, at ``wind_speed``), and add the scenario module writing
-    ``result_path`` with the profile's limits for it (doubled in wind); a parameter no module has is a ValueError."""
+    ``result_path`` with the profile's limits for it (doubled in wind), on ``host`` of a profile spread over several;
+    a parameter no module has is a ValueError."""
     chosen = get_scenario(scenario)
     set_params(prof, chosen.params)
     if wind:
@@ -36,7 +37,7 @@ def prepare_flight(
     limits = dict(prof.scenario_limits.get(scenario, {}))
     if wind:
         limits = windy_limits(chosen.checks, limits)
-    add_scenario(prof, scenario, result_path, limits, prof.scenario_options.get(scenario, {}))
+    add_scenario(prof, scenario, result_path, limits, prof.scenario_options.get(scenario, {}), host)
 
 
 def set_params(prof: Profile, params: dict[str, object]) -> None:
@@ -60,7 +61,12 @@ def windy_limits(checks: tuple[Check, ...], limits: dict[str, object]) -> dict[s
 
 
 def add_scenario(
-    prof: Profile, scenario: str, result_path: Path, limits: dict[str, object], options: dict[str, str] | None = None
+    prof: Profile,
+    scenario: str,
+    result_path: Path,
+    limits: dict[str, object],
+    options: dict[str, str] | None = None,
+    host: str = "",
 ) -> None:
     """Append the scenario module to a profile (critical: the stack stops when the scenario ends)."""
     cls = load_module_class("scenario")
@@ -80,5 +86,6 @@ def add_scenario(
             restart="no",
             max_restarts=0,
             critical=True,
+            host=host,
         )
     )

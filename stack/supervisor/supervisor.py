@@ -158,6 +158,9 @@ class Supervisor:
         }
         self.roster_complete = False
         self.failed = False
+        # The vehicle's modules, on every host, whose messages its modules accept (stack.bus.access): the
+        # profile's, and those the coordinator's host added (a flight's scenario, the observers).
+        self.vehicle_modules = {e.name for e in profile.modules}
         # The lockstep run's id, and its same-host shared-memory fast path (stack.fastpath) unless the
         # profile sends lockstep traffic over Zenoh.
         self.run_id = secrets.randbits(63) | 1
@@ -236,7 +239,7 @@ class Supervisor:
             self._say(f"bus rendezvous {self.endpoint}, vehicle '{self.vehicle}'")
             if self.profile.hosts:
                 self._say(f"host {self.host}: router on {', '.join(self.router_listen)}")
-            if (self.leads or self._await_run_id(session)) and self._start_all():
+            if (self.leads or self._await_lead(session)) and self._start_all():
                 self.roster_complete = True
                 if self.fast is not None and self._await_vehicle_roster(session):
                     self.fast.roster_complete()
@@ -267,16 +270,21 @@ class Supervisor:
     def _key(self, what: str) -> str:
         return keys.supervisor_key(self.vehicle, self.host, what)
 
-    def _await_run_id(self, session: zenoh.Session) -> bool:
-        """The run's id, from the supervisor of the coordinator's host (it may start after this one); False if
-        stopped meanwhile."""
+    def _await_lead(self, session: zenoh.Session) -> bool:
+        """The run's id, seed and parameters, from the supervisor of the coordinator's host (it may start after this
+        one): a flight there sets its scenario's, which are the vehicle's wherever its modules run. False if stopped
+        meanwhile."""
         said = False
         while not self._stop.is_set():
             answers = [a for a in rosters(session, self.vehicle) if a["host"] != self.host and a["run_id"]]
-            leader = next((a for a in answers if a.get("leads")), None)
+            leader = next((a for a in answers if a["leads"]), None)
             if leader is not None:
                 self.run_id = leader["run_id"]
-                self._say(f"lockstep run of host {leader['host']}")
+                self.profile.seed = leader["seed"]
+                for m in self.modules:
+                    m.entry.params = leader["params"].get(m.entry.name, m.entry.params)
+                self.vehicle_modules.update(leader["params"])
+                self._say(f"the run of host {leader['host']}: its seed {self.profile.seed} and parameters")
                 return True
             if not said:
                 self._say("waiting for the host of the lockstep's coordinator to come up")
@@ -408,7 +416,7 @@ class Supervisor:
             late_join=m.restarts > 0,
             run_id=self.run_id,
             fastpath_fd=self.fast.region.fd if self.fast is not None and not bridged else -1,
-            peers=[e.name for e in self.profile.modules],
+            peers=sorted(self.vehicle_modules),
             hosts=self.profile.hosts_with_modules(),
             shm_run=self.shm_run,
             outside=[e.name for e in self.profile.modules if e.cls.OUTSIDE_LOCKSTEP or e.cls.PASSIVE],
@@ -726,6 +734,8 @@ class Supervisor:
             "host": self.host,
             "leads": self.leads,
             "run_id": self.run_id,
+            "seed": self.profile.seed,
+            "params": {e.name: e.params for e in self.profile.modules},  # every module of the vehicle it knows
             "complete": self.roster_complete,
             "modules": modules,
         }

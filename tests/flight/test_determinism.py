@@ -3,7 +3,8 @@ on both at once, and however the modules share processes.
 
 ``stack fly attitude_step --seed 3`` runs, on the shared-memory fast path with every module its own process,
 with the lockstep over Zenoh, with the modules in two processes (sitl_quad_grouped), and with the position
-chain taking part over Zenoh beside the shared memory (sitl_quad_mixed), are compared through
+chain taking part over Zenoh beside the shared memory (sitl_quad_mixed), and with the flight control on
+another host than the simulator (sitl_quad_hosts, hosts made of network namespaces), are compared through
 their recordings (read with the stack's RecordingReader):
 every message any module published up to the scenario's last tick, with its bus header and every
 field, must be identical, and none may be missing. A different seed draws different sensor noise, so
@@ -20,6 +21,10 @@ import pytest
 
 from stack.mathlib import quaternion as quat
 from tests.flight.flights import Flight, InProcessFlight
+from tests.hosts.split import fly_across_hosts
+from tests.support.hosts import network
+
+__all__ = ["network"]  # the fixture of tests/support/hosts.py
 
 pytestmark = pytest.mark.flight
 Fly = Callable[..., Flight]
@@ -68,6 +73,15 @@ def test_same_seed_gives_the_same_flight_whatever_carries_it(fly: Fly, other: di
     assert all_a == all_b
     assert a.report["metrics"] == b.report["metrics"]
     assert a.report["sim_time_s"] == b.report["sim_time_s"]
+
+
+def test_same_seed_gives_the_same_flight_split_across_hosts(fly: Fly, network, tmp_path) -> None:
+    a, b = fly(3, 0), fly_across_hosts(network(["sim", "control"]), "attitude_step", 3, tmp_path)
+    end = a.scenario_end_us()
+    assert b.scenario_end_us() == end
+    assert ground_truth(b, end) == ground_truth(a, end)
+    assert every_message(b, end) == every_message(a, end)
+    assert a.report["metrics"] == b.report["metrics"]
 
 
 def test_a_different_seed_gives_a_different_trajectory(fly_here: Callable[..., InProcessFlight]) -> None:

@@ -1,0 +1,68 @@
+"""The default quad flown over two hosts of a test network: ``stack fly`` on the simulator's host, ``stack up`` on
+the flight-control host (tests/support/hosts.py makes the hosts)."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+from tests.flight.flights import FLY_TIMEOUT_S, Flight
+from tests.support.harness import REPO, stack_env, write_profile
+from tests.support.hosts import Host, Network
+
+ROUTER_PORT = 7447  # inside namespaces of the test's own: nothing else listens there
+
+
+def split_profile(path: Path, net: Network, extra: str = "") -> Path:
+    """``sitl_quad_hosts`` with the endpoints of the network's hosts (those it has), and ``extra`` TOML."""
+    endpoints = "\n".join(f'[hosts.{h.name}]\nendpoint = "tcp/{h.address}:{ROUTER_PORT}"\n' for h in net.hosts.values())
+    return write_profile(path, f'extends = "sitl_quad_hosts"\n\n{endpoints}\n{extra}')
+
+
+def stack_on(host: Host, *args: str, timeout: float = 120.0) -> subprocess.CompletedProcess[str]:
+    """A ``stack`` command run on ``host``."""
+    return host.run(sys.executable, "-m", "stack", *args, env=stack_env(host.home), timeout=timeout, cwd=REPO)
+
+
+def up_on(host: Host, profile: Path, log: Path, *args: str) -> subprocess.Popen[str]:
+    """``stack up PROFILE --host NAME`` on ``host``, its output in ``log``."""
+    return host.popen(
+        sys.executable, "-m", "stack", "up", str(profile), "--host", host.name, "--quiet", *args,
+        env=stack_env(host.home), stdout=log.open("w"), stderr=subprocess.STDOUT, cwd=REPO,
+    )  # fmt: skip
+
+
+# The MAVLink links run on the simulator's host: a flight leaves them out, and no host then waits for the ground.
+LINKS_BESIDE_THE_SIMULATOR = """
+[[module]]
+name = "mavlink_gcs"
+host = "sim"
+
+[[module]]
+name = "mavlink_api"
+host = "sim"
+"""
+
+
+def fly_across_hosts(net: Network, scenario: str, seed: int, work: Path) -> Flight:
+    """``stack fly SCENARIO --seed SEED --host sim`` with a report and a recording, flight control on the network's
+    host ``control``; that host's stack is stopped once the flight is over."""
+    sim, control = net.hosts["sim"], net.hosts["control"]
+    profile = split_profile(work / "split.toml", net, LINKS_BESIDE_THE_SIMULATOR)
+    report, recording = work / "report.json", work / "flight.mcap"
+    controls = up_on(control, profile, work / "control.log")
+    try:
+        out = stack_on(
+            sim,
+            *("fly", scenario, "--profile", str(profile), "--host", "sim", "--seed", str(seed), "--quiet"),
+            *("--report", str(report), "--record", str(recording)),
+            timeout=FLY_TIMEOUT_S,
+        )
+    finally:
+        stack_on(control, "down")
+        controls.wait(timeout=60)
+    output = out.stdout + out.stderr + (work / "control.log").read_text()
+    assert report.exists(), f"no report (exit code {out.returncode}):\n{output}"
+    return Flight(out.returncode, output, json.loads(report.read_text()), recording)
