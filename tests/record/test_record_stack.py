@@ -271,9 +271,13 @@ def test_the_flight_stack_is_recorded_without_loss_and_exports(tmp_path):
     home = tmp_path / "home"
     mcap = tmp_path / "flight.mcap"
     profile = launch_profile(tmp_path, "sitl_quad", recorder(mcap))
-    stack = RunningStack(home, profile, "--duration", "5", "--quiet")
+    stack = RunningStack(home, profile, "--quiet")
     try:
-        assert stack.wait(timeout=180) == 0, stack.output
+        stack.wait_up()
+        # the attitude estimate starts once the estimator has converged, about two simulated seconds in
+        sim_time = lambda: max(m.get("sim_time_us", 0) for m in stack.status()["modules"])  # noqa: E731
+        eventually(lambda: sim_time() > 3_500_000, 180.0, "three and a half simulated seconds")
+        assert stack.stop(signal.SIGTERM) == 0, stack.output
     finally:
         stack.kill()
     assert not wait_no_processes(home)
