@@ -5,20 +5,18 @@ from __future__ import annotations
 import json
 import os
 import re
-import signal
 import sys
 import time
 from decimal import Decimal
 from pathlib import Path
 from typing import Any
 
-import psutil
 import typer
 
 import stack
 from stack.bus.node import Node
 from stack.bus.supervisors import vehicle_status
-from stack.cli import cmd, fly, log, mavlink, param, pixhawk_sim, plot, router, teleop, topic, vehicle_summary
+from stack.cli import cmd, down, fly, log, mavlink, param, pixhawk_sim, plot, router, teleop, topic, vehicle_summary
 from stack.cli.common import (
     EndpointOption,
     JsonOption,
@@ -58,6 +56,7 @@ app.command("replay")(log.replay)
 app.command("pixhawk-sim")(pixhawk_sim.pixhawk_sim)
 app.command("teleop")(teleop.teleop)
 app.command("router")(router.router)
+app.command("down")(down.down)
 
 
 def _print_version(value: bool) -> None:
@@ -169,38 +168,6 @@ def _device_args(prof: Profile, device: str) -> dict[str, dict[str, object]]:
     if not names:
         fail(f"--device: profile {prof.name} has no pixhawk module (try: stack up pixhawk --device ...)", code=2)
     return {name: {"device": device} for name in names}
-
-
-@app.command()
-def down(
-    vehicle: str | None = VehicleOption,
-    timeout: float = typer.Option(30.0, help="Seconds to wait for the stack to stop"),
-) -> None:
-    """Stop the running `stack up` stacks, or the flights if none runs, or the one named (its supervisor
-    stops the modules in reverse order)."""
-    stacks = run_state.addressed_stacks(vehicle)
-    if not stacks:
-        fail("no running stack found")
-    for s in stacks:
-        pid, name = int(s["pid"]), run_state.stack_name(s)
-        os.kill(pid, signal.SIGTERM)
-        typer.echo(f"stopping stack '{name}' (supervisor pid {pid})")
-        if not _wait_exit(pid, timeout):
-            fail(f"stack '{name}' did not stop within {timeout:g} s")
-    typer.echo("stopped")
-
-
-def _wait_exit(pid: int, timeout: float) -> bool:
-    """Wait until the process is gone (a zombie waiting for its parent counts as gone)."""
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        try:
-            if psutil.Process(pid).status() == psutil.STATUS_ZOMBIE:
-                return True
-        except psutil.NoSuchProcess:
-            return True
-        time.sleep(0.05)
-    return False
 
 
 DROP_COUNTERS = {

@@ -232,6 +232,7 @@ class Supervisor:
                 session.liveliness().declare_subscriber(keys.alive_query(self.vehicle), self._on_alive, history=True),
                 session.declare_subscriber(keys.heartbeat_all(self.vehicle), self._on_heartbeat),
                 session.declare_queryable(self._key("outside"), self._on_outside_query),
+                session.declare_queryable(self._key("stop"), self._on_stop_query),
             ]
             run_state.write_state(self.vehicle, self.state_record())
             self._say(f"run directory {self.run_dir}")
@@ -746,6 +747,13 @@ class Supervisor:
         waits until its topics are among them (with no fast path, every topic always is)."""
         reply = {"fast_path": self.fast is not None, "topics": self.fast.outside_topics() if self.fast else []}
         query.reply(self._key("outside"), json.dumps(reply))
+
+    def _on_stop_query(self, query: zenoh.Query) -> None:
+        """``stack down`` from another host of the vehicle: stop as on SIGTERM."""
+        query.reply(self._key("stop"), json.dumps({"host": self.host, "pid": os.getpid()}))
+        if not self._stop.is_set():
+            self._signal = signal.SIGTERM
+        self._stop.set()
 
     def _on_status_query(self, query: zenoh.Query) -> None:
         query.reply(self._key("status"), json.dumps(self.status()))
