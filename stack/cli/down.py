@@ -63,8 +63,12 @@ def _stop_other_hosts(s: dict[str, object], only: str | None, timeout: float) ->
     except zenoh.ZError as e:
         fail(f"cannot reach the bus of host {own} to stop the others: {e}")
     with node:
-        key = keys.supervisor_key(vehicle, only, "stop") if only else keys.supervisor_query(vehicle, "stop")
-        stopping = {str(a["host"]): a["pid"] for a in query_json(node.session, key) if a.get("host") != own}
+        hosts = [only] if only else sorted({a["host"] for a in rosters(node.session, vehicle)} - {own})
+        stopping = {
+            str(a["host"]): a["pid"]
+            for h in hosts
+            for a in query_json(node.session, keys.supervisor_key(vehicle, h, "stop"))
+        }
         if only is not None and only not in stopping:
             fail(f"host {only}: no supervisor of vehicle '{vehicle}' answers there")
         for name, pid in sorted(stopping.items()):

@@ -5,7 +5,9 @@ process), so none of them has a name anywhere and all are gone with the last pro
 The supervisor also tells the coordinator what it decided about a module that exited (restart or not),
 and which topics something outside the fast path subscribes to, from the topic graph's liveliness
 tokens: modules of the profile read the fast path, anything else (``stack topic echo``, a ground-station
-link, a module on another host) needs the topic on Zenoh.
+link, a recorder on another host) needs the topic on Zenoh. A topic that a member over Zenoh reads is there
+already: the coordinator's process relays it (:mod:`stack.fastpath.bridge`), and its publisher putting it on
+Zenoh as well would deliver every message twice to the others.
 """
 
 from __future__ import annotations
@@ -20,8 +22,9 @@ from stack.fastpath.layout import H_ROSTER, P_NAME, P_ZENOH, S_EVENTFD, S_EXITS,
 
 
 class FastPathHost:
-    def __init__(self, names: list[str], run_id: int) -> None:
+    def __init__(self, names: list[str], run_id: int, bridged: list[str] | tuple[str, ...] = ()) -> None:
         self.names = names
+        self.bridged = frozenset(bridged)
         self.region = Region.create(names, run_id)
         self.eventfds = [os.eventfd(0, os.EFD_NONBLOCK | os.EFD_CLOEXEC) for _ in names]
         w = self.region.words
@@ -78,9 +81,11 @@ class FastPathHost:
             return sorted(suffix for suffix, modules in self._subscribers.items() if modules - inside)
 
     def update_outside(self) -> None:
-        """Flag each publication that something outside the profile's modules subscribes to (at once when
-        the graph changes; the supervisor calls it again as modules declare new publications)."""
-        outside = set(self.outside_topics())
+        """Flag each publication that something outside the profile's modules subscribes to and the bridge does not
+        relay (at once when the graph changes; the supervisor calls it again as modules declare new publications)."""
+        with self._lock:
+            relayed = {suffix for suffix, modules in self._subscribers.items() if modules & self.bridged}
+        outside = set(self.outside_topics()) - relayed
         region, w = self.region, self.region.words
         with self._flags_lock:
             for slot in range(region.slots):

@@ -41,13 +41,18 @@ INS = WorkQueue("INS0", -14)
 COMMANDER = WorkQueue("commander", -10)
 """PX4 starts its commander task at SCHED_PRIORITY_DEFAULT + 40 (``src/modules/commander/Commander.cpp``)."""
 HP_DEFAULT = WorkQueue("hp_default", -18)
+ROUTER = WorkQueue("router", -13)
+"""A host's Zenoh router, in a vehicle spread over several: the flight's messages between hosts pass through it, so
+it runs beside the controllers that read them (``wq:nav_and_controllers``)."""
 
 
-def raise_priority(module: str, queue: WorkQueue) -> str:
-    """Put this process (and the threads it starts later) at ``queue``'s priority; returns what was done."""
+def raise_priority(module: str, queue: WorkQueue, reset_on_fork: bool = False) -> str:
+    """Put this process (and the threads it starts later) at ``queue``'s priority; returns what was done.
+    ``reset_on_fork``: the processes it starts do not inherit the real-time priority (SCHED_RESET_ON_FORK)."""
     try:
         top = os.sched_get_priority_max(os.SCHED_FIFO)
-        os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(top + queue.relative_priority))
+        policy = os.SCHED_FIFO | (os.SCHED_RESET_ON_FORK if reset_on_fork else 0)
+        os.sched_setscheduler(0, policy, os.sched_param(top + queue.relative_priority))
         done = f"SCHED_FIFO {top + queue.relative_priority} (wq:{queue.name})"
     except (PermissionError, AttributeError, OSError) as fifo_refused:
         try:

@@ -38,6 +38,7 @@ from stack.fastpath.host import FastPathHost
 from stack.msg.internal import ModuleHeartbeat
 from stack.runtime.module import LINK_SUFFIX
 from stack.runtime.pacing import MAX_SPEED
+from stack.runtime.priority import ROUTER, raise_priority
 from stack.runtime.spec import ModuleSpec
 from stack.supervisor import state as run_state
 from stack.supervisor.profile import ModuleEntry, ProcessEntry, Profile, expand_placeholders
@@ -218,12 +219,16 @@ class Supervisor:
     def run(self) -> int:
         signal.signal(signal.SIGINT, self._on_signal)
         signal.signal(signal.SIGTERM, self._on_signal)
+        if self.profile.hosts and not self.profile.lockstep:
+            # before the router's threads start, which inherit it; the module processes start at normal priority
+            done = raise_priority(f"router of host {self.host}", ROUTER, reset_on_fork=True)
+            self._say(f"router of host {self.host}: scheduling {done}")
         session = self._open_router()
         entities = []
         if self.shm_run and self.leads:
             remote = [name for name in self.bridged if name not in {m.entry.name for m in self.modules}]
             fast = [m.entry.name for m in self.modules if self._on_fast_path(m)]
-            self.fast = FastPathHost([*fast, *remote], self.run_id)
+            self.fast = FastPathHost([*fast, *remote], self.run_id, bridged=self.bridged)
             self.fast.watch_graph(session, self.vehicle)
         try:
             entities = [

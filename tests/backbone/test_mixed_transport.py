@@ -6,7 +6,7 @@ with its position chain over Zenoh flies bit for bit the shared-memory flight in
 import pytest
 
 from stack.supervisor.profile import ProfileError, load_profile
-from tests.support.harness import RunningStack, chain_profile, wait_no_processes, write_profile
+from tests.support.harness import RunningStack, chain_profile, eventually, wait_no_processes, write_profile
 
 
 def test_the_supervisor_says_who_takes_part_over_zenoh_and_they_run_in_their_own_processes(tmp_path):
@@ -17,7 +17,13 @@ def test_the_supervisor_says_who_takes_part_over_zenoh_and_they_run_in_their_own
         stack.wait_for(r"lockstep members over Zenoh: doubler, pacer")
         stack.wait_for(r"lockstep starting with doubler, pacer, summer, tick_source \(shared-memory fast path\)")
         assert "over Zenoh in the shared-memory lockstep: doubler, pacer" in stack.output
-        rows = {m["module"]: m for m in stack.status()["modules"]}
+        rows = {}
+
+        def heard_from_every_module() -> bool:  # a module's heartbeat comes about once a second
+            rows.update((m["module"], m) for m in stack.status()["modules"])
+            return all("trigger" in row for row in rows.values())
+
+        eventually(heard_from_every_module, 30.0, "a heartbeat from every module")
         assert rows["doubler"]["trigger"] == "on sensor_gyro"
         assert len({m["pid"] for m in rows.values()}) == 4
     finally:

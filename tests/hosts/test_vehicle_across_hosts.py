@@ -12,6 +12,8 @@ from pathlib import Path
 
 import pytest
 
+from stack.bus.node import stable_publisher_id
+from stack.record.recorder import RecordedMessage, RecordingReader
 from tests.support.harness import REPO, eventually, stack_env, write_profile
 from tests.support.hosts import Host, Network
 
@@ -38,34 +40,51 @@ def status(host: Host) -> dict | None:
     return json.loads(out.stdout) if out.returncode == 0 else None
 
 
-def bring_up(net: Network, profile: Path, tmp_path: Path, *args: str) -> dict[str, subprocess.Popen[str]]:
+def bring_up(
+    net: Network, profile: Path, tmp_path: Path, *args: str, record: Path | None = None
+) -> dict[str, subprocess.Popen[str]]:
+    """Every host's share, the ground host recording the whole vehicle to ``record``."""
     procs = {}
     for name, host in net.hosts.items():
         log = (tmp_path / f"{name}.log").open("w")
+        recording = ("--record", str(record)) if name == "ground" and record is not None else ()
         procs[name] = host.popen(
-            sys.executable, "-m", "stack", "up", str(profile), "--host", name, "--quiet", *args,
+            sys.executable, "-m", "stack", "up", str(profile), "--host", name, "--quiet", *args, *recording,
             env=stack_env(host.home), stdout=log, stderr=subprocess.STDOUT, cwd=REPO,
         )  # fmt: skip
     return procs
 
 
-def running(report: dict | None) -> bool:
-    """Every module of the vehicle running, and its clock going (simulated time, in lockstep)."""
-    if report is None or len(report["modules"]) != 12:
+def assert_each_message_once(messages: list[RecordedMessage]) -> None:
+    """Every publisher numbers its messages per topic: none missing after the first heard, none twice."""
+    channels: dict[tuple[str, int, int], list[int]] = {}
+    for m in messages:
+        channels.setdefault((m.topic, m.instance, m.publisher_id), []).append(m.index)
+    for channel, indices in channels.items():
+        assert indices == list(range(indices[0], indices[0] + len(indices))), channel
+
+
+def running(report: dict | None, count: int) -> bool:
+    """The ``count`` modules of the vehicle running, and its clock going (simulated time, in lockstep)."""
+    if report is None or len(report["modules"]) != count:
         return False
     modules = report["modules"]
     clock = not report["lockstep"] or any(m.get("sim_time_us") for m in modules)
     return all(m["state"] == "running" for m in modules) and clock
 
 
-@pytest.mark.parametrize("mode", [(), ("--realtime",)], ids=["lockstep", "realtime"])
-def test_takeoff_hover_and_land_across_three_hosts_commanded_from_the_ground(network, tmp_path, mode):
+@pytest.mark.parametrize("realtime", [False, True], ids=["lockstep", "realtime"])
+def test_takeoff_hover_and_land_across_three_hosts_commanded_from_the_ground(network, tmp_path, realtime):
+    """In lockstep the ground host also records the whole vehicle (in real time, three hosts' stacks and a recorder
+    of every topic are more than the two cores of the test machine run on the wall clock)."""
     net = network(HOSTS)
     profile = split_profile(tmp_path / "split.toml", net)
-    procs = bring_up(net, profile, tmp_path, *mode)
+    recording = None if realtime else tmp_path / "ground.mcap"
+    procs = bring_up(net, profile, tmp_path, *(["--realtime"] if realtime else []), record=recording)
     ground = net.hosts["ground"]
     logs = lambda: "\n".join((tmp_path / f"{h}.log").read_text() for h in HOSTS)  # noqa: E731
-    eventually(lambda: running(status(ground)), START_TIMEOUT_S, "the vehicle up on all hosts")
+    count = 12 if recording is None else 13  # the profile's modules, and the ground host's recorder
+    eventually(lambda: running(status(ground), count), START_TIMEOUT_S, "the vehicle up on all hosts")
 
     report = status(ground)
     assert report is not None and report["hosts"] == list(HOSTS)
@@ -88,3 +107,11 @@ def test_takeoff_hover_and_land_across_three_hosts_commanded_from_the_ground(net
     codes = {name: p.wait(timeout=60) for name, p in procs.items()}
     assert codes == dict.fromkeys(HOSTS, 0), f"{codes}\n{logs()}"
     assert "Traceback" not in logs()
+    if recording is None:
+        return
+    with RecordingReader(recording) as reader:
+        messages = list(reader.iter_messages())
+    publishers = {stable_publisher_id("v1", name): host for name, host in placed.items()}
+    heard_from = {publishers[m.publisher_id] for m in messages if m.publisher_id in publishers}
+    assert heard_from == {"sim", "control"}  # the ground host's links publish on the wall clock only when used
+    assert_each_message_once(messages)
