@@ -63,7 +63,8 @@ def complete_roster(answers: Iterable[dict], hosts: Sequence[str], run_id: int) 
 
 def vehicle_status(session: zenoh.Session, vehicle: str, timeout: float = 2.0) -> dict | None:
     """Every host's status as one: the first answer's vehicle facts, and every host's module rows in host order
-    (each row names its host); None when no supervisor answers."""
+    (each row names its host); None when no supervisor answers. ``silent_hosts``: the hosts of the profile that run
+    modules and did not answer (``placement`` says which modules are theirs)."""
     answers = query_json(session, keys.supervisor_query(vehicle, "status"), timeout=timeout)
     if not answers:
         return None
@@ -71,6 +72,8 @@ def vehicle_status(session: zenoh.Session, vehicle: str, timeout: float = 2.0) -
     report = dict(answers[0])
     report["modules"] = [row for a in answers for row in a.get("modules", [])]
     report["hosts"] = [a.get("host", "") for a in answers]
+    placement: dict[str, list[str]] = report.get("placement", {})
+    report["silent_hosts"] = [h for h, names in placement.items() if names and h not in report["hosts"]]
     return report
 
 

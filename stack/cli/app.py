@@ -208,11 +208,13 @@ def status(
             typer.echo(line)
     # Modules sharing a process (a profile's `process = "NAME"`) show it; their CPU% and MEM are the process's.
     shared = any(m.get("process", m["module"]) != m["module"] for m in report["modules"])
+    spread = bool(report.get("placement"))  # a vehicle over several hosts: each module's host
     rows = []
     for m in report["modules"]:
         rows.append(
             (
                 m["module"],
+                *((m.get("host", ""),) if spread else ()),
                 *((m.get("process", m["module"]),) if shared else ()),
                 m["state"],
                 m["pid"] or "-",
@@ -228,7 +230,10 @@ def status(
             )
         )
     columns = ("STATE", "PID", "CPU%", "MEM", "RESTARTS", "RATE", "RUNS", "IN", "OUT", "ERR", "LOOP us")
-    print_table(("MODULE", *(("PROCESS",) if shared else ()), *columns), rows)
+    print_table(("MODULE", *(("HOST",) if spread else ()), *(("PROCESS",) if shared else ()), *columns), rows)
+    for host in report.get("silent_hosts", []):
+        modules = ", ".join(report["placement"][host])
+        typer.echo(f"host {host}: its supervisor does not answer (lost, or not started): {modules}")
     for m in report["modules"]:
         drops = [f"{DROP_COUNTERS[k]} {m[k]}" for k in DROP_COUNTERS if m.get(k)]
         if drops:

@@ -64,7 +64,12 @@ class ReplayStack:
         raise AssertionError("unreachable")
 
     def _on_status(self, query: zenoh.Query) -> None:
-        report = {"vehicle": self.vehicle, "profile": f"replay of {self.source.name}", "lockstep": self.lockstep}
+        report = {
+            "vehicle": self.vehicle,
+            "host": SINGLE_HOST,
+            "profile": f"replay of {self.source.name}",
+            "lockstep": self.lockstep,
+        }
         query.reply(self._status_key, json.dumps({**report, "modules": []}))
 
     def __enter__(self) -> ReplayStack:

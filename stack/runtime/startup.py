@@ -77,12 +77,13 @@ def sync(
 
     A member over Zenoh in a shared-memory run (``spec.sync_with``) waits for the sync of those modules only (the
     others do not sync), and registers first: the fast path's publishers are probed for it by the coordinator's
-    process (:mod:`stack.fastpath.bridge`) once it knows the member. Modules outside the lockstep never probe in
+    process (:mod:`stack.fastpath.bridge`) once it knows the member (a restarted member registers last, as any
+    late joiner: its token tells the coordinator it is back). Modules outside the lockstep never probe in
     such a run (their messages are not the lockstep's), and nothing waits for them.
     """
     inputs = list(inputs)
     late_join, sync_with = spec.late_join, spec.sync_with
-    registers_first = member is not None and sync_with is not None
+    registers_first = member is not None and sync_with is not None and not late_join
     deadline = StartDeadline()
     roster: dict[str, int] | None = None
     declared = False

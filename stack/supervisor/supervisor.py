@@ -798,6 +798,7 @@ class Supervisor:
             "vehicle": self.vehicle,
             "host": self.host,
             "host_order": list(self.profile.hosts).index(self.host) if self.profile.hosts else 0,
+            "placement": {h: [e.name for e in self.profile.modules if e.host == h] for h in self.profile.hosts},
             "profile": self.profile.name,
             "lockstep": self.profile.lockstep,
             "speed": self.options.speed,

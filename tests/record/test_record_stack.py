@@ -311,6 +311,9 @@ def test_a_replay_is_a_stack_of_its_own_beside_a_live_lockstep_stack(tmp_path):
         assert out.returncode == 0, out.stderr
         assert json.loads(out.stdout) == {
             "vehicle": "t1",
+            "host": "local",
+            "hosts": ["local"],
+            "silent_hosts": [],
             "profile": "replay of source.mcap",
             "lockstep": True,
             "modules": [],
