@@ -75,6 +75,7 @@ def test_same_seed_gives_the_same_flight_whatever_carries_it(fly: Fly, other: di
     assert a.report["sim_time_s"] == b.report["sim_time_s"]
 
 
+@pytest.mark.xdist_group("heavy_wall_clock")  # two hosts' stacks at full speed: not beside the Pixhawk's flights
 def test_same_seed_gives_the_same_flight_split_across_hosts(fly: Fly, network, tmp_path) -> None:
     a, b = fly(3, 0), fly_across_hosts(network(["sim", "control"]), "attitude_step", 3, tmp_path)
     end = a.scenario_end_us()

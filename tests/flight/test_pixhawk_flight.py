@@ -19,7 +19,9 @@ import pytest
 
 from tests.support.harness import refused_in_logs, run_cli, wait_no_processes, write_profile
 
-pytestmark = pytest.mark.flight
+# On the wall clock, and the simulated Pixhawk at normal priority: never beside the multi-host flights
+# (tests/hosts), whose three stacks would starve it.
+pytestmark = [pytest.mark.flight, pytest.mark.xdist_group("heavy_wall_clock")]
 
 FLY_TIMEOUT_S = 900.0
 SKIPPED_STEPS_MAX = 0.01

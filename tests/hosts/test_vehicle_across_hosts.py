@@ -14,25 +14,17 @@ import pytest
 
 from stack.bus.node import stable_publisher_id
 from stack.record.recorder import RecordedMessage, RecordingReader
-from tests.support.harness import REPO, eventually, stack_env, write_profile
+from tests.hosts.split import split_profile, up_on
+from tests.hosts.split import stack_on as stack
+from tests.support.harness import REPO, eventually, stack_env
 from tests.support.hosts import Host, Network
 
-pytestmark = pytest.mark.timeout(400)
+# Three hosts' stacks at once (at real-time priority, in real time): never beside the simulated Pixhawk's real-time
+# flights (tests/flight/test_pixhawk_flight.py), which they would starve.
+pytestmark = [pytest.mark.timeout(400), pytest.mark.xdist_group("heavy_wall_clock")]
 
 HOSTS = ("sim", "control", "ground")
-ROUTER_PORT = 7447  # inside namespaces of this test's own: nothing else listens there
 START_TIMEOUT_S = 240.0  # three stacks starting on a loaded two-core machine
-
-
-def split_profile(path: Path, net: Network) -> Path:
-    """``sitl_quad_hosts`` with the endpoints of this network's hosts."""
-    endpoints = "\n".join(f'[hosts.{h.name}]\nendpoint = "tcp/{h.address}:{ROUTER_PORT}"\n' for h in net.hosts.values())
-    return write_profile(path, f'extends = "sitl_quad_hosts"\n\n{endpoints}')
-
-
-def stack(host: Host, *args: str, timeout: float = 120.0) -> subprocess.CompletedProcess[str]:
-    """A ``stack`` command run on ``host``."""
-    return host.run(sys.executable, "-m", "stack", *args, env=stack_env(host.home), timeout=timeout, cwd=REPO)
 
 
 def status(host: Host) -> dict | None:
@@ -46,12 +38,8 @@ def bring_up(
     """The share of each host named, the ground host recording the whole vehicle to ``record``."""
     procs = {}
     for name in names:
-        log = (tmp_path / f"{name}.log").open("w")
         recording = ("--record", str(record)) if name == "ground" and record is not None else ()
-        procs[name] = net.hosts[name].popen(
-            sys.executable, "-m", "stack", "up", str(profile), "--host", name, "--quiet", *args, *recording,
-            env=stack_env(net.hosts[name].home), stdout=log, stderr=subprocess.STDOUT, cwd=REPO,
-        )  # fmt: skip
+        procs[name] = up_on(net.hosts[name], profile, tmp_path / f"{name}.log", *args, *recording)
     return procs
 
 
@@ -77,8 +65,13 @@ def running(report: dict | None, count: int) -> bool:
 def test_takeoff_hover_and_land_across_three_hosts_commanded_from_the_ground(network, tmp_path, realtime):
     """In lockstep the ground host also records the whole vehicle (in real time, three hosts' stacks and a recorder
     of every topic are more than the two cores of the test machine run on the wall clock)."""
-    net = network(HOSTS)
+    net = network((*HOSTS, "laptop"))  # a laptop the profile gives no module: its router and the tools
     profile = split_profile(tmp_path / "split.toml", net)
+    laptop = net.hosts["laptop"]
+    router = laptop.popen(
+        sys.executable, "-m", "stack", "router", str(profile), "--host", "laptop",
+        env=stack_env(laptop.home), stdout=(tmp_path / "laptop.log").open("w"), stderr=subprocess.STDOUT, cwd=REPO,
+    )  # fmt: skip
     recording = None if realtime else tmp_path / "ground.mcap"
     mode = ["--realtime"] if realtime else []
     procs = bring_up(net, ["sim", "ground"], profile, tmp_path, *mode, record=recording)
@@ -100,7 +93,7 @@ def test_takeoff_hover_and_land_across_three_hosts_commanded_from_the_ground(net
 
     takeoff = stack(ground, "cmd", "takeoff", "--alt", "3", "--wait")
     assert takeoff.returncode == 0 and "takeoff complete" in takeoff.stdout, takeoff.stdout + takeoff.stderr + logs()
-    hover = status(net.hosts["control"])  # any host sees the whole vehicle
+    hover = status(laptop)  # any host sees the whole vehicle, a host with only a router too
     assert hover is not None and hover["vehicle_summary"]["armed"]
     assert hover["vehicle_summary"]["position"]["altitude_above_home"] > 2.0
     # the tools of the ground host reach modules of the other hosts
@@ -118,6 +111,7 @@ def test_takeoff_hover_and_land_across_three_hosts_commanded_from_the_ground(net
     codes = {name: p.wait(timeout=60) for name, p in procs.items()}
     assert codes == dict.fromkeys(HOSTS, 0), f"{codes}\n{logs()}"
     assert "Traceback" not in logs()
+    assert stack(laptop, "down").returncode == 0 and router.wait(timeout=60) == 0
     if recording is None:
         return
     with RecordingReader(recording) as reader:
@@ -126,3 +120,4 @@ def test_takeoff_hover_and_land_across_three_hosts_commanded_from_the_ground(net
     heard_from = {publishers[m.publisher_id] for m in messages if m.publisher_id in publishers}
     assert heard_from == {"sim", "control"}  # the ground host's links publish on the wall clock only when used
     assert_each_message_once(messages)
+
