@@ -64,7 +64,8 @@ def complete_roster(answers: Iterable[dict], hosts: Sequence[str], run_id: int) 
 def vehicle_status(session: zenoh.Session, vehicle: str, timeout: float = 2.0) -> dict | None:
     """Every host's status as one: the first answer's vehicle facts, and every host's module rows in host order
     (each row names its host); None when no supervisor answers. ``silent_hosts``: the hosts of the profile that run
-    modules and did not answer (``placement`` says which modules are theirs)."""
+    modules and did not answer (``placement`` says which modules are theirs); ``lost_hosts``: host → the answering
+    hosts that count it lost (stack.bus.host_beats)."""
     answers = query_json(session, keys.supervisor_query(vehicle, "status"), timeout=timeout)
     if not answers:
         return None
@@ -74,6 +75,11 @@ def vehicle_status(session: zenoh.Session, vehicle: str, timeout: float = 2.0) -
     report["hosts"] = [a.get("host", "") for a in answers]
     placement: dict[str, list[str]] = report.get("placement", {})
     report["silent_hosts"] = [h for h, names in placement.items() if names and h not in report["hosts"]]
+    lost: dict[str, list[str]] = {}
+    for a in answers:
+        for h in a.get("lost_hosts", []):
+            lost.setdefault(str(h), []).append(str(a.get("host", "")))
+    report["lost_hosts"] = lost
     return report
 
 

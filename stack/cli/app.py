@@ -234,6 +234,9 @@ def status(
     for host in report.get("silent_hosts", []):
         modules = ", ".join(report["placement"][host])
         typer.echo(f"host {host}: its supervisor does not answer (lost, or not started): {modules}")
+    for host, seen_by in report.get("lost_hosts", {}).items():
+        modules = ", ".join(report["placement"].get(host, [])) or "no modules"
+        typer.echo(f"host {host}: lost to host {', '.join(seen_by)} (no beat within the lease): {modules}")
     for m in report["modules"]:
         drops = [f"{DROP_COUNTERS[k]} {m[k]}" for k in DROP_COUNTERS if m.get(k)]
         if drops:

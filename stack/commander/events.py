@@ -7,6 +7,7 @@ and link losses as warnings, and the rest (arming, mode changes) as information
 
 from __future__ import annotations
 
+from stack.bus.host_beats import LOST_PREFIX
 from stack.msg.system import MavlinkLog
 
 WARNING_EVENTS = (
@@ -15,7 +16,7 @@ WARNING_EVENTS = (
     "Link to the Pixhawk lost",
     "Commander stalled",
 )
-CRITICAL_EVENTS = ("Failsafe activated",)
+CRITICAL_EVENTS = ("Failsafe activated", LOST_PREFIX)
 
 
 def event_severity(text: str, refused: bool) -> int:

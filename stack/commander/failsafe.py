@@ -165,6 +165,8 @@ class FailsafeConditions:
     position_control_lost: bool = False
     airspeed_lost: bool = False
     landed: bool = True
+    host_lost: bool = False
+    """A host carrying flight modules of the vehicle is lost (stack.commander.host_loss)."""
 
 
 class FailsafeResult(NamedTuple):
@@ -183,6 +185,7 @@ _DISARM = _Options(FailsafeAction.DISARM, takeover=Takeover.NEVER)
 _POSITION_CONTROL_LOSS = _Options(FailsafeAction.LAND, Clear.ON_MODE_CHANGE_OR_DISARM, Takeover.MODE_SWITCH_ONLY)
 _FW_POSITION_CONTROL_LOSS = _Options(FailsafeAction.DESCEND, Clear.ON_MODE_CHANGE_OR_DISARM, Takeover.MODE_SWITCH_ONLY)
 _AIRSPEED_LOSS = _Options(FailsafeAction.WARN)
+_HOST_LOSS = _Options(FailsafeAction.LAND, Clear.ON_MODE_CHANGE_OR_DISARM, Takeover.MODE_SWITCH_ONLY)
 
 
 @cache
@@ -353,6 +356,7 @@ class Failsafe:
             lost_position = _FW_POSITION_CONTROL_LOSS if vehicle_type == FIXED_WING else _POSITION_CONTROL_LOSS
             self._check("position_control_loss", cond.position_control_lost, lost_position)
             self._check("airspeed_loss", cond.airspeed_lost, _AIRSPEED_LOSS)
+            self._check("host_loss", cond.host_lost, _HOST_LOSS)
 
         warning = cond.battery_warning
         if warning > BatteryWarning.NONE:

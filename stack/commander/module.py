@@ -147,6 +147,11 @@ class CommanderModule(Module):
         self._module_pids: dict[str, int] = {}
         if not self._lockstep:
             self.commander.chain.silence_us = control_chain.REALTIME_SILENCE_US
+        spec = rt.spec
+        if spec.placement and not self._lockstep:
+            # In lockstep a lost host stops simulated time itself; in real time its beats say it is gone.
+            self.commander.watch_hosts(spec.placement, spec.host, spec.host_lease_ms, spec.outside)
+            self.watch_hosts(self._on_host_beat)
         self.watch_modules(self._on_module)
         kept = self.kept_state()
         if kept is not None:
@@ -172,6 +177,11 @@ class CommanderModule(Module):
             # In lockstep a dead module's silence is measured in simulated time, which stands still while the
             # supervisor restarts it; in real time its liveliness token says at once that it is gone.
             self.commander.chain.module_died(module)
+
+    def _on_host_beat(self, host: str) -> None:
+        hosts = self.commander.hosts
+        if hosts is not None:
+            hosts.beat(host, self.now_us())
 
     def on_params_changed(self, changed: set[str]) -> None:
         self.commander.set_params(self.params.values())

@@ -69,7 +69,7 @@ commander disarms.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Collection, Mapping, Sequence
 from dataclasses import replace
 from enum import IntEnum
 from typing import NamedTuple
@@ -98,6 +98,7 @@ from stack.commander.health import (
     vehicle_type_name,
 )
 from stack.commander.home import HomePosition, home_from_local_position
+from stack.commander.host_loss import HostLoss
 from stack.commander.modes import (
     FIXED_WING,
     MAV_MODE_FLAG_CUSTOM_MODE_ENABLED,
@@ -305,6 +306,8 @@ class Commander:
         self._gcs_lost = False
         self._manual_control_lost = False
         self.chain = ControlChainMonitor()
+        self.hosts: HostLoss | None = None
+        """The vehicle's other hosts, when it is spread over several and flies in real time (:meth:`watch_hosts`)."""
         self._chain_faults: tuple[ChainFault, ...] = ()
         self._gcs_lost_counter = 0
         self.ignored_commands = 0
@@ -459,6 +462,10 @@ class Commander:
 
         self._update_link(now_us)
         self._update_manual_control(now_us)
+        hosts_held = False
+        if self.hosts is not None:
+            self._events.extend(self.hosts.update(now_us))
+            hosts_held = armed and self.hosts.holding(now_us)
         if self._p.com_ext_ap:
             self._follow_external_autopilot(now_us)
             armed = self.armed
@@ -480,14 +487,14 @@ class Commander:
             self._set_intention(follow)
 
         if not catching_up:
-            self._update_control_chain(now_us, armed)
+            self._update_control_chain(now_us, armed, hosts_held)
         if not armed and inp.landed and self._failsafe.selected_action == FailsafeAction.TERMINATE:
             # Disarmed by force while still falling, or before the land detector agreed: once it is on the
             # ground the vehicle may fly again, as after a disarm on the ground.
             self._clear_termination()
         failing = self._failing
-        if self._external_link_down(now_us):
-            failing &= ~_ESTIMATES  # without the Pixhawk's sensors the estimates go; its own failsafe flies
+        if self._external_link_down(now_us) or hosts_held:
+            failing &= ~_ESTIMATES  # the estimates went with the link or host; the plant's own failsafe flies
         conditions = FailsafeConditions(
             failing=failing,
             gcs_connection_lost=self._gcs_lost,
@@ -498,6 +505,7 @@ class Commander:
             position_control_lost=any(f.loss == Loss.POSITION_CONTROL for f in self._chain_faults),
             airspeed_lost=any(f.loss == Loss.AIRSPEED for f in self._chain_faults),
             landed=inp.landed,
+            host_lost=self.hosts is not None and self.hosts.flight_host_lost,
         )
         result = self._failsafe.update(
             now_us, armed, self.user_intended_nav_state, self._intention_updated, conditions, p.geofence.gf_action
@@ -558,11 +566,19 @@ class Commander:
         armed = "armed" if self.armed else "disarmed"
         self._events.append(f"Commander restarted: resuming {armed} in {mode_name(self.nav_state)}")
 
-    def _update_control_chain(self, now_us: int, armed: bool) -> None:
+    def watch_hosts(
+        self, placement: Mapping[str, Sequence[str]], own: str, lease_ms: int, outside: Collection[str]
+    ) -> None:
+        """The vehicle runs on several hosts (``placement``: host → its modules; ``own``: this one's), in real
+        time: feed :attr:`hosts` with their beats (see :mod:`stack.commander.host_loss`)."""
+        self.hosts = HostLoss(placement, own, lease_ms, outside)
+
+    def _update_control_chain(self, now_us: int, armed: bool, hosts_held: bool) -> None:
         if self.nav_state == NS.NAVIGATION_STATE_TERMINATION:
             return  # terminated: the loops are off, and the modules that were lost stay named
-        if self._p.com_ext_ap:
-            self._chain_faults = ()  # an external autopilot flies the vehicle; its estimates come over its link
+        if self._p.com_ext_ap or hosts_held:
+            # an external autopilot flies the vehicle, or the plant's side does while a host of the flight is missing
+            self._chain_faults = ()
             return
         faults = tuple(self.chain.update(now_us, armed, control_mode(self.nav_state, armed, self.vehicle_type)))
         for fault in faults:
@@ -1033,6 +1049,7 @@ class Commander:
             can_set,
             self._chain_faults,
             self.mav_type,
+            tuple(self.hosts.lost) if self.hosts is not None else (),
         )
         changed = key != self._published_key
         if changed or self._messages is None:
@@ -1057,6 +1074,7 @@ class Commander:
                 gcs_connection_lost_counter=self._gcs_lost_counter,
                 pre_flight_checks_pass=self._preflight_ok,
                 control_lost_modules=[f.module for f in self._chain_faults],
+                lost_hosts=list(self.hosts.lost) if self.hosts is not None else [],
                 vehicle_type=vehicle_type,
                 system_type=self.mav_type,
             )

@@ -10,6 +10,11 @@ flights' sensors replayed through the filter, it gives the same horizontal posit
 the simulator's truth (within 1 %) and no smaller height or velocity errors. It publishes
 ``vehicle_local_position``, which runs the position chain (flight_mode_manager, mc_pos_control,
 mc_hover_thrust_estimator) at 50 Hz, and ``vehicle_global_position``.
+
+Without an attitude estimate as recent as the accelerometer's samples (within ATTITUDE_TIMEOUT_US of sample
+time: the attitude estimator dead, or on a host that is gone) it neither predicts nor publishes: a specific force
+rotated by an old attitude is not the vehicle's, and an estimate nobody updates must go stale for its readers
+(the commander's 1 s estimate timeout) rather than stay valid.
 """
 
 from __future__ import annotations
@@ -90,6 +95,9 @@ def global_position_message(est: LocalPositionEstimate, now_us: int) -> VehicleG
     )
 
 
+ATTITUDE_TIMEOUT_US = 200_000
+
+
 class LocalPositionEstimatorModule(Module):
     NAME = "local_position_estimator"
     WORK_QUEUE = INS
@@ -125,7 +133,11 @@ class LocalPositionEstimatorModule(Module):
     def run(self, msg: None, dt: float) -> None:
         attitude = self.latest(ORB_ID.vehicle_attitude)
         samples = self.take(ORB_ID.sensor_accel)
-        if attitude is None or not samples:
+        if (
+            attitude is None
+            or not samples
+            or samples[-1].timestamp_sample - attitude.timestamp_sample > ATTITUDE_TIMEOUT_US
+        ):
             for topic in (ORB_ID.sensor_baro, ORB_ID.sensor_gps):
                 self.take(topic)
             return

@@ -91,6 +91,8 @@ class VehicleStatus(Message):
     pre_flight_checks_pass: bool = False
     control_lost_modules: list[str] = msgspec.field(default_factory=list)
     """The control chain's dead or silent modules (not in PX4, whose loops share one process)."""
+    lost_hosts: list[str] = msgspec.field(default_factory=list)
+    """The vehicle's hosts whose beats stopped (not in PX4, which runs on one board; stack.bus.host_beats)."""
 
 
 class ActuatorArmed(Message):

@@ -205,6 +205,11 @@ class Module:
         (called from another thread)."""
         self.rt.watch_modules(on_change)
 
+    def watch_hosts(self, on_beat: Callable[[str], None]) -> None:
+        """``on_beat(host)`` for each beat of a host of this vehicle, when it is spread over hosts
+        (stack.bus.host_beats; called from another thread)."""
+        self.rt.watch_hosts(on_beat)
+
     def show_link(self, what: str, url: str) -> None:
         """Give the user a link (a web viewer's page): logged now, and said again by the supervisor once the
         whole stack is up, as its last start-up line, where it is seen."""

@@ -19,6 +19,7 @@ import zenoh
 from stack.bus import keys
 from stack.bus.access import Access
 from stack.bus.alive import AliveTokens
+from stack.bus.host_beats import beat_host, beats_key
 from stack.bus.node import Node, wall_clock_us
 from stack.bus.topics import FLAG_LOCKSTEP_TIME, Received, TopicPublisher
 from stack.fastpath.attach import Attachment
@@ -148,6 +149,18 @@ class Runtime:
 
         key = keys.alive_query(self.spec.vehicle)
         self._module_watchers.append(self.node.session.liveliness().declare_subscriber(key, changed, history=True))
+
+    def watch_hosts(self, on_beat: Callable[[str], None]) -> None:
+        """Call ``on_beat(host)`` for each beat of a host of this vehicle (stack.bus.host_beats; called from a Zenoh
+        thread). The subscriber lives as long as the session."""
+        vehicle = self.spec.vehicle
+
+        def beat(sample: zenoh.Sample) -> None:
+            host = beat_host(str(sample.key_expr), vehicle)
+            if host is not None:
+                on_beat(host)
+
+        self._module_watchers.append(self.node.session.declare_subscriber(beats_key(vehicle), beat))
 
     def add_input(self, topic: str, instance: int, queue: bool, capacity: int) -> None:
         if (topic, instance) in self.inputs:

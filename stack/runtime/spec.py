@@ -188,6 +188,11 @@ class ModuleSpec:
     shm_run: bool = False
     # The vehicle's modules outside the lockstep (links, observers), wherever they run.
     outside: list[str] = field(default_factory=list)
+    # A vehicle over several hosts: this module's host, every host's modules, and how long a host may go without a
+    # beat before it counts as lost (stack.bus.host_beats). No placement: one host.
+    host: str = SINGLE_HOST
+    placement: dict[str, list[str]] = field(default_factory=dict)
+    host_lease_ms: int = 0
 
     def to_json(self) -> str:
         d = asdict(self)

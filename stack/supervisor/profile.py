@@ -49,6 +49,7 @@ from pathlib import Path
 
 from stack.bus import keys
 from stack.bus.config import BusConfig
+from stack.bus.host_beats import BEAT_PERIOD_S, DEFAULT_LEASE_MS, MIN_LEASE_MS
 from stack.bus.supervisors import SINGLE_HOST
 from stack.launch_files import find_mission, launch_dirs
 from stack.msg.registry import TOPICS
@@ -157,6 +158,8 @@ class Profile:
     scenario_limits: dict[str, dict[str, float | bool]] = field(default_factory=dict)
     scenario_options: dict[str, dict[str, str]] = field(default_factory=dict)
     hosts: dict[str, HostEntry] = field(default_factory=dict)
+    host_lease_ms: int = DEFAULT_LEASE_MS
+    """How long a host of the vehicle may go without a beat before the others count it lost (stack.bus.host_beats)."""
 
     @property
     def name(self) -> str:
@@ -167,6 +170,10 @@ class Profile:
         if not self.hosts:
             return [SINGLE_HOST]
         return [h for h in self.hosts if any(m.host == h for m in self.modules)]
+
+    def placement(self) -> dict[str, list[str]]:
+        """Host → the names of its modules, for every host of the profile (empty without hosts)."""
+        return {h: [e.name for e in self.modules if e.host == h] for h in self.hosts}
 
     def check_host(self, host: str | None) -> None:
         """``--host``: required, and one of the profile's hosts, when the profile spreads the vehicle over hosts;
@@ -329,7 +336,8 @@ class _Loader:
         transport = self._get(stack, "stack", "lockstep_transport", str, "shm")
         if transport not in LOCKSTEP_TRANSPORTS:
             raise self.fail("stack.lockstep_transport", f"'{transport}' is not one of {', '.join(LOCKSTEP_TRANSPORTS)}")
-        bus, port = self._bus(self._table(doc, "bus"))
+        bus_table = self._table(doc, "bus")
+        bus, port = self._bus(bus_table)
         profile = Profile(
             path=self.path,
             vehicle=vehicle,
@@ -343,6 +351,7 @@ class _Loader:
             lockstep_transport=transport,
             open_topics=self._open_topics(stack),
             hosts=self._hosts(self._table(doc, "hosts")),
+            host_lease_ms=self._host_lease(bus_table),
         )
         shared = self._airframe_params(airframe)
         given_shared = self._table(doc, "params")
@@ -473,7 +482,7 @@ class _Loader:
         return limits, options
 
     def _bus(self, table: dict) -> tuple[BusConfig, int]:
-        self._only(table, "bus", {"port", "connect", "listen", "mode", "low_latency", "lease_ms"})
+        self._only(table, "bus", {"port", "connect", "listen", "mode", "low_latency", "lease_ms", "host_lease_ms"})
         port = self._get(table, "bus", "port", int, 0)
         if not 0 <= port <= 65535:
             raise self.fail("bus.port", f"{port} is not a TCP port")
@@ -494,6 +503,14 @@ class _Loader:
         except ValueError as e:
             raise self.fail("bus.mode", str(e)) from None
         return bus, port
+
+    def _host_lease(self, table: dict) -> int:
+        lease = self._get(table, "bus", "host_lease_ms", int, DEFAULT_LEASE_MS)
+        if lease < MIN_LEASE_MS:
+            raise self.fail(
+                "bus.host_lease_ms", f"{lease} ms is shorter than {MIN_LEASE_MS} ms (a beat every {BEAT_PERIOD_S:g} s)"
+            )
+        return lease
 
     def _airframe_params(self, airframe: str) -> dict[str, object]:
         if not airframe:

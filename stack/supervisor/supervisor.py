@@ -32,6 +32,7 @@ import zenoh
 from stack.bus import keys
 from stack.bus.alive import AliveTokens
 from stack.bus.config import LOOPBACK_ANY_PORT, BusConfig
+from stack.bus.host_beats import BEAT_PERIOD_S, HostWatch, beat_host, beat_key, beats_key
 from stack.bus.ports import free_port, port_taken
 from stack.bus.supervisors import SINGLE_HOST, complete_roster, rosters
 from stack.fastpath.host import FastPathHost
@@ -174,6 +175,8 @@ class Supervisor:
         self._heartbeats: dict[str, ModuleHeartbeat] = {}
         self._print_lock = threading.Lock()
         self._hb_decoder = msgspec.msgpack.Decoder(ModuleHeartbeat)
+        # A vehicle over several hosts: this host's beat, and the other hosts' (stack.bus.host_beats).
+        self.hosts = HostWatch(profile.placement(), self.host, profile.host_lease_ms) if profile.hosts else None
 
     def _set_port(self, port: int) -> None:
         self.port = port
@@ -225,6 +228,7 @@ class Supervisor:
             self._say(f"router of host {self.host}: scheduling {done}")
         session = self._open_router()
         entities = []
+        beating: threading.Thread | None = None
         if self.shm_run and self.leads:
             remote = [name for name in self.bridged if name not in {m.entry.name for m in self.modules}]
             fast = [m.entry.name for m in self.modules if self._on_fast_path(m)]
@@ -239,6 +243,10 @@ class Supervisor:
                 session.declare_queryable(self._key("outside"), self._on_outside_query),
                 session.declare_queryable(self._key("stop"), self._on_stop_query),
             ]
+            if self.hosts is not None:
+                entities.append(session.declare_subscriber(beats_key(self.vehicle), self._on_beat))
+                beating = threading.Thread(target=self._beat, args=(session,), name="beat", daemon=True)
+                beating.start()
             run_state.write_state(self.vehicle, self.state_record())
             self._say(f"run directory {self.run_dir}")
             self._say_groups()
@@ -260,6 +268,9 @@ class Supervisor:
             if self._signal is not None and self.roster_complete:
                 self._say(f"{signal.Signals(self._signal).name}: stopping")
             self._stop_all()
+            self._stop.set()
+            if beating is not None:
+                beating.join()
             for entity in entities:
                 entity.undeclare()
             if self.fast is not None:
@@ -426,6 +437,9 @@ class Supervisor:
             hosts=self.profile.hosts_with_modules(),
             shm_run=self.shm_run,
             outside=[e.name for e in self.profile.modules if e.cls.OUTSIDE_LOCKSTEP or e.cls.PASSIVE],
+            host=self.host,
+            placement=self.profile.placement(),
+            host_lease_ms=self.profile.host_lease_ms,
             open_topics=list(self.profile.open_topics),
             bridged=self.bridged if e.name == self.coordinator else [],
             sync_with=[*self.bridged, self.coordinator] if bridged and self.coordinator else None,
@@ -568,6 +582,20 @@ class Supervisor:
                 del self._alive[name]
             self._alive_changed.notify_all()
 
+    def _beat(self, session: zenoh.Session) -> None:
+        """This host's beat, every BEAT_PERIOD_S until the supervisor stops."""
+        publisher = session.declare_publisher(beat_key(self.vehicle, self.host))
+        try:
+            while not self._stop.wait(BEAT_PERIOD_S):
+                publisher.put(b"")
+        finally:
+            publisher.undeclare()
+
+    def _on_beat(self, sample: zenoh.Sample) -> None:
+        host = beat_host(str(sample.key_expr), self.vehicle)
+        if host is not None and self.hosts is not None:
+            self.hosts.beat(host, time.monotonic_ns() // 1000)
+
     def _on_heartbeat(self, sample: zenoh.Sample) -> None:
         try:
             hb = self._hb_decoder.decode(sample.payload.to_bytes())
@@ -586,6 +614,9 @@ class Supervisor:
             if deadline is not None and now >= deadline:
                 self._say(f"duration of {self.options.duration:g} s reached")
                 return
+            if self.hosts is not None:
+                for change in self.hosts.update(time.monotonic_ns() // 1000):
+                    self._say(change.describe())
             for members in self.groups.values():
                 proc = members[0].proc
                 if proc is not None and proc.poll() is not None and any(m.state == "running" for m in members):
@@ -798,7 +829,8 @@ class Supervisor:
             "vehicle": self.vehicle,
             "host": self.host,
             "host_order": list(self.profile.hosts).index(self.host) if self.profile.hosts else 0,
-            "placement": {h: [e.name for e in self.profile.modules if e.host == h] for h in self.profile.hosts},
+            "placement": self.profile.placement(),
+            "lost_hosts": self.hosts.lost if self.hosts is not None else [],
             "profile": self.profile.name,
             "lockstep": self.profile.lockstep,
             "speed": self.options.speed,

@@ -5,6 +5,7 @@ import re
 
 import pytest
 
+from stack.bus.host_beats import DEFAULT_LEASE_MS
 from stack.supervisor.profile import ProfileError, load_profile
 from tests.support.harness import run_cli, write_profile
 
@@ -47,6 +48,15 @@ def test_each_module_runs_on_its_host_and_the_parameters_are_the_vehicles(tmp_pa
     assert p.hosts_with_modules() == ["sim", "control"]  # the ground host starts no module
     for host in p.hosts:
         p.check_host(host)
+
+
+def test_the_host_lease_is_the_profiles_and_too_short_a_lease_is_refused(tmp_path):
+    assert load_profile(write_profile(tmp_path / "a.toml", SPLIT)).host_lease_ms == DEFAULT_LEASE_MS
+    longer = load_profile(write_profile(tmp_path / "b.toml", SPLIT + "\n[bus]\nhost_lease_ms = 2000\n"))
+    assert longer.host_lease_ms == 2000
+    assert longer.placement() == {"sim": ["tick_source"], "control": ["doubler"], "ground": []}
+    with pytest.raises(ProfileError, match=r"c\.toml: bus\.host_lease_ms: 200 ms is shorter than 500 ms"):
+        load_profile(write_profile(tmp_path / "c.toml", SPLIT + "\n[bus]\nhost_lease_ms = 200\n"))
 
 
 def test_a_profile_of_one_machine_has_one_host():

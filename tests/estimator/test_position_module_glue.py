@@ -6,7 +6,7 @@ import math
 import pytest
 
 from stack.estimator.position_kf import LocalPositionKF
-from stack.estimator.position_module import LocalPositionEstimatorModule
+from stack.estimator.position_module import ATTITUDE_TIMEOUT_US, LocalPositionEstimatorModule
 from stack.mathlib import quaternion as quat
 from stack.msg.estimation import VehicleAttitude
 from stack.msg.registry import ORB_ID
@@ -53,6 +53,22 @@ def test_publishes_both_positions_stamped_with_the_accelerometer_sample_and_head
     assert local.timestamp_sample == glob.timestamp_sample == bench.now - 500
     assert local.timestamp == glob.timestamp == bench.now
     assert local.heading == pytest.approx(0.7) and local.heading_good_for_control
+
+
+def test_silent_once_the_attitude_is_older_than_its_timeout_and_again_publishing_when_it_is_back():
+    """The attitude estimator gone (dead, or its host lost) while the sensors go on: no estimate, valid or not."""
+    bench = ModuleBench(LocalPositionEstimatorModule)
+    bench.put(ORB_ID.vehicle_attitude, VehicleAttitude(timestamp_sample=0))
+    while bench.now + round(DT * 1e6) - 500 <= ATTITUDE_TIMEOUT_US:
+        step(bench)
+    published = len(bench.sent(ORB_ID.vehicle_local_position))
+    assert published == ATTITUDE_TIMEOUT_US // round(DT * 1e6)
+    for _ in range(50):
+        step(bench)
+    assert len(bench.sent(ORB_ID.vehicle_local_position)) == published
+    bench.put(ORB_ID.vehicle_attitude, VehicleAttitude(timestamp_sample=bench.now))
+    step(bench)
+    assert len(bench.sent(ORB_ID.vehicle_local_position)) == published + 1
 
 
 def test_a_non_finite_accelerometer_sample_is_refused_and_counted():

@@ -145,6 +145,7 @@ class ModuleBench:
         self.behind = False
         self.now = 0
         self.node = self.stand_in_node()
+        self.host_watchers: list[Callable[[str], None]] = []
         self.module_watchers: list[Callable[[str, int, bool], None]] = []
         self.module = cls(self)  # type: ignore[arg-type]
 
@@ -168,6 +169,14 @@ class ModuleBench:
     def module_changed(self, module: str, pid: int, alive: bool) -> None:
         for on_change in self.module_watchers:
             on_change(module, pid, alive)
+
+    def watch_hosts(self, on_beat: Callable[[str], None]) -> None:
+        """No other hosts on a bench: a test beats for them with :meth:`host_beat`."""
+        self.host_watchers.append(on_beat)
+
+    def host_beat(self, host: str) -> None:
+        for on_beat in self.host_watchers:
+            on_beat(host)
 
     def put(self, topic: Topic[M], msg: M, instance: int = 0) -> None:
         """Deliver ``msg`` on ``topic`` (stamped now when its timestamp is 0)."""

@@ -1,0 +1,63 @@
+"""The commander's view of the vehicle's other hosts: which are lost, and when the flight is not its to judge.
+
+A vehicle over several machines (a companion computer, a simulator machine, a ground laptop) loses a host when its
+beats stop (:mod:`stack.bus.host_beats`). PX4 runs on one board and has no such loss; the nearest is a Pixhawk
+whose companion goes silent (``src/modules/commander/Commander.cpp``, Offboard loss) or a companion that loses its
+Pixhawk. The commander acts as the surviving side of that pair:
+
+* a lost host is named, with its modules, in ``vehicle_status.lost_hosts``, the log and STATUSTEXT;
+* a host that carries only links and observers (a ground laptop: MAVLink, recorder, plots) is only named: the
+  data-link-loss failsafe (NAV_DLL_ACT) answers for the ground station it carried;
+* while a host that carries flight modules (the plant, estimators, controllers) is late or lost, and for
+  RETURN_GRACE_US after it is back, the estimate and control-chain checks are *held*: their inputs went with
+  the host, and the plant's side flies the vehicle on its own (the simulator and a Pixhawk land on Offboard loss).
+  Flight termination on what a lost host took away would cut the motors the moment the host returns; PX4 likewise
+  terminates only on a failure of its own board;
+* once such a host is lost the failsafe lands (``host_loss``; cleared by a mode change or disarm, as PX4's
+  position-loss landing is), so the vehicle keeps landing when the host comes back and can be armed again on the
+  ground.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Collection, Mapping, Sequence
+
+from stack.bus.host_beats import HostWatch
+
+RETURN_GRACE_US = 1_500_000
+"""After a flight host is back, its modules have this long to deliver fresh estimates and outputs."""
+
+
+class HostLoss:
+    """See the module docstring. ``outside``: the vehicle's modules outside the flight (links, observers)."""
+
+    def __init__(
+        self, placement: Mapping[str, Sequence[str]], own: str, lease_ms: int, outside: Collection[str]
+    ) -> None:
+        self.watch = HostWatch(placement, own, lease_ms)
+        self._flight_hosts = frozenset(
+            h for h, modules in self.watch.placement.items() if any(m not in outside for m in modules)
+        )
+        self.lost: list[str] = []
+        """The lost hosts, in the profile's order."""
+        self._held_until_us = 0
+
+    def beat(self, host: str, now_us: int) -> None:
+        self.watch.beat(host, now_us)
+
+    def update(self, now_us: int) -> list[str]:
+        """The events of this cycle (hosts lost and back)."""
+        events = [change.describe() for change in self.watch.update(now_us)]
+        self.lost = self.watch.lost
+        if any(h in self._flight_hosts for h in self.watch.late(now_us)):
+            self._held_until_us = now_us + RETURN_GRACE_US
+        return events
+
+    @property
+    def flight_host_lost(self) -> bool:
+        """A lost host carries flight modules: the ``host_loss`` failsafe (land)."""
+        return any(h in self._flight_hosts for h in self.lost)
+
+    def holding(self, now_us: int) -> bool:
+        """Whether the estimate and control-chain checks are held (see the module docstring)."""
+        return now_us < self._held_until_us

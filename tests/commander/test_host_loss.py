@@ -1,0 +1,194 @@
+"""A vehicle over several hosts: the commander names a lost host and never terminates on what it took away."""
+
+from __future__ import annotations
+
+import pytest
+
+from stack.bus.host_beats import HostWatch, beat_host, beat_key
+from stack.commander import commands as C
+from stack.commander.control_chain import OUTPUTS
+from stack.commander.events import event_severity
+from stack.commander.host_loss import RETURN_GRACE_US
+from stack.msg.system import MavlinkLog
+from stack.msg.system import VehicleStatus as NS
+from tests.commander.helpers import Clock, local_position, make_clock
+
+PLACEMENT = {
+    "sim": ["simulator", "attitude_estimator_q", "local_position_estimator"],
+    "control": ["commander", "mc_att_control", "mc_rate_control", "control_allocator"],
+    "ground": ["mavlink_gcs"],
+}
+LEASE_MS = 750
+
+
+def test_a_host_is_late_after_three_missed_beats_lost_after_the_lease_and_back_with_its_next_beat():
+    watch = HostWatch(PLACEMENT, "control", LEASE_MS)
+    assert watch.update(10_000_000) == [] and watch.late(10_000_000) == []  # never heard: not started yet
+    watch.beat("sim", 0)
+    watch.beat("ground", 0)
+    assert watch.late(300_000) == []
+    assert watch.late(300_001) == ["sim", "ground"]
+    assert watch.update(750_000) == []
+    watch.beat("ground", 700_000)
+    (change,) = watch.update(750_001)
+    assert (change.host, change.lost, change.modules) == ("sim", True, tuple(PLACEMENT["sim"]))
+    assert change.describe() == (
+        "Lost host sim (no beat for 0.75 s): simulator, attitude_estimator_q, local_position_estimator"
+    )
+    assert watch.lost == ["sim"] and watch.update(800_000) == []
+    watch.beat("sim", 5_000_000)
+    watch.beat("ground", 5_000_000)
+    (back,) = watch.update(5_000_000)
+    assert (back.host, back.lost, back.describe()) == ("sim", False, "Host sim back after 5.0 s")
+    assert watch.lost == []
+
+
+def test_beats_of_hosts_outside_the_profile_and_the_watchers_own_are_ignored_and_counted():
+    watch = HostWatch(PLACEMENT, "control", LEASE_MS)
+    watch.beat("intruder", 0)
+    watch.beat("control", 0)
+    assert watch.foreign == 2
+    assert watch.update(10_000_000) == []
+
+
+@pytest.mark.parametrize(
+    ("key", "host"),
+    [
+        ("stack/v1/@supervisor/sim/beat", "sim"),
+        ("stack/v2/@supervisor/sim/beat", None),
+        ("stack/v1/@supervisor/sim/status", None),
+        ("stack/v1/@supervisor/sim/beat/x", None),
+    ],
+)
+def test_a_beat_key_names_its_host(key, host):
+    assert beat_host(key, "v1") == host
+    assert beat_key("v1", "sim") == "stack/v1/@supervisor/sim/beat"
+
+
+class SplitVehicle:
+    """A commander on host ``control`` hovering at 5 m, with the hosts beating and the chain's outputs coming
+    until a test stops them."""
+
+    def __init__(self) -> None:
+        self.clock: Clock = make_clock()
+        commander = self.clock.commander
+        commander.watch_hosts(PLACEMENT, "control", LEASE_MS, outside={"mavlink_gcs"})
+        self.beating = {"sim", "ground"}
+        self.estimates = True
+        self.frozen_at = 0
+        self.step()
+        self.clock.send(C.arm_command())
+        self.clock.send(C.set_mode_command("hold"))
+        self.clock.fly_to((0.0, 0.0, -5.0))
+        self.step(0.2)
+        assert self.status.nav_state == NS.NAVIGATION_STATE_AUTO_LOITER
+
+    @property
+    def status(self) -> NS:
+        return self.clock.status
+
+    def lose(self, host: str) -> None:
+        """The host's beats stop; with the simulator's host go the sensors and the estimates."""
+        self.beating.discard(host)
+        if host == "sim":
+            self.estimates = False
+            self.frozen_at = self.clock.t
+            t = self.frozen_at
+            self.clock.overrides = {
+                f: t
+                for f in (
+                    "attitude_timestamp_us",
+                    "angular_velocity_timestamp_us",
+                    "gyro_timestamp_us",
+                    "accel_timestamp_us",
+                    "baro_timestamp_us",
+                    "mag_timestamp_us",
+                    "gps_timestamp_us",
+                )
+            }
+            self.clock.overrides["local_position"] = local_position(t, *self.clock.position)
+
+    def regain(self, host: str) -> None:
+        self.beating.add(host)
+        if host == "sim":
+            self.estimates = True
+            self.clock.overrides = {}
+
+    def step(self, seconds: float = 0.0) -> None:
+        clock = self.clock
+        end = clock.t + max(round(seconds * 1e6), clock.period)
+        while clock.t < end:
+            hosts = clock.commander.hosts
+            assert hosts is not None
+            for host in self.beating:
+                hosts.beat(host, clock.t)
+            if self.estimates:
+                for topic in OUTPUTS:
+                    clock.commander.chain.output_seen(topic, clock.t)
+            clock.step()
+
+
+def test_losing_the_simulators_host_in_the_air_lands_and_never_terminates():
+    vehicle = SplitVehicle()
+    vehicle.lose("sim")
+    for _ in range(300):  # 3 s: the estimates time out after 1 s, the chain after 0.5 s
+        vehicle.step()
+        assert vehicle.status.nav_state != NS.NAVIGATION_STATE_TERMINATION
+        assert not vehicle.clock.last.actuator_armed.termination
+    status = vehicle.status
+    assert status.lost_hosts == ["sim"]
+    assert status.nav_state == NS.NAVIGATION_STATE_AUTO_LAND
+    assert (vehicle.clock.last.failsafe_action, vehicle.clock.last.failsafe_cause) == ("land", "host_loss")
+    assert status.control_lost_modules == []
+    lost = next(e for e in vehicle.clock.events if e.startswith("Lost host sim"))
+    assert lost.endswith("simulator, attitude_estimator_q, local_position_estimator")
+    assert event_severity(lost, refused=False) == MavlinkLog.SEVERITY_CRITICAL
+
+
+def test_without_the_hosts_beats_the_same_loss_terminates():
+    """What the beats change: the chain's and the estimates' own checks terminate a vehicle that loses them."""
+    clock = make_clock()
+    clock.step()
+    clock.send(C.arm_command())
+    clock.send(C.set_mode_command("hold"))
+    clock.fly_to((0.0, 0.0, -5.0))
+    t = clock.t
+    clock.overrides = {"attitude_timestamp_us": t, "angular_velocity_timestamp_us": t, "gyro_timestamp_us": t}
+    clock.step(1.5)
+    assert clock.status.nav_state == NS.NAVIGATION_STATE_TERMINATION
+
+
+def test_the_host_back_keeps_landing_and_once_landed_the_vehicle_disarms_and_may_arm_again():
+    vehicle = SplitVehicle()
+    vehicle.lose("sim")
+    vehicle.step(2.0)
+    vehicle.regain("sim")
+    vehicle.step(0.05)
+    assert "Host sim back after" in " ".join(vehicle.clock.events)
+    assert vehicle.status.lost_hosts == []
+    vehicle.step(RETURN_GRACE_US / 1e6 + 0.5)
+    assert vehicle.status.nav_state == NS.NAVIGATION_STATE_AUTO_LAND
+    vehicle.clock.position, vehicle.clock.landed = (0.0, 0.0, 0.0), True
+    vehicle.step(3.0)
+    assert vehicle.status.arming_state == NS.ARMING_STATE_DISARMED
+    ack = vehicle.clock.send(C.arm_command())
+    assert ack.result == 0, ack.reason
+
+
+def test_a_host_late_for_less_than_the_lease_is_no_failsafe():
+    vehicle = SplitVehicle()
+    vehicle.beating.discard("sim")
+    vehicle.step(0.5)
+    vehicle.beating.add("sim")
+    vehicle.step(0.5)
+    assert vehicle.status.nav_state == NS.NAVIGATION_STATE_AUTO_LOITER
+    assert not [e for e in vehicle.clock.events if "host" in e.lower()]
+
+
+def test_losing_the_ground_host_only_names_it():
+    vehicle = SplitVehicle()
+    vehicle.lose("ground")
+    vehicle.step(2.0)
+    assert vehicle.status.lost_hosts == ["ground"]
+    assert vehicle.status.nav_state == NS.NAVIGATION_STATE_AUTO_LOITER
+    assert "Lost host ground (no beat for 0.76 s): mavlink_gcs" in vehicle.clock.events
