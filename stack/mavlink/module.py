@@ -29,8 +29,10 @@ from typing import TYPE_CHECKING, Any, ClassVar
 from pymavlink.dialects.v20 import common as mavlink2
 
 from stack.bus import keys
+from stack.bus.host_beats import HostWatch
 from stack.bus.node import wall_clock_us
 from stack.bus.topics import TopicSubscriber
+from stack.commander.module import CommanderModule
 from stack.commander.state_machine import SUPPORTED_COMMANDS
 from stack.mavlink import (
     commands,
@@ -65,6 +67,7 @@ from stack.msg.topic import Topic
 from stack.params import catalogue
 from stack.params.param import ParamError
 from stack.runtime.module import Arg, Module, Timer
+from stack.runtime.spec import ModuleSpec
 
 if TYPE_CHECKING:
     from stack.bus.node import Node
@@ -269,8 +272,19 @@ class MavlinkModule(Module):
             int(self.params["MAV_TYPE"]),
             ", signed" if key is not None else "",
         )
+        self._commander_host = self._watch_commander_host(rt.spec)
         self._thread = threading.Thread(target=self._link_loop, name="mavlink", daemon=True)
         self._thread.start()
+
+    def _watch_commander_host(self, spec: ModuleSpec) -> HostWatch | None:
+        """On a vehicle over several hosts, the commander's host when it is another: its loss is told by the link
+        (the commander, who tells of the other hosts' losses, went with it; stack.bus.host_beats)."""
+        host = next((h for h, names in spec.placement.items() if CommanderModule.NAME in names), spec.host)
+        if host == spec.host or spec.lockstep:
+            return None
+        watch = HostWatch({host: spec.placement[host]}, spec.host, spec.host_lease_ms)
+        self.watch_hosts(lambda beating: watch.beat(beating, wall_clock_us()))
+        return watch
 
     def _heartbeat(self) -> dict[str, int]:
         """The HEARTBEAT's fields now: the commander's state, and MAV_TYPE as the parameter is now."""
@@ -541,6 +555,11 @@ class MavlinkModule(Module):
 
     def _periodic(self, now: int) -> None:
         self._activate(now)
+        if self._commander_host is not None:
+            for change in self._commander_host.update(now):
+                self.log.warning("%s", change.describe())
+                severity = mavlink2.MAV_SEVERITY_CRITICAL if change.lost else mavlink2.MAV_SEVERITY_INFO
+                self._say(severity, change.describe())
         flags = self.presence.telemetry_due(now)
         if flags is not None:
             self._publish(ORB_ID.telemetry_status, telemetry_status(self.endpoint.kind, flags))

@@ -113,6 +113,38 @@ def test_a_message_for_the_operator_goes_out_as_statustext_a_bad_setpoint_is_cou
     assert bench.rejected == 1 and bench.sent(ORB_ID.vehicle_attitude_setpoint) == []
 
 
+def test_on_the_ground_host_the_link_tells_of_the_commanders_host_lost_and_back(tmp_path, monkeypatch):
+    """The commander tells of the other hosts' losses (its mavlink_log); of its own host's, only the link can."""
+    monkeypatch.setenv("STACK_HOME", str(tmp_path))
+    monkeypatch.setattr(mavlink_module, "_Subscription", _Subscription)
+    monkeypatch.setattr(mavlink_module, "BusParamSource", _Params)
+    placement = {"sim": ["simulator"], "control": ["commander", "mc_rate_control"], "ground": ["mavlink_gcs"]}
+    peer = Peer(0)
+    port = peer.sock.getsockname()[1]
+    bench = LinkBench(
+        MavlinkModule,
+        args={"device": f"udpout:127.0.0.1:{port}", "remote": ""},
+        host="ground",
+        placement=placement,
+        host_lease_ms=500,
+    )
+    try:
+        peer.connect(timeout=5.0)
+        bench.host_beat("sim")
+        bench.host_beat("control")
+        lost = peer.wait("STATUSTEXT", lambda m: "Lost host control" in m.text, timeout=5.0)
+        assert lost.severity == M.MAV_SEVERITY_CRITICAL
+        assert lost.text.startswith("Lost host control (no beat for 0.5")
+        peer.wait("STATUSTEXT", lambda m: "mc_rate_control" in m.text, timeout=5.0)  # the text's next chunk
+        bench.host_beat("control")
+        back = peer.wait("STATUSTEXT", lambda m: "Host control back" in m.text, timeout=5.0)
+        assert back.severity == M.MAV_SEVERITY_INFO
+        assert not [m for m in peer.all("STATUSTEXT") if "sim" in m.text]  # the commander tells of that one
+    finally:
+        bench.module.close()
+        peer.close()
+
+
 def test_telemetry_status_says_a_ground_station_is_heard(link):
     bench, _ = link
     status = wait_for(lambda: bench.sent(ORB_ID.telemetry_status), what="telemetry_status")[-1]

@@ -80,10 +80,14 @@ class LinkBench(ModuleBench):
     """``ModuleBench`` with ``node`` (a :class:`BusStandIn`) and the error count the link thread keeps."""
 
     def __init__(
-        self, cls: type[Module], params: dict[str, object] | None = None, args: dict[str, Any] | None = None
+        self,
+        cls: type[Module],
+        params: dict[str, object] | None = None,
+        args: dict[str, Any] | None = None,
+        **spec: Any,
     ) -> None:
         self.errors = 0
-        super().__init__(cls, params, args)
+        super().__init__(cls, params, args, **spec)
 
     def stand_in_node(self) -> BusStandIn:
         return BusStandIn(self.name)
