@@ -6,8 +6,8 @@ needs to know whether the other hosts are there (the other supervisors, the comm
 
 * a host is *late* when its last beat is older than LATE_US (three beats missed): whatever it sends may be
   missing, and what its modules stopped sending is not yet their own failure;
-* it is *lost* when its last beat is older than the lease (the profile's ``[bus] host_lease_ms``), and *back*
-  with its next beat.
+* it is *lost* when its last beat is older than the lease (the profile's ``[bus] host_lease_ms``), or at once when
+  its supervisor says it stops (a last beat carrying STOPPING), and *back* with its next beat.
 
 Zenoh itself notices a silent link only after its own lease (10 s by default), and a shorter Zenoh lease drops
 healthy loopback links of a loaded machine; the beats decide sooner, and only about hosts. A host never heard is
@@ -28,6 +28,8 @@ DEFAULT_LEASE_MS = 750
 """Loss noticed 0.65–0.75 s after the last beat (within PX4's 1 s estimate timeouts), at 7 missed beats."""
 MIN_LEASE_MS = 500
 LOST_PREFIX = "Lost host"
+STOPPING = b"stopping"
+"""The payload of a supervisor's last beat: its host stops (``stack down``), no need to wait for the lease."""
 
 
 def beat_key(vehicle: str, host: str) -> str:
@@ -53,11 +55,14 @@ class HostChange(NamedTuple):
     modules: tuple[str, ...]
     silent_us: int
     """How long the host had been silent when the change was seen."""
+    stopped: bool = False
+    """Lost because its supervisor said it stops."""
 
     def describe(self) -> str:
         if self.lost:
             names = ", ".join(self.modules) or "no modules"
-            return f"{LOST_PREFIX} {self.host} (no beat for {self.silent_us / 1e6:.2f} s): {names}"
+            why = "its supervisor stopped" if self.stopped else f"no beat for {self.silent_us / 1e6:.2f} s"
+            return f"{LOST_PREFIX} {self.host} ({why}): {names}"
         return f"Host {self.host} back after {self.silent_us / 1e6:.1f} s"
 
 
@@ -76,11 +81,16 @@ class HostWatch:
         self._last: dict[str, int] = {}
         self._lost: dict[str, int] = {}
         """Lost host → its last beat."""
+        self._stopping: set[str] = set()
 
-    def beat(self, host: str, now_us: int) -> None:
+    def beat(self, host: str, now_us: int, payload: bytes = b"") -> None:
         if host not in self.placement:
             self.foreign += 1
             return
+        if payload == STOPPING:
+            self._stopping.add(host)
+            return
+        self._stopping.discard(host)
         self._last[host] = max(now_us, self._last.get(host, now_us))
 
     def update(self, now_us: int) -> list[HostChange]:
@@ -92,9 +102,9 @@ class HostWatch:
                 if last > self._lost[host]:
                     changes.append(HostChange(host, False, self.placement[host], last - self._lost[host]))
                     del self._lost[host]
-            elif silent > self.lease_us:
+            elif silent > self.lease_us or host in self._stopping:
                 self._lost[host] = last
-                changes.append(HostChange(host, True, self.placement[host], silent))
+                changes.append(HostChange(host, True, self.placement[host], silent, host in self._stopping))
         return changes
 
     @property
@@ -103,8 +113,10 @@ class HostWatch:
         return [h for h in self.placement if h in self._lost]
 
     def late(self, now_us: int) -> list[str]:
-        """The hosts heard before whose last beat is older than LATE_US (lost ones included)."""
-        return [h for h in self.placement if h in self._last and now_us - self._last[h] > LATE_US]
+        """The hosts heard before whose last beat is older than LATE_US, and the lost ones."""
+        return [
+            h for h in self.placement if h in self._lost or (h in self._last and now_us - self._last[h] > LATE_US)
+        ]
 
     def modules_of(self, hosts: Sequence[str]) -> tuple[str, ...]:
         return tuple(m for h in hosts for m in self.placement[h])

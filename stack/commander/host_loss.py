@@ -42,8 +42,8 @@ class HostLoss:
         """The lost hosts, in the profile's order."""
         self._held_until_us = 0
 
-    def beat(self, host: str, now_us: int) -> None:
-        self.watch.beat(host, now_us)
+    def beat(self, host: str, now_us: int, payload: bytes = b"") -> None:
+        self.watch.beat(host, now_us, payload)
 
     def update(self, now_us: int) -> list[str]:
         """The events of this cycle (hosts lost and back)."""

@@ -178,10 +178,10 @@ class CommanderModule(Module):
             # supervisor restarts it; in real time its liveliness token says at once that it is gone.
             self.commander.chain.module_died(module)
 
-    def _on_host_beat(self, host: str) -> None:
+    def _on_host_beat(self, host: str, payload: bytes) -> None:
         hosts = self.commander.hosts
         if hosts is not None:
-            hosts.beat(host, self.now_us())
+            hosts.beat(host, self.now_us(), payload)
 
     def on_params_changed(self, changed: set[str]) -> None:
         self.commander.set_params(self.params.values())

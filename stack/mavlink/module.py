@@ -283,7 +283,7 @@ class MavlinkModule(Module):
         if host == spec.host or spec.lockstep:
             return None
         watch = HostWatch({host: spec.placement[host]}, spec.host, spec.host_lease_ms)
-        self.watch_hosts(lambda beating: watch.beat(beating, wall_clock_us()))
+        self.watch_hosts(lambda beating, payload: watch.beat(beating, wall_clock_us(), payload))
         return watch
 
     def _heartbeat(self) -> dict[str, int]:

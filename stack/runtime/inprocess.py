@@ -64,7 +64,7 @@ class InProcessRuntime(Runtime):
     def watch_modules(self, on_change: Callable[[str, int, bool], None]) -> None:
         """Nothing to watch: every module runs in this one process."""
 
-    def watch_hosts(self, on_beat: Callable[[str], None]) -> None:
+    def watch_hosts(self, on_beat: Callable[[str, bytes], None]) -> None:
         """Nothing to watch: one process on one host."""
 
     def add_input(self, topic: str, instance: int, queue: bool, capacity: int) -> None:

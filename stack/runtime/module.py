@@ -205,8 +205,8 @@ class Module:
         (called from another thread)."""
         self.rt.watch_modules(on_change)
 
-    def watch_hosts(self, on_beat: Callable[[str], None]) -> None:
-        """``on_beat(host)`` for each beat of a host of this vehicle, when it is spread over hosts
+    def watch_hosts(self, on_beat: Callable[[str, bytes], None]) -> None:
+        """``on_beat(host, payload)`` for each beat of a host of this vehicle, when it is spread over hosts
         (stack.bus.host_beats; called from another thread)."""
         self.rt.watch_hosts(on_beat)
 

@@ -150,15 +150,15 @@ class Runtime:
         key = keys.alive_query(self.spec.vehicle)
         self._module_watchers.append(self.node.session.liveliness().declare_subscriber(key, changed, history=True))
 
-    def watch_hosts(self, on_beat: Callable[[str], None]) -> None:
-        """Call ``on_beat(host)`` for each beat of a host of this vehicle (stack.bus.host_beats; called from a Zenoh
-        thread). The subscriber lives as long as the session."""
+    def watch_hosts(self, on_beat: Callable[[str, bytes], None]) -> None:
+        """Call ``on_beat(host, payload)`` for each beat of a host of this vehicle (stack.bus.host_beats; called from
+        a Zenoh thread). The subscriber lives as long as the session."""
         vehicle = self.spec.vehicle
 
         def beat(sample: zenoh.Sample) -> None:
             host = beat_host(str(sample.key_expr), vehicle)
             if host is not None:
-                on_beat(host)
+                on_beat(host, sample.payload.to_bytes())
 
         self._module_watchers.append(self.node.session.declare_subscriber(beats_key(vehicle), beat))
 

@@ -32,7 +32,7 @@ import zenoh
 from stack.bus import keys
 from stack.bus.alive import AliveTokens
 from stack.bus.config import LOOPBACK_ANY_PORT, BusConfig
-from stack.bus.host_beats import BEAT_PERIOD_S, HostWatch, beat_host, beat_key, beats_key
+from stack.bus.host_beats import BEAT_PERIOD_S, STOPPING, HostWatch, beat_host, beat_key, beats_key
 from stack.bus.ports import free_port, port_taken
 from stack.bus.supervisors import SINGLE_HOST, complete_roster, rosters
 from stack.fastpath.host import FastPathHost
@@ -588,13 +588,14 @@ class Supervisor:
         try:
             while not self._stop.wait(BEAT_PERIOD_S):
                 publisher.put(b"")
+            publisher.put(STOPPING)
         finally:
             publisher.undeclare()
 
     def _on_beat(self, sample: zenoh.Sample) -> None:
         host = beat_host(str(sample.key_expr), self.vehicle)
         if host is not None and self.hosts is not None:
-            self.hosts.beat(host, time.monotonic_ns() // 1000)
+            self.hosts.beat(host, time.monotonic_ns() // 1000, sample.payload.to_bytes())
 
     def _on_heartbeat(self, sample: zenoh.Sample) -> None:
         try:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from stack.bus.host_beats import HostWatch, beat_host, beat_key
+from stack.bus.host_beats import STOPPING, HostWatch, beat_host, beat_key
 from stack.commander import commands as C
 from stack.commander.control_chain import OUTPUTS
 from stack.commander.events import event_severity
@@ -41,6 +41,18 @@ def test_a_host_is_late_after_three_missed_beats_lost_after_the_lease_and_back_w
     (back,) = watch.update(5_000_000)
     assert (back.host, back.lost, back.describe()) == ("sim", False, "Host sim back after 5.0 s")
     assert watch.lost == []
+
+
+def test_a_host_whose_supervisor_says_it_stops_is_lost_at_once_and_back_when_it_beats_again():
+    watch = HostWatch(PLACEMENT, "control", LEASE_MS)
+    watch.beat("ground", 0)
+    watch.beat("ground", 100_000, STOPPING)
+    (change,) = watch.update(110_000)
+    assert change.lost and change.describe() == "Lost host ground (its supervisor stopped): mavlink_gcs"
+    assert watch.late(110_000) == ["ground"]
+    watch.beat("ground", 9_000_000)
+    (back,) = watch.update(9_000_000)
+    assert not back.lost and watch.lost == [] and watch.late(9_000_000) == []
 
 
 def test_beats_of_hosts_outside_the_profile_and_the_watchers_own_are_ignored_and_counted():

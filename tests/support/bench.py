@@ -145,7 +145,7 @@ class ModuleBench:
         self.behind = False
         self.now = 0
         self.node = self.stand_in_node()
-        self.host_watchers: list[Callable[[str], None]] = []
+        self.host_watchers: list[Callable[[str, bytes], None]] = []
         self.module_watchers: list[Callable[[str, int, bool], None]] = []
         self.module = cls(self)  # type: ignore[arg-type]
 
@@ -170,13 +170,13 @@ class ModuleBench:
         for on_change in self.module_watchers:
             on_change(module, pid, alive)
 
-    def watch_hosts(self, on_beat: Callable[[str], None]) -> None:
+    def watch_hosts(self, on_beat: Callable[[str, bytes], None]) -> None:
         """No other hosts on a bench: a test beats for them with :meth:`host_beat`."""
         self.host_watchers.append(on_beat)
 
-    def host_beat(self, host: str) -> None:
+    def host_beat(self, host: str, payload: bytes = b"") -> None:
         for on_beat in self.host_watchers:
-            on_beat(host)
+            on_beat(host, payload)
 
     def put(self, topic: Topic[M], msg: M, instance: int = 0) -> None:
         """Deliver ``msg`` on ``topic`` (stamped now when its timestamp is 0)."""
