@@ -15,13 +15,24 @@ import zenoh
 from stack.bus import keys
 from stack.bus.config import LOOPBACK_ANY_PORT, BusConfig
 from stack.bus.ports import port_taken
+from stack.bus.timebase import shared_offset_from_environment
 from stack.bus.topics import TopicPublisher, TopicSubscriber
 from stack.msg.registry import TOPICS, fingerprint, message_type
 
+_SHARED_OFFSET = shared_offset_from_environment()
 
-def wall_clock_us() -> int:
-    """Monotonic time in µs, comparable between processes on one host (PX4's hrt_absolute_time)."""
-    return time.clock_gettime_ns(time.CLOCK_MONOTONIC) // 1000
+if _SHARED_OFFSET is None:
+
+    def wall_clock_us() -> int:
+        """Monotonic time in µs, comparable between processes on one host (PX4's hrt_absolute_time)."""
+        return time.clock_gettime_ns(time.CLOCK_MONOTONIC) // 1000
+
+else:
+
+    def wall_clock_us() -> int:
+        """Monotonic time in µs on the vehicle's time base (stack.bus.timebase): this host's clock plus the offset
+        its supervisor keeps to the leading host's."""
+        return time.clock_gettime_ns(time.CLOCK_MONOTONIC) // 1000 + _SHARED_OFFSET.read()
 
 
 def stable_publisher_id(vehicle: str, name: str) -> int:

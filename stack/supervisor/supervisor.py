@@ -12,6 +12,7 @@ start before the modules, are watched and restarted alike, stop after them, and 
 
 from __future__ import annotations
 
+import contextlib
 import json
 import logging
 import os
@@ -35,6 +36,17 @@ from stack.bus.config import LOOPBACK_ANY_PORT, BusConfig
 from stack.bus.host_beats import BEAT_PERIOD_S, STOPPING, HostWatch, beat_host, beat_key, beats_key
 from stack.bus.ports import free_port, port_taken
 from stack.bus.supervisors import SINGLE_HOST, complete_roster, rosters
+from stack.bus.timebase import (
+    OFFSET_FILE_ENV,
+    RESYNC_PERIOD_S,
+    SKEW_WARN_US,
+    SYNC_SAMPLES,
+    ClockSample,
+    OffsetEstimate,
+    SharedOffset,
+    estimate_offset,
+    slew,
+)
 from stack.fastpath.host import FastPathHost
 from stack.msg.internal import ModuleHeartbeat
 from stack.runtime.module import LINK_SUFFIX
@@ -127,6 +139,8 @@ class Supervisor:
         self._set_port(profile.port or free_port())
         coordinator = next((e for e in profile.modules if e.cls.LOCKSTEP_COORDINATOR), None)
         self.leads = coordinator is None or any(e is coordinator for e in here)
+        # Whose clock is the vehicle's time base across hosts (stack.bus.timebase): the coordinator's host.
+        self.leader = coordinator.host if coordinator is not None and profile.hosts else self.host
         # A shared-memory lockstep run: modules share a process only in one (see stack.supervisor.profile), and a
         # member may take part over Zenoh (stack.fastpath.bridge), as every member on another host does.
         self.shm_run = profile.lockstep and profile.lockstep_transport == "shm"
@@ -177,6 +191,10 @@ class Supervisor:
         self._hb_decoder = msgspec.msgpack.Decoder(ModuleHeartbeat)
         # A vehicle over several hosts: this host's beat, and the other hosts' (stack.bus.host_beats).
         self.hosts = HostWatch(profile.placement(), self.host, profile.host_lease_ms) if profile.hosts else None
+        # In real time on several hosts, the vehicle's time base is the leading host's (stack.bus.timebase).
+        self.clock = SharedOffset(run_dir / "clock_offset", writable=True) if profile.hosts else None
+        self._offset_at: tuple[int, float] | None = None
+        """(offset µs, when it was set: time.monotonic()) once measured."""
 
     def _set_port(self, port: int) -> None:
         self.port = port
@@ -245,6 +263,8 @@ class Supervisor:
             ]
             if self.hosts is not None:
                 entities.append(session.declare_subscriber(beats_key(self.vehicle), self._on_beat))
+                if self.leader == self.host:
+                    entities.append(session.declare_queryable(self._key("clock"), self._on_clock_query))
                 beating = threading.Thread(target=self._beat, args=(session,), name="beat", daemon=True)
                 beating.start()
             run_state.write_state(self.vehicle, self.state_record())
@@ -253,7 +273,7 @@ class Supervisor:
             self._say(f"bus rendezvous {self.endpoint}, vehicle '{self.vehicle}'")
             if self.profile.hosts:
                 self._say(f"host {self.host}: router on {', '.join(self.router_listen)}")
-            if (self.leads or self._await_lead(session)) and self._start_all():
+            if (self.leads or self._await_lead(session)) and self._sync_clock(session) and self._start_all():
                 self.roster_complete = True
                 if self.fast is not None and self._await_vehicle_roster(session):
                     self.fast.roster_complete()
@@ -275,6 +295,8 @@ class Supervisor:
                 entity.undeclare()
             if self.fast is not None:
                 self.fast.close()
+            if self.clock is not None:
+                self.clock.close()
             session.close()
             run_state.remove_state(self.vehicle, os.getpid())
         if self._signal is not None and not self.roster_complete:
@@ -451,6 +473,7 @@ class Supervisor:
             **os.environ,
             "PYTHONUNBUFFERED": "1",
             **{f"STACK_{k.upper()}": v for k, v in self.placeholders.items()},
+            **({OFFSET_FILE_ENV: str(self.clock.path)} if self._offset_at is not None and self.clock else {}),
         }
 
     def _spawn(self, m: ModuleProcess, go: bool = True) -> None:
@@ -581,6 +604,62 @@ class Supervisor:
             elif self._alive.get(name) == pid:
                 del self._alive[name]
             self._alive_changed.notify_all()
+
+    def _on_clock_query(self, query: zenoh.Query) -> None:
+        query.reply(self._key("clock"), str(time.clock_gettime_ns(time.CLOCK_MONOTONIC) // 1000))
+
+    def _measure_offset(self, session: zenoh.Session) -> OffsetEstimate | None:
+        """The leading host's clock minus this one's (stack.bus.timebase), None when it does not answer."""
+        samples = []
+        key = keys.supervisor_key(self.vehicle, self.leader, "clock")
+        for _ in range(SYNC_SAMPLES):
+            sent = time.clock_gettime_ns(time.CLOCK_MONOTONIC) // 1000
+            for reply in session.get(key, timeout=1.0):
+                if reply.ok is not None:
+                    received = time.clock_gettime_ns(time.CLOCK_MONOTONIC) // 1000
+                    with contextlib.suppress(ValueError):
+                        samples.append(ClockSample(sent, int(reply.ok.payload.to_string()), received))
+        return estimate_offset(samples)
+
+    def _sync_clock(self, session: zenoh.Session) -> bool:
+        """Before this host's modules start, in real time: put them on the leading host's clock (and keep them there,
+        :meth:`_keep_clock`). False if stopped meanwhile."""
+        if self.clock is None or self.profile.lockstep or self.leader == self.host:
+            return True
+        said = False
+        while not self._stop.is_set():
+            estimate = self._measure_offset(session)
+            if estimate is not None:
+                self.clock.write(estimate.offset_us)
+                self._offset_at = (estimate.offset_us, time.monotonic())
+                self._say(
+                    f"clock: on host {self.leader}'s, {estimate.offset_us / 1e6:+.6f} s from this host's"
+                    f" (round trip {estimate.round_trip_us / 1000:.1f} ms)"
+                )
+                threading.Thread(target=self._keep_clock, args=(session,), name="clock", daemon=True).start()
+                return True
+            if not said:
+                self._say(f"waiting for host {self.leader}'s clock")
+                said = True
+            self._stop.wait(0.2)
+        return False
+
+    def _keep_clock(self, session: zenoh.Session) -> None:
+        """Measure again every RESYNC_PERIOD_S and slew towards it; a large error is said (a clock stepped, or
+        drifting fast)."""
+        assert self.clock is not None and self._offset_at is not None
+        while not self._stop.wait(RESYNC_PERIOD_S):
+            estimate = self._measure_offset(session)
+            if estimate is None:
+                continue
+            offset, since = self._offset_at
+            now = time.monotonic()
+            error = estimate.offset_us - offset
+            if abs(error) > SKEW_WARN_US:
+                self._say(f"clock: {error / 1000:+.1f} ms off host {self.leader}'s; slewing to it")
+            offset = slew(offset, estimate.offset_us, round((now - since) * 1e6))
+            self.clock.write(offset)
+            self._offset_at = (offset, now)
 
     def _beat(self, session: zenoh.Session) -> None:
         """This host's beat, every BEAT_PERIOD_S until the supervisor stops."""

@@ -64,8 +64,12 @@ def running(report: dict | None, count: int) -> bool:
 @pytest.mark.parametrize("realtime", [False, True], ids=["lockstep", "realtime"])
 def test_takeoff_hover_and_land_across_three_hosts_commanded_from_the_ground(network, tmp_path, realtime):
     """In lockstep the ground host also records the whole vehicle (in real time, three hosts' stacks and a recorder
-    of every topic are more than the two cores of the test machine run on the wall clock)."""
-    net = network((*HOSTS, "laptop"))  # a laptop the profile gives no module: its router and the tools
+    of every topic are more than the two cores of the test machine run on the wall clock). In real time the
+    flight-control host's monotonic clock is 100 s ahead of the others', as another machine's would be: its
+    modules run on the vehicle's time base (stack.bus.timebase), else they would judge every sample of the
+    simulator's host 100 s old."""
+    ahead = {"control": 100} if realtime else None
+    net = network((*HOSTS, "laptop"), clock_ahead_s=ahead)  # a laptop the profile gives no module: its router, tools
     profile = split_profile(tmp_path / "split.toml", net)
     laptop = net.hosts["laptop"]
     router = laptop.popen(
@@ -111,6 +115,8 @@ def test_takeoff_hover_and_land_across_three_hosts_commanded_from_the_ground(net
     codes = {name: p.wait(timeout=60) for name, p in procs.items()}
     assert codes == dict.fromkeys(HOSTS, 0), f"{codes}\n{logs()}"
     assert "Traceback" not in logs()
+    if realtime:
+        assert "clock: on host sim's, -100.00" in (tmp_path / "control.log").read_text()
     assert stack(laptop, "down").returncode == 0 and router.wait(timeout=60) == 0
     if recording is None:
         return

@@ -88,11 +88,14 @@ class Host:
     home: Path
     switch: str = field(repr=False)
     port: str = field(repr=False)  # its link's end in the switch namespace
+    clock_ahead_s: int = 0
+    """Its CLOCK_MONOTONIC this far ahead of the test machine's (a time namespace of its own), as another machine's."""
     processes: list[subprocess.Popen[str]] = field(default_factory=list, repr=False)
 
     def command(self, *args: str) -> list[str]:
         """``args`` as a command run on this host."""
-        return ["ip", "netns", "exec", self.netns, *args]
+        ahead = ("unshare", "--time", "--monotonic", str(self.clock_ahead_s), "--fork", "--kill-child")
+        return ["ip", "netns", "exec", self.netns, *(ahead if self.clock_ahead_s else ()), *args]
 
     def environment(self, env: Mapping[str, str] | None) -> dict[str, str]:
         """``env``, or by default the caller's environment with this host's STACK_HOME."""
@@ -142,7 +145,9 @@ class Network:
     ``network`` fixture does); as a context manager it starts, and closes even when the start fails.
     """
 
-    def __init__(self, names: Sequence[str], base: Path, grace: float = 5.0) -> None:
+    def __init__(
+        self, names: Sequence[str], base: Path, grace: float = 5.0, clock_ahead_s: Mapping[str, int] | None = None
+    ) -> None:
         self.grace = grace
         prefix = _unique_prefix()
         self.switch = f"{prefix}-switch"
@@ -154,6 +159,7 @@ class Network:
                 home=base / name,
                 switch=self.switch,
                 port=f"p{i + 1}",
+                clock_ahead_s=(clock_ahead_s or {}).get(name, 0),
             )
             for i, name in enumerate(names)
         }
@@ -226,16 +232,16 @@ def alive(pid: int) -> bool:
 
 
 @pytest.fixture
-def network(request: pytest.FixtureRequest, tmp_path: Path) -> Callable[[Sequence[str]], Network]:
+def network(request: pytest.FixtureRequest, tmp_path: Path) -> Callable[..., Network]:
     """``network(["sim", "control"])``: a started network of those hosts, cleaned up after the test (skips
-    where network namespaces cannot be made)."""
+    where network namespaces cannot be made); ``clock_ahead_s={"control": 100}`` sets a host's clock ahead."""
     require_netns()
     count = 0
 
-    def make(names: Sequence[str]) -> Network:
+    def make(names: Sequence[str], clock_ahead_s: Mapping[str, int] | None = None) -> Network:
         nonlocal count
         count += 1
-        net = Network(names, tmp_path / f"network-{count}")
+        net = Network(names, tmp_path / f"network-{count}", clock_ahead_s=clock_ahead_s)
         request.addfinalizer(net.close)
         return net.start()
 
