@@ -29,7 +29,10 @@ with the other work.
    reaches anyone: only the lease notices), T0 taken as the command returns; the time until the subscriber sees
    the token's DELETE (its own receive time), with the profile's ``[bus] lease_ms`` 1000 and the default 10000 (the
    lease of every session, the routers' included); then the link goes up again and the time until the token is
-   seen again. Also a SIGKILL of the token holder (its socket closes: no lease involved).
+   seen again. Also a SIGKILL of the token holder (its socket closes: no lease involved). Then the stack's own
+   detection (stack.bus.host_beats): a process on ``control`` beats as a supervisor does, a watcher on ``sim`` is
+   a ``HostWatch`` looked at every 10 ms as the commander does; the time from the cut until it counts ``control``
+   lost, and from the link up until it is back.
 4. CPU per host during the split flight of item 1. A sampler thread reads, every 0.1 s, which processes are in each
    host's namespace (``/proc/PID/ns/net`` against ``/run/netns/NS``) and each one's CPU time (user + system, all
    threads; psutil). A host's cumulative CPU at a sample is the sum over every process seen so far of its latest
@@ -63,6 +66,7 @@ import psutil
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
+from stack.bus.host_beats import DEFAULT_LEASE_MS  # noqa: E402
 from tests.hosts.split import fly_across_hosts, split_profile  # noqa: E402
 from tests.support.harness import run_cli, stack_env  # noqa: E402
 from tests.support.hosts import Host, Network  # noqa: E402
@@ -126,6 +130,29 @@ token = session.liveliness().declare_token(cfg["key"])
 print("ready", flush=True)
 while True:
     time.sleep(1)
+"""
+
+BEATER = COMMON + """
+from stack.bus.host_beats import BEAT_PERIOD_S, beat_key
+pub = session.declare_publisher(beat_key("v1", "control"))
+print("ready", flush=True)
+while True:
+    pub.put(b"")
+    time.sleep(BEAT_PERIOD_S)
+"""
+
+BEAT_WATCHER = COMMON + """
+from stack.bus.host_beats import DEFAULT_LEASE_MS, HostWatch, beat_host, beats_key
+watch = HostWatch({"sim": [], "control": ["mc_rate_control"]}, "sim", DEFAULT_LEASE_MS)
+def on_sample(sample):
+    host = beat_host(str(sample.key_expr), "v1")
+    if host is not None:
+        watch.beat(host, time.monotonic_ns() // 1000)
+sub = session.declare_subscriber(beats_key("v1"), on_sample)
+while True:
+    time.sleep(0.01)  # as often as the commander looks (100 Hz)
+    for change in watch.update(time.monotonic_ns() // 1000):
+        print("DELETE" if change.lost else "PUT", time.monotonic_ns(), flush=True)
 """
 
 WATCHER = COMMON + """
@@ -476,6 +503,40 @@ def host_loss(net: Network, trials: int, work: Path) -> None:
                 if proc is not None:
                     stop(proc)
             routers.close()
+    beats(net, trials, work)
+
+
+def beats(net: Network, trials: int, work: Path) -> None:
+    """The stack's own host-loss detection (stack.bus.host_beats): beats every 0.1 s through the routers, lost after
+    the profile's host lease (the default, with the routers' default Zenoh lease)."""
+    sim, control = net.hosts["sim"], net.hosts["control"]
+    routers = Routers(net, work, 10000)
+    beater = watcher = None
+    try:
+        watcher = Watcher(
+            script_on(sim, BEAT_WATCHER, peer("bench-beat-watch", routers.endpoints["sim"]), stdout=subprocess.PIPE)
+        )
+        beater = script_on(control, BEATER, peer("bench-beat", routers.endpoints["control"]), stdout=subprocess.DEVNULL)
+        time.sleep(2.0)  # the beats flowing (a host never heard is not lost)
+        for _ in range(trials):
+            control.link_down()
+            t0 = time.monotonic_ns()
+            lost = watcher.wait_for("DELETE", 10)
+            control.link_up()
+            t1 = time.monotonic_ns()
+            back = watcher.wait_for("PUT", 60)
+            print(
+                f"  host beats, lease {DEFAULT_LEASE_MS} ms, link down: lost after {fmt_s(t0, lost)};"
+                f" after link up, back after {fmt_s(t1, back)}",
+                flush=True,
+            )
+            time.sleep(1.0)
+    finally:
+        control.link_up()
+        for proc in (beater, watcher.proc if watcher else None):
+            if proc is not None:
+                stop(proc)
+        routers.close()
 
 
 def main() -> None:

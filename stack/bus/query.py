@@ -1,4 +1,4 @@
-"""Zenoh queries with JSON payloads: ask every queryable on a key and collect their JSON replies."""
+"""Zenoh queries with JSON payloads: ask every queryable on a key and collect their JSON replies; answer one."""
 
 from __future__ import annotations
 
@@ -21,3 +21,9 @@ def query_json(session: zenoh.Session, key: str, payload: dict | None = None, ti
         if reply.ok is not None:
             out.append(json.loads(reply.ok.payload.to_string()))
     return out
+
+
+def answer(query: zenoh.Query, key: str, payload: str) -> None:
+    """Reply to ``query``, never waiting for room on the way: Zenoh's replies block by default, and a reply to a
+    tool behind a slow link would hold up every router it passes (a dropped one is a query that times out)."""
+    query.reply(key, payload, congestion_control=zenoh.CongestionControl.DROP)

@@ -21,6 +21,7 @@ from stack.bus import keys
 from stack.bus.config import BusConfig
 from stack.bus.node import Node
 from stack.bus.ports import free_port, port_taken
+from stack.bus.query import answer
 from stack.bus.supervisors import SINGLE_HOST
 from stack.supervisor import state as run_state
 
@@ -70,7 +71,7 @@ class ReplayStack:
             "profile": f"replay of {self.source.name}",
             "lockstep": self.lockstep,
         }
-        query.reply(self._status_key, json.dumps({**report, "modules": []}))
+        answer(query, self._status_key, json.dumps({**report, "modules": []}))
 
     def __enter__(self) -> ReplayStack:
         return self

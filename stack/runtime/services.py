@@ -14,6 +14,7 @@ import psutil
 import zenoh
 
 from stack.bus import keys
+from stack.bus.query import answer
 from stack.msg.internal import ModuleHeartbeat
 from stack.params.param import ParamError
 from stack.params.store import ParamStore
@@ -42,7 +43,7 @@ class ParamService:
             reply = self.handle(request)
         except (ValueError, TypeError, AttributeError) as e:
             reply = {"module": self.module, "error": f"bad request: {e}"}
-        query.reply(self.key, json.dumps(reply))
+        answer(query, self.key, json.dumps(reply))
 
     def handle(self, request: dict[str, object]) -> dict[str, object]:
         op = request.get("op", "list")

@@ -35,6 +35,7 @@ from stack.bus.alive import AliveTokens
 from stack.bus.config import LOOPBACK_ANY_PORT, BusConfig
 from stack.bus.host_beats import BEAT_PERIOD_S, STOPPING, HostWatch, beat_host, beat_key, beats_key
 from stack.bus.ports import free_port, port_taken
+from stack.bus.query import answer
 from stack.bus.supervisors import SINGLE_HOST, complete_roster, rosters
 from stack.bus.timebase import (
     OFFSET_FILE_ENV,
@@ -606,7 +607,7 @@ class Supervisor:
             self._alive_changed.notify_all()
 
     def _on_clock_query(self, query: zenoh.Query) -> None:
-        query.reply(self._key("clock"), str(time.clock_gettime_ns(time.CLOCK_MONOTONIC) // 1000))
+        answer(query, self._key("clock"), str(time.clock_gettime_ns(time.CLOCK_MONOTONIC) // 1000))
 
     def _measure_offset(self, session: zenoh.Session) -> OffsetEstimate | None:
         """The leading host's clock minus this one's (stack.bus.timebase), None when it does not answer."""
@@ -856,23 +857,23 @@ class Supervisor:
             "complete": self.roster_complete,
             "modules": modules,
         }
-        query.reply(self._key("roster"), json.dumps(reply))
+        answer(query, self._key("roster"), json.dumps(reply))
 
     def _on_outside_query(self, query: zenoh.Query) -> None:
         """Which topics the stack puts on Zenoh for subscribers outside it: a tool that has just subscribed
         waits until its topics are among them (with no fast path, every topic always is)."""
         reply = {"fast_path": self.fast is not None, "topics": self.fast.outside_topics() if self.fast else []}
-        query.reply(self._key("outside"), json.dumps(reply))
+        answer(query, self._key("outside"), json.dumps(reply))
 
     def _on_stop_query(self, query: zenoh.Query) -> None:
         """``stack down`` from another host of the vehicle: stop as on SIGTERM."""
-        query.reply(self._key("stop"), json.dumps({"host": self.host, "pid": os.getpid()}))
+        answer(query, self._key("stop"), json.dumps({"host": self.host, "pid": os.getpid()}))
         if not self._stop.is_set():
             self._signal = signal.SIGTERM
         self._stop.set()
 
     def _on_status_query(self, query: zenoh.Query) -> None:
-        query.reply(self._key("status"), json.dumps(self.status()))
+        answer(query, self._key("status"), json.dumps(self.status()))
 
     def status(self) -> dict[str, object]:
         rows = []
