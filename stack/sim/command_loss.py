@@ -13,10 +13,11 @@ wires them), with the flight stack as its Offboard companion:
   armed is not silent.
 * While the commands flow they drive the motors unchanged, and nothing else runs.
 * Silent for more than COM_OF_LOSS_T of simulated time, the plant's autopilot takes over as PX4 does on Offboard
-  loss (``src/modules/commander/failsafe/failsafe.cpp``, ``FailsafeBase::checkStateAndMode`` for
-  ``offboard_control_signal_lost``; the action COM_OBL_RC_ACT from ``Commander.cpp``'s parameters): Land, Hold
-  (Position, Altitude and Stabilized fall back to Hold without RC), Terminate (motors stopped) or Disarm. It flies
-  on the simulator's truth and IMU, from fresh loops (their parameters are taken at each takeover).
+  loss (``src/modules/commander/HealthAndArmingChecks/checks/offboardCheck.cpp`` raises
+  ``offboard_control_signal_lost``; ``src/modules/commander/failsafe/failsafe.cpp``, ``Failsafe::checkStateAndMode``,
+  flies ``fromOffboardLossActParam(COM_OBL_RC_ACT)``): Land, Hold (Position, Altitude and Stabilized fall back to
+  Hold without RC), Terminate (motors stopped) or Disarm. It flies on the simulator's truth and IMU, from fresh
+  loops (a parameter change reaches the loops at the next takeover, the commander and land detector at once).
 * Commands again while it flies the failsafe: control returns to the stack at once (PX4 clears the mode fallback
   when the signal returns).
 * Landed, it disarms after COM_DISARM_LAND (``Commander::checkForAutoDisarm``) and its motors stop. They stay
