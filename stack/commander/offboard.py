@@ -10,6 +10,7 @@ says it streams (PX4 ``src/modules/commander/ModeUtil/control_mode.cpp``, ``vehi
 from __future__ import annotations
 
 import math
+from enum import IntEnum
 
 from stack.commander.modes import MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, nav_state_from_custom_mode
 from stack.msg.system import OffboardControlMode, VehicleCommand, VehicleCommandAck, VehicleStatus
@@ -17,6 +18,20 @@ from stack.params import catalogue
 
 PARAMS = catalogue.params("COM_OF_LOSS_T")
 """The Offboard signal's timeout, read by the commander and the simulated Pixhawk."""
+
+
+class OffboardLossAction(IntEnum):
+    """COM_OBL_RC_ACT (PX4 ``failsafe.h`` ``offboard_loss_failsafe_mode``), which the simulated autopilots fly: the
+    simulated Pixhawk's and the simulator's takeover (Return mode, 3, is not simulated: the parameter refuses it)."""
+
+    POSITION = 0
+    ALTITUDE = 1
+    STABILIZED = 2
+    RETURN = 3
+    LAND = 4
+    HOLD = 5
+    TERMINATE = 6
+    DISARM = 7
 
 NO_SIGNAL_REASON = "Switching to Offboard denied: no offboard signal (offboard_control_mode)"
 

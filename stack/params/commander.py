@@ -1,5 +1,6 @@
 """Commander (PX4 ``src/modules/commander/commander_params.c``): arming, disarming, link timeouts and the
-failsafe actions, with the stack's COM_EXT_AP."""
+failsafe actions, with the stack's COM_EXT_AP; and the failure detector's attitude limits
+(``src/modules/commander/failure_detector/failure_detector_params.c``)."""
 
 from stack.params.param import ENABLED, Param
 
@@ -19,6 +20,26 @@ PARAMS: tuple[Param, ...] = (
     Param("COM_POS_FS_EPH", 5.0, 0.0, 1000.0, "m", "Horizontal position error above which the position is invalid"),
     Param("COM_DL_LOSS_T", 10, 5, 300, "s", "GCS connection counts as lost after this long without a message"),
     Param("COM_OF_LOSS_T", 1.0, 0.0, 60.0, "s", "Offboard signal counts as lost after this long without one"),
+    Param(
+        "COM_OBL_RC_ACT",
+        0,
+        0,
+        7,
+        "",
+        "Offboard loss failsafe action of the simulated autopilots (the simulated Pixhawk's, the simulator's "
+        "takeover); Position, Altitude and Stabilized fall back to Hold without RC; 3 Return mode is not simulated",
+        values={
+            0: "Position mode",
+            1: "Altitude mode",
+            2: "Stabilized",
+            4: "Land mode",
+            5: "Hold mode",
+            6: "Terminate",
+            7: "Disarm",
+        },
+    ),
+    Param("FD_FAIL_R", 60, 0, 180, "deg", "Roll beyond which the failure detector reports an attitude failure"),
+    Param("FD_FAIL_P", 60, 0, 180, "deg", "Pitch beyond which the failure detector reports an attitude failure"),
     Param("COM_TAKEOFF_ACT", 0, 0, 1, "", "Action after a takeoff has completed",
           values={0: "Hold", 1: "Mission (if valid)"}),
     Param("COM_FAIL_ACT_T", 5.0, 0.0, 25.0, "s", "Hold this long before a failsafe action (0 = act at once)"),

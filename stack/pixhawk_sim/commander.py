@@ -34,9 +34,9 @@ from pymavlink.dialects.v20 import common as mavlink
 
 from stack.commander import offboard
 from stack.commander.auto_disarm import AutoDisarm, AutoDisarmParams
+from stack.commander.offboard import OffboardLossAction
 from stack.mavlink.px4_modes import Px4Mode, name
 from stack.pixhawk_sim.modes import ARMING_PREVENTED_MODES, FLOWN_MODES, MANUAL_CONTROL_MODES, SELECTABLE_MODES
-from stack.pixhawk_sim.params import OffboardLossAction
 
 INITIAL_MODE = Px4Mode.POSCTL
 """PX4's initial user intention (``UserModeIntention``); without RC it cannot run, so arming needs a mode change."""

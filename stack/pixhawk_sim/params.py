@@ -2,17 +2,15 @@
 wherever the stack has the parameter.
 
 The controllers, the allocator, the land detector and the battery bring their own parameter tables; the
-commander's timeouts come from ``stack.commander``. Defined here are only the PX4 parameters nothing else
-in the stack uses: the Offboard-loss action and the failure detector's attitude limits. The airframe
-geometry (``CA_ROTOR*``, ``THR_MDL_FAC``, ``MPC_THR_HOVER``) comes from the vehicle model, as a launch
-profile's ``airframe`` gives it to the allocator.
+commander's timeouts, the Offboard-loss action and the failure detector's attitude limits come from the
+catalogue's commander group. The airframe geometry (``CA_ROTOR*``, ``THR_MDL_FAC``, ``MPC_THR_HOVER``) comes
+from the vehicle model, as a launch profile's ``airframe`` gives it to the allocator.
 """
 
 from __future__ import annotations
 
 import tomllib
 from collections.abc import Mapping
-from enum import IntEnum
 from pathlib import Path
 
 from stack.airframe.model import VehicleModel
@@ -21,64 +19,21 @@ from stack.commander import land_detector, offboard
 from stack.commander import state_machine as commander
 from stack.estimator.angular_velocity import GyroFilterParams
 from stack.mixer import allocation, effectiveness, output
+from stack.params import catalogue
 from stack.params.binding import combine
 from stack.params.param import Param, ParamError, ParamValue
 from stack.posctl import flight_mode_manager, pos_module
 from stack.sim import battery
-from stack.sim.module import SimulatorModule
-
-
-class OffboardLossAction(IntEnum):
-    """COM_OBL_RC_ACT (PX4 ``failsafe.h`` ``offboard_loss_failsafe_mode``)."""
-
-    POSITION = 0
-    ALTITUDE = 1
-    STABILIZED = 2
-    RETURN = 3
-    LAND = 4
-    HOLD = 5
-    TERMINATE = 6
-    DISARM = 7
-
-
-SIMULATED_OFFBOARD_LOSS_ACTIONS = tuple(a for a in OffboardLossAction if a is not OffboardLossAction.RETURN)
-"""Return mode is not simulated, so COM_OBL_RC_ACT 3 is refused."""
-
-_OFFBOARD_LOSS_MEANINGS = {
-    OffboardLossAction.POSITION: "Position mode",
-    OffboardLossAction.ALTITUDE: "Altitude mode",
-    OffboardLossAction.STABILIZED: "Stabilized",
-    OffboardLossAction.LAND: "Land mode",
-    OffboardLossAction.HOLD: "Hold mode",
-    OffboardLossAction.TERMINATE: "Terminate",
-    OffboardLossAction.DISARM: "Disarm",
-}
-
-OWN_PARAMS: tuple[Param, ...] = (
-    Param(
-        "COM_OBL_RC_ACT",
-        int(OffboardLossAction.POSITION),
-        0,
-        7,
-        "",
-        "Offboard loss failsafe action (Position, Altitude and Stabilized fall back to Hold without RC; "
-        "3 Return mode is not simulated)",
-        values={int(a): _OFFBOARD_LOSS_MEANINGS[a] for a in SIMULATED_OFFBOARD_LOSS_ACTIONS},
-    ),
-    Param("FD_FAIL_R", 60, 0, 180, "deg", "Roll beyond which the failure detector reports an attitude failure"),
-    Param("FD_FAIL_P", 60, 0, 180, "deg", "Pitch beyond which the failure detector reports an attitude failure"),
-)
 
 _COMMANDER_NAMES = ("COM_DISARM_LAND", "COM_DISARM_PRFLT")
 _SIMULATOR_NAMES = ("SIH_LOC_LAT0", "SIH_LOC_LON0", "SIH_LOC_H0")
 
 
 # The first definition of each name (the land detector repeats a few MPC_* of position control).
-PARAMS: tuple[Param, ...] = combine(
-    OWN_PARAMS,
+AUTOPILOT_PARAMS: tuple[Param, ...] = combine(
+    catalogue.params("COM_OBL_RC_ACT", "FD_FAIL_R", "FD_FAIL_P"),
     offboard.PARAMS,
     (p for p in commander.PARAMS if p.name in _COMMANDER_NAMES),
-    (p for p in SimulatorModule.PARAMS if p.name in _SIMULATOR_NAMES),
     GyroFilterParams.PARAMS,
     rate_control.PARAMS,
     attitude_control.PARAMS,
@@ -88,8 +43,10 @@ PARAMS: tuple[Param, ...] = combine(
     effectiveness.PARAMS,
     allocation.PARAMS,
     output.PARAMS,
-    battery.PARAMS,
 )
+"""The autopilot's: its commander (``Px4Commander``), land detector and control chain (``FlightControl``), which
+the simulator's takeover on a silent flight stack (``stack.sim.command_loss``) flies too."""
+PARAMS: tuple[Param, ...] = combine(AUTOPILOT_PARAMS, catalogue.params(*_SIMULATOR_NAMES), battery.PARAMS)
 DEFINITIONS: dict[str, Param] = {p.name: p for p in PARAMS}
 
 

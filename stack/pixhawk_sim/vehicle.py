@@ -115,33 +115,11 @@ class SimulatedPixhawk:
         self.steps += 1
 
     def _detect_landing(self, now: int, truth: GroundTruth) -> None:
-        out = self.control.last
-        vx, vy, vz = truth.velocity
         imu = self.samples[ImuSample].value
-        self.land_detector.update(
-            now,
-            LandDetectorInputs(
-                armed=self.commander.armed,
-                local_position_timestamp_us=now,
-                z_valid=True,
-                v_xy_valid=True,
-                v_z_valid=True,
-                vx=vx,
-                vy=vy,
-                vz=vz,
-                z_deriv=vz,
-                angular_velocity=self.control.body_rates,
-                acceleration=imu.accel,
-                throttle=-out.thrust_body[2],
-                climb_rate_control=self.commander.mode in (Px4Mode.AUTO_LOITER, Px4Mode.AUTO_LAND),
-                velocity_setpoint_z=out.velocity_sp_z,
-            ),
-        )
+        self.land_detector.update(now, land_detector_inputs(now, truth, imu, self.commander, self.control))
 
     def condition(self) -> Condition:
-        land = self.land_detector.state
-        roll, pitch, _ = quat.to_euler(self.truth.q)
-        return Condition(land.landed, land.maybe_landed, roll, pitch)
+        return condition(self.land_detector.state, self.truth)
 
     # ------------------------------------------------------------------ commands and setpoints
 
@@ -153,10 +131,7 @@ class SimulatedPixhawk:
         return verdict
 
     def _home_here(self) -> HomePosition:
-        """Home where the vehicle is (PX4 sets it on arming)."""
-        t = self.truth
-        x, y, z = t.position
-        return HomePosition(x, y, z, quat.yaw(t.q), t.lat, t.lon, t.alt)
+        return home_here(self.truth)
 
     def set_mode(self, mode: Px4Mode | None) -> Verdict:
         return self.commander.set_mode(mode, self.time_us)
@@ -172,3 +147,40 @@ class SimulatedPixhawk:
     def flying_attitude(self) -> bool:
         """Whether the attitude is controlled in Offboard (attitude setpoints rather than body rates)."""
         return self.setpoint is not None and self.setpoint.is_attitude
+
+
+def land_detector_inputs(
+    now_us: int, truth: GroundTruth, imu: ImuSample, commander: Px4Commander, control: FlightControl
+) -> LandDetectorInputs:
+    """The land detector's inputs: the truth for the estimate, the last control output for the thrust and the
+    vertical velocity setpoint (PX4 ``MulticopterLandDetector``), climb rate controlled in Hold and Land."""
+    out = control.last
+    vx, vy, vz = truth.velocity
+    return LandDetectorInputs(
+        armed=commander.armed,
+        local_position_timestamp_us=now_us,
+        z_valid=True,
+        v_xy_valid=True,
+        v_z_valid=True,
+        vx=vx,
+        vy=vy,
+        vz=vz,
+        z_deriv=vz,
+        angular_velocity=control.body_rates,
+        acceleration=imu.accel,
+        throttle=-out.thrust_body[2],
+        climb_rate_control=commander.mode in (Px4Mode.AUTO_LOITER, Px4Mode.AUTO_LAND),
+        velocity_setpoint_z=out.velocity_sp_z,
+    )
+
+
+def condition(land: LandDetectorState, truth: GroundTruth) -> Condition:
+    """What the commander needs to know about the vehicle: landed, and its tilt."""
+    roll, pitch, _ = quat.to_euler(truth.q)
+    return Condition(land.landed, land.maybe_landed, roll, pitch)
+
+
+def home_here(truth: GroundTruth) -> HomePosition:
+    """Home where the vehicle is (PX4 sets it on arming)."""
+    x, y, z = truth.position
+    return HomePosition(x, y, z, quat.yaw(truth.q), truth.lat, truth.lon, truth.alt)

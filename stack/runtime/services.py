@@ -15,11 +15,17 @@ import zenoh
 
 from stack.bus import keys
 from stack.bus.query import answer
+from stack.bus.topics import MAX_SAMPLE_BYTES
 from stack.msg.internal import ModuleHeartbeat
 from stack.params.param import ParamError
 from stack.params.store import ParamStore
 
 log = logging.getLogger("stack.runtime")
+
+LIST_REPLY_BYTES = MAX_SAMPLE_BYTES // 2
+"""The most parameter descriptions [bytes of JSON] one reply lists: a reply larger than the bus carries is lost
+without a word, so a module with many parameters (the simulator's takeover reads every loop's) lists them in
+several replies."""
 
 
 class ParamService:
@@ -40,10 +46,28 @@ class ParamService:
     def _on_query(self, query: zenoh.Query) -> None:
         try:
             request = json.loads(query.payload.to_string()) if query.payload is not None else {"op": "list"}
-            reply = self.handle(request)
+            replies = self.replies(self.handle(request))
         except (ValueError, TypeError, AttributeError) as e:
-            reply = {"module": self.module, "error": f"bad request: {e}"}
-        answer(query, self.key, json.dumps(reply))
+            replies = [json.dumps({"module": self.module, "error": f"bad request: {e}"})]
+        for reply in replies:
+            answer(query, self.key, reply)
+
+    def replies(self, result: dict[str, object]) -> list[str]:
+        """The JSON replies of an answer: one, or for a list as many as it takes to keep each to LIST_REPLY_BYTES
+        (the client joins a module's pieces)."""
+        params = result.get("params")
+        if not isinstance(params, list):
+            return [json.dumps(result)]
+        pieces: list[list[object]] = [[]]
+        size = 0
+        for p in params:
+            length = len(json.dumps(p)) + 2
+            if pieces[-1] and size + length > LIST_REPLY_BYTES:
+                pieces.append([])
+                size = 0
+            pieces[-1].append(p)
+            size += length
+        return [json.dumps({"module": self.module, "params": piece}) for piece in pieces]
 
     def handle(self, request: dict[str, object]) -> dict[str, object]:
         op = request.get("op", "list")

@@ -3,7 +3,9 @@
 Each step it reads the latest ``actuator_outputs_sim`` (a multicopter's motors; a plane's throttle,
 aileron, elevator and rudder in output[0..3]), advances the physics by one IMU period and publishes
 the sensors that fell due (accelerometer before gyro, the estimator's trigger; a plane's airspeed),
-the ground truth and, at 10 Hz, the battery (PX4's battery simulator: drains while armed). In lockstep it drives
+the ground truth and, at 10 Hz, the battery (PX4's battery simulator: drains while armed). A multicopter whose
+flight stack falls silent while armed (its flight-control host lost) is flown down by the plant's own autopilot, as a
+Pixhawk on Offboard loss (:mod:`stack.sim.command_loss`). In lockstep it drives
 simulated time; with ``--realtime`` it is paced by the wall clock and keeps to it: a run that comes late (a busy
 machine) runs the steps missed back to back, up to MAX_CATCH_UP_STEPS; beyond that the missed time is skipped
 (the physics does not see it) and counted. Otherwise simulated time would fall behind the wall clock for good,
@@ -27,11 +29,12 @@ from stack.params import catalogue
 from stack.params.binding import combine
 from stack.runtime.module import Arg, Module
 from stack.runtime.priority import PLANT
-from stack.sim import battery
+from stack.sim import battery, command_loss
 from stack.sim.airspeed_sensor import AirspeedSample
 from stack.sim.battery import BatteryModel
+from stack.sim.command_loss import CommandLossFailsafe
 from stack.sim.sensors import BaroSample, GpsSample, ImuSample, MagSample
-from stack.sim.simulator import MAX_CATCH_UP_STEPS, Simulator
+from stack.sim.simulator import MAX_CATCH_UP_STEPS, GroundTruth, Simulator
 from stack.sim.wind import WindParams
 
 # Device ids as PX4's simulated drivers report them (SIH's IMU id; the others distinct).
@@ -62,6 +65,7 @@ class SimulatorModule(Module):
             "SIM_WIND_GUST", "SIM_WIND_GUST_T", "SIM_WIND_HREF", "SYS_FAILURE_EN", "MAV_SYS_ID", "MAV_COMP_ID",
         ),
         battery.PARAMS,
+        command_loss.PARAMS,
     )
 
     def __init__(self, rt) -> None:
@@ -82,6 +86,14 @@ class SimulatorModule(Module):
         )
         self.sim.set_gps_enabled(int(p["SIM_GPS_USED"]) >= 4)
         self.input_count = model.input_count
+        self.truth: GroundTruth = self.sim.truth()
+        self.imu: ImuSample | None = None
+        """The plant's last state and IMU sample, which the takeover flies on."""
+        self.takeover = (
+            CommandLossFailsafe(self.params.values(), model, self.sim.imu_period_us)
+            if isinstance(model, VehicleModel)
+            else None
+        )
         self.subscribe(ORB_ID.actuator_outputs_sim)
         self.subscribe(ORB_ID.actuator_armed)
         self.subscribe(ORB_ID.vehicle_command, queue=True)
@@ -142,6 +154,8 @@ class SimulatorModule(Module):
             self.sim.set_wind(self._wind_params())
         if changed & {p.name for p in battery.PARAMS}:
             self.battery.set_params(self.params.values())
+        if self.takeover is not None and changed & {p.name for p in command_loss.PARAMS}:
+            self.takeover.set_params(self.params.values())
 
     def step_period_us(self) -> int:
         return self.sim.imu_period_us
@@ -174,9 +188,18 @@ class SimulatorModule(Module):
         # output said: a dead allocator cannot keep them turning.
         stopped = armed is not None and (not armed.armed or armed.lockdown or armed.kill or armed.termination)
         if outputs is None or stopped:
-            return (0.0,) * self.input_count
-        commands = outputs.output[: self.input_count]
-        return tuple(c if math.isfinite(c) else 0.0 for c in commands)
+            commands = (0.0,) * self.input_count
+        else:
+            commands = tuple(c if math.isfinite(c) else 0.0 for c in outputs.output[: self.input_count])
+        takeover = self.takeover
+        if takeover is None:
+            return commands
+        arrived = self.update(ORB_ID.actuator_outputs_sim) is not None
+        commands = takeover.motor_commands(self.sim.time_us, arrived, armed, self.truth, self.imu, commands)
+        if takeover.events:
+            for level, text in takeover.take_events():
+                self.log.log(level, text)
+        return commands
 
     def run(self, msg: object, dt: float) -> None:
         now = self.now_us()
@@ -197,14 +220,22 @@ class SimulatorModule(Module):
             self._step()
 
     def status(self) -> dict[str, float | int | str | bool]:
-        """Real time: steps run late back to back, and steps skipped (more than MAX_CATCH_UP_STEPS late)."""
-        return {"catch_up_steps": self.catch_up_steps, "skipped_steps": self.skipped_steps}
+        """Real time: steps run late back to back, and steps skipped (more than MAX_CATCH_UP_STEPS late); a
+        multicopter's motor control: the stack's, or the plant's failsafe and its mode, or the plant disarmed."""
+        status: dict[str, float | int | str | bool] = {
+            "catch_up_steps": self.catch_up_steps,
+            "skipped_steps": self.skipped_steps,
+        }
+        if self.takeover is not None:
+            status.update(self.takeover.status())
+        return status
 
     def _step(self) -> None:
         epoch = self.epoch_us
         assert epoch is not None
         for sample in self.sim.advance(self.motor_commands()):
             if isinstance(sample, ImuSample):
+                self.imu = sample
                 self._publish_imu(sample, epoch)
             elif isinstance(sample, MagSample):
                 self._publish_mag(sample, epoch)
@@ -214,6 +245,7 @@ class SimulatorModule(Module):
                 self._publish_gps(sample, epoch)
             elif isinstance(sample, AirspeedSample):
                 self._publish_airspeed(sample, epoch)
+        self.truth = self.sim.truth()
         self._publish_truth(epoch)
         if self.sim.time_us >= self._battery_due_us:
             self._battery_due_us = self.sim.time_us + battery.PERIOD_US
@@ -296,7 +328,7 @@ class SimulatorModule(Module):
         self.publish(ORB_ID.battery_status, BatteryStatus(**state._asdict()))
 
     def _publish_truth(self, epoch: int) -> None:
-        t = self.sim.truth()
+        t = self.truth
         wind: Vec3 = self.sim.wind
         self.publish(
             ORB_ID.sim_groundtruth,

@@ -59,11 +59,14 @@ def query_rotors(session: zenoh.Session, vehicle: str) -> tuple[tuple[float, flo
         target=zenoh.QueryTarget.ALL,
         timeout=1.0,
     )
+    by_module: dict[str, dict[str, object]] = {}
     for reply in replies:
         if reply.ok is None:
             continue
         answer = json.loads(reply.ok.payload.to_string())
-        values = {p["name"]: p["value"] for p in answer.get("params", [])}
+        values = by_module.setdefault(str(answer.get("module", "")), {})
+        values.update((p["name"], p["value"]) for p in answer.get("params", []))  # a module's list comes in pieces
+    for values in by_module.values():
         rotors = rotors_from_params(values)
         if rotors is not None:
             return rotors

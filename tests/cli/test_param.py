@@ -43,7 +43,7 @@ def refusal(out, code: int = 1) -> str:
 
 def test_one_row_per_parameter_with_its_owners_unit_description_and_meaning(stack):
     params = listing(stack)
-    assert params["MC_AIRMODE"]["owners"] == ["control_allocator", "mc_att_control"]
+    assert params["MC_AIRMODE"]["owners"] == ["control_allocator", "mc_att_control", "simulator"]
     assert params["SYS_FAILURE_EN"]["owners"] == ["commander", "simulator"]
     assert params["NAV_DLL_ACT"]["value"] == 2 and params["NAV_DLL_ACT"]["meaning"] == "Return mode"
     assert params["MC_ROLLRATE_MAX"]["unit"] == "deg/s" and params["MC_ROLLRATE_MAX"]["mav_type"] == 9
@@ -52,7 +52,7 @@ def test_one_row_per_parameter_with_its_owners_unit_description_and_meaning(stac
     assert table[1].split()[:6] == ["*", "NAV_DLL_ACT", "2", "(Return", "mode)", "0"]
     assert "GCS connection loss failsafe action" in table[1]
     airmode = stack.cli("param", "list", "MC_AIRMODE").stdout.splitlines()
-    assert len(airmode) == 3 and "control_allocator,mc_att_control" in airmode[1]
+    assert len(airmode) == 3 and "control_allocator,mc_att_control,simulator" in airmode[1]
     assert airmode[2] == "1 parameters, 1 changed from default (*)"
 
 
@@ -75,20 +75,20 @@ def test_an_unknown_name_suggests_the_closest(stack):
 def test_a_set_reaches_every_module_that_reads_it(stack):
     out = stack.cli("param", "set", "MPC_THR_HOVER", "0.45")
     assert out.returncode == 0, out.stderr
-    assert out.stdout.strip() == "MPC_THR_HOVER: 0.4903 -> 0.45  (commander, mc_att_control)"
+    assert out.stdout.strip() == "MPC_THR_HOVER: 0.4903 -> 0.45  (commander, mc_att_control, simulator)"
     stack.wait_for(r"\[commander\] INFO\s+parameters changed: MPC_THR_HOVER=0.45")
     stack.wait_for(r"\[mc_att_control\] INFO\s+parameters changed: MPC_THR_HOVER=0.45")
-    assert module_values(stack, "MPC_THR_HOVER") == {"commander": 0.45, "mc_att_control": 0.45}
+    assert module_values(stack, "MPC_THR_HOVER") == {"commander": 0.45, "mc_att_control": 0.45, "simulator": 0.45}
 
 
 def test_a_refused_set_changes_nothing_anywhere(stack):
     before = module_values(stack, "MPC_MANTHR_MIN")
-    assert set(before) == {"commander", "mc_att_control"}
+    assert set(before) == {"commander", "mc_att_control", "simulator"}
     line = refusal(stack.cli("param", "set", "MPC_MANTHR_MIN", "1.5"))
     assert line.startswith("error: MPC_MANTHR_MIN: 1.5 is above the maximum 1") and "nothing changed" in line
     assert refusal(stack.cli("param", "set", "MC_AIRMODE", "3")).startswith("error: MC_AIRMODE: 3 is not one of")
     assert module_values(stack, "MPC_MANTHR_MIN") == before
-    assert module_values(stack, "MC_AIRMODE") == {"control_allocator": 2, "mc_att_control": 2}
+    assert module_values(stack, "MC_AIRMODE") == {"control_allocator": 2, "mc_att_control": 2, "simulator": 2}
 
 
 def test_a_negative_value_is_a_value_not_an_option(stack):
@@ -142,7 +142,7 @@ def test_load_reports_every_bad_line_and_applies_the_others(stack, tmp_path):
     assert errors[3] == "error: MC_ROLL_P: type 6 given, the parameter's is 9"
     assert "1 changed, 0 unchanged, 2 refused, 1 unknown, 1 lines not parameters" in out.stdout
     assert module_values(stack, "NAV_DLL_ACT") == {"commander": 3}
-    assert module_values(stack, "MC_AIRMODE") == {"control_allocator": 2, "mc_att_control": 2}
+    assert module_values(stack, "MC_AIRMODE") == {"control_allocator": 2, "mc_att_control": 2, "simulator": 2}
 
 
 def test_reset_goes_to_the_firmware_default_not_the_profiles_value(stack):

@@ -8,13 +8,13 @@ import pytest
 
 from stack.commander.failsafe import DLL_EXCEPT_AUTO_MODES, DLL_EXCEPT_MISSION
 from stack.commander.geofence import GeofenceAction
+from stack.commander.offboard import OffboardLossAction
 from stack.estimator import position_kf
 from stack.params import catalogue
 from stack.params.catalogue import CATALOGUE
 from stack.params.param import MAV_PARAM_TYPE_INT32, MAV_PARAM_TYPE_REAL32, Param, ParamError
 from stack.params.store import ParamStore
 from stack.pixhawk_sim import params as pixhawk_sim_params
-from stack.pixhawk_sim.params import SIMULATED_OFFBOARD_LOSS_ACTIONS
 from stack.posctl import flight_mode_manager
 from stack.runtime.spec import MODULES, load_module_class
 
@@ -34,13 +34,11 @@ def test_every_catalogue_parameter_is_read_by_some_module():
     assert sorted(set(CATALOGUE) - read) == []
 
 
-def test_the_simulated_pixhawk_takes_the_catalogue_definition_of_every_name_it_shares():
-    own = {p.name for p in pixhawk_sim_params.OWN_PARAMS}
-    assert own == {"COM_OBL_RC_ACT", "FD_FAIL_R", "FD_FAIL_P"} and not own & set(CATALOGUE)
+def test_the_simulated_pixhawk_takes_the_catalogue_definition_of_every_parameter():
     for p in pixhawk_sim_params.PARAMS:
-        if p.name not in own:
-            assert CATALOGUE[p.name] is p
-    assert set(pixhawk_sim_params.DEFINITIONS["COM_OBL_RC_ACT"].values) == set(SIMULATED_OFFBOARD_LOSS_ACTIONS)
+        assert CATALOGUE[p.name] is p
+    simulated = set(OffboardLossAction) - {OffboardLossAction.RETURN}
+    assert set(CATALOGUE["COM_OBL_RC_ACT"].values) == simulated
 
 
 @pytest.mark.parametrize("name", sorted(CATALOGUE))
@@ -54,7 +52,7 @@ def test_each_definition_accepts_its_default_and_documents_itself(name):
     assert p.mav_type == (MAV_PARAM_TYPE_REAL32 if p.type is float else MAV_PARAM_TYPE_INT32)
 
 
-BOUNDED = sorted({p.name: p for p in (*CATALOGUE.values(), *pixhawk_sim_params.PARAMS)}.values(), key=lambda p: p.name)
+BOUNDED = sorted(CATALOGUE.values(), key=lambda p: p.name)
 
 
 @pytest.mark.parametrize(

@@ -5,10 +5,12 @@ import pytest
 import zenoh
 
 from stack.bus.config import BusConfig
+from stack.bus.topics import MAX_SAMPLE_BYTES
 from stack.params import catalogue, client
 from stack.params.param import ParamError
 from stack.params.store import ParamStore
 from stack.runtime.services import ParamService
+from stack.sim.module import SimulatorModule
 
 VEHICLE = "tp1"
 SHARED = catalogue.params("MPC_THR_HOVER", "MPC_MANTHR_MIN", "NAV_DLL_ACT")
@@ -139,3 +141,12 @@ def test_many_values_each_set_or_reported(modules):
     ]
     assert len(report.unknown) == 1 and "did you mean MPC_THR_HOVER?" in report.unknown[0]
     assert a.values()["NAV_DLL_ACT"] == 3 and a.values()["MPC_THR_HOVER"] == 0.5
+
+
+def test_a_module_with_more_parameters_than_one_reply_carries_lists_them_all(modules):
+    store = modules.serve("simulator", ParamStore(SimulatorModule.PARAMS))
+    service = modules.services[-1]
+    replies = service.replies(service.handle({"op": "list"}))
+    assert len(replies) > 1 and all(len(r) < MAX_SAMPLE_BYTES for r in replies)
+    params = client.list_params(modules.session, VEHICLE)
+    assert [p.name for p in params] == sorted(store.defs) and all(p.owners == ("simulator",) for p in params)

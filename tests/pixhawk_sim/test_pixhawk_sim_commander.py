@@ -8,10 +8,11 @@ import pytest
 from pymavlink.dialects.v20 import common as mavlink
 
 from stack.airframe.model import load_vehicle
+from stack.commander.offboard import OffboardLossAction
 from stack.mavlink.px4_modes import Px4Mode
 from stack.params.param import ParamError
 from stack.pixhawk_sim.commander import Condition, Px4Commander
-from stack.pixhawk_sim.params import OffboardLossAction, parameter_values, read_params_file
+from stack.pixhawk_sim.params import parameter_values, read_params_file
 
 ACCEPTED = mavlink.MAV_RESULT_ACCEPTED
 REJECTED = mavlink.MAV_RESULT_TEMPORARILY_REJECTED

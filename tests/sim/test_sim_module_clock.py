@@ -25,7 +25,9 @@ def test_one_step_per_run_when_on_time():
     times = imu_times(bench)
     assert len(times) == 10 and all(b - a == 4000 for a, b in itertools.pairwise(times))
     assert times[-1] == bench.now
-    assert bench.module.status() == {"catch_up_steps": 0, "skipped_steps": 0}
+    assert bench.module.status() == {
+        "catch_up_steps": 0, "skipped_steps": 0, "motor_control": "stack", "plant_mode": ""
+    }
 
 
 def test_a_late_run_catches_up_then_keeps_to_the_clock():
@@ -47,7 +49,9 @@ def test_beyond_the_catch_up_limit_the_missed_time_is_skipped():
     bench.run(None, late * PERIOD_S)
     times = imu_times(bench)
     assert len(times) == 2 and times[-1] == bench.now  # one step, stamped now: the stack's clock again
-    assert bench.module.status() == {"catch_up_steps": 0, "skipped_steps": late - 1}
+    assert bench.module.status() == {
+        "catch_up_steps": 0, "skipped_steps": late - 1, "motor_control": "stack", "plant_mode": ""
+    }
     assert bench.module.sim.time_us == 2 * 4000  # the physics did not see the skipped time
     truth = bench.sent(ORB_ID.sim_groundtruth)
     assert truth[-1].timestamp_sample == bench.now

@@ -74,3 +74,32 @@ def test_each_step_publishes_the_imu_and_the_truth_stamped_on_the_stacks_clock()
     assert accel.timestamp_sample == gyro.timestamp_sample == bench.now
     assert accel.z < -9.0  # standing: the accelerometer reads gravity up
     assert len(bench.sent(ORB_ID.sim_groundtruth)) == 1 and len(bench.sent(ORB_ID.battery_status)) == 1
+
+
+IDLE = ActuatorOutputs(noutputs=4, output=(0.1,) * 4 + (0.0,) * 12)
+
+
+def test_a_silent_armed_stack_hands_the_motors_to_the_plant_and_back_when_its_commands_return(caplog):
+    bench = ModuleBench(SimulatorModule, params={"COM_OBL_RC_ACT": 4, "COM_OF_LOSS_T": 0.5})
+    bench.put(ORB_ID.actuator_armed, ActuatorArmed(armed=True))
+    for _ in range(50):
+        bench.put(ORB_ID.actuator_outputs_sim, IDLE)
+        bench.run(None, PERIOD_S)
+    assert bench.module.status()["motor_control"] == "stack"
+    with caplog.at_level("INFO"):
+        for _ in range(round(0.5 / PERIOD_S) + 1):
+            bench.run(None, PERIOD_S)
+        assert bench.module.status()["motor_control"] == "failsafe"
+        assert bench.module.status()["plant_mode"] == "AUTO.LAND"
+        bench.put(ORB_ID.actuator_outputs_sim, IDLE)
+        bench.run(None, PERIOD_S)
+        assert bench.module.status()["motor_control"] == "stack"
+    assert [(r.levelname, r.getMessage()[:40]) for r in caplog.records if r.name == "simulator"] == [
+        ("WARNING", "no motor commands from the flight stack "),
+        ("INFO", "motor commands from the flight stack aga"),
+    ]
+
+
+def test_a_plane_has_no_takeover():
+    bench = ModuleBench(SimulatorModule, args={"vehicle": "sih_plane"})
+    assert bench.module.takeover is None and set(bench.module.status()) == {"catch_up_steps", "skipped_steps"}
