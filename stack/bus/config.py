@@ -16,6 +16,11 @@ from dataclasses import asdict, dataclass, field
 import zenoh
 
 LOOPBACK_ANY_PORT = "tcp/127.0.0.1:0"
+DROP_WAIT_US = 50
+QUEUE_BATCHES = 16
+QUEUE_PRIORITIES = (
+    "control", "real_time", "interactive_high", "interactive_low", "data_high", "data", "data_low", "background"
+)  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -65,6 +70,17 @@ class BusConfig:
         conf.insert_json5("transport/link/tx/lease", str(self.lease_ms))
         # A message that finds its queue full is dropped at once (Zenoh waits 1 ms by default, which behind a slow
         # link, for every message, holds up the sender's thread; a blocking message still waits).
+        # Room for a burst of express messages (each its own batch) before a full queue drops one.
+        conf.insert_json5("transport/link/tx/queue/size", json.dumps(dict.fromkeys(QUEUE_PRIORITIES, QUEUE_BATCHES)))
+        conf.insert_json5(
+            "transport/link/tx/queue/congestion_control",
+            json.dumps(
+                {
+                    "drop": {"wait_before_drop": DROP_WAIT_US, "max_wait_before_drop_fragments": 50_000},
+                    "block": {"wait_before_close": 5_000_000},
+                }
+            ),
+        )
         # Zenoh's own shared-memory transport keeps files in /dev/shm that outlive a killed process; the
         # stack's same-host traffic has its own fast path (stack.fastpath), which leaves nothing behind.
         conf.insert_json5("transport/shared_memory/enabled", "false")

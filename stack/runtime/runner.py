@@ -192,7 +192,14 @@ class Runtime:
         return buf
 
     def add_output(self, topic: str, instance: int, reliable: bool | None) -> None:
-        pub = self.node.publisher(topic, instance, reliable=True if self.lockstep else reliable)
+        if self.lockstep:
+            reliable = True  # the barrier counts every message
+        elif self.spec.placement:
+            # A vehicle over several hosts, in real time: a message that waits for room in a full queue (on the way
+            # to a ground host behind a slow link) holds up every router it passes, and with it the flight's own
+            # traffic. PX4's uORB never blocks a publisher either: the message is dropped for that reader only.
+            reliable = False
+        pub = self.node.publisher(topic, instance, reliable=reliable)
         if self.fast is not None:
             sample = len(pub.encoder.encode(pub.msg_type()))
             pub.fast = self.fast.publication(pub.suffix, fingerprint(pub.msg_type), sample)

@@ -41,6 +41,7 @@ The ``[params]`` are the vehicle's, wherever its modules run. A profile without 
 from __future__ import annotations
 
 import ast
+import dataclasses
 import re
 import string
 import tomllib
@@ -388,6 +389,10 @@ class _Loader:
                 continue
             profile.processes.append(process)
         self._check_process_groups(profile)
+        if profile.hosts and "low_latency" not in bus_table:
+            # Zenoh's low-latency transport writes straight to the socket: behind a slow link between hosts a router
+            # would wait for room, holding up everything else it forwards. With queues, a full one drops instead.
+            profile.bus = dataclasses.replace(profile.bus, low_latency=False)
         self._check_placement(profile)
         for module in profile.modules:
             for aname, value in module.args.items():
