@@ -22,7 +22,9 @@ wires them), with the flight stack as its Offboard companion:
   when the signal returns).
 * Landed, it disarms after COM_DISARM_LAND (``Commander::checkForAutoDisarm``) and its motors stop. They stay
   stopped until the stack's ``actuator_armed`` disarms (or stops the motors): then the stack's commands drive
-  again, and a new arming arms the plant's commander again.
+  again, and a new arming arms the plant's commander again. A stack that says disarmed while the plant still flies
+  its failsafe (restarted after its host was lost, it knows nothing of the flight) does not stop it: the plant
+  lands first. Lockdown, kill and termination stop the motors at once.
 
 Only a multicopter (:class:`~stack.airframe.model.VehicleModel`) has one: for a fixed-wing or a JSBSim plant the
 simulator makes no takeover and keeps applying the last commands. The parameters are the simulator module's, with
@@ -124,7 +126,12 @@ class CommandLossFailsafe:
         ``now_us``: the simulator's time; ``outputs_arrived``: a new ``actuator_outputs_sim`` this step;
         ``armed``: the last ``actuator_armed`` (None: none yet); ``truth`` and ``imu``: the plant's state and its
         last IMU sample (None before the first); ``commands``: what the stack's last outputs command now."""
-        if armed is None or not armed.armed or armed.lockdown or armed.kill or armed.termination:
+        stopped = armed is not None and (armed.lockdown or armed.kill or armed.termination)
+        if armed is None or not armed.armed or stopped:
+            if self._flying_failsafe() and not stopped and imu is not None:
+                # A stack restarted after its host was lost knows nothing of the flight and says disarmed: the plant
+                # in the air flies on (a Pixhawk disarms on a command, never on its companion's silence or restart).
+                return self._fly_on(now_us, truth, imu)
             if self._commander is not None:
                 self._stand_down()
             return commands
@@ -150,8 +157,19 @@ class CommandLossFailsafe:
         motors = self._fly(now_us, truth, imu)
         if taking_over:
             self._announce_takeover(commander)
-        if not commander.armed:
-            self._disarmed(commander)
+        return self._unless_disarmed(motors)
+
+    def _flying_failsafe(self) -> bool:
+        return self.control is MotorControl.FAILSAFE and self._land is not None and not self._land.state.landed
+
+    def _fly_on(self, now_us: int, truth: GroundTruth, imu: ImuSample) -> tuple[float, ...]:
+        return self._unless_disarmed(self._fly(now_us, truth, imu))
+
+    def _unless_disarmed(self, motors: tuple[float, ...]) -> tuple[float, ...]:
+        """The failsafe's motor commands, or stopped motors once the plant's commander has disarmed."""
+        assert self._commander is not None
+        if not self._commander.armed:
+            self._disarmed(self._commander)
             return self._stopped
         return motors
 

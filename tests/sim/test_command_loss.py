@@ -171,6 +171,30 @@ def test_the_plant_disarmed_stays_disarmed_until_the_stack_disarms_then_the_stac
     assert plant.control is MotorControl.STACK and plant.failsafe.mode.name == "OFFBOARD"
 
 
+def test_a_restarted_stack_that_says_disarmed_does_not_stop_the_plant_in_the_air_a_kill_does() -> None:
+    """The flight-control host's stack started again after its loss knows nothing of the flight: disarmed."""
+    plant = Plant(**LAND)
+    plant.hovering()
+    plant.run(0.5, True, ARMED, plant.hover)
+    plant.run(2.0, False, ARMED, plant.hover)  # lost: the plant lands
+    zeros = (0.0,) * 4
+    plant.run(2.0, True, DISARMED, zeros)  # the restarted stack's idle outputs, disarmed
+    assert plant.control is MotorControl.FAILSAFE and not plant.truth.on_ground
+    assert max(abs(v) for v in plant.truth.velocity) < 3.0
+    for _ in range(30 * S // plant.sim.imu_period_us):
+        if plant.step(True, DISARMED, zeros) is zeros:
+            break
+    assert plant.truth.on_ground and plant.control is MotorControl.STACK  # landed: the stack's (disarmed) again
+    assert max(abs(v) for v in plant.truth.velocity) < 0.1
+
+    killed = Plant(**LAND)
+    killed.hovering()
+    killed.run(0.5, True, ARMED, killed.hover)
+    killed.run(2.0, False, ARMED, killed.hover)
+    assert killed.step(True, ActuatorArmed(armed=True, kill=True), zeros) is zeros
+    assert killed.control is MotorControl.STACK
+
+
 def test_the_disarm_action_stops_the_motors_at_once() -> None:
     plant = Plant(COM_OBL_RC_ACT=int(OffboardLossAction.DISARM))
     plant.run(0.5, True, ARMED, (0.1,) * 4)
