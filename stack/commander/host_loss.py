@@ -24,8 +24,9 @@ from collections.abc import Collection, Mapping, Sequence
 
 from stack.bus.host_beats import HostWatch
 
-RETURN_GRACE_US = 1_500_000
-"""After a flight host is back, its modules have this long to deliver fresh estimates and outputs."""
+RETURN_GRACE_US = 3_000_000
+"""After a flight host is back, its modules have this long to deliver fresh estimates and outputs (a link that
+comes back delivers what it held in bursts for a while, measured up to 2 s on a loaded machine)."""
 
 
 class HostLoss:

@@ -94,9 +94,12 @@ def test_losing_the_flight_control_host_in_a_hover(network, tmp_path: Path, loss
 
     commander = run_log(control, "commander")
     if loss == "link_cut":
-        # the flight-control host, cut off, lost the simulator's host: it landed, it never terminated
+        # the flight-control host, cut off, lost the simulator's host: it landed, and never terminated while the
+        # host was away (the estimates and the chain it took away are not the commander's to judge then)
         assert "Lost host sim (no beat for" in commander and "Failsafe activated (host_loss): land" in commander
-    assert "terminate" not in commander, commander
+        assert "terminate" not in commander.split("Host sim back")[0], commander
+    else:
+        assert "terminate" not in commander, commander
     assert stack(ground, "down").returncode == 0
     codes = {name: p.wait(timeout=60) for name, p in procs.items()}
     assert set(codes.values()) == {0}, f"{codes}\n{logs()}"

@@ -314,6 +314,7 @@ def test_a_replay_is_a_stack_of_its_own_beside_a_live_lockstep_stack(tmp_path):
             "host": "local",
             "hosts": ["local"],
             "silent_hosts": [],
+            "lost_hosts": {},
             "profile": "replay of source.mcap",
             "lockstep": True,
             "modules": [],
