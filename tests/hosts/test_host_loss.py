@@ -1,8 +1,8 @@
 """A host of the vehicle lost in a real-time hover, over three hosts (network namespaces): the flight-control host's
-link cut for 5 s, or its processes killed. The other hosts name it within a second; the simulator's host, the
-plant's side, lands the vehicle on its own as a Pixhawk does on Offboard loss (never a fall); the flight-control
-host, cut off, names the simulator's host lost and lands rather than terminating; once it is back the vehicle,
-on the ground, may fly again."""
+link cut for 5 s, or its processes killed. The other hosts name it once the host lease is over; the simulator's
+host, the plant's side, lands the vehicle on its own as a Pixhawk does on Offboard loss (never a fall); the
+flight-control host, cut off, names the simulator's host lost and lands rather than terminating; once it is back
+the vehicle, on the ground, may fly again."""
 
 from __future__ import annotations
 
@@ -24,6 +24,9 @@ from tests.support.hosts import Host, namespace_pids
 pytestmark = [pytest.mark.timeout(500), pytest.mark.xdist_group("heavy_wall_clock")]
 
 CUT_S = 5.0
+# Longer than the default (0.75 s, measured by benchmarks/bench_hosts.py): three real-time stacks beside another test
+# on two cores delay a beat by more than that now and then, and a host counted lost during the takeoff lands it.
+LEASE_MS = 2000
 LOST = re.compile(r"Lost host control \(no beat for (\d+\.\d+) s\)")
 
 
@@ -52,7 +55,7 @@ def detection_s(log: str) -> float:
 def test_losing_the_flight_control_host_in_a_hover(network, tmp_path: Path, loss: str) -> None:
     net = network(HOSTS)
     sim, control, ground = (net.hosts[h] for h in HOSTS)
-    profile = split_profile(tmp_path / "split.toml", net)
+    profile = split_profile(tmp_path / "split.toml", net, f"[bus]\nhost_lease_ms = {LEASE_MS}\n")
     procs = bring_up(net, list(HOSTS), profile, tmp_path, "--realtime")
     logs = lambda: "\n".join(p.read_text() for p in tmp_path.glob("*.log"))  # noqa: E731
     eventually(lambda: running(status(ground), 12), START_TIMEOUT_S, "the vehicle up on all hosts")
@@ -66,9 +69,9 @@ def test_losing_the_flight_control_host_in_a_hover(network, tmp_path: Path, loss
             os.kill(pid, signal.SIGKILL)
         procs.pop("control").wait(timeout=30)
     cut = time.monotonic()
-    # named by the other hosts within a second (the profile's host lease, 0.75 s by default)
+    # named by the other hosts once the profile's host lease is over
     eventually(lambda: LOST.search((tmp_path / "sim.log").read_text()), 10.0, "the simulator's host names it")
-    assert detection_s((tmp_path / "sim.log").read_text()) < 1.0
+    assert detection_s((tmp_path / "sim.log").read_text()) < LEASE_MS / 1000 + 0.3
     eventually(lambda: LOST.search(run_log(ground, "mavlink_gcs")), 10.0, "the ground station told (STATUSTEXT)")
     # the plant lands the vehicle on its own: a descent, never a fall
     eventually(lambda: "the plant lands on its own" in run_log(sim, "simulator"), 10.0, "the plant's failsafe")
