@@ -98,9 +98,13 @@ class TopicPublisher:
         self.count = 0
         self.fast: RingWriter | None = None
         self.fast_read = False
+        # A droppable message goes below Zenoh's default priority: behind a slow link its queue is full, and a
+        # message that may not be dropped (a query's final reply, Zenoh's own) waiting there for room holds up the
+        # router it passes, with every message of the vehicle, for up to the 5 s after which Zenoh closes the link.
         self._pub = node.session.declare_publisher(
             self.key,
             congestion_control=zenoh.CongestionControl.BLOCK if reliable else zenoh.CongestionControl.DROP,
+            priority=zenoh.Priority.DATA if reliable else zenoh.Priority.DATA_LOW,
             express=True,
         )
 

@@ -34,10 +34,9 @@ def router(
         prof.check_host(host)
     except ProfileError as e:
         fail(str(e), code=2)
-    own = prof.hosts[host]
     loopback = f"tcp/127.0.0.1:{free_port()}"
-    listen = (loopback, own.endpoint)
-    connect = (*prof.bus.connect, *(h.endpoint for h in prof.hosts.values() if h is not own))
+    beyond, connect = prof.router_links(host)
+    listen = (loopback, *beyond)
     bus = BusConfig(mode="router", listen=listen, connect=connect, lease_ms=prof.bus.lease_ms)
     stop = threading.Event()
     for signum in (signal.SIGINT, signal.SIGTERM):
@@ -45,7 +44,7 @@ def router(
     try:
         session = zenoh.open(bus.zenoh_config(f"router-{host}"))
     except zenoh.ZError as e:
-        fail(f"host {host}: cannot open its router on {', '.join(listen)}: {e}")
+        fail(f"host {host}: cannot open its router on {', '.join(e.partition('#')[0] for e in listen)}: {e}")
     client = BusConfig(mode="client", connect=(loopback,), listen=(), lease_ms=prof.bus.lease_ms)
     record = {
         **run_state.process_identity(),

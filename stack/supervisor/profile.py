@@ -49,7 +49,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from stack.bus import keys
-from stack.bus.config import BusConfig
+from stack.bus.config import BusConfig, between_hosts
 from stack.bus.host_beats import BEAT_PERIOD_S, DEFAULT_LEASE_MS, MIN_LEASE_MS
 from stack.bus.supervisors import SINGLE_HOST
 from stack.launch_files import find_mission, launch_dirs
@@ -175,6 +175,13 @@ class Profile:
     def placement(self) -> dict[str, list[str]]:
         """Host → the names of its modules, for every host of the profile (empty without hosts)."""
         return {h: [e.name for e in self.modules if e.host == h] for h in self.hosts}
+
+    def router_links(self, host: str) -> tuple[tuple[str, ...], tuple[str, ...]]:
+        """Where ``host``'s router listens for the other hosts, and what it connects to (``bus.connect`` and the other
+        hosts' endpoints), with the socket buffers of a link between hosts."""
+        own = self.hosts[host]
+        others = (between_hosts(h.endpoint) for h in self.hosts.values() if h is not own)
+        return (between_hosts(own.endpoint),), (*self.bus.connect, *others)
 
     def check_host(self, host: str | None) -> None:
         """``--host``: required, and one of the profile's hosts, when the profile spreads the vehicle over hosts;

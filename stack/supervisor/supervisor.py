@@ -201,9 +201,8 @@ class Supervisor:
         self.port = port
         self.endpoint = f"tcp/127.0.0.1:{port}"
         bus = self.profile.bus
-        own = self.profile.hosts.get(self.host)
-        self.router_listen = (self.endpoint, *((own.endpoint,) if own is not None else ()))
-        self.router_connect = (*bus.connect, *(h.endpoint for h in self.profile.hosts.values() if h is not own))
+        listen, self.router_connect = self.profile.router_links(self.host) if self.profile.hosts else ((), bus.connect)
+        self.router_listen = (self.endpoint, *listen)
         self.module_bus = BusConfig(
             mode=bus.mode,
             connect=(self.endpoint, *bus.connect),
@@ -273,7 +272,7 @@ class Supervisor:
             self._say_groups()
             self._say(f"bus rendezvous {self.endpoint}, vehicle '{self.vehicle}'")
             if self.profile.hosts:
-                self._say(f"host {self.host}: router on {', '.join(self.router_listen)}")
+                self._say(f"host {self.host}: router on {', '.join(e.partition('#')[0] for e in self.router_listen)}")
             if (self.leads or self._await_lead(session)) and self._sync_clock(session) and self._start_all():
                 self.roster_complete = True
                 if self.fast is not None and self._await_vehicle_roster(session):
@@ -664,7 +663,8 @@ class Supervisor:
 
     def _beat(self, session: zenoh.Session) -> None:
         """This host's beat, every BEAT_PERIOD_S until the supervisor stops."""
-        publisher = session.declare_publisher(beat_key(self.vehicle, self.host))
+        # Ahead of the vehicle's messages in Zenoh's queues: behind a link full of telemetry a beat still gets through.
+        publisher = session.declare_publisher(beat_key(self.vehicle, self.host), priority=zenoh.Priority.REAL_TIME)
         try:
             while not self._stop.wait(BEAT_PERIOD_S):
                 publisher.put(b"")

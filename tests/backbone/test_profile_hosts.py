@@ -5,6 +5,7 @@ import re
 
 import pytest
 
+from stack.bus.config import HOST_LINK_SEND_BUFFER_BYTES
 from stack.bus.host_beats import DEFAULT_LEASE_MS
 from stack.supervisor.profile import ProfileError, load_profile
 from tests.support.harness import run_cli, write_profile
@@ -48,6 +49,15 @@ def test_each_module_runs_on_its_host_and_the_parameters_are_the_vehicles(tmp_pa
     assert p.hosts_with_modules() == ["sim", "control"]  # the ground host starts no module
     for host in p.hosts:
         p.check_host(host)
+
+
+def test_a_hosts_router_listens_on_its_endpoint_and_connects_to_the_others_with_small_send_buffers(tmp_path):
+    p = load_profile(write_profile(tmp_path / "split.toml", SPLIT + '\n[bus]\nconnect = ["tcp/10.0.0.9:7447"]\n'))
+    small = f"#so_sndbuf={HOST_LINK_SEND_BUFFER_BYTES}"
+    assert p.router_links("control") == (
+        (f"tcp/10.0.0.2:7447{small}",),
+        ("tcp/10.0.0.9:7447", f"tcp/10.0.0.1:7447{small}", f"tcp/10.0.0.3:7447{small}"),
+    )
 
 
 def test_the_host_lease_is_the_profiles_and_too_short_a_lease_is_refused(tmp_path):
