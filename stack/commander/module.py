@@ -177,6 +177,8 @@ class CommanderModule(Module):
             # In lockstep a dead module's silence is measured in simulated time, which stands still while the
             # supervisor restarts it; in real time its liveliness token says at once that it is gone.
             self.commander.chain.module_died(module)
+            if self.commander.hosts is not None:
+                self.commander.hosts.module_died(module, self.now_us())
 
     def _on_host_beat(self, host: str, payload: bytes) -> None:
         hosts = self.commander.hosts

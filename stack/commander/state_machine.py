@@ -465,7 +465,7 @@ class Commander:
         hosts_held = False
         if self.hosts is not None:
             self._events.extend(self.hosts.update(now_us))
-            hosts_held = armed and self.hosts.holding(now_us)
+            hosts_held = armed and self.hosts.holding(now_us, estimates_valid=not self._failing & _ESTIMATES)
         if self._p.com_ext_ap:
             self._follow_external_autopilot(now_us)
             armed = self.armed

@@ -8,7 +8,7 @@ from stack.bus.host_beats import STOPPING, HostWatch, beat_host, beat_key
 from stack.commander import commands as C
 from stack.commander.control_chain import OUTPUTS
 from stack.commander.events import event_severity
-from stack.commander.host_loss import RETURN_GRACE_US
+from stack.commander.host_loss import CONVERGE_LIMIT_US, DEATH_GRACE_US, RETURN_GRACE_US
 from stack.msg.system import MavlinkLog
 from stack.msg.system import VehicleStatus as NS
 from tests.commander.helpers import Clock, local_position, make_clock
@@ -204,3 +204,51 @@ def test_losing_the_ground_host_only_names_it():
     assert vehicle.status.lost_hosts == ["ground"]
     assert vehicle.status.nav_state == NS.NAVIGATION_STATE_AUTO_LOITER
     assert "Lost host ground (no beat for 0.76 s): mavlink_gcs" in vehicle.clock.events
+
+
+def die(vehicle: SplitVehicle, module: str) -> None:
+    """``module``'s liveliness ends, as the commander's glue reports it."""
+    commander = vehicle.clock.commander
+    assert commander.hosts is not None
+    commander.chain.module_died(module)
+    commander.hosts.module_died(module, vehicle.clock.t)
+
+
+def test_modules_of_a_host_killed_die_at_once_and_the_host_loss_follows_with_no_termination():
+    """A killed host's links close at once: its modules' liveliness ends before its beats are late."""
+    vehicle = SplitVehicle()
+    vehicle.lose("sim")
+    for module in PLACEMENT["sim"]:
+        die(vehicle, module)
+    for _ in range(300):
+        vehicle.step()
+        assert vehicle.status.nav_state != NS.NAVIGATION_STATE_TERMINATION
+    assert vehicle.status.lost_hosts == ["sim"]
+    assert vehicle.status.nav_state == NS.NAVIGATION_STATE_AUTO_LAND
+
+
+def test_a_dead_module_of_the_commanders_own_host_is_acted_on_at_once():
+    vehicle = SplitVehicle()
+    die(vehicle, "mc_rate_control")
+    vehicle.step()
+    assert vehicle.status.nav_state == NS.NAVIGATION_STATE_TERMINATION
+
+
+def test_a_dead_module_of_a_host_that_still_beats_is_acted_on_once_the_grace_is_over():
+    vehicle = SplitVehicle()
+    die(vehicle, "attitude_estimator_q")
+    vehicle.step()
+    assert vehicle.status.nav_state != NS.NAVIGATION_STATE_TERMINATION  # held: its host may have gone with it
+    vehicle.step(DEATH_GRACE_US / 1e6)
+    assert vehicle.status.nav_state == NS.NAVIGATION_STATE_TERMINATION  # the host beats on: the module failed
+
+
+def test_a_host_back_with_estimators_still_converging_is_given_time_and_no_more():
+    vehicle = SplitVehicle()
+    vehicle.lose("sim")
+    vehicle.step(2.0)
+    vehicle.beating.add("sim")  # back, its estimators started again: no valid estimate yet
+    vehicle.step(RETURN_GRACE_US / 1e6 + 2.0)
+    assert vehicle.status.nav_state == NS.NAVIGATION_STATE_AUTO_LAND
+    vehicle.step((CONVERGE_LIMIT_US - RETURN_GRACE_US) / 1e6)
+    assert vehicle.status.nav_state == NS.NAVIGATION_STATE_TERMINATION  # they never converged
