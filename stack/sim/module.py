@@ -24,7 +24,7 @@ from stack.msg.fixedwing import Airspeed
 from stack.msg.registry import ORB_ID
 from stack.msg.sensors import SensorAccel, SensorBaro, SensorGps, SensorGyro, SensorMag
 from stack.msg.simulation import SimGroundtruth
-from stack.msg.system import BatteryStatus, VehicleCommand
+from stack.msg.system import ActuatorArmed, BatteryStatus, VehicleCommand
 from stack.params import catalogue
 from stack.params.binding import combine
 from stack.runtime.module import Arg, Module
@@ -94,6 +94,9 @@ class SimulatorModule(Module):
             if isinstance(model, VehicleModel)
             else None
         )
+        self._stack_disarmed_seen = False
+        """Whether the stack has said disarmed since this plant started (:meth:`_stack_arming`)."""
+        self._said_armed_before = False
         self.subscribe(ORB_ID.actuator_outputs_sim)
         self.subscribe(ORB_ID.actuator_armed)
         self.subscribe(ORB_ID.vehicle_command, queue=True)
@@ -181,9 +184,26 @@ class SimulatorModule(Module):
             self.sim.set_gps_enabled(enabled)
             self.log.info("GPS %s (failure injection)", "restored" if enabled else "off")
 
+    def _stack_arming(self) -> ActuatorArmed | None:
+        """The stack's last ``actuator_armed`` (None: none yet), taken as disarmed until the stack has said disarmed
+        once since this plant started. A plant started while the stack says armed (its host lost in a flight and
+        started again: a new vehicle, on the ground) keeps its motors stopped until the stack disarms, as a Pixhawk
+        powers up disarmed whatever its companion streams; else the stack's loops, flying the vehicle they knew,
+        throw the new one about."""
+        armed = self.latest(ORB_ID.actuator_armed)
+        if armed is None or self._stack_disarmed_seen:
+            return armed
+        if not armed.armed:
+            self._stack_disarmed_seen = True
+            return armed
+        if not self._said_armed_before:
+            self._said_armed_before = True
+            self.log.warning("the stack was armed before this plant started: its motors stay stopped until it disarms")
+        return ActuatorArmed(timestamp=armed.timestamp, armed=False)
+
     def motor_commands(self) -> tuple[float, ...]:
         outputs = self.latest(ORB_ID.actuator_outputs_sim)
-        armed = self.latest(ORB_ID.actuator_armed)
+        armed = self._stack_arming()
         # As PX4's output drivers do, the motors stop on disarm, lockdown, kill or termination whatever the last
         # output said: a dead allocator cannot keep them turning.
         stopped = armed is not None and (not armed.armed or armed.lockdown or armed.kill or armed.termination)
@@ -323,7 +343,7 @@ class SimulatorModule(Module):
         )
 
     def _publish_battery(self, epoch: int) -> None:
-        armed = self.latest(ORB_ID.actuator_armed)
+        armed = self._stack_arming()
         state = self.battery.update(battery.PERIOD_US * 1e-6, armed is not None and armed.armed)
         self.publish(ORB_ID.battery_status, BatteryStatus(**state._asdict()))
 

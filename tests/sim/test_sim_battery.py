@@ -305,6 +305,8 @@ def test_sim_gps_used_below_4_satellites_is_a_gps_loss():
 
 def test_battery_status_drains_at_10_hz_while_armed_and_refills_when_disarmed():
     module, rt = simulator_module(SIM_BAT_DRAIN=10.0, SIM_BAT_MIN_PCT=0.0)
+    rt.inputs[("actuator_armed", 0)].latest = ActuatorArmed(armed=False)  # the stack, disarmed first
+    module.motor_commands()
     rt.inputs[("actuator_armed", 0)].latest = ActuatorArmed(armed=True)
     run(module, rt, 1.0)
     status = rt.published("battery_status")

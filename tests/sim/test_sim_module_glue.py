@@ -76,11 +76,31 @@ def test_each_step_publishes_the_imu_and_the_truth_stamped_on_the_stacks_clock()
     assert len(bench.sent(ORB_ID.sim_groundtruth)) == 1 and len(bench.sent(ORB_ID.battery_status)) == 1
 
 
+def test_a_plant_started_while_the_stack_is_armed_keeps_its_motors_stopped_until_the_stack_disarms(caplog):
+    """Its host lost in a flight and started again: a new vehicle on the ground, which the stack's loops, still
+    flying the one they knew, must not spin up."""
+    bench = ModuleBench(SimulatorModule)
+    bench.put(ORB_ID.actuator_outputs_sim, SPINNING)
+    with caplog.at_level("WARNING"):
+        bench.put(ORB_ID.actuator_armed, ActuatorArmed(armed=True))
+        assert bench.module.motor_commands() == (0.0,) * 4
+        assert bench.module.motor_commands() == (0.0,) * 4
+    assert [r.getMessage() for r in caplog.records if r.name == "simulator"] == [
+        "the stack was armed before this plant started: its motors stay stopped until it disarms"
+    ]
+    bench.put(ORB_ID.actuator_armed, ActuatorArmed(armed=False))
+    assert bench.module.motor_commands() == (0.0,) * 4
+    bench.put(ORB_ID.actuator_armed, ActuatorArmed(armed=True))
+    assert bench.module.motor_commands() == (0.5, 0.6, 0.0, 0.8)
+
+
 IDLE = ActuatorOutputs(noutputs=4, output=(0.1,) * 4 + (0.0,) * 12)
 
 
 def test_a_silent_armed_stack_hands_the_motors_to_the_plant_and_back_when_its_commands_return(caplog):
     bench = ModuleBench(SimulatorModule, params={"COM_OBL_RC_ACT": 4, "COM_OF_LOSS_T": 0.5})
+    bench.put(ORB_ID.actuator_armed, ActuatorArmed(armed=False))
+    bench.run(None, PERIOD_S)
     bench.put(ORB_ID.actuator_armed, ActuatorArmed(armed=True))
     for _ in range(50):
         bench.put(ORB_ID.actuator_outputs_sim, IDLE)

@@ -168,6 +168,8 @@ def test_the_module_takes_the_plane_inputs_from_actuator_outputs_sim_while_armed
     rt = StandInRuntime("sih_plane")
     module = SimulatorModule(rt)
     rt.inputs[("actuator_outputs_sim", 0)].latest = outputs(0.5, 0.0, math.nan, 0.0, 0.9)
+    rt.inputs[("actuator_armed", 0)].latest = ActuatorArmed(armed=False)  # the stack, disarmed first
+    assert module.motor_commands() == (0.0, 0.0, 0.0, 0.0)
     rt.inputs[("actuator_armed", 0)].latest = ActuatorArmed(armed=True)
     assert module.motor_commands() == (0.5, 0.0, 0.0, 0.0)  # four inputs, NaN → 0, the fifth output ignored
     run(module, rt, 0.5)
