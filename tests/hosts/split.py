@@ -26,6 +26,16 @@ def stack_on(host: Host, *args: str, timeout: float = 120.0) -> subprocess.Compl
     return host.run(sys.executable, "-m", "stack", *args, env=stack_env(host.home), timeout=timeout, cwd=REPO)
 
 
+def take_off(host: Host, altitude: float) -> bool:
+    """``stack cmd takeoff --wait`` from ``host``, for ``eventually``: False while it is refused (a stack just up,
+    or a host back, whose estimates still converge) or does not complete."""
+    out = stack_on(host, "cmd", "takeoff", "--alt", str(altitude), "--wait")
+    return out.returncode == 0 and "takeoff complete" in out.stdout
+
+
+TAKEOFF_TIMEOUT_S = 90.0
+
+
 def up_on(host: Host, profile: Path, log: Path, *args: str) -> subprocess.Popen[str]:
     """``stack up PROFILE --host NAME`` on ``host``, its output in ``log``."""
     return host.popen(

@@ -15,11 +15,11 @@ from pathlib import Path
 
 import pytest
 
-from tests.hosts.split import split_profile, up_on
+from tests.hosts.split import TAKEOFF_TIMEOUT_S, split_profile, take_off, up_on
 from tests.hosts.split import stack_on as stack
 from tests.hosts.test_vehicle_across_hosts import HOSTS, START_TIMEOUT_S, bring_up, running, status
 from tests.support.harness import eventually
-from tests.support.hosts import Host, namespace_pids
+from tests.support.hosts import Host, Network, namespace_pids
 
 pytestmark = [pytest.mark.timeout(500), pytest.mark.xdist_group("heavy_wall_clock")]
 
@@ -51,16 +51,37 @@ def detection_s(log: str) -> float:
     return float(found.group(1))
 
 
+class Hover:
+    """The vehicle over the three hosts in real time, with the test's host lease, commanded from the ground host."""
+
+    def __init__(self, net: Network, tmp_path: Path) -> None:
+        self.net, self.tmp_path = net, tmp_path
+        self.profile = split_profile(tmp_path / "split.toml", net, f"[bus]\nhost_lease_ms = {LEASE_MS}\n")
+        self.procs = bring_up(net, list(HOSTS), self.profile, tmp_path, "--realtime")
+
+    def logs(self) -> str:
+        return "\n".join(p.read_text() for p in self.tmp_path.glob("*.log"))
+
+    def take_off(self) -> None:
+        """Once every module runs: up to 3 m."""
+        ground = self.net.hosts["ground"]
+        eventually(lambda: running(status(ground), 12), START_TIMEOUT_S, "the vehicle up on all hosts")
+        eventually(lambda: take_off(ground, 3), TAKEOFF_TIMEOUT_S, "a takeoff accepted and complete")
+
+    def stop(self) -> None:
+        """``stack down`` from the ground host: every host's share ends cleanly."""
+        assert stack(self.net.hosts["ground"], "down").returncode == 0
+        codes = {name: p.wait(timeout=60) for name, p in self.procs.items()}
+        assert set(codes.values()) == {0}, f"{codes}\n{self.logs()}"
+        assert "Traceback" not in self.logs()
+
+
 @pytest.mark.parametrize("loss", ["link_cut", "killed"])
 def test_losing_the_flight_control_host_in_a_hover(network, tmp_path: Path, loss: str) -> None:
-    net = network(HOSTS)
+    flight = Hover(network(HOSTS), tmp_path)
+    net, profile, procs = flight.net, flight.profile, flight.procs
     sim, control, ground = (net.hosts[h] for h in HOSTS)
-    profile = split_profile(tmp_path / "split.toml", net, f"[bus]\nhost_lease_ms = {LEASE_MS}\n")
-    procs = bring_up(net, list(HOSTS), profile, tmp_path, "--realtime")
-    logs = lambda: "\n".join(p.read_text() for p in tmp_path.glob("*.log"))  # noqa: E731
-    eventually(lambda: running(status(ground), 12), START_TIMEOUT_S, "the vehicle up on all hosts")
-    takeoff = stack(ground, "cmd", "takeoff", "--alt", "3", "--wait")
-    assert takeoff.returncode == 0 and "takeoff complete" in takeoff.stdout, takeoff.stdout + takeoff.stderr + logs()
+    flight.take_off()
 
     if loss == "link_cut":
         control.link_down()
@@ -90,8 +111,7 @@ def test_losing_the_flight_control_host_in_a_hover(network, tmp_path: Path, loss
 
     eventually(down_and_disarmed, 120.0, "the vehicle landed and disarmed, every host back")
     assert truth(sim)[0] < 0.3
-    again = stack(ground, "cmd", "takeoff", "--alt", "2", "--wait")
-    assert again.returncode == 0 and "takeoff complete" in again.stdout, again.stdout + again.stderr + logs()
+    eventually(lambda: take_off(ground, 2), TAKEOFF_TIMEOUT_S, "a takeoff again")
     land = stack(ground, "cmd", "land", "--wait")
     assert land.returncode == 0 and "landed and disarmed" in land.stdout, land.stdout + land.stderr
 
@@ -103,7 +123,94 @@ def test_losing_the_flight_control_host_in_a_hover(network, tmp_path: Path, loss
         assert "terminate" not in commander.split("Host sim back")[0], commander
     else:
         assert "terminate" not in commander, commander
-    assert stack(ground, "down").returncode == 0
-    codes = {name: p.wait(timeout=60) for name, p in procs.items()}
-    assert set(codes.values()) == {0}, f"{codes}\n{logs()}"
-    assert "Traceback" not in logs()
+    flight.stop()
+
+
+def test_losing_the_ground_host_in_a_hover_only_names_it(network, tmp_path: Path) -> None:
+    """The ground host carries only the MAVLink links: losing it, by a 5 s link cut and then by SIGKILL of its
+    processes, is named by the others and changes nothing in the flight (with no ground station connected there is
+    no data link to lose either); once back, or started again, it commands the vehicle as before."""
+    flight = Hover(network(HOSTS), tmp_path)
+    net, profile, procs = flight.net, flight.profile, flight.procs
+    sim, control, ground = (net.hosts[h] for h in HOSTS)
+    flight.take_off()
+    lost = re.compile(r"Lost host ground \(no beat for (\d+\.\d+) s\)")
+
+    def hovers_while_lost(times: int) -> None:
+        """Named lost for the ``times``-th time by the simulator's host and the commander, within the lease; the
+        vehicle holds its hover for CUT_S meanwhile."""
+        start = time.monotonic()
+        eventually(lambda: len(lost.findall((tmp_path / "sim.log").read_text())) == times, 10.0, "named lost")
+        assert float(lost.findall((tmp_path / "sim.log").read_text())[-1]) < LEASE_MS / 1000 + 0.3
+        eventually(lambda: len(lost.findall(run_log(control, "commander"))) == times, 10.0, "the commander names it")
+        while time.monotonic() - start < CUT_S:
+            altitude, down_speed = truth(sim)
+            assert altitude > 1.0 and down_speed < 1.0, (altitude, down_speed)  # climbing to 3 m, or holding it
+
+    ground.link_down()
+    hovers_while_lost(1)
+    ground.link_up()
+    eventually(lambda: "Host ground back" in (tmp_path / "sim.log").read_text(), 30.0, "the ground host back")
+
+    for pid in namespace_pids(ground.netns):
+        os.kill(pid, signal.SIGKILL)
+    procs.pop("ground").wait(timeout=30)
+    hovers_while_lost(2)
+    procs["ground"] = up_on(ground, profile, tmp_path / "ground-again.log", "--realtime")
+    eventually(lambda: running(status(ground), 12), START_TIMEOUT_S, "the ground host's share started again")
+    land = stack(ground, "cmd", "land", "--wait")
+    assert land.returncode == 0 and "landed and disarmed" in land.stdout, land.stdout + land.stderr + flight.logs()
+
+    commander = run_log(control, "commander")
+    assert "Failsafe activated" not in commander, commander
+    flight.stop()
+
+
+def test_losing_the_simulator_and_estimator_host_in_a_hover(network, tmp_path: Path) -> None:
+    """The simulator's host, with the estimators, lost by a 5 s link cut: the commander, without estimates, lands
+    (``host_loss``) and never terminates on the estimates the lost host took away, and the plant, without motor
+    commands, lands on its own. Then its processes SIGKILLed in a hover, the simulated world with them: named,
+    the same failsafe; once its share is started again the new plant, on the ground, keeps its motors stopped
+    while the stack still says armed, the commander sees it landed and disarms, and the vehicle flies again."""
+    flight = Hover(network(HOSTS), tmp_path)
+    net, profile, procs = flight.net, flight.profile, flight.procs
+    sim, control, ground = (net.hosts[h] for h in HOSTS)
+    lost = re.compile(r"Lost host sim \(no beat for (\d+\.\d+) s\)")
+    commander = lambda: run_log(control, "commander")  # noqa: E731
+
+    def down_and_disarmed() -> bool:
+        report = status(ground)
+        return running(report, 12) and report is not None and report["vehicle_summary"].get("armed") is False
+
+    def named_lost(times: int) -> None:
+        eventually(lambda: len(lost.findall((tmp_path / "control.log").read_text())) == times, 10.0, "named lost")
+        assert float(lost.findall((tmp_path / "control.log").read_text())[-1]) < LEASE_MS / 1000 + 0.3
+        eventually(lambda: commander().count("Failsafe activated (host_loss): land") == times, 10.0, "landing")
+
+    flight.take_off()
+    sim.link_down()
+    cut = time.monotonic()
+    named_lost(1)
+    eventually(lambda: "the plant lands on its own" in run_log(sim, "simulator"), 10.0, "the plant's failsafe")
+    while time.monotonic() - cut < CUT_S:
+        altitude, down_speed = truth(sim)  # the simulator's host, cut off, still answers its own tools
+        assert down_speed < 2.0, (altitude, down_speed)
+    sim.link_up()
+    eventually(down_and_disarmed, 120.0, "the vehicle landed and disarmed, every host back")
+    assert truth(sim)[0] < 0.3
+    assert "terminate" not in commander(), commander()
+    eventually(lambda: take_off(ground, 2), TAKEOFF_TIMEOUT_S, "a takeoff again")
+
+    for pid in namespace_pids(sim.netns):
+        os.kill(pid, signal.SIGKILL)
+    procs.pop("sim").wait(timeout=30)
+    named_lost(2)
+    procs["sim"] = up_on(sim, profile, tmp_path / "sim-again.log", "--realtime")
+    eventually(down_and_disarmed, 120.0, "a new simulated vehicle, on the ground, and the commander disarmed")
+    eventually(lambda: take_off(ground, 2), TAKEOFF_TIMEOUT_S, "a takeoff again")
+    land = stack(ground, "cmd", "land", "--wait")
+    assert land.returncode == 0 and "landed and disarmed" in land.stdout, land.stdout + land.stderr + flight.logs()
+
+    assert "the stack was armed before this plant started" in run_log(sim, "simulator")
+    assert "terminate" not in commander(), commander()
+    flight.stop()

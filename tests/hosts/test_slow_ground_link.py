@@ -15,7 +15,7 @@ from pathlib import Path
 
 import pytest
 
-from tests.hosts.split import split_profile
+from tests.hosts.split import TAKEOFF_TIMEOUT_S, split_profile, take_off
 from tests.hosts.split import stack_on as stack
 from tests.hosts.test_host_loss import truth
 from tests.hosts.test_vehicle_across_hosts import HOSTS, START_TIMEOUT_S, bring_up, running, status
@@ -50,12 +50,6 @@ def ground_tool(ground: Host, *args: str, log: Path) -> subprocess.Popen[str]:
     )  # fmt: skip
 
 
-def take_off(ground: Host) -> bool:
-    """Takeoff to 3 m from the ground host; False while it is refused (the estimates still converging)."""
-    out = stack(ground, "cmd", "takeoff", "--alt", "3", "--wait")
-    return out.returncode == 0 and "takeoff complete" in out.stdout
-
-
 def test_a_ground_host_behind_a_slow_link_never_slows_the_vehicle(network, tmp_path: Path) -> None:
     net = network(HOSTS)
     sim, control, ground = (net.hosts[h] for h in HOSTS)
@@ -63,7 +57,7 @@ def test_a_ground_host_behind_a_slow_link_never_slows_the_vehicle(network, tmp_p
     procs = bring_up(net, list(HOSTS), profile, tmp_path, "--realtime")
     logs = lambda: "\n".join(p.read_text() for p in tmp_path.glob("*.log"))  # noqa: E731
     eventually(lambda: running(status(ground), 12), START_TIMEOUT_S, "the vehicle up on all hosts")
-    eventually(lambda: take_off(ground), 60, "a takeoff accepted and complete")
+    eventually(lambda: take_off(ground, 3), TAKEOFF_TIMEOUT_S, "a takeoff accepted and complete")
 
     listed = stack(ground, "topic", "list", "--json")
     assert listed.returncode == 0, listed.stdout + listed.stderr

@@ -14,7 +14,7 @@ import pytest
 
 from stack.bus.node import stable_publisher_id
 from stack.record.recorder import RecordedMessage, RecordingReader
-from tests.hosts.split import split_profile, up_on
+from tests.hosts.split import TAKEOFF_TIMEOUT_S, split_profile, take_off, up_on
 from tests.hosts.split import stack_on as stack
 from tests.support.harness import REPO, eventually, stack_env
 from tests.support.hosts import Host, Network
@@ -95,8 +95,7 @@ def test_takeoff_hover_and_land_across_three_hosts_commanded_from_the_ground(net
     assert placed["commander"] == placed["mc_pos_control"] == "control"
     assert placed["mavlink_gcs"] == "ground"
 
-    takeoff = stack(ground, "cmd", "takeoff", "--alt", "3", "--wait")
-    assert takeoff.returncode == 0 and "takeoff complete" in takeoff.stdout, takeoff.stdout + takeoff.stderr + logs()
+    eventually(lambda: take_off(ground, 3), TAKEOFF_TIMEOUT_S, "a takeoff accepted and complete")
     hover = status(laptop)  # any host sees the whole vehicle, a host with only a router too
     assert hover is not None and hover["vehicle_summary"]["armed"]
     assert hover["vehicle_summary"]["position"]["altitude_above_home"] > 2.0
