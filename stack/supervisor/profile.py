@@ -177,14 +177,11 @@ class Profile:
         return {h: [e.name for e in self.modules if e.host == h] for h in self.hosts}
 
     def router_links(self, host: str) -> tuple[tuple[str, ...], tuple[str, ...]]:
-        """Where ``host``'s router listens for the other hosts, and what it connects to: ``bus.connect`` and the hosts
-        listed before it, each with the socket buffers of a link between hosts. One link joins two hosts (the later
-        one connects): when both connected, each pair of routers kept two TCP links, and losing a third host held
-        up the traffic between the two others for seconds now and then."""
-        names = list(self.hosts)
-        earlier = names[: names.index(host)]
-        others = (between_hosts(self.hosts[h].endpoint) for h in earlier)
-        return (between_hosts(self.hosts[host].endpoint),), (*self.bus.connect, *others)
+        """Where ``host``'s router listens for the other hosts, and what it connects to (``bus.connect`` and the other
+        hosts' endpoints), with the socket buffers of a link between hosts."""
+        own = self.hosts[host]
+        others = (between_hosts(h.endpoint) for h in self.hosts.values() if h is not own)
+        return (between_hosts(own.endpoint),), (*self.bus.connect, *others)
 
     def check_host(self, host: str | None) -> None:
         """``--host``: required, and one of the profile's hosts, when the profile spreads the vehicle over hosts;
