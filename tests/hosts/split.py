@@ -27,10 +27,13 @@ def stack_on(host: Host, *args: str, timeout: float = 120.0) -> subprocess.Compl
 
 
 def take_off(host: Host, altitude: float) -> bool:
-    """``stack cmd takeoff --wait`` from ``host``, for ``eventually``: False while it is refused (a stack just up,
-    or a host back, whose estimates still converge) or does not complete."""
+    """``stack cmd takeoff --wait`` from ``host``, for ``eventually``: False while arming is refused (a stack just
+    up, or a host back, whose estimates still converge); a takeoff accepted must complete."""
     out = stack_on(host, "cmd", "takeoff", "--alt", str(altitude), "--wait")
-    return out.returncode == 0 and "takeoff complete" in out.stdout
+    if "Arming denied" in out.stdout + out.stderr:
+        return False
+    assert out.returncode == 0 and "takeoff complete" in out.stdout, out.stdout + out.stderr
+    return True
 
 
 TAKEOFF_TIMEOUT_S = 90.0

@@ -127,37 +127,25 @@ def test_losing_the_flight_control_host_in_a_hover(network, tmp_path: Path, loss
 
 
 def test_losing_the_ground_host_in_a_hover_only_names_it(network, tmp_path: Path) -> None:
-    """The ground host carries only the MAVLink links: losing it, by a 5 s link cut and then by SIGKILL of its
-    processes, is named by the others and changes nothing in the flight (with no ground station connected there is
-    no data link to lose either); once back, or started again, it commands the vehicle as before."""
+    """The ground host carries only the MAVLink links: losing it by a 5 s link cut is named by the others and
+    changes nothing in the flight (with no ground station connected there is no data link to lose either); once
+    back, it commands the vehicle as before."""
     flight = Hover(network(HOSTS), tmp_path)
-    net, profile, procs = flight.net, flight.profile, flight.procs
-    sim, control, ground = (net.hosts[h] for h in HOSTS)
+    sim, control, ground = (flight.net.hosts[h] for h in HOSTS)
     flight.take_off()
     lost = re.compile(r"Lost host ground \(no beat for (\d+\.\d+) s\)")
 
-    def hovers_while_lost(times: int) -> None:
-        """Named lost for the ``times``-th time by the simulator's host and the commander, within the lease; the
-        vehicle holds its hover for CUT_S meanwhile."""
-        start = time.monotonic()
-        eventually(lambda: len(lost.findall((tmp_path / "sim.log").read_text())) == times, 10.0, "named lost")
-        assert float(lost.findall((tmp_path / "sim.log").read_text())[-1]) < LEASE_MS / 1000 + 0.3
-        eventually(lambda: len(lost.findall(run_log(control, "commander"))) == times, 10.0, "the commander names it")
-        while time.monotonic() - start < CUT_S:
-            altitude, down_speed = truth(sim)
-            assert altitude > 1.0 and down_speed < 1.0, (altitude, down_speed)  # climbing to 3 m, or holding it
-
     ground.link_down()
-    hovers_while_lost(1)
+    start = time.monotonic()
+    # named lost by the simulator's host and the commander, within the lease; the hover holds meanwhile
+    eventually(lambda: lost.search((tmp_path / "sim.log").read_text()), 10.0, "named lost")
+    assert float(lost.findall((tmp_path / "sim.log").read_text())[-1]) < LEASE_MS / 1000 + 0.3
+    eventually(lambda: lost.search(run_log(control, "commander")), 10.0, "the commander names it")
+    while time.monotonic() - start < CUT_S:
+        altitude, down_speed = truth(sim)
+        assert altitude > 1.0 and down_speed < 1.0, (altitude, down_speed)  # climbing to 3 m, or holding it
     ground.link_up()
     eventually(lambda: "Host ground back" in (tmp_path / "sim.log").read_text(), 30.0, "the ground host back")
-
-    for pid in namespace_pids(ground.netns):
-        os.kill(pid, signal.SIGKILL)
-    procs.pop("ground").wait(timeout=30)
-    hovers_while_lost(2)
-    procs["ground"] = up_on(ground, profile, tmp_path / "ground-again.log", "--realtime")
-    eventually(lambda: running(status(ground), 12), START_TIMEOUT_S, "the ground host's share started again")
     land = stack(ground, "cmd", "land", "--wait")
     assert land.returncode == 0 and "landed and disarmed" in land.stdout, land.stdout + land.stderr + flight.logs()
 
@@ -214,3 +202,4 @@ def test_losing_the_simulator_and_estimator_host_in_a_hover(network, tmp_path: P
     assert "the stack was armed before this plant started" in run_log(sim, "simulator")
     assert "terminate" not in commander(), commander()
     flight.stop()
+
