@@ -146,8 +146,16 @@ def test_losing_the_ground_host_in_a_hover_only_names_it(network, tmp_path: Path
         assert altitude > 1.0 and down_speed < 1.0, (altitude, down_speed)  # climbing to 3 m, or holding it
     ground.link_up()
     eventually(lambda: "Host ground back" in (tmp_path / "sim.log").read_text(), 30.0, "the ground host back")
-    land = stack(ground, "cmd", "land", "--wait")
-    assert land.returncode == 0 and "landed and disarmed" in land.stdout, land.stdout + land.stderr + flight.logs()
+
+    def land() -> bool:
+        """From the ground host; False while its command is not yet acknowledged (its links coming back)."""
+        out = stack(ground, "cmd", "land", "--wait")
+        if "no acknowledgement" in out.stderr:
+            return False
+        assert out.returncode == 0 and "landed and disarmed" in out.stdout, out.stdout + out.stderr + flight.logs()
+        return True
+
+    eventually(land, 60.0, "a landing commanded from the ground host")
 
     commander = run_log(control, "commander")
     assert "Failsafe activated" not in commander, commander
