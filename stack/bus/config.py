@@ -34,6 +34,11 @@ def between_hosts(endpoint: str) -> str:
     return f"{endpoint}#so_sndbuf={HOST_LINK_SEND_BUFFER_BYTES}"
 
 
+def without_link_options(endpoint: str) -> str:
+    """``endpoint`` as a person reads it: its address, without the ``#`` link options (:func:`between_hosts`)."""
+    return endpoint.partition("#")[0]
+
+
 @dataclass(frozen=True)
 class BusConfig:
     mode: str = "peer"

@@ -32,7 +32,7 @@ import zenoh
 
 from stack.bus import keys
 from stack.bus.alive import AliveTokens
-from stack.bus.config import LOOPBACK_ANY_PORT, BusConfig
+from stack.bus.config import LOOPBACK_ANY_PORT, BusConfig, without_link_options
 from stack.bus.host_beats import BEAT_PERIOD_S, STOPPING, HostWatch, beat_host, beat_key, beats_key
 from stack.bus.ports import free_port, port_taken
 from stack.bus.query import answer
@@ -272,7 +272,7 @@ class Supervisor:
             self._say_groups()
             self._say(f"bus rendezvous {self.endpoint}, vehicle '{self.vehicle}'")
             if self.profile.hosts:
-                self._say(f"host {self.host}: router on {', '.join(e.partition('#')[0] for e in self.router_listen)}")
+                self._say(f"host {self.host}: router on {', '.join(map(without_link_options, self.router_listen))}")
             if (self.leads or self._await_lead(session)) and self._sync_clock(session) and self._start_all():
                 self.roster_complete = True
                 if self.fast is not None and self._await_vehicle_roster(session):
