@@ -11,6 +11,7 @@ through an ordinary Zenoh router.
 from __future__ import annotations
 
 import json
+import os
 from dataclasses import asdict, dataclass, field
 
 import zenoh
@@ -25,6 +26,11 @@ the ground saw the vehicle 14 s late; 32 kB still carries 30 MB/s at a 1 ms roun
 QUEUE_PRIORITIES = (
     "control", "real_time", "interactive_high", "interactive_low", "data_high", "data", "data_low", "background"
 )  # fmt: skip
+
+
+ZENOH_RUNTIME_ENV = "ZENOH_RUNTIME"
+ZENOH_RX_WORKERS, ZENOH_TX_WORKERS = 2, 1
+"""Zenoh 1.10's worker threads for receiving and for sending (zenoh-runtime's ZRuntime defaults)."""
 
 
 def between_hosts(endpoint: str) -> str:
@@ -107,3 +113,25 @@ class BusConfig:
         for key, value in self.extra.items():
             conf.insert_json5(key, json.dumps(value))
         return conf
+
+
+def open_router(bus: BusConfig, name: str) -> zenoh.Session:
+    """A router session whose Zenoh runtime has, beyond Zenoh's workers, a receiving and a sending worker for each
+    link to another host it may hold (two for each endpoint in ``bus.connect``: it connects, and the host there
+    connects back).
+
+    Zenoh closes a TCP link with SO_LINGER at 10 s (zenoh-link-tcp, TCP_LINGER_TIMEOUT): dropping a link to a host
+    cut off with data unsent blocks the worker thread that drops it until the link comes back or 10 s pass. With
+    Zenoh's two receiving workers, a host cut off from the two others stalled its own router that long, and every
+    message between its processes with it. The runtime reads ZENOH_RUNTIME once, as the process's first session
+    opens (the router's, in a supervisor or ``stack router``); it is set for that moment only, so the processes
+    started afterwards keep Zenoh's defaults, and a ZENOH_RUNTIME given by the user is left as it is."""
+    links = 2 * len(bus.connect)
+    if not links or ZENOH_RUNTIME_ENV in os.environ:
+        return zenoh.open(bus.zenoh_config(name))
+    rx, tx = ZENOH_RX_WORKERS + links, ZENOH_TX_WORKERS + links
+    os.environ[ZENOH_RUNTIME_ENV] = f"(rx: (worker_threads: {rx}), tx: (worker_threads: {tx}))"
+    try:
+        return zenoh.open(bus.zenoh_config(name))
+    finally:
+        del os.environ[ZENOH_RUNTIME_ENV]

@@ -16,7 +16,7 @@ import time
 import typer
 import zenoh
 
-from stack.bus.config import BusConfig, without_link_options
+from stack.bus.config import BusConfig, open_router, without_link_options
 from stack.bus.ports import free_port
 from stack.cli.common import fail
 from stack.supervisor import state as run_state
@@ -42,7 +42,7 @@ def router(
     for signum in (signal.SIGINT, signal.SIGTERM):
         signal.signal(signum, lambda *_: stop.set())
     try:
-        session = zenoh.open(bus.zenoh_config(f"router-{host}"))
+        session = open_router(bus, f"router-{host}")
     except zenoh.ZError as e:
         fail(f"host {host}: cannot open its router on {', '.join(map(without_link_options, listen))}: {e}")
     client = BusConfig(mode="client", connect=(loopback,), listen=(), lease_ms=prof.bus.lease_ms)

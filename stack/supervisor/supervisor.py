@@ -32,7 +32,7 @@ import zenoh
 
 from stack.bus import keys
 from stack.bus.alive import AliveTokens
-from stack.bus.config import LOOPBACK_ANY_PORT, BusConfig, without_link_options
+from stack.bus.config import LOOPBACK_ANY_PORT, BusConfig, open_router, without_link_options
 from stack.bus.host_beats import BEAT_PERIOD_S, STOPPING, HostWatch, beat_host, beat_key, beats_key
 from stack.bus.ports import free_port, port_taken
 from stack.bus.query import answer
@@ -228,7 +228,7 @@ class Supervisor:
                 lease_ms=self.profile.bus.lease_ms,
             )
             try:
-                return zenoh.open(bus.zenoh_config("supervisor"))
+                return open_router(bus, "supervisor")
             except zenoh.ZError as e:
                 if self.profile.port or attempt + 1 == ROUTER_PORT_ATTEMPTS or not port_taken(e):
                     raise

@@ -2,6 +2,7 @@
 
 import contextlib
 import json
+import os
 import subprocess
 import sys
 
@@ -9,7 +10,7 @@ import msgspec
 import pytest
 import zenoh
 
-from stack.bus import keys
+from stack.bus import config, keys
 from stack.bus.alive import AliveTokens, parse_alive_token
 from stack.bus.config import BusConfig
 from stack.bus.node import Node, stable_publisher_id
@@ -143,3 +144,20 @@ def test_a_message_larger_than_the_bus_carries_is_refused_not_lost():
         first = next(r for r in got if r is not None)
         msg, index = first.msg, first.index
         assert len(msg.source) > 47_000 and index == 1  # the refused one was not counted: no gap
+
+
+
+def test_a_routers_zenoh_runtime_has_a_worker_for_each_link_to_another_host_it_may_lose(monkeypatch):
+    """Two links to each other host's router (each side connects); Zenoh's defaults on one host; the setting is the
+    process's only while its first session opens (what Zenoh reads), and a user's own ZENOH_RUNTIME is kept."""
+    seen: list[str | None] = []
+    monkeypatch.setattr(config.zenoh, "open", lambda conf: seen.append(os.environ.get("ZENOH_RUNTIME")))
+    monkeypatch.delenv("ZENOH_RUNTIME", raising=False)
+    others = ("tcp/10.0.0.2:7447", "tcp/10.0.0.3:7447")
+    config.open_router(BusConfig(mode="router", connect=others), "router")
+    config.open_router(BusConfig(mode="router"), "router")
+    assert seen == ["(rx: (worker_threads: 6), tx: (worker_threads: 5))", None]
+    assert "ZENOH_RUNTIME" not in os.environ
+    monkeypatch.setenv("ZENOH_RUNTIME", "(rx: (worker_threads: 3))")
+    config.open_router(BusConfig(mode="router", connect=others), "router")
+    assert seen[-1] == os.environ["ZENOH_RUNTIME"] == "(rx: (worker_threads: 3))"
