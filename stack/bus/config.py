@@ -115,10 +115,9 @@ class BusConfig:
         return conf
 
 
-def open_router(bus: BusConfig, name: str) -> zenoh.Session:
-    """A router session whose Zenoh runtime has, beyond Zenoh's workers, a receiving and a sending worker for each
-    link to another host it may hold (two for each endpoint in ``bus.connect``: it connects, and the host there
-    connects back).
+def open_router(bus: BusConfig, name: str, links: int) -> zenoh.Session:
+    """A router session whose Zenoh runtime has, beyond Zenoh's workers, a receiving and a sending worker for each of
+    the ``links`` to other routers it may hold.
 
     Zenoh closes a TCP link with SO_LINGER at 10 s (zenoh-link-tcp, TCP_LINGER_TIMEOUT): dropping a link to a host
     cut off with data unsent blocks the worker thread that drops it until the link comes back or 10 s pass. With
@@ -126,7 +125,6 @@ def open_router(bus: BusConfig, name: str) -> zenoh.Session:
     message between its processes with it. The runtime reads ZENOH_RUNTIME once, as the process's first session
     opens (the router's, in a supervisor or ``stack router``); it is set for that moment only, so the processes
     started afterwards keep Zenoh's defaults, and a ZENOH_RUNTIME given by the user is left as it is."""
-    links = 2 * len(bus.connect)
     if not links or ZENOH_RUNTIME_ENV in os.environ:
         return zenoh.open(bus.zenoh_config(name))
     rx, tx = ZENOH_RX_WORKERS + links, ZENOH_TX_WORKERS + links

@@ -42,7 +42,7 @@ def router(
     for signum in (signal.SIGINT, signal.SIGTERM):
         signal.signal(signum, lambda *_: stop.set())
     try:
-        session = open_router(bus, f"router-{host}")
+        session = open_router(bus, f"router-{host}", prof.router_link_count)
     except zenoh.ZError as e:
         fail(f"host {host}: cannot open its router on {', '.join(map(without_link_options, listen))}: {e}")
     client = BusConfig(mode="client", connect=(loopback,), listen=(), lease_ms=prof.bus.lease_ms)

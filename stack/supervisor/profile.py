@@ -177,11 +177,19 @@ class Profile:
         return {h: [e.name for e in self.modules if e.host == h] for h in self.hosts}
 
     def router_links(self, host: str) -> tuple[tuple[str, ...], tuple[str, ...]]:
-        """Where ``host``'s router listens for the other hosts, and what it connects to (``bus.connect`` and the other
-        hosts' endpoints), with the socket buffers of a link between hosts."""
-        own = self.hosts[host]
-        others = (between_hosts(h.endpoint) for h in self.hosts.values() if h is not own)
-        return (between_hosts(own.endpoint),), (*self.bus.connect, *others)
+        """Where ``host``'s router listens for the other hosts, and what it connects to: ``bus.connect`` and the hosts
+        listed before it, each with the socket buffers of a link between hosts. One TCP link joins two hosts, the
+        later one connecting: when both connected at once, Zenoh put both links in one transport, and after a link
+        cut the two routers could disagree on it for good, one dropping the other's messages as unknown."""
+        names = list(self.hosts)
+        earlier = (between_hosts(self.hosts[h].endpoint) for h in names[: names.index(host)])
+        return (between_hosts(self.hosts[host].endpoint),), (*self.bus.connect, *earlier)
+
+    @property
+    def router_link_count(self) -> int:
+        """How many links a host's router may hold to other routers: one to each other host, one to each endpoint of
+        ``bus.connect``."""
+        return max(len(self.hosts) - 1, 0) + len(self.bus.connect)
 
     def check_host(self, host: str | None) -> None:
         """``--host``: required, and one of the profile's hosts, when the profile spreads the vehicle over hosts;

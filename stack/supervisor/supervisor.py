@@ -228,7 +228,7 @@ class Supervisor:
                 lease_ms=self.profile.bus.lease_ms,
             )
             try:
-                return open_router(bus, "supervisor")
+                return open_router(bus, "supervisor", self.profile.router_link_count)
             except zenoh.ZError as e:
                 if self.profile.port or attempt + 1 == ROUTER_PORT_ATTEMPTS or not port_taken(e):
                     raise

@@ -147,17 +147,17 @@ def test_a_message_larger_than_the_bus_carries_is_refused_not_lost():
 
 
 
-def test_a_routers_zenoh_runtime_has_a_worker_for_each_link_to_another_host_it_may_lose(monkeypatch):
-    """Two links to each other host's router (each side connects); Zenoh's defaults on one host; the setting is the
-    process's only while its first session opens (what Zenoh reads), and a user's own ZENOH_RUNTIME is kept."""
+def test_a_routers_zenoh_runtime_has_a_worker_for_each_link_to_another_router(monkeypatch):
+    """Zenoh's defaults without such links; the setting is the process's only while its first session opens (what
+    Zenoh reads), and a user's own ZENOH_RUNTIME is kept."""
     seen: list[str | None] = []
     monkeypatch.setattr(config.zenoh, "open", lambda conf: seen.append(os.environ.get("ZENOH_RUNTIME")))
     monkeypatch.delenv("ZENOH_RUNTIME", raising=False)
-    others = ("tcp/10.0.0.2:7447", "tcp/10.0.0.3:7447")
-    config.open_router(BusConfig(mode="router", connect=others), "router")
-    config.open_router(BusConfig(mode="router"), "router")
-    assert seen == ["(rx: (worker_threads: 6), tx: (worker_threads: 5))", None]
+    router = BusConfig(mode="router")
+    config.open_router(router, "router", links=2)
+    config.open_router(router, "router", links=0)
+    assert seen == ["(rx: (worker_threads: 4), tx: (worker_threads: 3))", None]
     assert "ZENOH_RUNTIME" not in os.environ
     monkeypatch.setenv("ZENOH_RUNTIME", "(rx: (worker_threads: 3))")
-    config.open_router(BusConfig(mode="router", connect=others), "router")
+    config.open_router(router, "router", links=2)
     assert seen[-1] == os.environ["ZENOH_RUNTIME"] == "(rx: (worker_threads: 3))"

@@ -51,13 +51,15 @@ def test_each_module_runs_on_its_host_and_the_parameters_are_the_vehicles(tmp_pa
         p.check_host(host)
 
 
-def test_a_hosts_router_listens_on_its_endpoint_and_connects_to_the_others_with_small_send_buffers(tmp_path):
+def test_a_hosts_router_listens_on_its_endpoint_and_connects_to_the_hosts_before_it_with_small_send_buffers(tmp_path):
     p = load_profile(write_profile(tmp_path / "split.toml", SPLIT + '\n[bus]\nconnect = ["tcp/10.0.0.9:7447"]\n'))
     small = f"#so_sndbuf={HOST_LINK_SEND_BUFFER_BYTES}"
-    assert p.router_links("control") == (
-        (f"tcp/10.0.0.2:7447{small}",),
-        ("tcp/10.0.0.9:7447", f"tcp/10.0.0.1:7447{small}", f"tcp/10.0.0.3:7447{small}"),
-    )
+    assert p.router_links("sim") == ((f"tcp/10.0.0.1:7447{small}",), ("tcp/10.0.0.9:7447",))  # the others connect
+    control = ((f"tcp/10.0.0.2:7447{small}",), ("tcp/10.0.0.9:7447", f"tcp/10.0.0.1:7447{small}"))
+    assert p.router_links("control") == control
+    ground = p.router_links("ground")[1]
+    assert ground == ("tcp/10.0.0.9:7447", f"tcp/10.0.0.1:7447{small}", f"tcp/10.0.0.2:7447{small}")
+    assert p.router_link_count == 3  # each host's to the two others, and to 10.0.0.9
 
 
 def test_the_host_lease_is_the_profiles_and_too_short_a_lease_is_refused(tmp_path):
