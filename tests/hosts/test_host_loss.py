@@ -2,7 +2,7 @@
 link cut for 5 s, or its processes killed. The other hosts name it once the host lease is over; the simulator's
 host, the plant's side, lands the vehicle on its own as a Pixhawk does on Offboard loss (never a fall); the
 flight-control host, cut off, names the simulator's host lost and lands rather than terminating; once it is back
-the vehicle, on the ground, may fly again."""
+the vehicle, on the ground, may fly again. In lockstep, simulated time waits for the lost host instead."""
 
 from __future__ import annotations
 
@@ -53,13 +53,22 @@ def detection_s(log: str) -> float:
     return float(found.group(1))
 
 
-class Hover:
-    """The vehicle over the three hosts in real time, with the test's host lease, commanded from the ground host."""
+def sim_time_s(host: Host) -> float:
+    """Simulated time as ``host`` reports it: its modules' furthest [s]."""
+    report = status(host)
+    assert report is not None
+    return max(m.get("sim_time_us", 0) for m in report["modules"]) / 1e6
 
-    def __init__(self, net: Network, tmp_path: Path) -> None:
+
+class Hover:
+    """The vehicle over the three hosts, in real time unless ``lockstep``, with the test's host lease, commanded
+    from the ground host."""
+
+    def __init__(self, net: Network, tmp_path: Path, lockstep: bool = False) -> None:
         self.net, self.tmp_path = net, tmp_path
         self.profile = split_profile(tmp_path / "split.toml", net, f"[bus]\nhost_lease_ms = {LEASE_MS}\n")
-        self.procs = bring_up(net, list(HOSTS), self.profile, tmp_path, "--realtime")
+        mode = () if lockstep else ("--realtime",)
+        self.procs = bring_up(net, list(HOSTS), self.profile, tmp_path, *mode)
 
     def logs(self) -> str:
         return "\n".join(p.read_text() for p in self.tmp_path.glob("*.log"))
@@ -216,3 +225,30 @@ def test_losing_the_simulator_and_estimator_host_in_a_hover(network, tmp_path: P
     assert "terminate" not in commander(), commander()
     flight.stop()
 
+
+def test_in_lockstep_time_waits_for_a_lost_host_and_goes_on_when_it_is_back(network, tmp_path: Path) -> None:
+    """Lockstep over the three hosts, the flight-control host's link cut for 5 s in a hover: the simulator's host
+    names it lost at once; simulated time waits for its modules (no time passes, so nothing fails over), and goes
+    on once it is back, the vehicle hovering where it was."""
+    flight = Hover(network(HOSTS), tmp_path, lockstep=True)
+    sim, control, ground = (flight.net.hosts[h] for h in HOSTS)
+    flight.take_off()
+
+    control.link_down()
+    cut = time.monotonic()
+    eventually(lambda: LOST.search((tmp_path / "sim.log").read_text()), 10.0, "the simulator's host names it")
+    assert detection_s((tmp_path / "sim.log").read_text()) < LEASE_MS / 1000 + 0.3
+    waiting = sim_time_s(sim)
+    while time.monotonic() - cut < CUT_S:
+        assert sim_time_s(sim) - waiting < 0.1  # a step or so, what was under way as the link went down
+    control.link_up()
+    eventually(lambda: sim_time_s(sim) > waiting + 2.0, 60.0, "simulated time going on")
+
+    report = status(ground)
+    assert report is not None and not report["lost_hosts"] and not report["silent_hosts"], report
+    summary = report["vehicle_summary"]
+    assert summary["armed"] and summary["position"]["altitude_above_home"] > 2.0, summary
+    assert "Failsafe activated" not in run_log(control, "commander")
+    land = stack(ground, "cmd", "land", "--wait")
+    assert land.returncode == 0 and "landed and disarmed" in land.stdout, land.stdout + land.stderr + flight.logs()
+    flight.stop()
