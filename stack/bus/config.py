@@ -23,6 +23,12 @@ HOST_LINK_SEND_BUFFER_BYTES = 16384
 """The kernel's send buffer of a TCP link between hosts (Linux doubles it). Telemetry to a ground host behind a slow
 link is dropped by Zenoh once this fills: the autotuned default (up to 4 MB) held 14 s of messages at 1 Mbit/s, so
 the ground saw the vehicle 14 s late; 32 kB still carries 30 MB/s at a 1 ms round trip."""
+ROUTER_LEASE_BETWEEN_HOSTS_MS = 30_000
+"""Zenoh's lease on a router of a vehicle spread over hosts. Longer than TCP's retransmission backoff after a link
+cut of up to 20 s, so such a cut heals on the same connection: with Zenoh's 10 s, a 6 s cut could already outlast
+it (the next retransmission 12.6 s after the cut), and re-opening the transport lost the messages under way (a
+lockstep step never finished) and now and then left two routers disagreeing for good (Zenoh 1.10). Losing a host
+is the host beats' to notice (stack.bus.host_beats), in under a second."""
 QUEUE_PRIORITIES = (
     "control", "real_time", "interactive_high", "interactive_low", "data_high", "data", "data_low", "background"
 )  # fmt: skip

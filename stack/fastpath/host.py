@@ -18,7 +18,18 @@ import threading
 import zenoh
 
 from stack.bus import keys
-from stack.fastpath.layout import H_ROSTER, P_NAME, P_ZENOH, S_EVENTFD, S_EXITS, S_EXPECTED, S_NPUBS, S_RESTART, Region
+from stack.fastpath.layout import (
+    H_ROSTER,
+    P_NAME,
+    P_ZENOH,
+    S_AWAY,
+    S_EVENTFD,
+    S_EXITS,
+    S_EXPECTED,
+    S_NPUBS,
+    S_RESTART,
+    Region,
+)
 
 
 class FastPathHost:
@@ -48,6 +59,13 @@ class FastPathHost:
         w = self.region.words
         w[self.region.slot_word(slot, S_RESTART)] = int(restarting)
         w[self.region.slot_word(slot, S_EXITS)] += 1
+
+    def host_away(self, names: tuple[str, ...], away: bool) -> None:
+        """The host of the modules ``names`` is lost (``away``) or back: while it is away, lockstep time waits for
+        its members in this run without judging their step stalled."""
+        for name in names:
+            if name in self.names:
+                self.region.words[self.region.slot_word(self.region.slot_of(name), S_AWAY)] = int(away)
 
     def restart_over(self, name: str) -> None:
         """A restart succeeded or was given up: time need not wait for it any longer."""

@@ -53,6 +53,7 @@ S_READ_TIME = 14  # module (lossless passive reader): every record older than th
 S_FLAGS = 15  # module: READS_ALL, LOSSLESS
 S_ADMITTED = 16  # coordinator: the admitted incarnation (0: not admitted)
 S_ADMIT_TIME = 17  # coordinator: the simulated time after which the admitted process's first step falls
+S_AWAY = 18  # supervisor: 1 while the module's host is lost (lockstep time waits for it, without a stall verdict)
 S_NAME = 24  # supervisor: the module name, NAME_BYTES of UTF-8
 S_PUBS = S_NAME + NAME_BYTES // 8
 PUB_WORDS = 16

@@ -11,7 +11,8 @@ Nothing here depends on a message arriving in time: the coordinator's waits time
 milliseconds and then wake again any member with work left (a lost wake-up costs milliseconds, never
 the run). A member that dies is noticed through its pidfd at once and dropped; if the supervisor
 restarts it, time waits until the new process is admitted. A member that makes no progress for
-``stall_timeout_s`` is named and the run stops.
+``stall_timeout_s`` is named and the run stops; while the supervisor says a member's host is lost, time
+waits for it without that verdict, which counts again from the host's return.
 """
 
 from __future__ import annotations
@@ -41,6 +42,7 @@ from stack.fastpath.layout import (
     ROLE_TRIGGERED,
     S_ADMIT_TIME,
     S_ADMITTED,
+    S_AWAY,
     S_BASE,
     S_EXITS,
     S_EXPECTED,
@@ -322,8 +324,14 @@ class FastCoordinator:
                 return
             if self._reap(WAIT_MS):
                 continue
+            if self._away():
+                stall.start(time.monotonic())  # time waits for a lost host; the verdict counts from its return
             stall.check(snap.obj, time.monotonic(), self.now, lambda snap=snap: self._busy(snap))
             self._rewake(snap)
+
+    def _away(self) -> bool:
+        """Whether the supervisor says the host of a member is lost."""
+        return any(self.w[self.region.slot_word(slot, S_AWAY)] for slot in self._members)
 
     def _rewake(self, snap: memoryview) -> None:
         """A member with work and no run going may have missed its wake-up: wake it again (harmless if not)."""

@@ -49,7 +49,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from stack.bus import keys
-from stack.bus.config import BusConfig, between_hosts
+from stack.bus.config import ROUTER_LEASE_BETWEEN_HOSTS_MS, BusConfig, between_hosts
 from stack.bus.host_beats import BEAT_PERIOD_S, DEFAULT_LEASE_MS, MIN_LEASE_MS
 from stack.bus.supervisors import SINGLE_HOST
 from stack.launch_files import find_mission, launch_dirs
@@ -184,6 +184,11 @@ class Profile:
         names = list(self.hosts)
         earlier = (between_hosts(self.hosts[h].endpoint) for h in names[: names.index(host)])
         return (between_hosts(self.hosts[host].endpoint),), (*self.bus.connect, *earlier)
+
+    @property
+    def router_lease_ms(self) -> int:
+        """Zenoh's lease on a host's router: between hosts ROUTER_LEASE_BETWEEN_HOSTS_MS, else ``[bus] lease_ms``."""
+        return ROUTER_LEASE_BETWEEN_HOSTS_MS if self.hosts else self.bus.lease_ms
 
     @property
     def router_link_count(self) -> int:

@@ -225,7 +225,7 @@ class Supervisor:
                 connect=self.router_connect,
                 listen=self.router_listen,
                 low_latency=self.profile.bus.low_latency,
-                lease_ms=self.profile.bus.lease_ms,
+                lease_ms=self.profile.router_lease_ms,
             )
             try:
                 return open_router(bus, "supervisor", self.profile.router_link_count)
@@ -698,6 +698,8 @@ class Supervisor:
             if self.hosts is not None:
                 for change in self.hosts.update(time.monotonic_ns() // 1000):
                     self._say(change.describe())
+                    if self.fast is not None:
+                        self.fast.host_away(change.modules, change.lost)
             for members in self.groups.values():
                 proc = members[0].proc
                 if proc is not None and proc.poll() is not None and any(m.state == "running" for m in members):

@@ -5,7 +5,7 @@ import pytest
 
 from stack.fastpath.attach import Attachment
 from stack.fastpath.host import FastPathHost
-from stack.fastpath.layout import ROLE_TIMED, ROLE_TRIGGERED, S_ADMITTED, S_INCARNATION, Region, topic_hash
+from stack.fastpath.layout import ROLE_TIMED, ROLE_TRIGGERED, S_ADMITTED, S_AWAY, S_INCARNATION, Region, topic_hash
 from stack.fastpath.ring import RECORDS, RingReader
 from stack.fastpath.topology import Topology
 from stack.msg.navigation import Mission, MissionItemEntry
@@ -103,3 +103,13 @@ def test_the_topology_says_who_reads_and_who_is_woken(host):
     assert topo.woken_by(gyro_topic, sim.slot) == ((est.slot, host.eventfds[est.slot]),)
     assert topo.sources(gyro_topic, est.slot) == [(sim.slot, 0, 1)]
     assert rec.slot not in {p.slot for p in topo.participants}  # never admitted
+
+
+def test_the_members_of_a_lost_host_are_away_until_it_is_back(host):
+    """The supervisor's word, which the coordinator reads: time waits for them without a stall verdict."""
+    region = host.region
+    away = lambda name: int(region.words[region.slot_word(region.slot_of(name), S_AWAY)])  # noqa: E731
+    host.host_away(("est", "a_module_of_another_run"), True)
+    assert (away("sim"), away("est"), away("rec")) == (0, 1, 0)
+    host.host_away(("est",), False)
+    assert away("est") == 0
