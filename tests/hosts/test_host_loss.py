@@ -117,7 +117,7 @@ def test_losing_the_flight_control_host_in_a_hover(network, tmp_path: Path, loss
     # back: every module running, the vehicle on the ground and disarmed, and it may fly again
     def down_and_disarmed() -> bool:
         report = status(ground)
-        return running(report, 12) and report is not None and report["vehicle_summary"].get("armed") is False
+        return running(report, 12) and report is not None and report.get("vehicle_summary", {}).get("armed") is False
 
     eventually(down_and_disarmed, 120.0, "the vehicle landed and disarmed, every host back")
     assert truth(sim)[0] < 0.3
@@ -137,9 +137,9 @@ def test_losing_the_flight_control_host_in_a_hover(network, tmp_path: Path, loss
 
 
 def test_losing_the_ground_host_in_a_hover_only_names_it(network, tmp_path: Path) -> None:
-    """The ground host carries only the MAVLink links: losing it by a 5 s link cut is named by the others and
-    changes nothing in the flight (with no ground station connected there is no data link to lose either); once
-    back, it commands the vehicle as before."""
+    """The ground host carries only the MAVLink links: losing it, by a 5 s link cut and then by its processes
+    SIGKILLed, is named by the others and changes nothing in the flight (with no ground station connected there
+    is no data link to lose either); once back, or its share started again, it commands the vehicle as before."""
     flight = Hover(network(HOSTS), tmp_path)
     sim, control, ground = (flight.net.hosts[h] for h in HOSTS)
     flight.take_off()
@@ -157,6 +157,18 @@ def test_losing_the_ground_host_in_a_hover_only_names_it(network, tmp_path: Path
     ground.link_up()
     eventually(lambda: "Host ground back" in (tmp_path / "sim.log").read_text(), 30.0, "the ground host back")
 
+    # then its processes SIGKILLed: named again, the hover holds; its share started again commands the landing
+    for pid in namespace_pids(ground.netns):
+        os.kill(pid, signal.SIGKILL)
+    flight.procs.pop("ground").wait(timeout=30)
+    start = time.monotonic()
+    eventually(lambda: len(lost.findall((tmp_path / "sim.log").read_text())) == 2, 10.0, "named lost again")
+    while time.monotonic() - start < CUT_S:
+        altitude, down_speed = truth(sim)
+        assert altitude > 2.0 and abs(down_speed) < 1.0, (altitude, down_speed)
+    flight.procs["ground"] = up_on(ground, flight.profile, tmp_path / "ground-again.log", "--realtime")
+    eventually(lambda: running(status(ground), 12), START_TIMEOUT_S, "the ground host's share up again")
+
     def land() -> bool:
         """From the ground host; False while its command is not yet acknowledged (its links coming back)."""
         out = stack(ground, "cmd", "land", "--wait")
@@ -165,7 +177,7 @@ def test_losing_the_ground_host_in_a_hover_only_names_it(network, tmp_path: Path
         assert out.returncode == 0 and "landed and disarmed" in out.stdout, out.stdout + out.stderr + flight.logs()
         return True
 
-    eventually(land, 60.0, "a landing commanded from the ground host")
+    eventually(land, 90.0, "a landing commanded from the ground host")
 
     commander = run_log(control, "commander")
     assert "Failsafe activated" not in commander, commander
@@ -187,7 +199,7 @@ def test_losing_the_simulator_and_estimator_host_in_a_hover(network, tmp_path: P
 
     def down_and_disarmed() -> bool:
         report = status(ground)
-        return running(report, 12) and report is not None and report["vehicle_summary"].get("armed") is False
+        return running(report, 12) and report is not None and report.get("vehicle_summary", {}).get("armed") is False
 
     def named_lost(times: int) -> None:
         eventually(lambda: len(lost.findall((tmp_path / "control.log").read_text())) == times, 10.0, "named lost")
