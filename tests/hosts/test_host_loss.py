@@ -145,27 +145,27 @@ def test_losing_the_ground_host_in_a_hover_only_names_it(network, tmp_path: Path
     flight.take_off()
     lost = re.compile(r"Lost host ground \(no beat for (\d+\.\d+) s\)")
 
+    def hovers_while_lost(times: int) -> None:
+        """Named lost for the ``times``-th time by the simulator's host and the commander, within the lease; the
+        vehicle holds its hover for CUT_S meanwhile."""
+        start = time.monotonic()
+        eventually(lambda: len(lost.findall((tmp_path / "sim.log").read_text())) == times, 10.0, "named lost")
+        assert float(lost.findall((tmp_path / "sim.log").read_text())[-1]) < LEASE_MS / 1000 + 0.3
+        eventually(lambda: len(lost.findall(run_log(control, "commander"))) == times, 10.0, "the commander names it")
+        while time.monotonic() - start < CUT_S:
+            altitude, down_speed = truth(sim)
+            assert altitude > 1.0 and down_speed < 1.0, (altitude, down_speed)  # climbing to 3 m, or holding it
+
     ground.link_down()
-    start = time.monotonic()
-    # named lost by the simulator's host and the commander, within the lease; the hover holds meanwhile
-    eventually(lambda: lost.search((tmp_path / "sim.log").read_text()), 10.0, "named lost")
-    assert float(lost.findall((tmp_path / "sim.log").read_text())[-1]) < LEASE_MS / 1000 + 0.3
-    eventually(lambda: lost.search(run_log(control, "commander")), 10.0, "the commander names it")
-    while time.monotonic() - start < CUT_S:
-        altitude, down_speed = truth(sim)
-        assert altitude > 1.0 and down_speed < 1.0, (altitude, down_speed)  # climbing to 3 m, or holding it
+    hovers_while_lost(1)
     ground.link_up()
     eventually(lambda: "Host ground back" in (tmp_path / "sim.log").read_text(), 30.0, "the ground host back")
 
-    # then its processes SIGKILLed: named again, the hover holds; its share started again commands the landing
+    # then its processes SIGKILLed; its share started again commands the landing
     for pid in namespace_pids(ground.netns):
         os.kill(pid, signal.SIGKILL)
     flight.procs.pop("ground").wait(timeout=30)
-    start = time.monotonic()
-    eventually(lambda: len(lost.findall((tmp_path / "sim.log").read_text())) == 2, 10.0, "named lost again")
-    while time.monotonic() - start < CUT_S:
-        altitude, down_speed = truth(sim)
-        assert altitude > 2.0 and abs(down_speed) < 1.0, (altitude, down_speed)
+    hovers_while_lost(2)
     flight.procs["ground"] = up_on(ground, flight.profile, tmp_path / "ground-again.log", "--realtime")
     eventually(lambda: running(status(ground), 12), START_TIMEOUT_S, "the ground host's share up again")
 
