@@ -22,6 +22,9 @@ interleaved, ``--runs`` times:
 - ``ceiling``: the same scenario and seed flown by :class:`stack.runtime.inprocess.InProcessStack`, the
   same modules chained in this one process with no bus (what the algorithms cost by themselves).
 
+First it measures the round trip of a wake-up between two processes sleeping in poll() on eventfds, as lockstep
+members do: what each hop of a message from one module process to another costs the machine by itself.
+
 While a stack runs, this script joins its bus as a client and listens to the module heartbeats (1 Hz
 wall, each with the module's simulated time, runs and mean time inside ``run()``). On each heartbeat of
 the lockstep coordinator it samples every module process's CPU time and context switches (psutil). The
@@ -40,6 +43,7 @@ import argparse
 import itertools
 import json
 import os
+import select
 import statistics
 import subprocess
 import sys
@@ -328,6 +332,7 @@ def main() -> None:
     load_profile(args.profile)  # refused here, in one line, if broken
     load = os.getloadavg()
     print(f"load average {load[0]:.2f} {load[1]:.2f} {load[2]:.2f} on {os.cpu_count()} CPUs; profile {args.profile}")
+    print(f"wake-up round trip between two processes (eventfd, poll): {wake_round_trip_us():.1f} µs")
     kinds = ["fast", "zenoh", "mixed", "observed", "up", "paced", *GROUPINGS, *(f"paced {g}" for g in GROUPINGS)]
     runs: dict[str, list[Run]] = {kind: [] for kind in kinds}
     with tempfile.TemporaryDirectory(prefix="bench_lockstep") as tmp:
@@ -370,6 +375,37 @@ def main() -> None:
         print(f"  {kind:<9} real-time factor {means[kind]:5.2f} >= {target:g}: {verdict(means[kind], target)}")
     ratio = ratios["fast"]
     print(f"  ratio to the ceiling     {ratio:5.2f} >= {RATIO_TARGET:g}: {verdict(ratio, RATIO_TARGET)}")
+
+
+WAKE_ECHO = """
+import os, select, sys
+ping, pong, n = int(sys.argv[1]), int(sys.argv[2]), int(sys.argv[3])
+poll = select.poll()
+poll.register(ping, select.POLLIN)
+for _ in range(n):
+    poll.poll()
+    os.eventfd_read(ping)
+    os.eventfd_write(pong, 1)
+"""
+
+
+def wake_round_trip_us(rounds: int = 20_000) -> float:
+    """Mean round trip of a wake-up between two processes that sleep in poll() on eventfds, as lockstep members do:
+    what each hop of a message between module processes costs the machine by itself."""
+    ping, pong = os.eventfd(0), os.eventfd(0)
+    echo = subprocess.Popen([sys.executable, "-c", WAKE_ECHO, str(ping), str(pong), str(rounds)], pass_fds=(ping, pong))
+    poll = select.poll()
+    poll.register(pong, select.POLLIN)
+    start = time.perf_counter()
+    for _ in range(rounds):
+        os.eventfd_write(ping, 1)
+        poll.poll()
+        os.eventfd_read(pong)
+    elapsed = time.perf_counter() - start
+    echo.wait()
+    os.close(ping)
+    os.close(pong)
+    return elapsed / rounds * 1e6
 
 
 def verdict(value: float, target: float) -> str:
