@@ -10,6 +10,8 @@ from __future__ import annotations
 import re
 from collections.abc import Callable
 
+import zenoh
+
 from stack.bus import keys
 
 _PID = re.compile(r"^[1-9][0-9]{0,9}$")
@@ -28,6 +30,19 @@ def parse_alive_token(key: str, vehicle: str) -> tuple[str, int] | None:
     if not _PID.match(pid):
         return None
     return module, int(pid)
+
+
+def vehicles_alive(session: zenoh.Session, timeout: float = 1.0) -> set[str]:
+    """The vehicles with a module process alive on the bus (its alive token well formed)."""
+    found = set()
+    for reply in session.liveliness().get(keys.alive_query("*"), timeout=timeout):
+        if reply.ok is None:
+            continue
+        key = str(reply.ok.key_expr)
+        vehicle = key.split("/")[1]
+        if keys.valid_name(vehicle) and parse_alive_token(key, vehicle) is not None:
+            found.add(vehicle)
+    return found
 
 
 class AliveTokens:

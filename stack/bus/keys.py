@@ -16,9 +16,14 @@ ROOT = "stack"
 _NAME = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_\-]*$")
 
 
-def check_name(kind: str, name: str) -> str:
+def valid_name(name: str) -> bool:
     """Names become key chunks: letters, digits, '_' and '-' only."""
-    if not _NAME.match(name):
+    return _NAME.match(name) is not None
+
+
+def check_name(kind: str, name: str) -> str:
+    """``name`` if :func:`valid_name`, else a ValueError saying why."""
+    if not valid_name(name):
         raise ValueError(f"invalid {kind} name '{name}': use letters, digits, '_' and '-' only")
     return name
 

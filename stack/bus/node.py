@@ -70,7 +70,7 @@ class Node:
         self._retired_drops = (0, 0, 0)
         self._tokens: list[zenoh.LivelinessToken] = []
         self._owns_session = session is None
-        self.session = session if session is not None else _open(bus, name)
+        self.session = session if session is not None else open_session(bus, name)
 
     def __enter__(self) -> Node:
         return self
@@ -154,7 +154,7 @@ class Node:
                 logging.getLogger("stack.bus").warning("closing the Zenoh session: %s", e)
 
 
-def _open(bus: BusConfig, name: str) -> zenoh.Session:
+def open_session(bus: BusConfig, name: str) -> zenoh.Session:
     """A session; a loopback port taken since the supervisor picked it (a stack starting beside this one
     took it first) is replaced by any free port: the others still reach this module through the router."""
     try:

@@ -8,7 +8,8 @@ import zenoh
 
 
 def query_json(session: zenoh.Session, key: str, payload: dict | None = None, timeout: float = 2.0) -> list[dict]:
-    """The JSON replies of every queryable matching ``key`` (as many as answer within ``timeout`` seconds)."""
+    """The JSON replies of every queryable matching ``key`` (as many as answer within ``timeout`` seconds); a reply
+    that is not JSON is dropped."""
     replies = session.get(
         key,
         payload=json.dumps(payload) if payload is not None else None,
@@ -18,8 +19,12 @@ def query_json(session: zenoh.Session, key: str, payload: dict | None = None, ti
     )
     out = []
     for reply in replies:
-        if reply.ok is not None:
+        if reply.ok is None:
+            continue
+        try:
             out.append(json.loads(reply.ok.payload.to_string()))
+        except ValueError:
+            continue
     return out
 
 

@@ -67,8 +67,20 @@ def vehicle_status(session: zenoh.Session, vehicle: str, timeout: float = 2.0) -
     modules and did not answer (``placement`` says which modules are theirs); ``lost_hosts``: host → the answering
     hosts that count it lost (stack.bus.host_beats)."""
     answers = query_json(session, keys.supervisor_query(vehicle, "status"), timeout=timeout)
-    if not answers:
-        return None
+    return merged_status(answers) if answers else None
+
+
+def vehicles_status(session: zenoh.Session, timeout: float = 2.0) -> dict[str, dict]:
+    """Every vehicle whose supervisors answer on the bus: vehicle → its status as :func:`vehicle_status` gives it."""
+    by_vehicle: dict[str, list[dict]] = {}
+    for answer in query_json(session, keys.supervisor_query("*", "status"), timeout=timeout):
+        if isinstance(answer, dict) and isinstance(answer.get("vehicle"), str):
+            by_vehicle.setdefault(answer["vehicle"], []).append(answer)
+    return {vehicle: merged_status(answers) for vehicle, answers in sorted(by_vehicle.items())}
+
+
+def merged_status(answers: list[dict]) -> dict:
+    """One vehicle's status from its supervisors' answers (see :func:`vehicle_status`)."""
     answers.sort(key=lambda a: (a.get("host_order", 0), str(a.get("host", ""))))
     report = dict(answers[0])
     report["modules"] = [row for a in answers for row in a.get("modules", [])]

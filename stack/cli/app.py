@@ -14,9 +14,22 @@ from typing import Any
 import typer
 
 import stack
-from stack.bus.node import Node
 from stack.bus.supervisors import vehicle_status
-from stack.cli import cmd, down, fly, log, mavlink, param, pixhawk_sim, plot, router, teleop, topic, vehicle_summary
+from stack.cli import (
+    cmd,
+    down,
+    fly,
+    log,
+    mavlink,
+    param,
+    pixhawk_sim,
+    plot,
+    router,
+    teleop,
+    topic,
+    vehicle_summary,
+    vehicles,
+)
 from stack.cli.common import (
     EndpointOption,
     JsonOption,
@@ -29,15 +42,11 @@ from stack.cli.common import (
     name_value_placeholders,
     print_table,
     to_jsonable,
-    wait_until_sent,
 )
 from stack.cli.observers import add_observers
 from stack.runtime.pacing import SPEED_ENV, describe_speed, parse_speed
 from stack.supervisor import state as run_state
 from stack.supervisor.profile import DEFAULT_PROFILE, Profile, ProfileError, load_profile
-
-SUMMARY_WAIT_S = 2.0
-"""Wall-clock seconds `stack status` waits for the vehicle's messages (vehicle_status comes at 2 Hz at least)."""
 
 app = command_group(
     help="stack: a PX4-shaped multicopter autopilot, one process per module, uORB topics over Zenoh.",
@@ -57,6 +66,7 @@ app.command("pixhawk-sim")(pixhawk_sim.pixhawk_sim)
 app.command("teleop")(teleop.teleop)
 app.command("router")(router.router)
 app.command("down")(down.down)
+app.command("vehicles")(vehicles.vehicles)
 
 
 def _print_version(value: bool) -> None:
@@ -195,7 +205,8 @@ def status(
             fail("the supervisor did not answer")
         commander = next((m["extra"] for m in report["modules"] if "failsafe_action" in m.get("extra", {})), None)
         if commander is not None:
-            report["vehicle_summary"] = vehicle_summary.summary(_latest(node, vehicle_summary.TOPICS), commander)
+            latest = vehicle_summary.latest([node])[node.vehicle]
+            report["vehicle_summary"] = vehicle_summary.summary(latest, commander)
     if as_json:
         typer.echo(json.dumps(to_jsonable(report)))
         return
@@ -248,20 +259,6 @@ def status(
     sim_times = [m.get("sim_time_us", 0) for m in report["modules"]]
     if report["lockstep"] and any(sim_times):
         typer.echo(f"simulated time {max(sim_times) / 1e6:.3f} s at {time.strftime('%H:%M:%S')}")
-
-
-def _latest(node: Node, topics: tuple[str, ...]) -> dict[str, object]:
-    """The next message of each topic, waiting at most SUMMARY_WAIT_S for them (those that came)."""
-    subs = {topic: node.subscriber(topic, keep_last=True) for topic in topics}
-    wait_until_sent(node, [(topic, 0) for topic in topics])
-    latest: dict[str, object] = {}
-    deadline = time.monotonic() + SUMMARY_WAIT_S
-    while len(latest) < len(topics) and time.monotonic() < deadline:
-        for name, sub in subs.items():
-            while (item := sub.poll()) is not None:
-                latest[name] = item.msg
-        time.sleep(0.01)
-    return latest
 
 
 def cli() -> Any:

@@ -15,8 +15,10 @@ import msgspec
 import typer
 import zenoh
 
+from stack.bus import keys
+from stack.bus.alive import vehicles_alive
 from stack.bus.config import BusConfig
-from stack.bus.node import Node
+from stack.bus.node import Node, open_session
 from stack.bus.supervisors import outside_ready
 from stack.supervisor import state as run_state
 from stack.supervisor.profile import LOCKSTEP_TRANSPORTS, Profile
@@ -75,9 +77,15 @@ def choose_transport(prof: Profile, transport: str | None) -> None:
 
 
 def find_stack(vehicle: str | None, endpoint: str | None) -> tuple[str, BusConfig]:
-    """The vehicle and bus settings to reach a running stack."""
+    """The vehicle and bus settings to reach a running stack (with ``endpoint``, the vehicle is checked on the bus
+    once connected: see :func:`vehicle_on_bus`)."""
+    if vehicle is not None:
+        try:
+            keys.check_name("vehicle", vehicle)
+        except ValueError as e:
+            fail(str(e), code=2)
     if endpoint:
-        return vehicle or "v1", BusConfig(mode="client", connect=(endpoint,), listen=())
+        return vehicle or "", BusConfig(mode="client", connect=(endpoint,), listen=())
     stacks = run_state.addressed_stacks(vehicle)
     if not stacks:
         which = f" named '{vehicle}'" if vehicle else ""
@@ -94,15 +102,39 @@ def find_stack(vehicle: str | None, endpoint: str | None) -> tuple[str, BusConfi
 
 @contextmanager
 def connect(vehicle: str | None, endpoint: str | None, name: str = "cli") -> Iterator[Node]:
-    vehicle, bus = find_stack(vehicle, endpoint)
+    found, bus = find_stack(vehicle, endpoint)
+    tool = f"{name}-{os.getpid()}"  # unique in the topic graph, where each tool's subscriptions are its own
+    session = open_bus(bus, tool)
     try:
-        # Unique in the topic graph, where each tool's subscriptions are its own.
-        node = Node(bus, vehicle, f"{name}-{os.getpid()}", stable_id=False)
+        if endpoint:
+            found = vehicle_on_bus(session, vehicle, endpoint)
+        with Node(bus, found, tool, stable_id=False, session=session) as node:
+            yield node
+    finally:
+        session.close()
+
+
+def open_bus(bus: BusConfig, tool: str) -> zenoh.Session:
+    try:
+        return open_session(bus, tool)
     except zenoh.ZError as e:
         where = ", ".join(bus.connect)
         fail(f"cannot reach the stack at {where} ({str(e).split(' at ')[0].strip()}); is it running?")
-    with node:
-        yield node
+
+
+def vehicle_on_bus(session: zenoh.Session, vehicle: str | None, endpoint: str) -> str:
+    """``vehicle`` if a module of it is alive on the bus, or the only vehicle there when none is named; else one
+    clear error naming the vehicles there."""
+    there = sorted(vehicles_alive(session))
+    if vehicle is None and len(there) == 1:
+        return there[0]
+    if vehicle is not None and vehicle in there:
+        return vehicle
+    if not there:
+        fail(f"no vehicle on the bus at {endpoint} (no module alive there)")
+    if vehicle is None:
+        fail(f"several vehicles on the bus at {endpoint} ({', '.join(there)}): choose one with --vehicle")
+    fail(f"no vehicle '{vehicle}' on the bus at {endpoint} (there: {', '.join(there)})")
 
 
 def wait_until_sent(node: Node, topics: Iterable[tuple[str, int]], timeout: float = OUTSIDE_WAIT_S) -> None:

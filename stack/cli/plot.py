@@ -17,18 +17,23 @@ from types import FrameType
 import typer
 
 from stack.bus.config import BusConfig
-from stack.bus.node import Node
 from stack.bus.supervisors import vehicle_status
-from stack.cli.common import EndpointOption, VehicleOption, fail, find_stack
+from stack.cli.common import EndpointOption, VehicleOption, fail, find_stack, open_bus, vehicle_on_bus
 from stack.runtime.spec import ModuleSpec
 from stack.viz.display import DEFAULT_GRPC_PORT, has_display
 
 
-def _stack_is_lockstep(vehicle: str, bus: BusConfig) -> bool:
-    """Whether the stack runs in lockstep (its timestamps are then simulated time from zero)."""
-    with Node(bus, vehicle, "plot-probe", stable_id=False) as node:
-        status = vehicle_status(node.session, vehicle)
-    return bool(status and status.get("lockstep"))
+def _probe(vehicle: str, endpoint: str | None, bus: BusConfig) -> tuple[str, bool]:
+    """The vehicle (checked on the bus when reached by ``endpoint``), and whether it runs in lockstep (its timestamps
+    are then simulated time from zero)."""
+    session = open_bus(bus, f"plot-probe-{os.getpid()}")
+    try:
+        if endpoint:
+            vehicle = vehicle_on_bus(session, vehicle or None, endpoint)
+        status = vehicle_status(session, vehicle)
+    finally:
+        session.close()
+    return vehicle, bool(status and status.get("lockstep"))
 
 
 def _stop_on_signals() -> None:
@@ -67,7 +72,7 @@ def plot(
     if not web and not save and not has_display():
         fail("no display here for the Rerun viewer: use --web (a viewer in the browser) or --save FILE.rrd")
     vehicle_name, bus = find_stack(vehicle, endpoint)
-    lockstep = _stack_is_lockstep(vehicle_name, bus)
+    vehicle_name, lockstep = _probe(vehicle_name, endpoint, bus)
     spec = ModuleSpec(
         name=f"plot-{os.getpid()}",
         module="rerun_bridge",

@@ -5,16 +5,39 @@ and the commander's heartbeat figures."""
 from __future__ import annotations
 
 import math
+import time
+from collections.abc import Sequence
 from typing import Any
 
+from stack.bus.node import Node
+from stack.cli.common import wait_until_sent
 from stack.commander.modes import mode_name
 from stack.msg.estimation import VehicleLocalPosition
 from stack.msg.system import BatteryStatus, HomePosition, VehicleStatus
 
 TOPICS = ("vehicle_status", "vehicle_local_position", "home_position", "battery_status")
+SUMMARY_WAIT_S = 2.0
+"""Wall-clock seconds a summary waits for the vehicle's messages (vehicle_status comes at 2 Hz at least)."""
 BATTERY_WARNINGS = {
     v: k.removeprefix("WARNING_").lower() for k, v in vars(BatteryStatus).items() if k.startswith("WARNING_")
 }
+
+
+def latest(nodes: Sequence[Node]) -> dict[str, dict[str, Any]]:
+    """Vehicle → the next message of each of :data:`TOPICS` of it (those that came), each node a vehicle's, waiting at
+    most SUMMARY_WAIT_S for them all."""
+    subs = {node.vehicle: {topic: node.subscriber(topic, keep_last=True) for topic in TOPICS} for node in nodes}
+    for node in nodes:
+        wait_until_sent(node, [(topic, 0) for topic in TOPICS])
+    out: dict[str, dict[str, Any]] = {vehicle: {} for vehicle in subs}
+    deadline = time.monotonic() + SUMMARY_WAIT_S
+    while any(len(out[v]) < len(TOPICS) for v in subs) and time.monotonic() < deadline:
+        for vehicle, topics in subs.items():
+            for name, sub in topics.items():
+                while (item := sub.poll()) is not None:
+                    out[vehicle][name] = item.msg
+        time.sleep(0.01)
+    return out
 
 
 def summary(latest: dict[str, Any], commander: dict[str, Any] | None) -> dict[str, Any]:
