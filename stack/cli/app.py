@@ -38,6 +38,7 @@ from stack.cli.common import (
     choose_transport,
     command_group,
     connect,
+    connect_all,
     fail,
     name_value_placeholders,
     print_table,
@@ -195,21 +196,37 @@ DROP_COUNTERS = {
 def status(
     vehicle: str | None = VehicleOption,
     endpoint: str | None = EndpointOption,
+    every: bool = typer.Option(False, "--all", help="Every vehicle on the bus, one after the other (JSON: a list)"),
     as_json: bool = JsonOption,
 ) -> None:
     """The vehicle (mode, armed, failsafe, position, battery, as PX4's `commander status`), then each
     module's state, pid, CPU, memory, restarts, trigger rate and counters."""
+    if every:
+        if vehicle is not None:
+            fail("--all addresses every vehicle: give it or --vehicle, not both", code=2)
+        with connect_all(endpoint) as nodes:
+            reports = {n.vehicle: r for n in nodes if (r := vehicle_status(n.session, n.vehicle)) is not None}
+            vehicle_summary.add_summaries(reports, nodes)
+        if as_json:
+            typer.echo(json.dumps(to_jsonable(list(reports.values()))))
+            return
+        for i, report in enumerate(reports.values()):
+            if i:
+                typer.echo("")
+            _print_status(report)
+        return
     with connect(vehicle, endpoint) as node:
         report = vehicle_status(node.session, node.vehicle)
         if report is None:
             fail("the supervisor did not answer")
-        commander = next((m["extra"] for m in report["modules"] if "failsafe_action" in m.get("extra", {})), None)
-        if commander is not None:
-            latest = vehicle_summary.latest([node])[node.vehicle]
-            report["vehicle_summary"] = vehicle_summary.summary(latest, commander)
+        vehicle_summary.add_summaries({node.vehicle: report}, [node])
     if as_json:
         typer.echo(json.dumps(to_jsonable(report)))
         return
+    _print_status(report)
+
+
+def _print_status(report: dict[str, Any]) -> None:
     mode = "lockstep" if report["lockstep"] else "real time"
     if report["lockstep"] and "speed" in report:
         mode += f", {describe_speed(report['speed'])}"

@@ -11,9 +11,12 @@ and sends nothing. ``--wait`` then follows the action on the vehicle's topics un
 from __future__ import annotations
 
 import math
+import threading
 import time
+from collections.abc import Callable
+from functools import partial
 from pathlib import Path
-from typing import Any
+from typing import Any, NoReturn
 
 import msgspec
 import typer
@@ -21,7 +24,15 @@ import typer
 from stack.bus.node import Node
 from stack.bus.supervisors import vehicle_status
 from stack.bus.topics import MessageTooLarge, TopicPublisher
-from stack.cli.common import EndpointOption, VehicleOption, command_group, connect, fail, wait_until_sent
+from stack.cli.common import (
+    EndpointOption,
+    VehicleOption,
+    command_group,
+    connect,
+    connect_all,
+    fail,
+    wait_until_sent,
+)
 from stack.cli.follow import (
     GOTO_MODES,
     LAND_MODES,
@@ -88,6 +99,9 @@ WaitTimeoutOption = typer.Option(
     "from its distances and the vehicle's speed parameters)",
     show_default=False,
 )
+AllOption = typer.Option(
+    False, "--all", help="Every vehicle on the bus at once (each answers for itself; the exit code is the worst)"
+)
 YawOption = typer.Option(None, "--yaw", help="Heading in degrees (default: keep the current one)")
 
 New = list[tuple[str, Message]]
@@ -116,9 +130,11 @@ class _Link:
     """One session with the vehicle. The acknowledgement and watched topics are subscribed to before
     anything is sent, so no answer is missed; into ring buffers, so a slow reader never holds up the bus."""
 
-    def __init__(self, node: Node, timeout: float, watch: tuple[str, ...] = ()) -> None:
+    def __init__(self, node: Node, timeout: float, watch: tuple[str, ...] = (), prefix: str = "") -> None:
+        """``prefix`` starts every line it prints (the vehicle's name, when several are commanded at once)."""
         self.node = node
         self.timeout = timeout
+        self.prefix = prefix
         self._acks = node.subscriber("vehicle_command_ack", keep_last=True)
         self._watched = {topic: node.subscriber(topic, keep_last=True) for topic in watch}
         wait_until_sent(node, [("vehicle_command_ack", 0), *((topic, 0) for topic in watch)])
@@ -127,6 +143,15 @@ class _Link:
         self.vehicle = Vehicle()
         self.heard = time.monotonic()
         """When the last watched message arrived (wall clock)."""
+
+    def say(self, line: str) -> None:
+        typer.echo(self.prefix + line)
+
+    def fail(self, message: str, error: bool = True) -> NoReturn:
+        """Print ``message`` on stderr (as an ``error:`` unless ``error`` is False: a refusal is the vehicle's
+        answer) and exit 1."""
+        typer.echo(f"{'error: ' if error else ''}{self.prefix}{message}", err=True)
+        raise typer.Exit(1)
 
     def poll(self) -> New:
         """Drain the watched topics; ``vehicle_status`` counts only once published after the last ack."""
@@ -150,7 +175,7 @@ class _Link:
         deadline = time.monotonic() + self.timeout
         while not publisher.matching():
             if time.monotonic() >= deadline:
-                fail(nobody)
+                self.fail(nobody)
             time.sleep(POLL_S)
         return publisher
 
@@ -163,7 +188,7 @@ class _Link:
             item = self._acks.poll()
             if item is None:
                 if time.monotonic() >= deadline:
-                    fail(f"{label}: no acknowledgement within {self.timeout:g} s (is the commander running?)")
+                    self.fail(f"{label}: no acknowledgement within {self.timeout:g} s (is the commander running?)")
                 time.sleep(POLL_S)
                 continue
             publisher, seq, ack = item.publisher, item.seq, item.msg
@@ -173,9 +198,8 @@ class _Link:
         self.latest.pop("vehicle_status", None)
         self.vehicle.status = None
         if ack.result != ACK.VEHICLE_CMD_RESULT_ACCEPTED:
-            typer.echo(outcome(label, ack), err=True)
-            raise typer.Exit(1)
-        typer.echo(outcome(label, ack))
+            self.fail(outcome(label, ack), error=False)
+        self.say(outcome(label, ack))
         return ack
 
     def follow(self, action: Action, start: VehicleCommandAck, limit_s: float | None) -> None:
@@ -193,29 +217,29 @@ class _Link:
         while True:
             for topic, msg in self.poll():
                 if topic == "mavlink_log" and msg.timestamp >= start.timestamp:
-                    typer.echo(f"vehicle: {msg.text}")
+                    self.say(f"vehicle: {msg.text}")
             v = self.vehicle
             if (failure := action.failed(v)) is not None:
                 unexplained = v.status is not None and v.status.failsafe and not v.failsafe_explained()
                 explain_by = explain_by or time.monotonic() + CAUSE_WAIT_S
                 if not unexplained or time.monotonic() >= explain_by:
-                    fail(failure)
+                    self.fail(failure)
             if (done := action.done(v)) is not None:
-                typer.echo(done)
+                self.say(done)
                 return
             now = time.monotonic()
             if budget is None and v.status is not None and v.position is not None:
                 budget = budget_s(action.nominal_s(v))
-                typer.echo(f"{action.name}: following, for at most {budget:.0f} s ({clock}time)")
+                self.say(f"{action.name}: following, for at most {budget:.0f} s ({clock}time)")
             elapsed = (v.now_us - start.timestamp) / 1e6 if lockstep else now - began
             if budget is not None and elapsed > budget:
-                fail(f"{action.name}: not done within {budget:.0f} s of {clock}time ({action.progress(v)})")
+                self.fail(f"{action.name}: not done within {budget:.0f} s of {clock}time ({action.progress(v)})")
             if now - self.heard > SILENT_S:
-                fail(f"{action.name}: nothing heard from the vehicle for {SILENT_S:g} s (did the stack stop?)")
+                self.fail(f"{action.name}: nothing heard from the vehicle for {SILENT_S:g} s (did the stack stop?)")
             if now >= report:
                 report += PROGRESS_S
                 if progress.due(action.progress(v), now):
-                    typer.echo(progress.line)
+                    self.say(progress.line)
             time.sleep(POLL_S)
 
 
@@ -253,15 +277,44 @@ def _send(
     timeout: float,
     action: Action | None = None,
     limit_s: float | None = None,
+    every: bool = False,
 ) -> None:
-    """Send ``cmd``; with an ``action``, follow it (``limit_s``: the time it may take, else sized to it)."""
+    """Send ``cmd``; with an ``action``, follow it (``limit_s``: the time it may take, else sized to it). With
+    ``every``, to every vehicle on the bus at once, each line its vehicle's; the exit code is the worst."""
     if limit_s is not None:
         _positive("--wait-timeout", limit_s)
+    if every:
+        if vehicle is not None:
+            fail("--all addresses every vehicle: give it or --vehicle, not both; nothing sent", code=2)
+        with connect_all(endpoint) as nodes:
+            links = [_Link(node, timeout, WATCHED if action else (), prefix=f"{node.vehicle}: ") for node in nodes]
+            raise typer.Exit(max(together([partial(_command, link, cmd, label, action, limit_s) for link in links])))
     with connect(vehicle, endpoint) as node:
-        link = _Link(node, timeout, WATCHED if action else ())
-        ack = link.command(cmd, label)
-        if action is not None:
-            link.follow(action, ack, limit_s)
+        _command(_Link(node, timeout, WATCHED if action else ()), cmd, label, action, limit_s)
+
+
+def _command(link: _Link, cmd: VehicleCommand, label: str, action: Action | None, limit_s: float | None) -> None:
+    ack = link.command(cmd, label)
+    if action is not None:
+        link.follow(action, ack, limit_s)
+
+
+def together(calls: list[Callable[[], None]]) -> list[int]:
+    """Run ``calls`` in threads at once: the exit code of each (0 unless it raised typer.Exit)."""
+    codes = [0] * len(calls)
+
+    def run(i: int) -> None:
+        try:
+            calls[i]()
+        except typer.Exit as e:
+            codes[i] = e.exit_code
+
+    threads = [threading.Thread(target=run, args=(i,), daemon=True) for i in range(len(calls))]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    return codes
 
 
 def _finite(name: str, value: float) -> float:
@@ -285,22 +338,24 @@ def _positive(name: str, value: float) -> float:
 def arm(
     force: bool = typer.Option(False, "--force", help="Skip the pre-arm checks"),
     timeout: float = TimeoutOption,
+    every: bool = AllOption,
     vehicle: str | None = VehicleOption,
     endpoint: str | None = EndpointOption,
 ) -> None:
     """Arm the motors (after the pre-arm checks)."""
-    _send(commands.arm_command(force), "arm", vehicle, endpoint, timeout)
+    _send(commands.arm_command(force), "arm", vehicle, endpoint, timeout, every=every)
 
 
 @app.command()
 def disarm(
     force: bool = typer.Option(False, "--force", help="Disarm even when not landed"),
     timeout: float = TimeoutOption,
+    every: bool = AllOption,
     vehicle: str | None = VehicleOption,
     endpoint: str | None = EndpointOption,
 ) -> None:
     """Disarm the motors (only when landed, unless --force)."""
-    _send(commands.disarm_command(force), "disarm", vehicle, endpoint, timeout)
+    _send(commands.disarm_command(force), "disarm", vehicle, endpoint, timeout, every=every)
 
 
 @app.command()
@@ -310,6 +365,7 @@ def takeoff(
     wait: bool = WaitOption,
     wait_timeout: float | None = WaitTimeoutOption,
     timeout: float = TimeoutOption,
+    every: bool = AllOption,
     vehicle: str | None = VehicleOption,
     endpoint: str | None = EndpointOption,
 ) -> None:
@@ -317,7 +373,7 @@ def takeoff(
     height = _optional("--alt", alt)
     cmd = commands.takeoff_command(height, relative=True, yaw_deg=_optional("--yaw", yaw))
     action = Takeoff("takeoff", TAKEOFF_MODES, height_m=height) if wait else None
-    _send(cmd, "takeoff", vehicle, endpoint, timeout, action, wait_timeout)
+    _send(cmd, "takeoff", vehicle, endpoint, timeout, action, wait_timeout, every)
 
 
 @app.command()
@@ -325,22 +381,24 @@ def land(
     wait: bool = WaitOption,
     wait_timeout: float | None = WaitTimeoutOption,
     timeout: float = TimeoutOption,
+    every: bool = AllOption,
     vehicle: str | None = VehicleOption,
     endpoint: str | None = EndpointOption,
 ) -> None:
     """Land where the vehicle is; --wait until it is down and disarmed."""
     action = Land("land", LAND_MODES, ends_disarmed=True) if wait else None
-    _send(commands.land_command(), "land", vehicle, endpoint, timeout, action, wait_timeout)
+    _send(commands.land_command(), "land", vehicle, endpoint, timeout, action, wait_timeout, every)
 
 
 @app.command()
 def hold(
     timeout: float = TimeoutOption,
+    every: bool = AllOption,
     vehicle: str | None = VehicleOption,
     endpoint: str | None = EndpointOption,
 ) -> None:
     """Hold position (PX4's Hold / auto:loiter)."""
-    _send(commands.hold_command(), "hold", vehicle, endpoint, timeout)
+    _send(commands.hold_command(), "hold", vehicle, endpoint, timeout, every=every)
 
 
 @app.command()
@@ -348,12 +406,13 @@ def rtl(
     wait: bool = WaitOption,
     wait_timeout: float | None = WaitTimeoutOption,
     timeout: float = TimeoutOption,
+    every: bool = AllOption,
     vehicle: str | None = VehicleOption,
     endpoint: str | None = EndpointOption,
 ) -> None:
     """Return to home and land; --wait until it is down at home and disarmed."""
     action = Return("rtl", RETURN_MODES, ends_disarmed=True) if wait else None
-    _send(commands.return_command(), "rtl", vehicle, endpoint, timeout, action, wait_timeout)
+    _send(commands.return_command(), "rtl", vehicle, endpoint, timeout, action, wait_timeout, every)
 
 
 app.command("return", help="Return to home and land (same as rtl).")(rtl)
@@ -405,6 +464,7 @@ def goto(
 def mode(
     name: str = typer.Argument(..., help="PX4 mode name: manual, stabilized, acro, altctl, posctl, auto:loiter..."),
     timeout: float = TimeoutOption,
+    every: bool = AllOption,
     vehicle: str | None = VehicleOption,
     endpoint: str | None = EndpointOption,
 ) -> None:
@@ -413,7 +473,7 @@ def mode(
         nav_state = nav_state_from_name(name)
     except ValueError as e:
         fail(f"{e}; nothing sent", code=2)
-    _send(commands.set_mode_command(name), f"mode {MODES[nav_state].name}", vehicle, endpoint, timeout)
+    _send(commands.set_mode_command(name), f"mode {MODES[nav_state].name}", vehicle, endpoint, timeout, every=every)
 
 
 def _vehicle_home(link: _Link) -> tuple[GeoPoint | None, str]:

@@ -8,7 +8,7 @@ import os
 import sys
 import time
 from collections.abc import Iterable, Iterator, Sequence
-from contextlib import contextmanager
+from contextlib import ExitStack, contextmanager
 from typing import Any, NoReturn
 
 import msgspec
@@ -112,6 +112,33 @@ def connect(vehicle: str | None, endpoint: str | None, name: str = "cli") -> Ite
             yield node
     finally:
         session.close()
+
+
+def bus_configs(endpoint: str | None) -> list[BusConfig]:
+    """The buses a command on every vehicle addresses: ``endpoint``'s, else those of the stacks a command naming no
+    stack addresses (the `stack up` ones, else the flights)."""
+    if endpoint:
+        return [BusConfig(mode="client", connect=(endpoint,), listen=())]
+    endpoints = sorted({str(s["endpoint"]) for s in run_state.addressed_stacks(None)})
+    if not endpoints:
+        fail("no running stack found (start one with `stack up`, or pass --endpoint)")
+    return [BusConfig(mode="client", connect=(e,), listen=()) for e in endpoints]
+
+
+@contextmanager
+def connect_all(endpoint: str | None, name: str = "cli") -> Iterator[list[Node]]:
+    """A node for every vehicle alive on the buses of :func:`bus_configs` (each vehicle once, by name)."""
+    tool = f"{name}-{os.getpid()}"
+    with ExitStack() as stack:
+        nodes: dict[str, Node] = {}
+        for bus in bus_configs(endpoint):
+            session = open_bus(bus, tool)
+            stack.callback(session.close)
+            for vehicle in sorted(vehicles_alive(session) - set(nodes)):
+                nodes[vehicle] = stack.enter_context(Node(bus, vehicle, tool, stable_id=False, session=session))
+        if not nodes:
+            fail("no vehicle on the bus (no module alive there)")
+        yield [nodes[v] for v in sorted(nodes)]
 
 
 def open_bus(bus: BusConfig, tool: str) -> zenoh.Session:

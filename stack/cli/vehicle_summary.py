@@ -40,6 +40,19 @@ def latest(nodes: Sequence[Node]) -> dict[str, dict[str, Any]]:
     return out
 
 
+def commander_figures(report: dict[str, Any]) -> dict[str, Any] | None:
+    """The commander's heartbeat figures in a vehicle's status report (None without a commander)."""
+    return next((m["extra"] for m in report.get("modules", []) if "failsafe_action" in m.get("extra", {})), None)
+
+
+def add_summaries(reports: dict[str, dict[str, Any]], nodes: Sequence[Node]) -> None:
+    """Each vehicle's status report (by vehicle) with a commander gains its ``vehicle_summary``, from the messages
+    its node (one per vehicle) takes in, all waited for at once."""
+    with_commander = {v: c for v, r in reports.items() if (c := commander_figures(r)) is not None}
+    for vehicle, messages in latest([n for n in nodes if n.vehicle in with_commander]).items():
+        reports[vehicle]["vehicle_summary"] = summary(messages, with_commander[vehicle])
+
+
 def summary(latest: dict[str, Any], commander: dict[str, Any] | None) -> dict[str, Any]:
     """The summary as JSON-able values from the latest message of each of :data:`TOPICS` (those seen) and
     the commander's heartbeat figures (None without a commander)."""

@@ -1,8 +1,8 @@
 """``stack vehicles``: every vehicle on the bus with its state, as QGroundControl's vehicle list shows them.
 
-The bus is the one of ``--endpoint``, else of every stack running on this machine (stacks joined into one bus
-list the same vehicles, each once). A vehicle is on the bus when its supervisors answer; its state comes
-from its own messages, as in ``stack status``.
+The bus is the one of ``--endpoint``, else of the stacks running on this machine that a command naming no stack
+addresses (stacks joined into one bus list the same vehicles, each once). A vehicle is on the bus when its
+supervisors answer; its state comes from its own messages, as in ``stack status``.
 """
 
 from __future__ import annotations
@@ -15,28 +15,25 @@ from typing import Any
 
 import typer
 
-from stack.bus.config import BusConfig
 from stack.bus.node import Node
 from stack.bus.supervisors import vehicles_status
 from stack.cli import vehicle_summary
-from stack.cli.common import EndpointOption, JsonOption, fail, open_bus, print_table, to_jsonable
-from stack.supervisor import state as run_state
+from stack.cli.common import EndpointOption, JsonOption, bus_configs, open_bus, print_table, to_jsonable
 
 
 def vehicles(endpoint: str | None = EndpointOption, as_json: bool = JsonOption) -> None:
     """Every vehicle on the bus: mode, armed, position, battery and its modules running."""
-    buses = _buses(endpoint)
     found: dict[str, dict[str, Any]] = {}
     tool = f"cli-{os.getpid()}"
     with ExitStack() as stack:
-        for bus in buses:
+        for bus in bus_configs(endpoint):
             session = open_bus(bus, tool)
             stack.callback(session.close)
             reports = {v: r for v, r in vehicles_status(session).items() if v not in found}
             nodes = [stack.enter_context(Node(bus, v, tool, stable_id=False, session=session)) for v in reports]
-            latest = vehicle_summary.latest(nodes)
+            vehicle_summary.add_summaries(reports, nodes)
             for vehicle, report in reports.items():
-                found[vehicle] = _row(vehicle, report, latest[vehicle])
+                found[vehicle] = _row(vehicle, report)
     rows = [found[v] for v in sorted(found)]
     if as_json:
         typer.echo(json.dumps(to_jsonable(rows)))
@@ -50,18 +47,8 @@ def vehicles(endpoint: str | None = EndpointOption, as_json: bool = JsonOption) 
     )
 
 
-def _buses(endpoint: str | None) -> list[BusConfig]:
-    if endpoint:
-        return [BusConfig(mode="client", connect=(endpoint,), listen=())]
-    endpoints = sorted({str(s["endpoint"]) for s in run_state.running_stacks()})
-    if not endpoints:
-        fail("no running stack found (start one with `stack up`, or pass --endpoint)")
-    return [BusConfig(mode="client", connect=(e,), listen=()) for e in endpoints]
-
-
-def _row(vehicle: str, report: dict[str, Any], latest: dict[str, Any]) -> dict[str, Any]:
+def _row(vehicle: str, report: dict[str, Any]) -> dict[str, Any]:
     modules = report.get("modules", [])
-    commander = next((m["extra"] for m in modules if "failsafe_action" in m.get("extra", {})), None)
     return {
         "vehicle": vehicle,
         "profile": report.get("profile", ""),
@@ -70,7 +57,7 @@ def _row(vehicle: str, report: dict[str, Any], latest: dict[str, Any]) -> dict[s
         "modules": len(modules),
         "modules_running": sum(1 for m in modules if m.get("state") == "running"),
         "modules_not_running": {str(m.get("module")): m.get("state") for m in modules if m.get("state") != "running"},
-        **vehicle_summary.summary(latest, commander),
+        **report.get("vehicle_summary", {}),
     }
 
 

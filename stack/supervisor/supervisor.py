@@ -203,9 +203,11 @@ class Supervisor:
         bus = self.profile.bus
         listen, self.router_connect = self.profile.router_links(self.host) if self.profile.hosts else ((), bus.connect)
         self.router_listen = (self.endpoint, *listen)
+        # Modules reach the rest of the bus through this router only: also connected to [bus] connect, a module had a
+        # second route to every subscriber there, which then got each of its messages twice.
         self.module_bus = BusConfig(
             mode=bus.mode,
-            connect=(self.endpoint, *bus.connect),
+            connect=(self.endpoint,),
             listen=bus.listen,
             low_latency=bus.low_latency,
             lease_ms=bus.lease_ms,

@@ -72,16 +72,43 @@ def test_a_vehicle_that_is_not_on_the_bus_is_one_clear_error(bus):
     assert out.returncode == 0 and "vehicle_status" in out.stdout
 
 
-def test_a_command_reaches_only_the_vehicle_it_names(bus):
+def test_status_all_gives_every_vehicle(bus):
+    first, _, _ = bus
+    out = first.cli("status", "--all", "--json")
+    assert out.returncode == 0, out.stderr
+    reports = json.loads(out.stdout)
+    assert [r["vehicle"] for r in reports] == ["v1", "v2"]
+    assert all("mode" in r["vehicle_summary"] and r["modules"] for r in reports)
+    text = first.cli("status", "--all").stdout
+    assert re.findall(r"(?m)^vehicle '(v\d)'", text) == ["v1", "v2"]
+    out = first.cli("status", "--all", "--vehicle", "v1")
+    assert out.returncode == 2
+    assert out.stderr.strip() == "error: --all addresses every vehicle: give it or --vehicle, not both"
+
+
+def test_a_tool_on_the_other_stacks_router_gets_each_message_once(bus):
     first, _, endpoint = bus
+    echo = ("topic", "echo", "vehicle_attitude", "-n", "50", "--json")
+    out = first.cli(*echo, "--vehicle", "v2", "--endpoint", endpoint)
+    assert out.returncode == 0, out.stderr
+    stamps = [json.loads(line)["timestamp_sample"] for line in out.stdout.splitlines()]
+    assert len(stamps) == 50 and stamps == sorted(set(stamps))
+
+
+def arm(stack: RunningStack, *args: str) -> None:
     deadline = time.monotonic() + 120.0
     while True:  # until the estimates have converged the commander refuses to arm, for now
-        arm = first.cli("cmd", "arm", "--endpoint", endpoint, "--vehicle", "v2")
-        if arm.returncode == 0 or time.monotonic() > deadline:
+        out = stack.cli("cmd", "arm", *args)
+        if out.returncode == 0 or time.monotonic() > deadline:
             break
-        assert "TEMPORARILY_REJECTED" in arm.stderr, arm.stderr
+        assert "TEMPORARILY_REJECTED" in out.stderr, out.stderr
         time.sleep(1.0)
-    assert arm.returncode == 0, arm.stderr
+    assert out.returncode == 0, out.stderr
+
+
+def test_a_command_reaches_only_the_vehicle_it_names_or_all_of_them(bus):
+    first, _, endpoint = bus
+    arm(first, "--endpoint", endpoint, "--vehicle", "v2")
     try:
         rows = listed(first)
         assert rows["v2"]["armed"] is True
@@ -89,3 +116,14 @@ def test_a_command_reaches_only_the_vehicle_it_names(bus):
     finally:
         assert first.cli("cmd", "disarm", "--endpoint", endpoint, "--vehicle", "v2").returncode == 0
     assert listed(first)["v2"]["armed"] is False
+    arm(first, "--all")
+    try:
+        assert [row["armed"] for row in listed(first).values()] == [True, True]
+    finally:
+        out = first.cli("cmd", "disarm", "--all")
+    assert out.returncode == 0, out.stderr
+    assert sorted(out.stdout.splitlines()) == ["v1: disarm: accepted", "v2: disarm: accepted"]
+    assert [row["armed"] for row in listed(first).values()] == [False, False]
+    out = first.cli("cmd", "hold", "--all", "--vehicle", "v1")
+    assert out.returncode == 2
+    assert out.stderr.strip() == "error: --all addresses every vehicle: give it or --vehicle, not both; nothing sent"
