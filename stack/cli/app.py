@@ -114,6 +114,12 @@ def up(
     host: str | None = typer.Option(
         None, "--host", help="The host of a profile spread over machines ([hosts]) whose share this machine runs"
     ),
+    vehicles: int = typer.Option(
+        1, "--vehicles", min=1, help="A swarm: this many copies of the profile's vehicle on one bus (v1, v2...)"
+    ),
+    swarm_vehicle: int = typer.Option(0, "--swarm-vehicle", hidden=True, help="Run vehicle I of a swarm"),
+    swarm_size: int = typer.Option(0, "--swarm-size", hidden=True, help="Of a swarm of N vehicles"),
+    swarm_join: str = typer.Option("", "--swarm-join", hidden=True, help="Joining the first vehicle's bus there"),
 ) -> None:
     """Start a stack from a launch profile and supervise it until Ctrl-C, SIGTERM or --duration."""
     try:
@@ -121,6 +127,31 @@ def up(
         prof.check_host(host)
     except ProfileError as e:
         fail(str(e), code=2)
+    if vehicles > 1:
+        given = [o for o, v in (("--plot", plot_), ("--web", web), ("--save", save), ("--record", record)) if v]
+        given += [o for o, v in (("--device", device), ("--host", host)) if v is not None]
+        if given:
+            fail(f"--vehicles starts a swarm of whole vehicles on this machine: not with {', '.join(given)}", code=2)
+        from stack.cli.swarm_up import check_swarm, run_swarm  # what starts the vehicles, only when it will
+
+        try:
+            names = check_swarm(prof, vehicles)
+        except ValueError as e:
+            fail(str(e), code=2)
+        running = [n for n in names if run_state.addressed_stacks(n)]
+        if running:
+            fail(f"a stack for vehicle '{running[0]}' is already running; `stack down` first")
+        up_args = [profile, "--log-level", log_level, *(("--duration", str(duration)) if duration else ())]
+        up_args += [*(("--speed", speed) if speed else ()), *(("--realtime",) if realtime else ())]
+        up_args += [*(("--quiet",) if quiet else ()), *(("--lockstep-transport", transport) if transport else ())]
+        raise typer.Exit(run_swarm(names, up_args))
+    if swarm_vehicle:
+        from stack.supervisor.swarm import vehicle_copy
+
+        try:
+            prof = vehicle_copy(prof, swarm_vehicle, swarm_size, swarm_join)
+        except ValueError as e:
+            fail(str(e), code=2)
     choose_transport(prof, transport)
     pace = _speed(prof, speed, realtime)
     extra_args = _device_args(prof, device) if device is not None else {}

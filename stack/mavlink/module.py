@@ -184,6 +184,13 @@ class MavlinkModule(Module):
         ),
         Arg("remote", "127.0.0.1:14550", "UDP: where to send until a peer has written (PX4's -o); empty: nowhere"),
         Arg(
+            "shared_remote",
+            False,
+            "A ground station's link: in a swarm every vehicle's sends to this one remote, where the ground station "
+            "tells them apart by system id (PX4's GCS links, all to 14550); otherwise vehicle i's link binds and "
+            "sends i - 1 ports further (PX4's API links, 14580+i-1 to 14540+i-1)",
+        ),
+        Arg(
             "signing_key",
             "",
             "A file with a MAVLink 2 signing key (64 hex digits): sign everything, refuse unsigned messages "

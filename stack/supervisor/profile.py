@@ -42,6 +42,7 @@ from __future__ import annotations
 
 import ast
 import dataclasses
+import math
 import re
 import string
 import tomllib
@@ -66,6 +67,7 @@ RESTART_POLICIES = ("no", "on-failure", "always")
 # How lockstep messages travel: shared memory between the processes of one supervisor (stack.fastpath),
 # or Zenoh, for a lockstep run whose modules are not all started by this supervisor on this host.
 LOCKSTEP_TRANSPORTS = ("shm", "zenoh")
+DEFAULT_SWARM_SPACING_M = 5.0
 FLAGS = ("lockstep", "realtime", "plot", "record")
 PLACEHOLDERS = ("python", "run_dir", "seed", "udp_port", "control_port")
 """What ``{name}`` in a process command or a module's string argument stands for (see the module docstring)."""
@@ -161,6 +163,10 @@ class Profile:
     hosts: dict[str, HostEntry] = field(default_factory=dict)
     host_lease_ms: int = DEFAULT_LEASE_MS
     """How long a host of the vehicle may go without a beat before the others count it lost (stack.bus.host_beats)."""
+    swarm_names: tuple[str, ...] = ()
+    """The vehicles of a swarm of this profile (``[swarm] names``); empty: v1, v2... (stack.supervisor.swarm)."""
+    swarm_spacing_m: float = DEFAULT_SWARM_SPACING_M
+    """How far east of the one before it each vehicle of a swarm has its home (``[swarm] spacing_m``)."""
 
     @property
     def name(self) -> str:
@@ -331,7 +337,7 @@ class _Loader:
             known = ", ".join(available_profiles())
             raise ProfileError(f"{self.path}: no such profile{hint} (available: {known})")
         doc = self._document(self.path, ())
-        self._only(doc, "", {"stack", "bus", "params", "module", "process", "scenario", "hosts"})
+        self._only(doc, "", {"stack", "bus", "params", "module", "process", "scenario", "hosts", "swarm"})
         stack = self._table(doc, "stack")
         self._only(
             stack,
@@ -419,7 +425,21 @@ class _Loader:
                 if isinstance(value, str):
                     self._check_placeholders(f"module ({module.name}).args.{aname}", value, allow_json=True)
         profile.scenario_limits, profile.scenario_options = self._scenario_settings(self._table(doc, "scenario"))
+        profile.swarm_names, profile.swarm_spacing_m = self._swarm(self._table(doc, "swarm"))
         return profile
+
+    def _swarm(self, table: dict) -> tuple[tuple[str, ...], float]:
+        self._only(table, "swarm", {"names", "spacing_m"})
+        names = self._get(table, "swarm", "names", list, [])
+        for i, name in enumerate(names):
+            if not isinstance(name, str) or not keys.valid_name(name):
+                raise self.fail(f"swarm.names[{i}]", f"{name!r} is not a vehicle name (letters, digits, '_' and '-')")
+        if len(set(names)) != len(names):
+            raise self.fail("swarm.names", "a vehicle is named twice")
+        spacing = float(self._get(table, "swarm", "spacing_m", float, DEFAULT_SWARM_SPACING_M))
+        if not (math.isfinite(spacing) and spacing > 0):
+            raise self.fail("swarm.spacing_m", f"expected metres above 0, got {spacing:g}")
+        return tuple(names), spacing
 
     def _hosts(self, table: dict) -> dict[str, HostEntry]:
         hosts = {}
