@@ -120,6 +120,7 @@ def up(
     swarm_vehicle: int = typer.Option(0, "--swarm-vehicle", hidden=True, help="Run vehicle I of a swarm"),
     swarm_size: int = typer.Option(0, "--swarm-size", hidden=True, help="Of a swarm of N vehicles"),
     swarm_join: str = typer.Option("", "--swarm-join", hidden=True, help="Joining the first vehicle's bus there"),
+    swarm_world: str = typer.Option("", "--swarm-world", hidden=True, help="On the world clock in this file"),
 ) -> None:
     """Start a stack from a launch profile and supervise it until Ctrl-C, SIGTERM or --duration."""
     try:
@@ -144,14 +145,17 @@ def up(
         up_args = [profile, "--log-level", log_level, *(("--duration", str(duration)) if duration else ())]
         up_args += [*(("--speed", speed) if speed else ()), *(("--realtime",) if realtime else ())]
         up_args += [*(("--quiet",) if quiet else ()), *(("--lockstep-transport", transport) if transport else ())]
-        raise typer.Exit(run_swarm(names, up_args))
+        raise typer.Exit(run_swarm(names, up_args, run_state.new_run_dir(prof.name, "swarm")))
+    world: dict[str, Any] = {}
     if swarm_vehicle:
-        from stack.supervisor.swarm import vehicle_copy
+        from stack.supervisor.swarm import vehicle_copy, vehicle_names
 
         try:
+            names = vehicle_names(prof, swarm_size)
             prof = vehicle_copy(prof, swarm_vehicle, swarm_size, swarm_join)
         except ValueError as e:
             fail(str(e), code=2)
+        world = {"world": swarm_world, "world_slot": swarm_vehicle - 1, "world_vehicles": tuple(names)}
     choose_transport(prof, transport)
     pace = _speed(prof, speed, realtime)
     extra_args = _device_args(prof, device) if device is not None else {}
@@ -171,6 +175,7 @@ def up(
         echo_only=shown,
         extra_args=extra_args,
         speed=pace,
+        **world,
     )
     supervisor = Supervisor(prof, options, run_dir, host)
     if record is not None:

@@ -51,6 +51,7 @@ from stack.cli.follow import (
 )
 from stack.cli.follow import PARAMS as FOLLOW_PARAMS
 from stack.commander import commands
+from stack.commander.command_checks import BROADCAST
 from stack.commander.modes import MODES, nav_state_from_name
 from stack.launch_files import find_mission
 from stack.mathlib.geo import MapProjection
@@ -109,8 +110,15 @@ New = list[tuple[str, Message]]
 
 
 def from_ground_station(cmd: VehicleCommand) -> VehicleCommand:
-    """``cmd`` as the CLI sends it: from a ground station's system and component."""
-    return msgspec.structs.replace(cmd, source_system=CLI_SYSTEM, source_component=CLI_COMPONENT)
+    """``cmd`` as the CLI sends it: from a ground station's system and component, to whatever system and component
+    the vehicle is (its topic key already names it; a swarm's vehicle i is MAVLink system i)."""
+    return msgspec.structs.replace(
+        cmd,
+        source_system=CLI_SYSTEM,
+        source_component=CLI_COMPONENT,
+        target_system=BROADCAST,
+        target_component=BROADCAST,
+    )
 
 
 def answers(ack: VehicleCommandAck, cmd: VehicleCommand) -> bool:

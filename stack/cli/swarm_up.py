@@ -2,8 +2,9 @@
 
 Each vehicle is a `stack up` of its own (its supervisor, router, run directory and state, so `stack status
 --vehicle v2` and `stack down --vehicle v2` reach it), started by this process: the first, then the others
-joining its router once it gives its endpoint. Their lines are relayed here, each starting with its vehicle.
-Ctrl-C or SIGTERM stops them all; the exit code is the worst of theirs.
+joining its router once it gives its endpoint, all on one world clock in lockstep (stack.runtime.world_clock).
+Their lines are relayed here, each starting with its vehicle. Ctrl-C or SIGTERM stops them all; the exit code is
+the worst of theirs.
 """
 
 from __future__ import annotations
@@ -13,14 +14,18 @@ import signal
 import subprocess
 import sys
 import threading
+import time
 from collections.abc import Sequence
+from pathlib import Path
 from types import FrameType
 
 import typer
 
+from stack.runtime.world_clock import create_world, leave_world
 from stack.supervisor.profile import Profile
 from stack.supervisor.swarm import vehicle_copy, vehicle_names
 
+WORLD_FILE = "world.clock"
 RENDEZVOUS = re.compile(r"\[stack\] bus rendezvous (\S+),")
 
 
@@ -31,8 +36,11 @@ def check_swarm(profile: Profile, count: int) -> list[str]:
     return vehicle_names(profile, count)
 
 
-def run_swarm(names: Sequence[str], up_args: Sequence[str]) -> int:
-    """Start each vehicle's `stack up UP_ARGS` and relay its lines until all have stopped; their worst exit code."""
+def run_swarm(names: Sequence[str], up_args: Sequence[str], run_dir: Path) -> int:
+    """Start each vehicle's `stack up UP_ARGS` on one world clock (its file in ``run_dir``) and relay its lines until
+    all have stopped; their worst exit code."""
+    world = run_dir / WORLD_FILE
+    create_world(world, len(names))
     children: list[subprocess.Popen[str]] = []
     relays: list[threading.Thread] = []
     joined = threading.Event()
@@ -40,7 +48,8 @@ def run_swarm(names: Sequence[str], up_args: Sequence[str]) -> int:
 
     def start(index: int, join: str) -> None:
         command = [sys.executable, "-m", "stack", "up", *up_args, "--swarm-vehicle", str(index)]
-        command += ["--swarm-size", str(len(names)), *(("--swarm-join", join) if join else ())]
+        command += ["--swarm-size", str(len(names)), "--swarm-world", str(world)]
+        command += ("--swarm-join", join) if join else ()
         child = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
         children.append(child)
         relay = threading.Thread(target=_relay, args=(child, names[index - 1], endpoint, joined), daemon=True)
@@ -65,10 +74,23 @@ def run_swarm(names: Sequence[str], up_args: Sequence[str]) -> int:
     if endpoint and not stopping:
         for index in range(2, len(names) + 1):
             start(index, endpoint[0])
-    codes = [child.wait() for child in children]
+    codes = _wait_all(children, world)
     for relay in relays:
         relay.join()
     return max(codes)
+
+
+def _wait_all(children: list[subprocess.Popen[str]], world: Path) -> list[int]:
+    """Each child's exit code once all have ended; as each ends, its vehicle leaves the world clock (the others
+    go on without it)."""
+    codes: dict[int, int] = {}
+    while len(codes) < len(children):
+        for slot, child in enumerate(children):
+            if slot not in codes and (code := child.poll()) is not None:
+                codes[slot] = code
+                leave_world(world, slot)
+        time.sleep(0.1)
+    return [codes[slot] for slot in range(len(children))]
 
 
 def _relay(child: subprocess.Popen[str], name: str, endpoint: list[str], joined: threading.Event) -> None:

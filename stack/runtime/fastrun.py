@@ -29,6 +29,7 @@ from stack.fastpath.ring import RingWriter, next_trigger, wake_all
 from stack.fastpath.topology import Topology
 from stack.runtime.module import Timer, Trigger
 from stack.runtime.pacing import Pacer
+from stack.runtime.world_clock import world_clock
 
 if TYPE_CHECKING:
     from stack.runtime.runner import Runtime
@@ -150,8 +151,11 @@ class FastDriver:
             rt.state = "running"
             wakes = self.att.wakes
             pacer = Pacer(rt.spec.speed)
+            world = world_clock(rt.spec)
             while True:
                 pacer.wait(coordinator.now + coordinator.period_us)
+                if world is not None:
+                    world.wait(coordinator.now + coordinator.period_us, coordinator.period_us)
                 t = coordinator.begin_step()
                 self.refresh_topology()
                 try:
@@ -162,7 +166,11 @@ class FastDriver:
                 if group is not None:
                     group.pump()
                 coordinator.finish_step()
+                if world is not None:
+                    world.done(t)
         finally:
+            if world is not None:
+                world.close()
             coordinator.close()
             if bridge is not None:
                 bridge.close()

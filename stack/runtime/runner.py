@@ -39,6 +39,7 @@ from stack.runtime.priority import raise_priority
 from stack.runtime.services import Heartbeat, ParamService
 from stack.runtime.spec import ModuleSpec, load_module_class, resolve_args
 from stack.runtime.start_deadline import StartDeadline
+from stack.runtime.world_clock import world_clock
 
 log = logging.getLogger("stack.runtime")
 
@@ -444,14 +445,23 @@ class Runtime:
         period = self.module.step_period_us()
         touched = self.node.touched
         pacer = Pacer(self.spec.speed)
-        while True:
-            coordinator.finish_step()
-            t = coordinator.now + period
-            pacer.wait(t)
-            coordinator.begin_step(t)
-            self.run_at(t, frozenset((*coordinator.members, self.node.publisher_id)))
-            coordinator.account_own(touched)
-            touched.clear()
+        world = world_clock(self.spec)
+        try:
+            while True:
+                coordinator.finish_step()
+                if world is not None and coordinator.now:
+                    world.done(coordinator.now)
+                t = coordinator.now + period
+                pacer.wait(t)
+                if world is not None:
+                    world.wait(t, period)
+                coordinator.begin_step(t)
+                self.run_at(t, frozenset((*coordinator.members, self.node.publisher_id)))
+                coordinator.account_own(touched)
+                touched.clear()
+        finally:
+            if world is not None:
+                world.close()
 
     def _wait_for_synced_roster(self, coordinator: LockstepCoordinator) -> None:
         """Start only when every module of the roster has synced and every member has been admitted.

@@ -193,6 +193,11 @@ class ModuleSpec:
     host: str = SINGLE_HOST
     placement: dict[str, list[str]] = field(default_factory=dict)
     host_lease_ms: int = 0
+    # A swarm's one simulated clock (stack.runtime.world_clock), given to the lockstep's coordinator: the world's file
+    # (empty: a vehicle on its own clock), this vehicle's slot in it and the vehicles by slot.
+    world: str = ""
+    world_slot: int = -1
+    world_vehicles: list[str] = field(default_factory=list)
 
     def to_json(self) -> str:
         d = asdict(self)

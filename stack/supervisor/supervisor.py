@@ -81,6 +81,9 @@ class UpOptions:
     kind: str = run_state.UP  # the command that started the stack, registered in its state
     extra_args: dict[str, dict[str, object]] = field(default_factory=dict)
     speed: float = MAX_SPEED  # the lockstep's pace (stack.runtime.pacing)
+    world: str = ""  # a swarm's world clock (stack.runtime.world_clock): its file, this vehicle's slot, the vehicles
+    world_slot: int = -1
+    world_vehicles: tuple[str, ...] = ()
 
 
 @dataclass
@@ -466,6 +469,9 @@ class Supervisor:
             host_lease_ms=self.profile.host_lease_ms,
             open_topics=list(self.profile.open_topics),
             bridged=self.bridged if e.name == self.coordinator else [],
+            world=self.options.world if e.cls.LOCKSTEP_COORDINATOR and self.profile.lockstep else "",
+            world_slot=self.options.world_slot,
+            world_vehicles=list(self.options.world_vehicles),
             sync_with=[*self.bridged, self.coordinator] if bridged and self.coordinator else None,
         )
 

@@ -1,0 +1,173 @@
+"""One simulated clock for the vehicles of a swarm, each running its own lockstep (stack.cli.swarm_up).
+
+As the vehicles of one Gazebo world follow its one ``/clock`` (PX4's ``GZBridge::clockCallback``), a vehicle's
+lockstep coordinator begins step ``t`` only once every vehicle of the world has finished the step before it: at
+any moment the vehicles are at most one step apart, so what one publishes reaches the others at the simulated
+time it would in flight, give or take that step.
+
+The world is a small file shared by the vehicles' coordinators, one slot per vehicle: the last step it finished
+(µs; LEFT once it has left the world), a 32-bit sequence bumped at each step, on which the others sleep (a
+futex on the shared mapping, woken at each bump), and its coordinator's pid. The file's creator (the swarm's
+launcher) sets a slot LEFT when its vehicle's stack ends, and a vehicle's coordinator does on its way out; a
+waiting coordinator that finds the laggard's pid gone counts it left too. Without futexes (another machine
+than x86-64 or arm64) the wait polls every 0.2 ms.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import logging
+import mmap
+import os
+import platform
+import struct
+import time
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from stack.runtime.spec import ModuleSpec
+
+log = logging.getLogger("stack.lockstep")
+
+SLOT_BYTES = 32
+_DONE, _SEQ, _PID = 0, 8, 16
+LEFT = (1 << 63) - 1
+"""A slot's finished step once its vehicle has left the world: every step waits no more for it."""
+WAIT_S = 0.1
+"""How long a wait sleeps before it checks again that the vehicle it waits for is still there."""
+SLOW_WAIT_S = 5.0
+POLL_S = 0.0002
+_FUTEX_SYSCALL = {"x86_64": 202, "aarch64": 98}.get(platform.machine())
+_FUTEX_WAIT, _FUTEX_WAKE = 0, 1
+_libc = ctypes.CDLL(None, use_errno=True)
+
+
+class _Timespec(ctypes.Structure):
+    _fields_ = [("tv_sec", ctypes.c_long), ("tv_nsec", ctypes.c_long)]
+
+
+def create_world(path: Path, vehicles: int) -> None:
+    """A world for ``vehicles`` vehicles, none of which has finished a step."""
+    path.write_bytes(bytes(SLOT_BYTES * vehicles))
+
+
+class World:
+    """The world file, mapped: each slot's finished step, sequence and pid."""
+
+    def __init__(self, path: Path) -> None:
+        self._file = path.open("r+b")
+        self._map = mmap.mmap(self._file.fileno(), 0)
+        self.slots = len(self._map) // SLOT_BYTES
+        self._seqs = [ctypes.c_uint32.from_buffer(self._map, s * SLOT_BYTES + _SEQ) for s in range(self.slots)]
+
+    def done_us(self, slot: int) -> int:
+        return struct.unpack_from("=Q", self._map, slot * SLOT_BYTES + _DONE)[0]
+
+    def pid(self, slot: int) -> int:
+        return struct.unpack_from("=Q", self._map, slot * SLOT_BYTES + _PID)[0]
+
+    def set_pid(self, slot: int, pid: int) -> None:
+        struct.pack_into("=Q", self._map, slot * SLOT_BYTES + _PID, pid)
+
+    def finish(self, slot: int, t_us: int) -> None:
+        """Slot ``slot`` has finished step ``t_us`` (LEFT: left the world): wake whoever waits for it. Only its
+        vehicle's coordinator calls it, or anyone once that coordinator is gone."""
+        struct.pack_into("=Q", self._map, slot * SLOT_BYTES + _DONE, t_us)
+        word = self._seqs[slot]
+        word.value = (word.value + 1) & 0xFFFFFFFF
+        if _FUTEX_SYSCALL is not None:
+            _libc.syscall(_FUTEX_SYSCALL, ctypes.byref(word), _FUTEX_WAKE, 0x7FFFFFFF, None, None, 0)
+
+    def sleep_on(self, slot: int, seq: int) -> bool:
+        """Sleep until slot ``slot``'s sequence moves on from ``seq`` or WAIT_S passes; False on time-out."""
+        word = self._seqs[slot]
+        if _FUTEX_SYSCALL is None:
+            end = time.monotonic() + WAIT_S
+            while word.value == seq:
+                if time.monotonic() > end:
+                    return False
+                time.sleep(POLL_S)
+            return True
+        timeout = _Timespec(0, int(WAIT_S * 1e9))
+        _libc.syscall(_FUTEX_SYSCALL, ctypes.byref(word), _FUTEX_WAIT, seq, ctypes.byref(timeout), None, 0)
+        return word.value != seq
+
+    def seq(self, slot: int) -> int:
+        return self._seqs[slot].value
+
+    def close(self) -> None:
+        del self._seqs
+        self._map.close()
+        self._file.close()
+
+
+def leave_world(path: Path, slot: int) -> None:
+    """Mark vehicle ``slot``'s place left (its stack has ended): the others go on without it."""
+    world = World(path)
+    try:
+        world.finish(slot, LEFT)
+    finally:
+        world.close()
+
+
+class WorldClock:
+    """Vehicle ``slot``'s coordinator's side of the world in file ``path``: :meth:`wait` before each step,
+    :meth:`done` after it, :meth:`close` on the way out."""
+
+    def __init__(self, path: Path, slot: int, names: list[str]) -> None:
+        """``names``: the vehicles by slot, to name the one time waits for."""
+        self.world = World(path)
+        if not 0 <= slot < self.world.slots:
+            self.world.close()
+            raise ValueError(f"{path}: no slot {slot} in a world of {len(names)} vehicles")
+        self.slot = slot
+        self.names = names
+        self.world.set_pid(slot, os.getpid())
+
+    def wait(self, t_us: int, period_us: int) -> None:
+        """Block until every other vehicle has finished the steps before ``t_us``."""
+        world, needed = self.world, t_us - period_us
+        since = 0.0
+        while True:
+            laggard = next((s for s in range(world.slots) if s != self.slot and world.done_us(s) < needed), None)
+            if laggard is None:
+                return
+            seq = world.seq(laggard)
+            if world.done_us(laggard) >= needed or world.sleep_on(laggard, seq):
+                continue
+            pid = world.pid(laggard)
+            if pid and not _alive(pid):
+                log.warning("world clock: vehicle %s is gone: time goes on without it", self.names[laggard])
+                world.finish(laggard, LEFT)
+                continue
+            since = since or time.monotonic()
+            if since > 0 and time.monotonic() - since > SLOW_WAIT_S:
+                log.warning("world clock: time waits at t=%.3f s for vehicle %s", t_us / 1e6, self.names[laggard])
+                since = -1.0
+
+    def done(self, t_us: int) -> None:
+        """This vehicle has finished step ``t_us``: wake whoever waits for it."""
+        self.world.finish(self.slot, t_us)
+
+    def close(self) -> None:
+        """Leave the world (the others go on without this vehicle) and let go of the file."""
+        self.world.finish(self.slot, LEFT)
+        self.world.close()
+
+
+def world_clock(spec: ModuleSpec) -> WorldClock | None:
+    """The coordinator's side of its swarm's world clock, or None for a vehicle on its own clock."""
+    if not spec.world:
+        return None
+    return WorldClock(Path(spec.world), spec.world_slot, spec.world_vehicles)
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
