@@ -8,7 +8,7 @@ vehicle's modules are up, then follows the simulators' heartbeats (about 1 Hz of
 time) for ``--duration`` seconds: a vehicle's real-time factor is the simulated time it gained between its first and
 last beat of that window over the wall time between them. Memory is the resident and unique bytes of every process
 of the swarm, per vehicle, read in the same window. A layout stops growing N once its slowest vehicle runs below
-0.25x or the next N would need more memory than the machine has available.
+0.6x (twice as many vehicles could not keep real time) or the next N would need more memory than is available.
 
 It prints a table per layout and the largest N whose slowest vehicle kept at least real time. The vehicles share
 one world clock (stack.runtime.world_clock), so their factors agree within a step: the slowest is the swarm's.
@@ -43,9 +43,9 @@ from benchmarks.bench_lockstep import grouped_profile  # noqa: E402
 from tests.support.harness import stack_env  # noqa: E402
 
 LAYOUTS = {"per module": "one process per module", "per vehicle": "one process per vehicle (module groups)"}
-SLOWEST_WORTH_GROWING = 0.25
+SLOWEST_WORTH_GROWING = 0.6
 UP_TIMEOUT_S = 60.0
-UP_TIMEOUT_PER_VEHICLE_S = 10.0
+UP_TIMEOUT_PER_VEHICLE_S = 20.0
 BEATS = keys.heartbeat_key("*", "simulator")
 HEADER = f"{'N':>3} {'slowest':>8} {'mean':>6} {'fastest':>8} {'processes':>9} {'MB/vehicle':>10} {'unique':>7}"
 
@@ -64,7 +64,10 @@ class SwarmRun:
 
 
 def up_lines_seen(log: Path, count: int) -> bool:
+    """Whether every vehicle said it is up (a swarm of one is a plain `stack up`, its lines not prefixed)."""
     text = log.read_text() if log.exists() else ""
+    if count == 1:
+        return re.search(r"(?m)^(v1: )?\[stack\] all \d+ modules up", text) is not None
     return all(re.search(rf"(?m)^v{i}: \[stack\] all \d+ modules up", text) for i in range(1, count + 1))
 
 

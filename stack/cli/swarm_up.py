@@ -1,8 +1,10 @@
 """``stack up PROFILE --vehicles N``: N copies of the profile's vehicle on one bus (stack.supervisor.swarm).
 
 Each vehicle is a `stack up` of its own (its supervisor, router, run directory and state, so `stack status
---vehicle v2` and `stack down --vehicle v2` reach it), started by this process: the first, then the others
-joining its router once it gives its endpoint, all on one world clock in lockstep (stack.runtime.world_clock).
+--vehicle v2` and `stack down --vehicle v2` reach it), started by this process one after the other, each once the
+one before is up (on a small machine, dozens of module processes starting at once would miss their start-up
+deadlines), the others joining the first one's router, all on one world clock in lockstep
+(stack.runtime.world_clock).
 Their lines are relayed here, each starting with its vehicle. Ctrl-C or SIGTERM stops them all; the exit code is
 the worst of theirs.
 """
@@ -27,6 +29,7 @@ from stack.supervisor.swarm import vehicle_copy, vehicle_names
 
 WORLD_FILE = "world.clock"
 RENDEZVOUS = re.compile(r"\[stack\] bus rendezvous (\S+),")
+UP = re.compile(r"\[stack\] all \d+ modules up")
 
 
 def check_swarm(profile: Profile, count: int) -> list[str]:
@@ -37,47 +40,74 @@ def check_swarm(profile: Profile, count: int) -> list[str]:
 
 
 def run_swarm(names: Sequence[str], up_args: Sequence[str], run_dir: Path) -> int:
-    """Start each vehicle's `stack up UP_ARGS` on one world clock (its file in ``run_dir``) and relay its lines until
-    all have stopped; their worst exit code."""
+    """Start each vehicle's `stack up UP_ARGS` on one world clock (its file in ``run_dir``), one after the other, and
+    relay their lines until all have stopped; their worst exit code. A vehicle that does not come up stops them all."""
     world = run_dir / WORLD_FILE
     create_world(world, len(names))
-    children: list[subprocess.Popen[str]] = []
-    relays: list[threading.Thread] = []
-    joined = threading.Event()
-    endpoint: list[str] = []
-
-    def start(index: int, join: str) -> None:
-        command = [sys.executable, "-m", "stack", "up", *up_args, "--swarm-vehicle", str(index)]
-        command += ["--swarm-size", str(len(names)), "--swarm-world", str(world)]
-        command += ("--swarm-join", join) if join else ()
-        child = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-        children.append(child)
-        relay = threading.Thread(target=_relay, args=(child, names[index - 1], endpoint, joined), daemon=True)
-        relay.start()
-        relays.append(relay)
-
+    launched: list[_Vehicle] = []
     stopping: list[int] = []
 
     def stop(signum: int, _: FrameType | None) -> None:
         stopping.append(signum)
-        joined.set()
-        for child in children:
-            if child.poll() is None:
-                child.send_signal(signum)
+        for vehicle in launched:
+            vehicle.signal(signum)
 
     for signum in (signal.SIGINT, signal.SIGTERM):
         signal.signal(signum, stop)
-    start(1, "")
-    while not joined.wait(0.2):
-        if children[0].poll() is not None:
-            joined.set()
-    if endpoint and not stopping:
-        for index in range(2, len(names) + 1):
-            start(index, endpoint[0])
-    codes = _wait_all(children, world)
-    for relay in relays:
-        relay.join()
+    join = ""
+    for index, name in enumerate(names, start=1):
+        if stopping:
+            break
+        command = [sys.executable, "-m", "stack", "up", *up_args, "--swarm-vehicle", str(index)]
+        command += ["--swarm-size", str(len(names)), "--swarm-world", str(world)]
+        command += ("--swarm-join", join) if join else ()
+        vehicle = _Vehicle(name, command)
+        launched.append(vehicle)
+        if not vehicle.wait_up():
+            if not stopping:
+                typer.echo(f"[swarm] {name} did not come up: stopping the swarm")
+                stop(signal.SIGTERM, None)
+            break
+        join = join or vehicle.endpoint
+    for slot in range(len(launched), len(names)):
+        leave_world(world, slot)
+    codes = _wait_all([v.child for v in launched], world)
+    for vehicle in launched:
+        vehicle.relay.join()
     return max(codes)
+
+
+class _Vehicle:
+    """One vehicle's `stack up`, its lines relayed, each starting with its name."""
+
+    def __init__(self, name: str, command: list[str]) -> None:
+        self.name = name
+        self.endpoint = ""
+        self.came_up = False
+        self.up = threading.Event()
+        self.child = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+        self.relay = threading.Thread(target=self._relay, daemon=True)
+        self.relay.start()
+
+    def _relay(self) -> None:
+        assert self.child.stdout is not None
+        for line in self.child.stdout:
+            if not self.endpoint and (m := RENDEZVOUS.search(line)) is not None:
+                self.endpoint = m.group(1)
+            if UP.search(line):
+                self.came_up = True
+                self.up.set()
+            typer.echo(f"{self.name}: {line.rstrip()}")
+        self.up.set()
+
+    def wait_up(self) -> bool:
+        """Whether it came up (False: it ended first)."""
+        self.up.wait()
+        return self.came_up
+
+    def signal(self, signum: int) -> None:
+        if self.child.poll() is None:
+            self.child.send_signal(signum)
 
 
 def _wait_all(children: list[subprocess.Popen[str]], world: Path) -> list[int]:
@@ -91,12 +121,3 @@ def _wait_all(children: list[subprocess.Popen[str]], world: Path) -> list[int]:
                 leave_world(world, slot)
         time.sleep(0.1)
     return [codes[slot] for slot in range(len(children))]
-
-
-def _relay(child: subprocess.Popen[str], name: str, endpoint: list[str], joined: threading.Event) -> None:
-    assert child.stdout is not None
-    for line in child.stdout:
-        if not endpoint and (m := RENDEZVOUS.search(line)) is not None:
-            endpoint.append(m.group(1))
-            joined.set()
-        typer.echo(f"{name}: {line.rstrip()}")
