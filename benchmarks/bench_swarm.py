@@ -46,6 +46,7 @@ LAYOUTS = {"per module": "one process per module", "per vehicle": "one process p
 SLOWEST_WORTH_GROWING = 0.6
 UP_TIMEOUT_S = 60.0
 UP_TIMEOUT_PER_VEHICLE_S = 20.0
+STOP_TIMEOUT_S = 60.0
 BEATS = keys.heartbeat_key("*", "simulator")
 HEADER = f"{'N':>3} {'slowest':>8} {'mean':>6} {'fastest':>8} {'processes':>9} {'MB/vehicle':>10} {'unique':>7}"
 
@@ -72,9 +73,10 @@ def up_lines_seen(log: Path, count: int) -> bool:
 
 
 def swarm_memory(launcher: psutil.Process) -> tuple[int, int, int]:
-    """How many processes the swarm has, and their resident and unique bytes."""
+    """How many processes the swarm has (the launcher, or the one vehicle's supervisor, and all below it), and
+    their resident and unique bytes."""
     processes, rss, uss = 0, 0, 0
-    for p in launcher.children(recursive=True):
+    for p in [launcher, *launcher.children(recursive=True)]:
         try:
             info = p.memory_full_info()
         except psutil.Error:
@@ -118,13 +120,7 @@ def fly_swarm(profile: str, count: int, duration: float, home: Path) -> SwarmRun
         finally:
             session.close()
     finally:
-        if proc.poll() is None:
-            proc.send_signal(signal.SIGINT)
-            try:
-                proc.wait(timeout=60.0 + count)
-            except subprocess.TimeoutExpired:
-                proc.kill()
-                proc.wait()
+        stop_swarm(proc, count)
     factors = {}
     for vehicle, seen in beats.items():
         if len(seen) >= 2 and seen[-1][0] > seen[0][0]:
@@ -134,11 +130,34 @@ def fly_swarm(profile: str, count: int, duration: float, home: Path) -> SwarmRun
     return SwarmRun(count, factors, *memory)
 
 
+def stop_swarm(proc: subprocess.Popen, count: int) -> None:
+    """Ctrl-C to the swarm, then wait until none of its stacks runs (a vehicle still stopping would refuse the next
+    swarm's vehicle of its name); what still runs after STOP_TIMEOUT_S is killed, and said."""
+    if proc.poll() is None:
+        proc.send_signal(signal.SIGINT)
+    deadline = time.monotonic() + STOP_TIMEOUT_S + count
+    while (proc.poll() is None or run_state.running_stacks()) and time.monotonic() < deadline:
+        time.sleep(0.2)
+    left = run_state.running_stacks()
+    if proc.poll() is None or left:
+        print(f"    (the swarm of {count} did not stop within {STOP_TIMEOUT_S + count:.0f} s: killed)", flush=True)
+        pids = [proc.pid, *(int(s["pid"]) for s in left)]
+        for pid in pids:
+            try:
+                tree = psutil.Process(pid)
+                for p in [tree, *tree.children(recursive=True)]:
+                    p.kill()
+            except psutil.Error:
+                continue
+        proc.wait()
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--profile", default="sitl_quad", help="launch profile (a name in launch/ or a path)")
     parser.add_argument("--counts", default="1,2,4,8,16,32", help="swarm sizes, in growing order")
     parser.add_argument("--duration", type=float, default=12.0, help="wall seconds measured in each run")
+    parser.add_argument("--layouts", default=",".join(LAYOUTS), help="layouts measured: " + ", ".join(LAYOUTS))
     args = parser.parse_args()
     counts = [int(c) for c in args.counts.split(",")]
     load = os.getloadavg()
@@ -148,7 +167,7 @@ def main() -> None:
         home = Path(tmp)
         os.environ["STACK_HOME"] = str(home)  # where run_state finds the swarm's stacks
         profiles = {"per module": args.profile, "per vehicle": str(grouped_profile(args.profile, "one", home))}
-        for layout in LAYOUTS:
+        for layout in args.layouts.split(","):
             print(f"\n{LAYOUTS[layout]}")
             print(HEADER)
             for count in counts:
@@ -168,7 +187,7 @@ def main() -> None:
                         print(f"    (not growing past {count}: slowest {run.slowest:.2f}x, or memory)")
                     break
     print("\nthe largest swarm whose slowest vehicle kept real time (>= 1x):")
-    for layout in LAYOUTS:
+    for layout in args.layouts.split(","):
         print(f"  {layout:<12} {best.get(layout, 0)} vehicles")
 
 

@@ -5,7 +5,7 @@ its name is ``[swarm] names[i-1]``, else ``v<i>``; MAV_SYS_ID is ``i`` (``ROMFS/
 sets it to the instance + 1); each MAVLink link binds ``i - 1`` ports further and sends ``i - 1`` ports further,
 but a ground station's link (``shared_remote``) sends where every vehicle's does, as PX4's GCS links all send to
 14550 (``px4-rc.mavlink``); its simulated home lies ``(i - 1) × [swarm] spacing_m`` east of the profile's.
-Vehicles after the first join the first one's bus (its router's endpoint).
+Vehicles after the first join the first one's bus (its router's endpoint), over Zenoh's queued transport.
 """
 
 from __future__ import annotations
@@ -43,7 +43,9 @@ def vehicle_copy(profile: Profile, index: int, count: int, join: str = "") -> Pr
         raise ValueError(f"{profile.path}: a swarm of a profile spread over hosts ([hosts]) is not supported")
     shift = index - 1
     modules = [_module_copy(m, index, shift * profile.swarm_spacing_m) for m in profile.modules]
-    bus = profile.bus
+    # The vehicles' routers are linked to one another: with Zenoh's low-latency transport, which writes straight to
+    # the socket, the first vehicle's router (every other one's link) locked up as they all closed at once.
+    bus = dataclasses.replace(profile.bus, low_latency=False)
     if index > 1 and join:
         bus = dataclasses.replace(bus, connect=(*bus.connect, join))
     return dataclasses.replace(

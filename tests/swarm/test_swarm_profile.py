@@ -25,6 +25,7 @@ def test_vehicle_i_is_named_numbered_and_linked_as_px4_sitl_instance_i_minus_1()
     third = vehicle_copy(base, 3, 3, JOIN)
     assert (first.vehicle, third.vehicle) == ("v1", "v3")
     assert first.bus.connect == base.bus.connect and third.bus.connect == (*base.bus.connect, JOIN)
+    assert not first.bus.low_latency and not third.bus.low_latency
     for m in third.modules:
         if "MAV_SYS_ID" in {p.name for p in m.cls.PARAMS}:
             assert m.params["MAV_SYS_ID"] == 3, m.name
