@@ -39,7 +39,8 @@ from stack.supervisor import state as run_state
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
-from benchmarks.bench_lockstep import grouped_profile  # noqa: E402
+from bench_lockstep import grouped_profile  # noqa: E402  (beside this script)
+
 from tests.support.harness import stack_env  # noqa: E402
 
 LAYOUTS = {"per module": "one process per module", "per vehicle": "one process per vehicle (module groups)"}
