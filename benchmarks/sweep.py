@@ -2,13 +2,14 @@
 
     python benchmarks/sweep.py [--scenarios takeoff_land,mission_box] [--seeds 1-20] [--jobs 2]
                                [--profile P] [--wind both|calm|wind] [--wind-speed 8] [--per-seed]
-                               [--summary out.md|out.json]
+                               [--vehicles 3] [--summary out.md|out.json]
 
 Each flight is one ``stack fly SCENARIO --seed N --quiet [--wind]`` in a fresh interpreter; with
 ``--in-process`` it is the same flight, message for message, flown by ``stack.scenario.inprocess`` in a worker
 process of its own (every module in one interpreter, no bus): about three times less CPU, so a 20-seed sweep
 of the quadrotor's scenarios takes minutes, not an hour. module_kill (it kills module processes) and link_loss
-(its simulated Pixhawk runs on the wall clock) fly only as ``stack fly``. A flight is a
+(its simulated Pixhawk runs on the wall clock) fly only as ``stack fly``, and so do the swarm scenarios, with
+``--vehicles`` vehicles (default 3), judged by their swarm's checks. A flight is a
 stack of its own (its bus, ports, run directory and state), so ``--jobs`` of them run side by side in one
 ``STACK_HOME``: a temporary one, or ``--home DIR`` to keep every run directory, report and output. Without
 ``--profile`` a scenario flies on its own profile (``Scenario.profile``: link_loss on the simulated Pixhawk,
@@ -47,7 +48,10 @@ FLY_TIMEOUT_S = 1800.0
 PROCESSES_ONLY = {
     "module_kill": "it kills module processes",
     "link_loss": "its simulated Pixhawk is a process on the wall clock",
+    "swarm_formation": "its vehicles are stacks of their own on one bus",
+    "swarm_leader_loss": "its vehicles are stacks of their own on one bus",
 }
+DEFAULT_VEHICLES = 3
 CONDITIONS = {"both": (False, True), "calm": (False,), "wind": (True,)}
 
 
@@ -75,7 +79,9 @@ def parse_seeds(text: str) -> list[int]:
     return seeds
 
 
-def fly(scenario: str, profile: str, seed: int, wind: bool, home: Path, wind_speed: float | None) -> dict[str, Any]:
+def fly(
+    scenario: str, profile: str, seed: int, wind: bool, home: Path, wind_speed: float | None, vehicles: int = 1
+) -> dict[str, Any]:
     """One ``stack fly``; its report (with ``log``, the flight's output), or ``{"seed", "passed": False,
     "error", "log"}`` when it left none."""
     stem = f"{scenario}{'-wind' if wind else ''}-seed{seed}"
@@ -83,6 +89,7 @@ def fly(scenario: str, profile: str, seed: int, wind: bool, home: Path, wind_spe
     env = {k: v for k, v in os.environ.items() if k != "STACK_ENDPOINT"}
     env.update(STACK_HOME=str(home), PYTHONUNBUFFERED="1")
     args = ["fly", scenario, "--profile", profile, "--seed", str(seed), "--quiet", "--report", str(report)]
+    args += ["--vehicles", str(vehicles)] if scenarios()[scenario].swarm is not None else []
     with log.open("w") as out:
         try:
             code = subprocess.run(
@@ -149,10 +156,15 @@ def median(check: Check, values: list[Any]) -> Any:
     return statistics.median(values)
 
 
+def checks_of(scenario: Scenario) -> tuple[Check, ...]:
+    """What a flight of the scenario is judged by: a swarm's checks for a swarm scenario."""
+    return scenario.swarm.checks if scenario.swarm is not None else scenario.checks
+
+
 def summarise(case: Case, reports: list[dict[str, Any]]) -> dict[str, Any]:
     """Per check: limit, median, worst and its seed, seeds passed; ``passed`` when every worst meets its limit."""
     rows = []
-    for check in case.scenario.checks:
+    for check in checks_of(case.scenario):
         found = {r["seed"]: c for r in reports for c in r.get("checks", []) if c["name"] == check.metric}
         # A flight without a report fails every check.
         values = [(r["seed"], found[r["seed"]]["value"] if r["seed"] in found else None) for r in reports]
@@ -195,11 +207,11 @@ def print_seeds(case: Case, reports: list[dict[str, Any]]) -> None:
     for r in reports:
         by_name = {c["name"]: c for c in r.get("checks", [])}
         cells = []
-        for check in case.scenario.checks:
+        for check in checks_of(case.scenario):
             c = by_name.get(check.metric)
             cells.append("-" if c is None else format_value(c["value"]) + ("" if c["passed"] else "*"))
         rows.append((r["seed"], *cells, "passed" if r["passed"] else "FAILED"))
-    print_table(("SEED", *(c.metric for c in case.scenario.checks), "RESULT"), rows)
+    print_table(("SEED", *(c.metric for c in checks_of(case.scenario)), "RESULT"), rows)
 
 
 def print_summary(summary: dict[str, Any]) -> None:
@@ -252,7 +264,9 @@ def sweep(args: argparse.Namespace, home: Path) -> int:
             (
                 pool.submit(fly_in_one_process, case.scenario.name, case.profile, seed, case.wind, args.wind_speed)
                 if args.in_process
-                else pool.submit(fly, case.scenario.name, case.profile, seed, case.wind, home, args.wind_speed)
+                else pool.submit(
+                    fly, case.scenario.name, case.profile, seed, case.wind, home, args.wind_speed, args.vehicles
+                )
             ): i
             for i, case in enumerate(todo)
             for seed in args.seeds
@@ -305,6 +319,9 @@ def main() -> None:
     )
     parser.add_argument(
         "--wind-speed", type=float, help="the wind's speed in m/s (default: --wind's 5 m/s with gusts, from the west)"
+    )
+    parser.add_argument(
+        "--vehicles", type=int, default=DEFAULT_VEHICLES, help="how many vehicles fly a swarm scenario (default 3)"
     )
     parser.add_argument("--per-seed", action="store_true", help="also print every check's value on every seed")
     parser.add_argument("--summary", type=Path, help="write the summary to this file: JSON if .json, else markdown")

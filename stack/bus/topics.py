@@ -290,6 +290,14 @@ class TopicSubscriber:
             if item is not None:
                 return item
 
+    def wait(self, timeout: float) -> None:
+        """Block until a message has arrived or ``timeout`` (s) has passed (a ``callback`` or ``keep_last`` one)."""
+        if self.arrived is None:
+            raise TypeError(f"{self.key}: only a subscriber that queues its messages itself can wait for one")
+        self._arrival.clear()
+        if not self.arrived:
+            self._arrival.wait(timeout)
+
     def undeclare(self) -> None:
         self._sub.undeclare()
         self._node.retire(self)

@@ -133,7 +133,7 @@ def up(
         given += [o for o, v in (("--device", device), ("--host", host)) if v is not None]
         if given:
             fail(f"--vehicles starts a swarm of whole vehicles on this machine: not with {', '.join(given)}", code=2)
-        from stack.cli.swarm_up import check_swarm, run_swarm  # what starts the vehicles, only when it will
+        from stack.cli.swarm_launch import check_swarm, run_swarm  # what starts the vehicles, only when it will
 
         try:
             names = check_swarm(prof, vehicles)
@@ -142,7 +142,7 @@ def up(
         running = [n for n in names if run_state.addressed_stacks(n)]
         if running:
             fail(f"a stack for vehicle '{running[0]}' is already running; `stack down` first")
-        up_args = [profile, "--log-level", log_level, *(("--duration", str(duration)) if duration else ())]
+        up_args = ["up", profile, "--log-level", log_level, *(("--duration", str(duration)) if duration else ())]
         up_args += [*(("--speed", speed) if speed else ()), *(("--realtime",) if realtime else ())]
         up_args += [*(("--quiet",) if quiet else ()), *(("--lockstep-transport", transport) if transport else ())]
         raise typer.Exit(run_swarm(names, up_args, run_state.new_run_dir(prof.name, "swarm")))

@@ -46,6 +46,14 @@ def fly(
         help="Of a profile spread over machines ([hosts]): the host this machine is, where the scenario runs "
         "(the others run `stack up PROFILE --host NAME`)",
     ),
+    vehicles: int = typer.Option(
+        1, "--vehicles", min=1, help="Fly a swarm scenario with this many copies of the profile's vehicle (v1 leads)"
+    ),
+    swarm_vehicle: int = typer.Option(0, "--swarm-vehicle", hidden=True, help="Fly vehicle I of a swarm"),
+    swarm_size: int = typer.Option(0, "--swarm-size", hidden=True, help="Of a swarm of N vehicles"),
+    swarm_join: str = typer.Option("", "--swarm-join", hidden=True, help="Joining the first vehicle's bus there"),
+    swarm_world: str = typer.Option("", "--swarm-world", hidden=True, help="On the world clock in this file"),
+    swarm_result: str = typer.Option("", "--swarm-result", hidden=True, help="Where the scenario writes its result"),
 ) -> None:
     """Fly a scripted scenario (in lockstep, deterministic for a seed) and report how well the stack flew.
 
@@ -60,6 +68,12 @@ def fly(
         raise typer.Exit(0)
     if scenario not in known:
         fail(unknown_scenario(scenario), code=2)
+    swarm = known[scenario].swarm
+    if swarm is not None and not swarm_vehicle and vehicles < swarm.min_vehicles:
+        fail(f"scenario {scenario} flies a swarm: give --vehicles N, N at least {swarm.min_vehicles}", code=2)
+    if swarm is None and vehicles > 1:
+        swarms = ", ".join(sorted(n for n, s in known.items() if s.swarm is not None))
+        fail(f"scenario {scenario} flies one vehicle; the swarm scenarios: {swarms}", code=2)
     try:
         flags = {"plot": plot_ or web, "record": record is not None}
         prof = load_profile(profile or known[scenario].profile or DEFAULT_PROFILE, flags=flags)
@@ -69,24 +83,48 @@ def fly(
     choose_transport(prof, transport)
     if seed is not None:
         prof.seed = seed
+    if vehicles > 1:
+        given = [o for o, v in (("--plot", plot_), ("--web", web), ("--save", save), ("--record", record)) if v]
+        given += ["--host"] if host is not None else []
+        if given:
+            fail(f"--vehicles flies a swarm of whole vehicles on this machine: not with {', '.join(given)}", code=2)
+        from stack.cli.swarm_fly import fly_swarm  # what starts the vehicles, only when it will
+
+        wind_args = ["--wind-speed", str(wind_speed)] if wind_speed is not None else ["--wind"] if wind else []
+        args = ["fly", scenario, *(("--profile", profile) if profile else ()), "--seed", str(prof.seed)]
+        args += ["--log-level", log_level, *(("--quiet",) if quiet else ()), *wind_args]
+        args += ("--lockstep-transport", transport) if transport else ()
+        raise typer.Exit(fly_swarm(prof, known[scenario], vehicles, args, report))
+    world: dict[str, object] = {}
+    role = ""
+    if swarm_vehicle:
+        from stack.supervisor.swarm import vehicle_copy, vehicle_names
+
+        try:
+            names = vehicle_names(prof, swarm_size)
+            prof = vehicle_copy(prof, swarm_vehicle, swarm_size, swarm_join)
+        except ValueError as e:
+            fail(str(e), code=2)
+        world = {"world": swarm_world, "world_slot": swarm_vehicle - 1, "world_vehicles": tuple(names)}
+        role = json.dumps({"slot": swarm_vehicle, "vehicles": names, "spacing_m": prof.swarm_spacing_m})
     prof.port = 0  # the flight's own router, on a free port
     # A flight is a stack of its own beside others: the links to the world outside (ground-station ports)
     # belong to `stack up`, and a scripted flight needs none.
     prof.modules = [m for m in prof.modules if not m.cls.OUTSIDE_LOCKSTEP]
     name = run_state.flight_name(prof.vehicle, os.getpid())
     run_dir = run_state.new_run_dir(scenario, name)
-    result_path = run_dir / "scenario_result.json"
+    result_path = Path(swarm_result) if swarm_result else run_dir / "scenario_result.json"
     try:
         wind = wind or wind_speed is not None
         speed = WIND_SPEED if wind_speed is None else wind_speed
-        prepare_flight(prof, scenario, result_path, wind, speed, host or "")
+        prepare_flight(prof, scenario, result_path, wind, speed, host or "", role)
     except ValueError as e:
         fail(f"scenario {scenario}: {e}", code=2)
     add_observers(prof, plot=plot_, web=web, save=save, record=record, own_ports=True, host=host or "")
     shown = ("scenario", "rerun_bridge") if web else ("scenario",)  # the web viewer's URL, even with --quiet
     from stack.supervisor.supervisor import Supervisor, UpOptions  # what starts processes, only when it will
 
-    options = UpOptions(log_level=log_level, echo_logs=not quiet, echo_only=shown, kind=run_state.FLY)
+    options = UpOptions(log_level=log_level, echo_logs=not quiet, echo_only=shown, kind=run_state.FLY, **world)
     typer.echo(f"[stack] flight '{name}' (another terminal addresses it with --vehicle {name})")
     code = Supervisor(prof, options, run_dir, host).run()
     if not result_path.exists():
@@ -110,11 +148,11 @@ def fly(
     }
     out = report or run_dir / "report.json"
     out.write_text(json.dumps(full, indent=2))
-    _print_summary(full, out)
+    print_summary(full, out)
     raise typer.Exit(0 if full["passed"] else 1)
 
 
-def _print_summary(report: dict, path: Path) -> None:
+def print_summary(report: dict, path: Path) -> None:
     status = "PASSED" if report["passed"] else "FAILED"
     windy = f", in {report['wind_speed_m_s']:g} m/s wind" if report["wind"] else ""
     typer.echo(

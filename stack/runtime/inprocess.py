@@ -67,6 +67,9 @@ class InProcessRuntime(Runtime):
     def watch_hosts(self, on_beat: Callable[[str, bytes], None]) -> None:
         """Nothing to watch: one process on one host."""
 
+    def add_peer_input(self, vehicle: str, topic: str, delay_us: int) -> None:
+        raise ValueError(f"{self.name}: one vehicle in one process reads no other vehicle ({vehicle}'s {topic})")
+
     def add_input(self, topic: str, instance: int, queue: bool, capacity: int) -> None:
         if (topic, instance) not in self.inputs:
             buf = InputBuffer(self.bus.subscribe(self, topic, instance), queue)

@@ -151,6 +151,11 @@ class Module:
         """Read a topic: the latest value, or with ``queue=True`` every message (for commands)."""
         self.rt.add_input(topic_name(topic), instance, queue, capacity)
 
+    def subscribe_peer(self, vehicle: str, topic: Topic, delay_s: float) -> None:
+        """Read another vehicle's topic on the bus, each message ``delay_s`` after it was published (as over a swarm's
+        radio; see stack.runtime.peers); :meth:`peer` gives it."""
+        self.rt.add_peer_input(vehicle, topic_name(topic), round(delay_s * 1e6))
+
     def advertise(self, topic: Topic, instance: int = 0, *, reliable: bool | None = None) -> None:
         self.rt.add_output(topic_name(topic), instance, reliable)
 
@@ -167,6 +172,14 @@ class Module:
     def take(self, topic: Topic[M], instance: int = 0) -> list[M]:
         """Every message that arrived since the previous call, oldest first (``queue=True`` inputs)."""
         return self.rt.inputs[(topic.name, instance)].take()
+
+    def peer(self, vehicle: str, topic: Topic[M]) -> M | None:
+        """The message of another vehicle's topic due now (see :meth:`subscribe_peer`), or None before its first."""
+        return self.rt.peer_inputs[(vehicle, topic.name)].read(self.rt.now_us())
+
+    def peer_present(self, vehicle: str, topic: Topic) -> bool:
+        """Whether any module of that vehicle is running (its processes are on the bus)."""
+        return self.rt.peer_inputs[(vehicle, topic.name)].present()
 
     def publish(self, topic: Topic[M], msg: M, instance: int = 0) -> None:
         self.rt.outputs[(topic.name, instance)].publish(msg, self.rt.now_us())

@@ -35,6 +35,7 @@ from stack.runtime.inputs import InputBuffer, sample_time
 from stack.runtime.lockstep import TIMER, LockstepCoordinator, LockstepMember
 from stack.runtime.module import TRIGGER_BACKLOG, Module, Timer, Trigger
 from stack.runtime.pacing import Pacer
+from stack.runtime.peers import PeerInput
 from stack.runtime.priority import raise_priority
 from stack.runtime.services import Heartbeat, ParamService
 from stack.runtime.spec import ModuleSpec, load_module_class, resolve_args
@@ -128,6 +129,7 @@ class Runtime:
         self.node: Node
         self.module: Module
         self._module_watchers: list[zenoh.Subscriber] = []
+        self.peer_inputs: dict[tuple[str, str], PeerInput] = {}
         self.access = Access.of(spec.vehicle, spec.peers, spec.open_topics) if spec.peers else None
 
     # -- clock -------------------------------------------------------------------------------------
@@ -162,6 +164,13 @@ class Runtime:
                 on_beat(host, sample.payload.to_bytes())
 
         self._module_watchers.append(self.node.session.declare_subscriber(beats_key(vehicle), beat))
+
+    def add_peer_input(self, vehicle: str, topic: str, delay_us: int) -> None:
+        if vehicle == self.spec.vehicle:
+            raise ValueError(f"{self.name}: {topic} of vehicle {vehicle} is this vehicle's own topic, not a peer's")
+        if (vehicle, topic) not in self.peer_inputs:
+            self.peer_inputs[(vehicle, topic)] = PeerInput(self.node, self.spec.bus, vehicle, topic, delay_us,
+                                                           self.lockstep)
 
     def add_input(self, topic: str, instance: int, queue: bool, capacity: int) -> None:
         if (topic, instance) in self.inputs:
@@ -301,6 +310,8 @@ class Runtime:
         module = getattr(self, "module", None)
         if module is not None:
             module.close()
+        for peer in self.peer_inputs.values():
+            peer.close()
         for service in self._services:
             service.close()
         if self._lockstep is not None:

@@ -1,4 +1,4 @@
-"""One simulated clock for the vehicles of a swarm, each running its own lockstep (stack.cli.swarm_up).
+"""One simulated clock for the vehicles of a swarm, each running its own lockstep (stack.cli.swarm_launch).
 
 As the vehicles of one Gazebo world follow its one ``/clock`` (PX4's ``GZBridge::clockCallback``), a vehicle's
 lockstep coordinator begins step ``t`` only once every vehicle of the world has finished the step before it: at

@@ -48,6 +48,23 @@ class Scenario:
     options: dict[str, str] = field(default_factory=dict)
     """What a vehicle's profile may choose for the flight, with the defaults (``[scenario.plane_mission]
     mission = "c172_rectangle"``: a mission sized for that aircraft)."""
+    swarm: Swarm | None = None
+    """A scenario of several vehicles (``stack fly NAME --vehicles N``), or None for one of one vehicle."""
+
+
+@dataclass(frozen=True)
+class Swarm:
+    """What a swarm scenario adds: what the other vehicles hear from the leader (vehicle 1), and how the swarm's
+    flight is judged from every vehicle's result (each with its ground-truth track, stack.scenario.swarm_track)."""
+
+    peers: tuple[Topic, ...]
+    """The leader's topics each other vehicle reads, ``peer_delay_s`` after the leader published them."""
+    peer_delay_s: float
+    evaluate: Callable[[list[dict[str, Any]], float], dict[str, Any]]
+    """The swarm's metrics from the vehicles' results (by vehicle; None for one that wrote none) and the spacing of
+    their homes."""
+    checks: tuple[Check, ...]
+    min_vehicles: int = 2
 
 
 def scenarios() -> dict[str, Scenario]:
@@ -62,12 +79,14 @@ def scenarios() -> dict[str, Scenario]:
         plane_loiter_wind,
         plane_mission,
         rpyt_step,
+        swarm_formation,
+        swarm_leader_loss,
         takeoff_land,
     )
 
     flights = (
         attitude_step, takeoff_land, mission_box, gps_loss, failsafes, link_loss, module_kill, rpyt_step, plane_mission,
-        plane_loiter_wind, plane_gps_loss,
+        plane_loiter_wind, plane_gps_loss, swarm_formation, swarm_leader_loss,
     )
     return {s.name: s for s in (f.SCENARIO for f in flights)}
 

@@ -25,11 +25,18 @@ rule for SIM_WIND_GUST), 2 s correlation time."""
 
 
 def prepare_flight(
-    prof: Profile, scenario: str, result_path: Path, wind: bool, wind_speed: float = WIND_SPEED, host: str = ""
+    prof: Profile,
+    scenario: str,
+    result_path: Path,
+    wind: bool,
+    wind_speed: float = WIND_SPEED,
+    host: str = "",
+    swarm: str = "",
 ) -> None:
     """Set the scenario's parameters (and the wind's, at ``wind_speed``), and add the scenario module writing
-    ``result_path`` with the profile's limits for it (doubled in wind), on ``host`` of a profile spread over several;
-    a parameter no module has is a ValueError."""
+    ``result_path`` with the profile's limits for it (doubled in wind), on ``host`` of a profile spread over several,
+    as the vehicle of a swarm flight ``swarm`` says (the module's argument; empty: a flight of one vehicle); a
+    parameter no module has is a ValueError."""
     chosen = get_scenario(scenario)
     set_params(prof, chosen.params)
     if wind:
@@ -37,7 +44,7 @@ def prepare_flight(
     limits = dict(prof.scenario_limits.get(scenario, {}))
     if wind:
         limits = windy_limits(chosen.checks, limits)
-    add_scenario(prof, scenario, result_path, limits, prof.scenario_options.get(scenario, {}), host)
+    add_scenario(prof, scenario, result_path, limits, prof.scenario_options.get(scenario, {}), host, swarm)
 
 
 def set_params(prof: Profile, params: dict[str, object]) -> None:
@@ -67,6 +74,7 @@ def add_scenario(
     limits: dict[str, object],
     options: dict[str, str] | None = None,
     host: str = "",
+    swarm: str = "",
 ) -> None:
     """Append the scenario module to a profile (critical: the stack stops when the scenario ends)."""
     cls = load_module_class("scenario")
@@ -81,6 +89,7 @@ def add_scenario(
                 "result": str(result_path),
                 "limits": json.dumps(limits),
                 "options": json.dumps(options or {}),
+                "swarm": swarm,
             },
             condition="",
             restart="no",

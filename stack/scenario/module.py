@@ -14,9 +14,11 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from stack.msg.registry import ORB_ID
+from stack.msg.topic import Topic
 from stack.runtime.module import Arg, Module, Timer
 from stack.scenario.catalogue import get_scenario
 from stack.scenario.script import ScenarioError, ScriptContext
+from stack.scenario.swarm_track import swarm_role, swarm_track
 
 if TYPE_CHECKING:
     from stack.runtime.runner import Runtime
@@ -31,6 +33,7 @@ class ScenarioModule(Module):
         Arg("result", "", "Where to write the result JSON"),
         Arg("limits", "{}", 'JSON object overriding check limits, e.g. {"yaw_rise_time_s": 0.3}'),
         Arg("options", "{}", 'JSON object choosing the scenario\'s options, e.g. {"mission": "c172_rectangle"}'),
+        Arg("swarm", "", 'A vehicle of a swarm flight: {"slot": 1, "vehicles": ["v1", "v2"], "spacing_m": 5.0}'),
     )
 
     def __init__(self, rt: Runtime) -> None:
@@ -47,7 +50,17 @@ class ScenarioModule(Module):
             self.advertise(topic)
         self._pids: dict[str, int] = {}
         self.watch_modules(self._on_module)
-        self.ctx = ScriptContext(self.publish, lambda: self.now_us() * 1e-6, lambda: dict(self._pids))
+        self.role = swarm_role(str(self.args["swarm"])) if self.args["swarm"] else None
+        self.ctx = ScriptContext(self.publish, lambda: self.now_us() * 1e-6, lambda: dict(self._pids), self.role)
+        self.ctx.end_flight = self._end_now
+        self.peers: tuple[Topic, ...] = ()
+        if self.role is not None:
+            if self.scenario.swarm is None:
+                raise ValueError(f"scenario {self.scenario.name} flies one vehicle, not a swarm")
+            if not self.role.leads:
+                self.peers = self.scenario.swarm.peers
+            for topic in self.peers:
+                self.subscribe_peer(self.role.leader, topic, self.scenario.swarm.peer_delay_s)
         self.ctx.options = {**self.scenario.options, **_json_object("options", str(self.args["options"]))}
         self.script = self.scenario.script(self.ctx)
         self.waiting = None
@@ -88,11 +101,31 @@ class ScenarioModule(Module):
             if m is not None:
                 ctx.latest[topic] = m
         ctx.take_acks(self.take(ORB_ID.vehicle_command_ack))
-        for t, text in ctx.events:
+        self._say_events()
+        if self.role is not None:
+            for topic in self.peers:
+                heard = self.peer(self.role.leader, topic)
+                if heard is not None:
+                    ctx.leader[topic] = heard
+
+    def _say_events(self) -> None:
+        for t, text in self.ctx.events:
             self.log.info("t=%.2f s: %s", t, text)
-        ctx.events.clear()
+        self.ctx.events.clear()
+
+    def _end_now(self) -> None:
+        """The result as it stands, written before the flight ends abruptly (ScriptContext.kill_stack)."""
+        self._say_events()
+        self._write(self._result(None))
 
     def _finish(self, error: str | None) -> None:
+        self._say_events()
+        result = self._result(error)
+        self._write(result)
+        self.log.info("scenario %s %s", self.scenario.name, "passed" if result["passed"] else "FAILED")
+        raise SystemExit(0)
+
+    def _result(self, error: str | None) -> dict[str, Any]:
         wall = time.monotonic() - (self.started_wall or time.monotonic())
         sim = self.ctx.now - self.started_sim
         metrics: dict[str, object] = {}
@@ -117,10 +150,13 @@ class ScenarioModule(Module):
             "metrics": {k: _plain(v) for k, v in metrics.items()},
             "checks": checks,
         }
+        if self.role is not None:
+            result["track"] = swarm_track(self.ctx)
+        return result
+
+    def _write(self, result: dict[str, Any]) -> None:
         if self.args["result"]:
             Path(str(self.args["result"])).write_text(json.dumps(result, indent=2))
-        self.log.info("scenario %s %s", self.scenario.name, "passed" if result["passed"] else "FAILED")
-        raise SystemExit(0)
 
 
 def _plain(value: object) -> object:

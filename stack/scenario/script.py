@@ -7,6 +7,7 @@ setpoints and commands. It only talks to the stack over the bus, as any user's s
 
 from __future__ import annotations
 
+import contextlib
 import math
 import os
 import signal
@@ -43,6 +44,24 @@ class Series:
         return [v for t, v in zip(self.times, self.values, strict=True) if t0 <= t <= t1]
 
 
+@dataclass(frozen=True)
+class SwarmRole:
+    """A vehicle's place in a swarm flight: its slot (1: the leader), the vehicles by slot, the spacing of their
+    homes (each ``spacing_m`` east of the one before, stack.supervisor.swarm)."""
+
+    slot: int
+    vehicles: tuple[str, ...]
+    spacing_m: float
+
+    @property
+    def leader(self) -> str:
+        return self.vehicles[0]
+
+    @property
+    def leads(self) -> bool:
+        return self.slot == 1
+
+
 class LatestMessages:
     """The newest message of each topic the scenario reads, by handle: ``latest[ORB_ID.vehicle_status]`` is a
     ``VehicleStatus``."""
@@ -71,10 +90,17 @@ class ScriptContext:
         publish: Callable[[Topic, Any], None],
         now_s: Callable[[], float],
         pids: Callable[[], dict[str, int]] = dict,
+        swarm: SwarmRole | None = None,
     ) -> None:
         self._publish = publish
         self._now_s = now_s
         self._pids = pids
+        self.swarm = swarm
+        """The vehicle's place in a swarm flight (None: a flight of one vehicle)."""
+        self.leader = LatestMessages()
+        """The leader's topics (Swarm.peers) as this vehicle hears them now: each as published Swarm.peer_delay_s
+        ago (a follower's only; missing before the first)."""
+        self.end_flight: Callable[[], None] = _cannot_end
         self.latest = LatestMessages()
         self.series: dict[Topic, Series] = {}
         self.events: list[tuple[float, str]] = []
@@ -124,6 +150,19 @@ class ScriptContext:
         """The process id of a running module of the stack (None while it is not running)."""
         return self._pids().get(module)
 
+    def kill_stack(self) -> None:
+        """End this vehicle at once, as a crash or a power loss would: its result is written as it stands, then its
+        supervisor and every module are killed (SIGKILL), this one last."""
+        self.log("killing every process of this vehicle")
+        self.end_flight()
+        supervisor = os.getppid()
+        os.kill(supervisor, signal.SIGKILL)
+        for pid in self._pids().values():
+            if pid != os.getpid():
+                with contextlib.suppress(ProcessLookupError):
+                    os.kill(pid, signal.SIGKILL)
+        os.kill(os.getpid(), signal.SIGKILL)
+
     def kill(self, module: str) -> int:
         """SIGKILL a module of the stack, as a crash would end it; returns the pid it had."""
         pid = self.pid(module)
@@ -143,7 +182,9 @@ class ScriptContext:
         self._acks.clear()
         # Floats as the fields say (an int in a float field would go on the wire as a MessagePack int).
         floats = {name: float(value) for name, value in params.items()}
-        self.publish(ORB_ID.vehicle_command, VehicleCommand(command=command, from_external=True, **floats))
+        # Addressed to whichever vehicle's bus it is on (a vehicle of a swarm is not MAVLink system 1).
+        message = VehicleCommand(command=command, from_external=True, target_system=0, target_component=0, **floats)
+        self.publish(ORB_ID.vehicle_command, message)
         label = command_label(command)
         yield self.until(lambda: any(a.command == command for a in self._acks), timeout, f"the ack of command {label}")
         ack = next(a for a in self._acks if a.command == command)
@@ -152,6 +193,10 @@ class ScriptContext:
             raise ScenarioError(f"command {label} refused ({result}): {ack.reason or 'no reason given'}")
         self.log(f"command {label} accepted")
         return ack
+
+
+def _cannot_end() -> None:
+    raise ScenarioError("this flight's result cannot be written from here")
 
 
 def degrees(values: list[float]) -> list[float]:

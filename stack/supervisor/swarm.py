@@ -2,7 +2,9 @@
 
 Vehicle ``i`` (from 1) of ``n`` follows PX4's multi-vehicle SITL (``Tools/simulation/sitl_multiple_run.sh``):
 its name is ``[swarm] names[i-1]``, else ``v<i>``; MAV_SYS_ID is ``i`` (``ROMFS/px4fmu_common/init.d-posix/rcS``
-sets it to the instance + 1); each MAVLink link binds ``i - 1`` ports further and sends ``i - 1`` ports further,
+sets it to the instance + 1); its seed is the profile's for vehicle 1 and one drawn from the profile's and ``i``
+for the others (numpy's SeedSequence), so no two vehicles see the same sensor noise and a seed still gives one
+swarm flight; each MAVLink link binds ``i - 1`` ports further and sends ``i - 1`` ports further,
 but a ground station's link (``shared_remote``) sends where every vehicle's does, as PX4's GCS links all send to
 14550 (``px4-rc.mavlink``); its simulated home lies ``(i - 1) × [swarm] spacing_m`` east of the profile's.
 Vehicles after the first join the first one's bus (its router's endpoint), over Zenoh's queued transport.
@@ -13,6 +15,8 @@ from __future__ import annotations
 import copy
 import dataclasses
 import re
+
+import numpy as np
 
 from stack.mathlib.geo import MapProjection
 from stack.params import catalogue
@@ -51,10 +55,16 @@ def vehicle_copy(profile: Profile, index: int, count: int, join: str = "") -> Pr
     return dataclasses.replace(
         profile,
         vehicle=vehicle_names(profile, count)[shift],
+        seed=vehicle_seed(profile.seed, index),
         modules=modules,
         processes=copy.deepcopy(profile.processes),
         bus=bus,
     )
+
+
+def vehicle_seed(seed: int, index: int) -> int:
+    """The seed of vehicle ``index`` (from 1) of a swarm flown with ``seed``."""
+    return seed if index == 1 else int(np.random.SeedSequence([seed & 0xFFFFFFFFFFFFFFFF, index]).generate_state(1)[0])
 
 
 def _module_copy(entry: ModuleEntry, index: int, east_m: float) -> ModuleEntry:

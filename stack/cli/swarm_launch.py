@@ -1,7 +1,8 @@
-"""``stack up PROFILE --vehicles N``: N copies of the profile's vehicle on one bus (stack.supervisor.swarm).
+"""``stack up PROFILE --vehicles N`` and ``stack fly SCENARIO --vehicles N``: N copies of the profile's vehicle on one
+bus (stack.supervisor.swarm).
 
-Each vehicle is a `stack up` of its own (its supervisor, router, run directory and state, so `stack status
---vehicle v2` and `stack down --vehicle v2` reach it), started by this process one after the other, each once the
+Each vehicle is a `stack up` (or `stack fly`) of its own (its supervisor, router, run directory and state, so `stack
+status --vehicle v2` and `stack down --vehicle v2` reach it), started by this process one after the other, each once the
 one before is up (on a small machine, dozens of module processes starting at once would miss their start-up
 deadlines), the others joining the first one's router, all on one world clock in lockstep
 (stack.runtime.world_clock).
@@ -17,7 +18,7 @@ import subprocess
 import sys
 import threading
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from types import FrameType
 
@@ -39,9 +40,12 @@ def check_swarm(profile: Profile, count: int) -> list[str]:
     return vehicle_names(profile, count)
 
 
-def run_swarm(names: Sequence[str], up_args: Sequence[str], run_dir: Path) -> int:
-    """Start each vehicle's `stack up UP_ARGS` on one world clock (its file in ``run_dir``), one after the other, and
-    relay their lines until all have stopped; their worst exit code. A vehicle that does not come up stops them all."""
+def run_swarm(
+    names: Sequence[str], args: Sequence[str], run_dir: Path, own: Callable[[str], list[str]] = lambda _: []
+) -> int:
+    """Start each vehicle's `stack ARGS` (``args``: ``up PROFILE ...`` or ``fly SCENARIO ...``, then ``own(name)``)
+    on one world clock (its file in ``run_dir``), one after the other, and relay their lines until all have stopped;
+    their worst exit code. A vehicle that does not come up stops them all."""
     world = run_dir / WORLD_FILE
     create_world(world, len(names))
     launched: list[_Vehicle] = []
@@ -58,7 +62,7 @@ def run_swarm(names: Sequence[str], up_args: Sequence[str], run_dir: Path) -> in
     for index, name in enumerate(names, start=1):
         if stopping:
             break
-        command = [sys.executable, "-m", "stack", "up", *up_args, "--swarm-vehicle", str(index)]
+        command = [sys.executable, "-m", "stack", *args, *own(name), "--swarm-vehicle", str(index)]
         command += ["--swarm-size", str(len(names)), "--swarm-world", str(world)]
         command += ("--swarm-join", join) if join else ()
         vehicle = _Vehicle(name, command)
@@ -72,8 +76,10 @@ def run_swarm(names: Sequence[str], up_args: Sequence[str], run_dir: Path) -> in
     for slot in range(len(launched), len(names)):
         leave_world(world, slot)
     codes = _wait_all([v.child for v in launched], world)
-    for vehicle in launched:
+    for vehicle, code in zip(launched, codes, strict=True):
         vehicle.relay.join()
+        if code < 0:
+            typer.echo(f"[swarm] {vehicle.name} was ended by {signal.Signals(-code).name}")
     return max(codes)
 
 
