@@ -65,12 +65,34 @@ def plot(
     duration: float = typer.Option(0.0, "--duration", "-d", help="Seconds of plotting, then stop (0: until Ctrl-C)"),
     vehicle: str | None = VehicleOption,
     endpoint: str | None = EndpointOption,
+    all_: bool = typer.Option(
+        False, "--all", help="Every vehicle on the bus in one view: positions, heights, speeds, batteries, modes"
+    ),
 ) -> None:
     """Live plots of a running stack in Rerun: attitude, rates, motors, position, estimator, 3D view."""
     from stack.runtime.runner import Runtime, Shutdown, shutdown_behind  # the module runtime, only when plotting
 
     if not web and not save and not has_display():
         fail("no display here for the Rerun viewer: use --web (a viewer in the browser) or --save FILE.rrd")
+    if all_:
+        if vehicle is not None:
+            fail("--all plots every vehicle: give it or --vehicle, not both", code=2)
+        from stack.cli.swarm_plot import plot_swarm
+
+        _stop_on_signals()
+        if duration > 0:
+            signal.setitimer(signal.ITIMER_REAL, duration)
+        sinks = {"save": save, "web": web, "spawn": not web and has_display(), "bind": bind}
+        sinks |= {"grpc_port": (0 if web else DEFAULT_GRPC_PORT) if grpc_port is None else grpc_port}
+        sinks |= {"web_port": 0 if web_port is None else web_port}
+        try:
+            plot_swarm(endpoint, sinks, window or None)
+        except Shutdown:
+            pass
+        finally:
+            signal.setitimer(signal.ITIMER_REAL, 0)
+        typer.echo("plot stopped")
+        return
     vehicle_name, bus = find_stack(vehicle, endpoint)
     vehicle_name, lockstep = _probe(vehicle_name, endpoint, bus)
     spec = ModuleSpec(

@@ -1,12 +1,13 @@
 """`stack up --vehicles 2`: two copies of the default profile's vehicle on one bus, the second joining the first's
 router.
 
-`stack vehicles` lists them with their state; `--all` and `--vehicle` address all of them or one, and a vehicle
-that is not there, or a name that cannot be one, is one clear error. Each is its own MAVLink system with PX4
-multi-vehicle SITL's numbering: every ground-station link sends to the one ground-station port, where MAVSDK finds
-systems 1 and 2; vehicle i's API link sends i - 1 ports further, where MAVSDK finds system i alone. Both keep one
-simulated clock: a vehicle whose simulator stands still holds the other. The links' first ports are free ones (the
-launch profile's are PX4's fixed ones); the swarm runs at real speed, which is all these checks need.
+`stack vehicles` lists them with their state; `--all` and `--vehicle` address all of them or one, and a vehicle that
+is not there, or a name that cannot be one, is one clear error; `stack plot --all` draws both in one view. Each is
+its own MAVLink system with PX4 multi-vehicle SITL's numbering: every ground-station link sends to the one ground-
+station port, where MAVSDK finds systems 1 and 2; vehicle i's API link sends i - 1 ports further, where MAVSDK finds
+system i alone. Both keep one simulated clock: a vehicle whose simulator stands still holds the other. The links'
+first ports are free ones (the launch profile's are PX4's fixed ones); the swarm runs at real speed, which is all
+these checks need.
 """
 
 from __future__ import annotations
@@ -26,6 +27,7 @@ from mavsdk.asyncio import ComponentType, Configuration, Mavsdk
 from stack.mathlib.geo import MapProjection
 from tests.mavlink.peer import Link, links_profile, udp_port
 from tests.support.harness import RunningStack, eventually, wait_no_processes
+from tests.viz.rrd import read_rrd
 
 VEHICLES = ("v1", "v2")
 
@@ -156,6 +158,23 @@ def test_a_command_reaches_only_the_vehicle_it_names_or_all_of_them(swarm):
     out = swarm.cli("cmd", "hold", "--all", "--vehicle", "v1")
     assert out.returncode == 2
     assert out.stderr.strip() == "error: --all addresses every vehicle: give it or --vehicle, not both; nothing sent"
+
+
+def test_plot_all_draws_every_vehicle_in_one_view(swarm, tmp_path):
+    rrd = tmp_path / "swarm.rrd"
+    out = swarm.cli("plot", "--all", "--save", str(rrd), "--duration", "3")
+    assert out.returncode == 0, out.stderr
+    assert "plotting v1" in out.stdout and "plotting v2" in out.stdout
+    content = read_rrd(rrd)
+    where = {}
+    for vehicle in VEHICLES:
+        for root in ("/swarm/world", "/swarm/height", "/swarm/speed", "/swarm/battery"):
+            assert content.rows(f"{root}/{vehicle}") > 0, (root, vehicle, sorted(content.entities()))
+        where[vehicle] = content.values(f"/swarm/world/{vehicle}", "Points3D:positions")[-1][0]
+    north, east, _ = (where["v2"][i] - where["v1"][i] for i in range(3))
+    assert abs(north) < 2.0 and abs(east - 5.0) < 2.0, where  # drawn as far apart as their homes are
+    events = [row[0] for row in content.values("/swarm/events", "TextLog:text")]
+    assert any(e.startswith("v1: ") for e in events) and any(e.startswith("v2: ") for e in events), events
 
 
 async def systems_heard(port: int, count: int) -> set[int]:
