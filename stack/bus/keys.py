@@ -118,6 +118,11 @@ def synced_query(vehicle: str) -> str:
     return f"{ROOT}/{vehicle}/@synced/*"
 
 
+def scenario_result_key(vehicle: str) -> str:
+    """Where a vehicle's scenario puts its result as it ends (the launchers of a swarm flight read it)."""
+    return f"{ROOT}/{vehicle}/@scenario/result"
+
+
 def supervisor_key(vehicle: str, host: str, what: str) -> str:
     """What the supervisor of one host of the vehicle answers (its roster, status...)."""
     return f"{ROOT}/{vehicle}/@supervisor/{host}/{what}"

@@ -49,6 +49,13 @@ def fly(
     vehicles: int = typer.Option(
         1, "--vehicles", min=1, help="Fly a swarm scenario with this many copies of the profile's vehicle (v1 leads)"
     ),
+    here: str = typer.Option(
+        "", "--here", help="Of a swarm spread over machines: the vehicles this one flies (v1,v2); see --listen, --join"
+    ),
+    listen: list[str] = typer.Option(
+        [], "--listen", help="With --here: where the other machines reach this one's share (e.g. tcp/10.0.0.1:7447)"
+    ),
+    join: list[str] = typer.Option([], "--join", help="With --here: another machine's --listen endpoint to join"),
     swarm_vehicle: int = typer.Option(0, "--swarm-vehicle", hidden=True, help="Fly vehicle I of a swarm"),
     swarm_size: int = typer.Option(0, "--swarm-size", hidden=True, help="Of a swarm of N vehicles"),
     swarm_join: str = typer.Option("", "--swarm-join", hidden=True, help="Joining the first vehicle's bus there"),
@@ -83,18 +90,23 @@ def fly(
     choose_transport(prof, transport)
     if seed is not None:
         prof.seed = seed
+    spread_options = [o for o, v in (("--here", here), ("--listen", listen), ("--join", join)) if v]
+    if spread_options and (vehicles < 2 or not here):
+        fail(f"{', '.join(spread_options)}: a share of a swarm flight: give --vehicles N and --here", code=2)
     if vehicles > 1:
         given = [o for o, v in (("--plot", plot_), ("--web", web), ("--save", save), ("--record", record)) if v]
         given += ["--host"] if host is not None else []
         if given:
-            fail(f"--vehicles flies a swarm of whole vehicles on this machine: not with {', '.join(given)}", code=2)
-        from stack.cli.swarm_fly import fly_swarm  # what starts the vehicles, only when it will
+            fail(f"--vehicles flies a swarm of whole vehicles: not with {', '.join(given)}", code=2)
+        from stack.cli.swarm_fly import Spread, fly_swarm  # what starts the vehicles, only when it will
+
+        spread = Spread([n.strip() for n in here.split(",") if n.strip()], listen, join) if here else None
 
         wind_args = ["--wind-speed", str(wind_speed)] if wind_speed is not None else ["--wind"] if wind else []
         args = ["fly", scenario, *(("--profile", profile) if profile else ()), "--seed", str(prof.seed)]
         args += ["--log-level", log_level, *(("--quiet",) if quiet else ()), *wind_args]
         args += ("--lockstep-transport", transport) if transport else ()
-        raise typer.Exit(fly_swarm(prof, known[scenario], vehicles, args, report))
+        raise typer.Exit(fly_swarm(prof, known[scenario], vehicles, args, report, spread))
     world: dict[str, object] = {}
     role = ""
     if swarm_vehicle:

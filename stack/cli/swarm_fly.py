@@ -12,6 +12,7 @@ from __future__ import annotations
 import json
 import time
 from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -19,6 +20,7 @@ import typer
 
 from stack.cli.common import fail
 from stack.cli.fly import print_summary
+from stack.cli.swarm_hub import Hub
 from stack.cli.swarm_launch import check_swarm, run_swarm
 from stack.scenario.catalogue import Scenario
 from stack.scenario.flight import WIND_SPEED, windy_limits
@@ -26,25 +28,51 @@ from stack.supervisor import state as run_state
 from stack.supervisor.profile import Profile
 
 
-def fly_swarm(prof: Profile, scenario: Scenario, count: int, args: Sequence[str], report: Path | None) -> int:
-    """Fly ``scenario`` with ``count`` vehicles of ``prof`` (each ``stack ARGS``); 0 if the swarm's checks pass."""
+def fly_swarm(
+    prof: Profile,
+    scenario: Scenario,
+    count: int,
+    args: Sequence[str],
+    report: Path | None,
+    spread: Spread | None = None,
+) -> int:
+    """Fly ``scenario`` with ``count`` vehicles of ``prof`` (each ``stack ARGS``), or with ``spread`` this machine's
+    share of them; 0 if the swarm's checks pass."""
     assert scenario.swarm is not None
     try:
         names = check_swarm(prof, count)
     except ValueError as e:
         fail(str(e), code=2)
-    running = [n for n in names if run_state.addressed_stacks(n)]
+    here = names if spread is None else spread.here
+    unknown = [n for n in here if n not in names]
+    if unknown:
+        fail(f"--here: no vehicle {', '.join(unknown)} in a swarm of {', '.join(names)}", code=2)
+    running = [n for n in here if run_state.addressed_stacks(n)]
     if running:
         fail(f"a stack for vehicle '{running[0]}' is already running; `stack down` first")
     run_dir = run_state.new_run_dir(scenario.name, "swarm")
-    paths = [run_dir / f"{name}.result.json" for name in names]
-    for path in paths:
-        path.unlink(missing_ok=True)
+    paths = {name: run_dir / f"{name}.result.json" for name in here}
     typer.echo(f"[swarm] {scenario.name} with {', '.join(names)} (seed {prof.seed}); logs in {run_dir}")
     started = time.monotonic()
-    run_swarm(names, args, run_dir, lambda name: ["--swarm-result", str(run_dir / f"{name}.result.json")])
+
+    def own(name: str) -> list[str]:
+        return ["--swarm-result", str(paths[name])]
+
+    if spread is None:
+        run_swarm(names, args, run_dir, own)
+        heard: dict[str, dict[str, Any]] = {}
+    else:
+        hub = Hub(spread.listen, spread.join)
+        try:
+            run_swarm(names, args, run_dir, own, here=here, hub=hub.local)
+            hub.wait_results([n for n in names if n not in here])
+            heard = dict(hub.results)
+        finally:
+            hub.close()
     wall = time.monotonic() - started
-    results: list[dict[str, Any] | None] = [json.loads(p.read_text()) if p.exists() else None for p in paths]
+    results: list[dict[str, Any] | None] = [
+        json.loads(paths[n].read_text()) if n in paths and paths[n].exists() else heard.get(n) for n in names
+    ]
     error = next((f"{n}: {r['error']}" for n, r in zip(names, results, strict=True) if r and r["error"]), None)
     metrics: dict[str, Any] = {}
     if error is None:
@@ -88,6 +116,16 @@ def fly_swarm(prof: Profile, scenario: Scenario, count: int, args: Sequence[str]
     out.write_text(json.dumps(full, indent=2))
     print_summary(full, out)
     return 0 if full["passed"] else 1
+
+
+@dataclass(frozen=True)
+class Spread:
+    """This machine's share of a swarm spread over several: its vehicles, where its hub listens for the other
+    machines' and where it reaches theirs (stack.cli.swarm_hub)."""
+
+    here: list[str]
+    listen: list[str]
+    join: list[str]
 
 
 def _wind_speed(args: Sequence[str]) -> float:

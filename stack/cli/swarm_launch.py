@@ -24,6 +24,7 @@ from types import FrameType
 
 import typer
 
+from stack.runtime.bus_world_clock import BUS_WORLD
 from stack.runtime.world_clock import create_world, leave_world
 from stack.supervisor.profile import Profile
 from stack.supervisor.swarm import vehicle_copy, vehicle_names
@@ -41,13 +42,22 @@ def check_swarm(profile: Profile, count: int) -> list[str]:
 
 
 def run_swarm(
-    names: Sequence[str], args: Sequence[str], run_dir: Path, own: Callable[[str], list[str]] = lambda _: []
+    names: Sequence[str],
+    args: Sequence[str],
+    run_dir: Path,
+    own: Callable[[str], list[str]] = lambda _: [],
+    here: Sequence[str] | None = None,
+    hub: str = "",
 ) -> int:
     """Start each vehicle's `stack ARGS` (``args``: ``up PROFILE ...`` or ``fly SCENARIO ...``, then ``own(name)``)
-    on one world clock (its file in ``run_dir``), one after the other, and relay their lines until all have stopped;
-    their worst exit code. A vehicle that does not come up stops them all."""
-    world = run_dir / WORLD_FILE
-    create_world(world, len(names))
+    on one world clock, one after the other, and relay their lines until all have stopped; their worst exit code. A
+    vehicle that does not come up stops them all. The world clock is a file in ``run_dir``; with ``here`` (the
+    vehicles of ``names`` this machine runs, the others running on other machines) it is kept over the bus, and
+    every vehicle joins the bus at ``hub``."""
+    local = [(index, name) for index, name in enumerate(names, start=1) if here is None or name in here]
+    world = run_dir / WORLD_FILE if here is None else None
+    if world is not None:
+        create_world(world, len(names))
     launched: list[_Vehicle] = []
     stopping: list[int] = []
 
@@ -58,14 +68,14 @@ def run_swarm(
 
     for signum in (signal.SIGINT, signal.SIGTERM):
         signal.signal(signum, stop)
-    join = ""
-    for index, name in enumerate(names, start=1):
+    join = hub
+    for index, name in local:
         if stopping:
             break
         command = [sys.executable, "-m", "stack", *args, *own(name), "--swarm-vehicle", str(index)]
-        command += ["--swarm-size", str(len(names)), "--swarm-world", str(world)]
+        command += ["--swarm-size", str(len(names)), "--swarm-world", str(world) if world is not None else BUS_WORLD]
         command += ("--swarm-join", join) if join else ()
-        vehicle = _Vehicle(name, command)
+        vehicle = _Vehicle(name, command, index - 1)
         launched.append(vehicle)
         if not vehicle.wait_up():
             if not stopping:
@@ -73,21 +83,23 @@ def run_swarm(
                 stop(signal.SIGTERM, None)
             break
         join = join or vehicle.endpoint
-    for slot in range(len(launched), len(names)):
-        leave_world(world, slot)
-    codes = _wait_all([v.child for v in launched], world)
+    if world is not None:
+        for index, _ in local[len(launched) :]:
+            leave_world(world, index - 1)
+    codes = _wait_all(launched, world)
     for vehicle, code in zip(launched, codes, strict=True):
         vehicle.relay.join()
         if code < 0:
             typer.echo(f"[swarm] {vehicle.name} was ended by {signal.Signals(-code).name}")
-    return max(codes)
+    return max(codes, default=0)
 
 
 class _Vehicle:
     """One vehicle's `stack up`, its lines relayed, each starting with its name."""
 
-    def __init__(self, name: str, command: list[str]) -> None:
+    def __init__(self, name: str, command: list[str], slot: int) -> None:
         self.name = name
+        self.slot = slot
         self.endpoint = ""
         self.came_up = False
         self.up = threading.Event()
@@ -116,14 +128,15 @@ class _Vehicle:
             self.child.send_signal(signum)
 
 
-def _wait_all(children: list[subprocess.Popen[str]], world: Path) -> list[int]:
-    """Each child's exit code once all have ended; as each ends, its vehicle leaves the world clock (the others
-    go on without it)."""
+def _wait_all(vehicles: list[_Vehicle], world: Path | None) -> list[int]:
+    """Each vehicle's exit code once all have ended; as each ends, it leaves the world clock's file (the others go
+    on without it; over the bus its token goes with it)."""
     codes: dict[int, int] = {}
-    while len(codes) < len(children):
-        for slot, child in enumerate(children):
-            if slot not in codes and (code := child.poll()) is not None:
-                codes[slot] = code
-                leave_world(world, slot)
+    while len(codes) < len(vehicles):
+        for i, vehicle in enumerate(vehicles):
+            if i not in codes and (code := vehicle.child.poll()) is not None:
+                codes[i] = code
+                if world is not None:
+                    leave_world(world, vehicle.slot)
         time.sleep(0.1)
-    return [codes[slot] for slot in range(len(children))]
+    return [codes[i] for i in range(len(vehicles))]

@@ -151,7 +151,7 @@ class FastDriver:
             rt.state = "running"
             wakes = self.att.wakes
             pacer = Pacer(rt.spec.speed)
-            world = world_clock(rt.spec)
+            world = world_clock(rt.spec, rt.node.session)
             while True:
                 pacer.wait(coordinator.now + coordinator.period_us)
                 if world is not None:

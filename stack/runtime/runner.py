@@ -456,7 +456,7 @@ class Runtime:
         period = self.module.step_period_us()
         touched = self.node.touched
         pacer = Pacer(self.spec.speed)
-        world = world_clock(self.spec)
+        world = world_clock(self.spec, self.node.session)
         try:
             while True:
                 coordinator.finish_step()

@@ -25,6 +25,10 @@ import time
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+import zenoh
+
+from stack.runtime.bus_world_clock import BUS_WORLD, BusWorldClock
+
 if TYPE_CHECKING:
     from stack.runtime.spec import ModuleSpec
 
@@ -156,10 +160,13 @@ class WorldClock:
         self.world.close()
 
 
-def world_clock(spec: ModuleSpec) -> WorldClock | None:
-    """The coordinator's side of its swarm's world clock, or None for a vehicle on its own clock."""
+def world_clock(spec: ModuleSpec, session: zenoh.Session) -> WorldClock | BusWorldClock | None:
+    """The coordinator's side of its swarm's world clock (in a file, or over the bus ``session`` reaches when the
+    swarm spans machines), or None for a vehicle on its own clock."""
     if not spec.world:
         return None
+    if spec.world == BUS_WORLD:
+        return BusWorldClock(session, spec.world_slot, spec.world_vehicles)
     return WorldClock(Path(spec.world), spec.world_slot, spec.world_vehicles)
 
 

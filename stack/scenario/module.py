@@ -13,6 +13,7 @@ import time
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from stack.bus import keys
 from stack.msg.registry import ORB_ID
 from stack.msg.topic import Topic
 from stack.runtime.module import Arg, Module, Timer
@@ -155,8 +156,11 @@ class ScenarioModule(Module):
         return result
 
     def _write(self, result: dict[str, Any]) -> None:
+        text = json.dumps(result, indent=2)
         if self.args["result"]:
-            Path(str(self.args["result"])).write_text(json.dumps(result, indent=2))
+            Path(str(self.args["result"])).write_text(text)
+        if self.role is not None:  # for the launchers of a swarm spread over machines
+            self.rt.node.session.put(keys.scenario_result_key(self.rt.spec.vehicle), text)
 
 
 def _plain(value: object) -> object:

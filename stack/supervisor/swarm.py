@@ -40,7 +40,7 @@ def vehicle_names(profile: Profile, count: int) -> list[str]:
 
 def vehicle_copy(profile: Profile, index: int, count: int, join: str = "") -> Profile:
     """Vehicle ``index`` (from 1) of a swarm of ``count`` of ``profile`` (see the module docstring); ``join``: the
-    first vehicle's bus endpoint, which the others connect to."""
+    bus endpoint it connects to (the first vehicle's, or the hub of a swarm spread over machines)."""
     if not 1 <= index <= count:
         raise ValueError(f"vehicle {index} of a swarm of {count}")
     if profile.hosts:
@@ -50,7 +50,7 @@ def vehicle_copy(profile: Profile, index: int, count: int, join: str = "") -> Pr
     # The vehicles' routers are linked to one another: with Zenoh's low-latency transport, which writes straight to
     # the socket, the first vehicle's router (every other one's link) locked up as they all closed at once.
     bus = dataclasses.replace(profile.bus, low_latency=False)
-    if index > 1 and join:
+    if join:
         bus = dataclasses.replace(bus, connect=(*bus.connect, join))
     return dataclasses.replace(
         profile,
