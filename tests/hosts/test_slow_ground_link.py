@@ -24,7 +24,7 @@ from tests.support.hosts import Host
 
 pytestmark = [pytest.mark.timeout(500), pytest.mark.xdist_group("heavy_wall_clock")]
 
-MEASURE_S = 20
+MEASURE_S = 12
 SLOW_LINK = "1mbit"
 
 

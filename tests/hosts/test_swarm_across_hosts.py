@@ -1,9 +1,9 @@
 """A swarm spread over two hosts (network namespaces joined by a bridge) flies ``swarm_formation`` in one world.
 
-Each host runs its share, ``stack fly swarm_formation --vehicles 2 --here vN``, with a STACK_HOME of its own, as
-separate machines would: the leader's host listens on its address, the follower's joins it. The world clock is kept
-over the bus, the follower hears the leader across the link, and each host judges the whole swarm from both
-vehicles' results: both find the same figures, those of the same flight on one machine.
+Each host runs its share, ``stack fly swarm_formation --vehicles 2 --here vN`` (each vehicle's modules grouped),
+with a STACK_HOME of its own, as separate machines would: the leader's host listens on its address, the follower's
+joins it. The world clock is kept over the bus, the follower hears the leader across the link, and each host judges
+the whole swarm from both vehicles' results: both find the same figures, those of the same flight on one machine.
 """
 
 from __future__ import annotations
@@ -27,7 +27,7 @@ def test_a_swarm_over_two_hosts_flies_in_formation_in_one_world(network, tmp_pat
     lead, follow = net.hosts["lead"], net.hosts["follow"]
     endpoint = f"tcp/{lead.address}:{ROUTER_PORT}"
     fly = (sys.executable, "-m", "stack", "fly", "swarm_formation", "--vehicles", "2", "--seed", str(FORMATION_SEED))
-    fly += ("--quiet",)
+    fly += ("--quiet", "--profile", "sitl_quad_grouped")  # each vehicle's lockstep modules in one process: half the CPU
     shares = {}
     for host, args in ((lead, ("--here", "v1", "--listen", endpoint)), (follow, ("--here", "v2", "--join", endpoint))):
         log = (tmp_path / f"{host.name}.log").open("w")

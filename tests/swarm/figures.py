@@ -9,4 +9,4 @@ FORMATION_METRICS = {
     "all_landed_and_disarmed": True,
     "box_time_s": 48.0,
 }
-"""`stack fly swarm_formation --vehicles 2 --seed 3` (first flown with sitl_quad_grouped)."""
+"""`stack fly swarm_formation --vehicles 2 --seed 3`: on one machine, grouped or not, and over two hosts."""
