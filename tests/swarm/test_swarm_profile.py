@@ -21,11 +21,13 @@ def entry(profile, name):
 
 def test_vehicle_i_is_named_numbered_and_linked_as_px4_sitl_instance_i_minus_1():
     base = load_profile("sitl_quad")
-    first = vehicle_copy(base, 1, 3, JOIN)
+    first = vehicle_copy(base, 1, 3)  # the bus the others join (on one machine)
     third = vehicle_copy(base, 3, 3, JOIN)
     assert (first.vehicle, third.vehicle) == ("v1", "v3")
     assert first.bus.connect == base.bus.connect and third.bus.connect == (*base.bus.connect, JOIN)
     assert not first.bus.low_latency and not third.bus.low_latency
+    assert vehicle_copy(base, 1, 3, JOIN).bus.connect == (*base.bus.connect, JOIN)  # a hub of machines' shares
+    assert first.seed == base.seed and third.seed != base.seed and third.seed != vehicle_copy(base, 2, 3).seed
     for m in third.modules:
         if "MAV_SYS_ID" in {p.name for p in m.cls.PARAMS}:
             assert m.params["MAV_SYS_ID"] == 3, m.name
