@@ -13,6 +13,7 @@ arrived.
 
 from __future__ import annotations
 
+import bisect
 import collections
 import logging
 import threading
@@ -48,7 +49,11 @@ class PeerStream:
         """The publication time of the newest message received (-1: none yet)."""
 
     def add(self, time_us: int, msg: Any) -> None:
-        self._queued.append((time_us, msg))
+        """In order of publication time: a message stamped out of order (a forged one) never holds back the others."""
+        if not self._queued or time_us >= self._queued[-1][0]:
+            self._queued.append((time_us, msg))
+        else:
+            bisect.insort(self._queued, (time_us, msg), key=lambda item: item[0])
         self.newest_us = max(self.newest_us, time_us)
 
     def complete(self, now_us: int) -> bool:

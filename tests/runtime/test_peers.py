@@ -30,3 +30,11 @@ def test_everything_due_has_arrived_once_a_later_message_has() -> None:
 def test_a_delay_must_be_positive() -> None:
     with pytest.raises(ValueError):
         PeerStream(0)
+
+
+def test_a_message_stamped_far_ahead_never_holds_back_the_others() -> None:
+    stream = PeerStream(100_000)
+    stream.add(0, "first")
+    stream.add(10**15, "forged")
+    stream.add(20_000, "second")
+    assert stream.at(120_000) == "second"
