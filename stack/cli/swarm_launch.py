@@ -24,8 +24,7 @@ from types import FrameType
 
 import typer
 
-from stack.runtime.bus_world_clock import BUS_WORLD
-from stack.runtime.world_clock import create_world, leave_world
+from stack.runtime.world_clock import BUS_WORLD, create_world, leave_world
 from stack.supervisor.profile import Profile
 from stack.supervisor.swarm import vehicle_copy, vehicle_names
 

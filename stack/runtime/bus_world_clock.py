@@ -1,11 +1,12 @@
 """One simulated clock for the vehicles of a swarm spread over several machines, kept over the bus.
 
-The rule is the world file's (stack.runtime.world_clock): a vehicle's coordinator begins step ``t`` only once every
-other vehicle of the world has finished the step before it. Across machines there is no file to share: each
-coordinator puts the step it has finished on ``stack/<vehicle>/@world/step`` and holds a liveliness token
-``stack/<vehicle>/@world/member`` while it takes part. A vehicle whose token is gone has left the world (its
-stack ended, or its host was lost: Zenoh drops the token of a session it no longer reaches) and is waited for no
-more; one whose token has not appeared yet has not started, and is waited for.
+The rule is the world file's (stack.runtime.world_clock): a vehicle's coordinator runs at most SLACK_US ahead of
+every other vehicle of the world, and once it must wait, waits until each has finished the step before its own.
+Across machines there is no file to share: each coordinator puts the step it has finished on
+``stack/<vehicle>/@world/step`` and holds a liveliness token ``stack/<vehicle>/@world/member`` while it takes part.
+A vehicle whose token is gone has left the world (its stack ended, or its host was lost: Zenoh drops the token of a
+session it no longer reaches) and is waited for no more; one whose token has not appeared yet has not started, and
+is waited for.
 """
 
 from __future__ import annotations
@@ -18,11 +19,10 @@ import time
 import zenoh
 
 from stack.bus import keys
+from stack.runtime.world_clock import SLACK_US
 
 log = logging.getLogger("stack.lockstep")
 
-BUS_WORLD = "bus"
-"""A swarm's ``world`` when its clock is kept over the bus rather than in a file."""
 SLOW_WAIT_S = 5.0
 _STEP = struct.Struct("<q")
 
@@ -80,19 +80,25 @@ class BusWorldClock:
             self._changed.notify_all()
 
     def wait(self, t_us: int, period_us: int) -> None:
-        """Block until every other vehicle still in the world has finished the steps before ``t_us``."""
+        """As stack.runtime.world_clock.WorldClock.wait: at most SLACK_US ahead of every other vehicle still in the
+        world; once it must wait, until each has finished the steps before ``t_us``."""
         needed = t_us - period_us
         since = time.monotonic()
         warned = False
         with self._changed:
+            if not self._laggard(t_us - max(period_us, SLACK_US)):
+                return
             while True:
-                laggard = next((n for n in self.others if n not in self._left and self._done[n] < needed), None)
+                laggard = self._laggard(needed)
                 if laggard is None:
                     return
                 self._changed.wait(0.1)
                 if not warned and time.monotonic() - since > SLOW_WAIT_S:
                     log.warning("world clock: time waits at t=%.3f s for vehicle %s", t_us / 1e6, laggard)
                     warned = True
+
+    def _laggard(self, needed: int) -> str | None:
+        return next((n for n in self.others if n not in self._left and self._done[n] < needed), None)
 
     def done(self, t_us: int) -> None:
         self._publisher.put(_STEP.pack(t_us))

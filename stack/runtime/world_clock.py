@@ -1,9 +1,12 @@
 """One simulated clock for the vehicles of a swarm, each running its own lockstep (stack.cli.swarm_launch).
 
 As the vehicles of one Gazebo world follow its one ``/clock`` (PX4's ``GZBridge::clockCallback``), a vehicle's
-lockstep coordinator begins step ``t`` only once every vehicle of the world has finished the step before it: at
-any moment the vehicles are at most one step apart, so what one publishes reaches the others at the simulated
-time it would in flight, give or take that step.
+lockstep coordinator begins step ``t`` only once every other vehicle of the world is at most SLACK_US behind it;
+when it must wait, it waits until every other one has finished the step before ``t``, then may run SLACK_US ahead
+again. So the vehicles are never more than SLACK_US apart, and a vehicle sleeps once per SLACK_US of simulated time
+rather than once per step (each sleep a wake-up across processes, the dearest thing on a virtual machine). What
+one vehicle reads of another does not depend on how far apart they are: a peer input gives each message a fixed
+delay longer than SLACK_US and waits for it when it is due (stack.runtime.peers).
 
 The world is a small file shared by the vehicles' coordinators, one slot per vehicle: the last step it finished
 (µs; LEFT once it has left the world), a 32-bit sequence bumped at each step, on which the others sleep (a
@@ -25,11 +28,10 @@ import time
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-import zenoh
-
-from stack.runtime.bus_world_clock import BUS_WORLD, BusWorldClock
-
 if TYPE_CHECKING:
+    import zenoh
+
+    from stack.runtime.bus_world_clock import BusWorldClock
     from stack.runtime.spec import ModuleSpec
 
 log = logging.getLogger("stack.lockstep")
@@ -38,6 +40,10 @@ SLOT_BYTES = 32
 _DONE, _SEQ, _PID = 0, 8, 16
 LEFT = (1 << 63) - 1
 """A slot's finished step once its vehicle has left the world: every step waits no more for it."""
+BUS_WORLD = "bus"
+"""A swarm's ``world`` when its clock is kept over the bus (stack.runtime.bus_world_clock) rather than in a file."""
+SLACK_US = 20_000
+"""How far ahead of the slowest vehicle of its world another may run (simulated µs)."""
 WAIT_S = 0.1
 """How long a wait sleeps before it checks again that the vehicle it waits for is still there."""
 SLOW_WAIT_S = 5.0
@@ -130,8 +136,13 @@ class WorldClock:
         self.world.set_pid(slot, os.getpid())
 
     def wait(self, t_us: int, period_us: int) -> None:
-        """Block until every other vehicle has finished the steps before ``t_us``."""
-        world, needed = self.world, t_us - period_us
+        """Block until every other vehicle is at most SLACK_US behind ``t_us``; once it must wait, until every other
+        one has finished the steps before ``t_us``."""
+        world = self.world
+        slack = t_us - max(period_us, SLACK_US)
+        if all(world.done_us(s) >= slack for s in range(world.slots) if s != self.slot):
+            return
+        needed = t_us - period_us
         since = 0.0
         while True:
             laggard = next((s for s in range(world.slots) if s != self.slot and world.done_us(s) < needed), None)
@@ -166,6 +177,8 @@ def world_clock(spec: ModuleSpec, session: zenoh.Session) -> WorldClock | BusWor
     if not spec.world:
         return None
     if spec.world == BUS_WORLD:
+        from stack.runtime.bus_world_clock import BusWorldClock
+
         return BusWorldClock(session, spec.world_slot, spec.world_vehicles)
     return WorldClock(Path(spec.world), spec.world_slot, spec.world_vehicles)
 

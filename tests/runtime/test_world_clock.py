@@ -1,5 +1,6 @@
-"""The world clock of a swarm (stack.runtime.world_clock): a vehicle begins a step only once every other one has
-finished the step before it; a vehicle that left, or whose coordinator is gone, is waited for no more."""
+"""The world clock of a swarm (stack.runtime.world_clock): a vehicle runs at most SLACK_US ahead of every other one,
+and once it must wait, waits until each has finished the step before its own; a vehicle that left, or whose
+coordinator is gone, is waited for no more."""
 
 from __future__ import annotations
 
@@ -8,7 +9,7 @@ import sys
 import threading
 import time
 
-from stack.runtime.world_clock import LEFT, World, WorldClock, create_world, leave_world
+from stack.runtime.world_clock import LEFT, SLACK_US, World, WorldClock, create_world, leave_world
 
 P = 4000
 NAMES = ["v1", "v2"]
@@ -20,18 +21,25 @@ def waits(clock: WorldClock, t_us: int) -> threading.Thread:
     return thread
 
 
-def test_a_step_waits_for_every_other_vehicle_to_finish_the_step_before(tmp_path):
+def test_a_vehicle_runs_at_most_the_slack_ahead_and_then_waits_for_the_others_to_catch_up(tmp_path):
     path = tmp_path / "world"
     create_world(path, 2)
     a, b = WorldClock(path, 0, NAMES), WorldClock(path, 1, NAMES)
+    ahead = SLACK_US // P
     try:
-        a.wait(P, P)  # the first step waits for nobody
-        a.done(P)
-        blocked = waits(a, 2 * P)
+        for k in range(1, ahead + 1):  # as far as the slack goes without v2
+            a.wait(k * P, P)
+            a.done(k * P)
+        blocked = waits(a, (ahead + 1) * P)
         blocked.join(0.3)
-        assert blocked.is_alive(), "v1 began its second step before v2 finished its first"
-        b.wait(P, P)
-        b.done(P)
+        assert blocked.is_alive(), "v1 ran more than the slack ahead of v2"
+        for k in range(1, ahead):
+            b.wait(k * P, P)
+            b.done(k * P)
+        blocked.join(0.3)
+        assert blocked.is_alive(), "v1 went on before v2 had caught up"
+        b.wait(ahead * P, P)
+        b.done(ahead * P)
         blocked.join(5.0)
         assert not blocked.is_alive()
     finally:
@@ -44,7 +52,7 @@ def test_a_vehicle_that_left_or_whose_coordinator_is_gone_is_waited_for_no_more(
     create_world(path, 2)
     a = WorldClock(path, 0, NAMES)
     try:
-        blocked = waits(a, 3 * P)
+        blocked = waits(a, SLACK_US + 3 * P)
         blocked.join(0.2)
         assert blocked.is_alive()
         leave_world(path, 1)
@@ -60,7 +68,7 @@ def test_a_vehicle_that_left_or_whose_coordinator_is_gone_is_waited_for_no_more(
     a = WorldClock(path, 0, NAMES)
     try:
         start = time.monotonic()
-        a.wait(3 * P, P)  # returns once it finds v2's pid gone
+        a.wait(SLACK_US + 3 * P, P)  # returns once it finds v2's pid gone
         assert time.monotonic() - start < 5.0
     finally:
         a.close()
@@ -81,7 +89,7 @@ clock.close()
 """
 
 
-def test_two_processes_keep_within_one_step_of_each_other(tmp_path):
+def test_two_processes_keep_within_the_slack_of_each_other(tmp_path):
     path = tmp_path / "world"
     create_world(path, 2)
     steps = 300
@@ -92,9 +100,9 @@ def test_two_processes_keep_within_one_step_of_each_other(tmp_path):
         for k in range(1, steps + 1):
             clock.wait(k * P, P)
             other_done = world.done_us(1)
-            assert other_done >= (k - 1) * P
-            # It cannot begin step k + 1 before this one finished step k (after its last step it leaves).
-            assert other_done <= k * P or (other_done == LEFT and k == steps)
+            assert other_done >= k * P - SLACK_US
+            # It cannot run more than the slack ahead of this one's last step (after its last step it leaves).
+            assert other_done <= (k - 1) * P + SLACK_US + P or other_done == LEFT
             clock.done(k * P)
     finally:
         clock.close()
