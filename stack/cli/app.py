@@ -19,6 +19,7 @@ from stack.cli import (
     cmd,
     down,
     fly,
+    keys,
     log,
     mavlink,
     param,
@@ -60,6 +61,7 @@ app.add_typer(param.app, name="param")
 app.add_typer(log.app, name="log")
 app.add_typer(cmd.app, name="cmd")
 app.add_typer(mavlink.app, name="mavlink")
+app.add_typer(keys.app, name="keys")
 app.command("fly")(fly.fly)
 app.command("plot")(plot.plot)
 app.command("replay")(log.replay)
