@@ -54,8 +54,8 @@ SCENARIO = Scenario(
         peer_delay_s=formation.LEADER_DELAY_S,
         evaluate=evaluate_swarm,
         checks=(
-            Check("formation_error_rms_m", 0.5),
-            Check("formation_error_max_m", 1.5),
+            Check("formation_error_rms_m", 0.4),
+            Check("formation_error_max_m", 1.0),
             Check("min_separation_m", 3.0, at_least=True),
             Check("all_landed_and_disarmed", True),
         ),
