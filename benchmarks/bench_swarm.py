@@ -11,7 +11,7 @@ of the swarm, per vehicle, read in the same window. A layout stops growing N onc
 0.6x (twice as many vehicles could not keep real time) or the next N would need more memory than is available.
 
 It prints a table per layout and the largest N whose slowest vehicle kept at least real time. The vehicles share
-one world clock (stack.runtime.world_clock), so their factors agree within 20 ms: the slowest is the swarm's.
+one world clock (stack.runtime.world_clock), so their factors agree within 50 ms: the slowest is the swarm's.
 """
 
 from __future__ import annotations

@@ -42,7 +42,7 @@ LEFT = (1 << 63) - 1
 """A slot's finished step once its vehicle has left the world: every step waits no more for it."""
 BUS_WORLD = "bus"
 """A swarm's ``world`` when its clock is kept over the bus (stack.runtime.bus_world_clock) rather than in a file."""
-SLACK_US = 20_000
+SLACK_US = 50_000
 """How far ahead of the slowest vehicle of its world another may run (simulated µs)."""
 WAIT_S = 0.1
 """How long a wait sleeps before it checks again that the vehicle it waits for is still there."""

@@ -21,7 +21,9 @@ from stack.msg.setpoints import TrajectorySetpoint
 Vec3 = tuple[float, float, float]
 
 LEADER_DELAY_S = 0.1
-"""How long after the leader publishes its position the others hear it (a radio link's latency)."""
+"""How long after the leader publishes its position the others hear it (a radio link's latency). Longer than the
+world clock's slack (stack.runtime.world_clock.SLACK_US) and the leader's publication period together, a follower
+finds the position due already there and never waits for it."""
 LEADER_TIMEOUT_S = 0.5
 """A leader whose newest position heard is older than this is lost."""
 BOX_SIDE_M = 20.0
