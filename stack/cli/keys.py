@@ -1,4 +1,5 @@
-"""``stack keys``: the keystore that admits members to a bus spread over machines (stack.security.keystore)."""
+"""``stack keys``: the keystore that admits members to a bus spread over machines (stack.security.keystore, imported
+by each command: cryptography costs every other command of the CLI nothing)."""
 
 from __future__ import annotations
 
@@ -9,7 +10,7 @@ from pathlib import Path
 import typer
 
 from stack.cli.common import command_group, fail, print_table
-from stack.security.keystore import ROLES, KeystoreError, init_keystore, issue_identity, list_identities
+from stack.security.roles import ROLES
 
 app = command_group(help="Keystore: a certificate authority and the identities of hosts, operators and observers")
 
@@ -17,6 +18,8 @@ app = command_group(help="Keystore: a certificate authority and the identities o
 @app.command("init")
 def init(directory: Path = typer.Argument(..., help="Where the keystore goes (created)")) -> None:
     """Make a certificate authority in DIRECTORY: ca.pem (give it to every member) and ca.key (keep it there)."""
+    from stack.security.keystore import KeystoreError, init_keystore
+
     try:
         cert = init_keystore(directory)
     except KeystoreError as e:
@@ -35,6 +38,8 @@ def issue(
     days: int = typer.Option(365, "--days", help="Days it is valid"),
 ) -> None:
     """Issue an identity: identities/NAME.pem and NAME.key (owner-only), signed by the keystore's authority."""
+    from stack.security.keystore import KeystoreError, issue_identity
+
     try:
         identity = issue_identity(directory, name, role, tuple(address), days)
     except (KeystoreError, ValueError) as e:
@@ -49,6 +54,8 @@ def list_(
     as_json: bool = typer.Option(False, "--json", help="As JSON"),
 ) -> None:
     """The identities of a keystore: name, role, expiry, and the names and addresses each is valid for."""
+    from stack.security.keystore import KeystoreError, list_identities
+
     try:
         identities = list_identities(directory)
     except KeystoreError as e:
