@@ -29,9 +29,9 @@ from cryptography.hazmat.primitives.asymmetric import ec
 from cryptography.x509.oid import ExtendedKeyUsageOID, NameOID
 
 from stack.bus import keys
+from stack.security.roles import ROLES
 
-ROLES = ("host", "operator", "observer")
-CA_CERT, CA_KEY = "ca.pem", "ca.key"
+CA_CERT, CA_KEY = "ca.pem", "ca.key"  # stack.supervisor.profile looks for ca.pem without importing this
 IDENTITIES = "identities"
 CA_DAYS = 3650
 IDENTITY_DAYS = 365
