@@ -63,6 +63,8 @@ class BusConfig:
     lease_ms: int = 10000
     gossip: bool = False
     extra: dict[str, object] = field(default_factory=dict)
+    tls: dict[str, str] = field(default_factory=dict)
+    """Mutual TLS on ``tls/`` links: ``root_ca``, ``certificate`` and ``private_key`` files (stack.security.tls)."""
 
     def __post_init__(self) -> None:
         if self.mode not in ("peer", "client", "router"):
@@ -82,6 +84,7 @@ class BusConfig:
             lease_ms=d["lease_ms"],
             gossip=d.get("gossip", False),
             extra=d.get("extra", {}),
+            tls=d.get("tls", {}),
         )
 
     def zenoh_config(self, name: str) -> zenoh.Config:
@@ -115,6 +118,17 @@ class BusConfig:
         if self.low_latency:
             conf.insert_json5("transport/unicast/lowlatency", "true")
             conf.insert_json5("transport/unicast/qos/enabled", "false")
+        if self.tls:
+            # enable_mtls on both sides: the listener then requires a certificate, and the connector presents one.
+            tls = {
+                "root_ca_certificate": self.tls["root_ca"],
+                "enable_mtls": True,
+                "listen_certificate": self.tls["certificate"],
+                "listen_private_key": self.tls["private_key"],
+                "connect_certificate": self.tls["certificate"],
+                "connect_private_key": self.tls["private_key"],
+            }
+            conf.insert_json5("transport/link/tls", json.dumps(tls))
         conf.insert_json5("metadata", json.dumps({"name": name}))
         for key, value in self.extra.items():
             conf.insert_json5(key, json.dumps(value))

@@ -167,6 +167,9 @@ class Profile:
     """The vehicles of a swarm of this profile (``[swarm] names``); empty: v1, v2... (stack.supervisor.swarm)."""
     swarm_spacing_m: float = DEFAULT_SWARM_SPACING_M
     """How far east of the one before it each vehicle of a swarm has its home (``[swarm] spacing_m``)."""
+    keystore: Path | None = None
+    """``[security] keystore``: the links between hosts on mutual TLS, each host presenting its identity there
+    (stack.security.tls); None: plain TCP."""
 
     @property
     def name(self) -> str:
@@ -188,8 +191,30 @@ class Profile:
         later one connecting: when both connected at once, Zenoh put both links in one transport, and after a link
         cut the two routers could disagree on it for good, one dropping the other's messages as unknown."""
         names = list(self.hosts)
-        earlier = (between_hosts(self.hosts[h].endpoint) for h in names[: names.index(host)])
-        return (between_hosts(self.hosts[host].endpoint),), (*self.bus.connect, *earlier)
+        earlier = (between_hosts(self.host_endpoint(h)) for h in names[: names.index(host)])
+        return (between_hosts(self.host_endpoint(host)),), (*self.bus.connect, *earlier)
+
+    def host_endpoint(self, host: str) -> str:
+        """Where ``host``'s router listens for the other hosts: over TLS with a keystore."""
+        endpoint = self.hosts[host].endpoint
+        if self.keystore is None:
+            return endpoint
+        from stack.security.tls import tls_endpoint  # cryptography, only for a profile with a keystore
+
+        return tls_endpoint(endpoint)
+
+    def host_tls(self, host: str) -> dict[str, str]:
+        """What ``host``'s router presents and trusts on the links between hosts (stack.bus.config.BusConfig.tls):
+        empty without a keystore; a ProfileError naming the file when its identity is not in the keystore."""
+        if self.keystore is None or not self.hosts:
+            return {}
+        from stack.security.keystore import KeystoreError
+        from stack.security.tls import tls_files
+
+        try:
+            return tls_files(self.keystore, host, role="host")
+        except KeystoreError as e:
+            raise ProfileError(f"{self.path}: security.keystore: {e}") from None
 
     @property
     def router_lease_ms(self) -> int:
@@ -213,6 +238,8 @@ class Profile:
         if host is not None and host not in self.hosts:
             hint = suggestion(host, self.hosts)
             raise ProfileError(f"{self.path}: --host {host}: no such host{hint}; hosts: {known}")
+        if host is not None:
+            self.host_tls(host)
 
 
 def resolve_path(profile: str | Path) -> Path:
@@ -337,7 +364,7 @@ class _Loader:
             known = ", ".join(available_profiles())
             raise ProfileError(f"{self.path}: no such profile{hint} (available: {known})")
         doc = self._document(self.path, ())
-        self._only(doc, "", {"stack", "bus", "params", "module", "process", "scenario", "hosts", "swarm"})
+        self._only(doc, "", {"stack", "bus", "params", "module", "process", "scenario", "hosts", "swarm", "security"})
         stack = self._table(doc, "stack")
         self._only(
             stack,
@@ -426,7 +453,19 @@ class _Loader:
                     self._check_placeholders(f"module ({module.name}).args.{aname}", value, allow_json=True)
         profile.scenario_limits, profile.scenario_options = self._scenario_settings(self._table(doc, "scenario"))
         profile.swarm_names, profile.swarm_spacing_m = self._swarm(self._table(doc, "swarm"))
+        profile.keystore = self._keystore(self._table(doc, "security"))
         return profile
+
+    def _keystore(self, table: dict) -> Path | None:
+        self._only(table, "security", {"keystore"})
+        given = self._get(table, "security", "keystore", str, "")
+        if not given:
+            return None
+        path = Path(given).expanduser()
+        path = path if path.is_absolute() else self.path.parent / path
+        if not (path / "ca.pem").exists():
+            raise self.fail("security.keystore", f"no keystore at {path} (make one with `stack keys init {path}`)")
+        return path
 
     def _swarm(self, table: dict) -> tuple[tuple[str, ...], float]:
         self._only(table, "swarm", {"names", "spacing_m"})

@@ -231,6 +231,7 @@ class Supervisor:
                 listen=self.router_listen,
                 low_latency=self.profile.bus.low_latency,
                 lease_ms=self.profile.router_lease_ms,
+                tls=self.profile.host_tls(self.host) if self.profile.hosts else {},
             )
             try:
                 return open_router(bus, "supervisor", self.profile.router_link_count)
