@@ -33,9 +33,12 @@ from stack.cli import (
 )
 from stack.cli.common import (
     EndpointOption,
+    InsecureOption,
     JsonOption,
+    KeystoreOption,
     TransportOption,
     VehicleOption,
+    check_exposure,
     choose_transport,
     command_group,
     connect,
@@ -116,6 +119,8 @@ def up(
     host: str | None = typer.Option(
         None, "--host", help="The host of a profile spread over machines ([hosts]) whose share this machine runs"
     ),
+    insecure: bool = InsecureOption,
+    keystore: Path | None = KeystoreOption,
     vehicles: int = typer.Option(
         1, "--vehicles", min=1, help="A swarm: this many copies of the profile's vehicle on one bus (v1, v2...)"
     ),
@@ -130,6 +135,7 @@ def up(
         prof.check_host(host)
     except ProfileError as e:
         fail(str(e), code=2)
+    check_exposure(prof, host, insecure, keystore)
     if vehicles > 1:
         given = [o for o, v in (("--plot", plot_), ("--web", web), ("--save", save), ("--record", record)) if v]
         given += [o for o, v in (("--device", device), ("--host", host)) if v is not None]

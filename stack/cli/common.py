@@ -9,6 +9,7 @@ import sys
 import time
 from collections.abc import Iterable, Iterator, Sequence
 from contextlib import ExitStack, contextmanager
+from pathlib import Path
 from typing import Any, NoReturn
 
 import msgspec
@@ -21,7 +22,7 @@ from stack.bus.config import BusConfig
 from stack.bus.node import Node, open_session
 from stack.bus.supervisors import outside_ready
 from stack.supervisor import state as run_state
-from stack.supervisor.profile import LOCKSTEP_TRANSPORTS, Profile
+from stack.supervisor.profile import LOCKSTEP_TRANSPORTS, Profile, ProfileError
 
 
 def command_group(**settings: object) -> typer.Typer:
@@ -63,6 +64,36 @@ TransportOption = typer.Option(
 def fail(message: str, code: int = 1) -> NoReturn:
     typer.echo(f"error: {message}", err=True)
     raise typer.Exit(code)
+
+
+InsecureOption = typer.Option(
+    False, "--insecure", help="Listen beyond this machine without a keystore (plain links: anyone on them gets in)"
+)
+KeystoreOption = typer.Option(
+    None, "--keystore", help="The keystore of the links between hosts (the profile's [security] keystore otherwise)"
+)
+
+
+def check_exposure(prof: Profile, host: str | None, insecure: bool, keystore: Path | None = None) -> None:
+    """With ``keystore``, the profile's links between hosts on mutual TLS from it (its identity for ``host`` named
+    now if missing); then refuse (exit 2, saying why) a stack that would listen beyond this machine over plain links
+    unless ``insecure`` (stack.security.exposure)."""
+    from stack.security.exposure import exposure_problem
+
+    if keystore is not None:
+        if not (keystore / "ca.pem").exists():
+            fail(f"--keystore: no keystore at {keystore} (make one with `stack keys init {keystore}`)", code=2)
+        prof.keystore = keystore.expanduser().resolve()
+        if host is not None:
+            try:
+                prof.host_tls(host)
+            except ProfileError as e:
+                fail(str(e), code=2)
+
+    what = f"host {host} of {prof.path}" if host is not None else str(prof.path)
+    problem = exposure_problem(what, prof.listen_endpoints(host), insecure)
+    if problem:
+        fail(problem, code=2)
 
 
 OUTSIDE_WAIT_S = 2.0

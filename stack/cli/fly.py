@@ -8,7 +8,15 @@ from pathlib import Path
 
 import typer
 
-from stack.cli.common import TransportOption, choose_transport, fail, print_table
+from stack.cli.common import (
+    InsecureOption,
+    KeystoreOption,
+    TransportOption,
+    check_exposure,
+    choose_transport,
+    fail,
+    print_table,
+)
 from stack.cli.observers import add_observers
 from stack.scenario.catalogue import scenarios, unknown_scenario
 from stack.scenario.flight import WIND_SPEED, prepare_flight
@@ -49,6 +57,8 @@ def fly(
     vehicles: int = typer.Option(
         1, "--vehicles", min=1, help="Fly a swarm scenario with this many copies of the profile's vehicle (v1 leads)"
     ),
+    insecure: bool = InsecureOption,
+    keystore: Path | None = KeystoreOption,
     here: str = typer.Option(
         "", "--here", help="Of a swarm spread over machines: the vehicles this one flies (v1,v2); see --listen, --join"
     ),
@@ -87,12 +97,17 @@ def fly(
         prof.check_host(host)
     except ProfileError as e:
         fail(str(e), code=2)
+    check_exposure(prof, host, insecure, keystore)
     choose_transport(prof, transport)
     if seed is not None:
         prof.seed = seed
     spread_options = [o for o, v in (("--here", here), ("--listen", listen), ("--join", join)) if v]
     if spread_options and (vehicles < 2 or not here):
         fail(f"{', '.join(spread_options)}: a share of a swarm flight: give --vehicles N and --here", code=2)
+    from stack.security.exposure import exposure_problem
+
+    if problem := exposure_problem("this machine's share of the swarm (its hub has no TLS)", listen, insecure):
+        fail(problem, code=2)
     if vehicles > 1:
         given = [o for o, v in (("--plot", plot_), ("--web", web), ("--save", save), ("--record", record)) if v]
         given += ["--host"] if host is not None else []
@@ -106,6 +121,7 @@ def fly(
         args = ["fly", scenario, *(("--profile", profile) if profile else ()), "--seed", str(prof.seed)]
         args += ["--log-level", log_level, *(("--quiet",) if quiet else ()), *wind_args]
         args += ("--lockstep-transport", transport) if transport else ()
+        args += ("--insecure",) if insecure else ()
         raise typer.Exit(fly_swarm(prof, known[scenario], vehicles, args, report, spread))
     world: dict[str, object] = {}
     role = ""

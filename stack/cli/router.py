@@ -12,13 +12,14 @@ import os
 import signal
 import threading
 import time
+from pathlib import Path
 
 import typer
 import zenoh
 
 from stack.bus.config import BusConfig, open_router, without_link_options
 from stack.bus.ports import free_port
-from stack.cli.common import fail
+from stack.cli.common import InsecureOption, KeystoreOption, check_exposure, fail
 from stack.supervisor import state as run_state
 from stack.supervisor.profile import ProfileError, load_profile
 
@@ -27,6 +28,8 @@ def router(
     profile: str = typer.Argument(..., help="Launch profile that spreads the vehicle over [hosts]"),
     host: str = typer.Option(..., "--host", help="The host of the profile this machine is"),
     duration: float | None = typer.Option(None, "--duration", "-d", help="Stop after this many seconds"),
+    insecure: bool = InsecureOption,
+    keystore: Path | None = KeystoreOption,
 ) -> None:
     """Run this host's Zenoh router of a vehicle spread over several machines, until Ctrl-C or SIGTERM."""
     try:
@@ -34,6 +37,7 @@ def router(
         prof.check_host(host)
     except ProfileError as e:
         fail(str(e), code=2)
+    check_exposure(prof, host, insecure, keystore)
     loopback = f"tcp/127.0.0.1:{free_port()}"
     beyond, connect = prof.router_links(host)
     listen = (loopback, *beyond)

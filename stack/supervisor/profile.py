@@ -194,6 +194,11 @@ class Profile:
         earlier = (between_hosts(self.host_endpoint(h)) for h in names[: names.index(host)])
         return (between_hosts(self.host_endpoint(host)),), (*self.bus.connect, *earlier)
 
+    def listen_endpoints(self, host: str | None) -> tuple[str, ...]:
+        """Where the stack of ``host`` (None: of a profile of one machine) listens beyond its modules' own router."""
+        beyond = self.router_links(host)[0] if host is not None and self.hosts else ()
+        return (*beyond, *self.bus.listen)
+
     def host_endpoint(self, host: str) -> str:
         """Where ``host``'s router listens for the other hosts: over TLS with a keystore."""
         endpoint = self.hosts[host].endpoint

@@ -42,7 +42,7 @@ TAKEOFF_TIMEOUT_S = 90.0
 def up_on(host: Host, profile: Path, log: Path, *args: str) -> subprocess.Popen[str]:
     """``stack up PROFILE --host NAME`` on ``host``, its output in ``log``."""
     return host.popen(
-        sys.executable, "-m", "stack", "up", str(profile), "--host", host.name, "--quiet", *args,
+        sys.executable, "-m", "stack", "up", str(profile), "--host", host.name, "--quiet", "--insecure", *args,
         env=stack_env(host.home), stdout=log.open("w"), stderr=subprocess.STDOUT, cwd=REPO,
     )  # fmt: skip
 
@@ -70,7 +70,7 @@ def fly_across_hosts(net: Network, scenario: str, seed: int, work: Path) -> Flig
         out = stack_on(
             sim,
             *("fly", scenario, "--profile", str(profile), "--host", "sim", "--seed", str(seed), "--quiet"),
-            *("--report", str(report), "--record", str(recording)),
+            *("--insecure", "--report", str(report), "--record", str(recording)),
             timeout=FLY_TIMEOUT_S,
         )
     finally:

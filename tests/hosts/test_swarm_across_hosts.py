@@ -27,7 +27,8 @@ def test_a_swarm_over_two_hosts_flies_in_formation_in_one_world(network, tmp_pat
     lead, follow = net.hosts["lead"], net.hosts["follow"]
     endpoint = f"tcp/{lead.address}:{ROUTER_PORT}"
     fly = (sys.executable, "-m", "stack", "fly", "swarm_formation", "--vehicles", "2", "--seed", str(FORMATION_SEED))
-    fly += ("--quiet", "--profile", "sitl_quad_grouped")  # each vehicle's lockstep modules in one process: half the CPU
+    # Plain links, each vehicle's lockstep modules in one process (half the CPU).
+    fly += ("--quiet", "--insecure", "--profile", "sitl_quad_grouped")
     shares = {}
     for host, args in ((lead, ("--here", "v1", "--listen", endpoint)), (follow, ("--here", "v2", "--join", endpoint))):
         log = (tmp_path / f"{host.name}.log").open("w")

@@ -74,7 +74,7 @@ def test_takeoff_hover_and_land_across_three_hosts_commanded_from_the_ground(net
     profile = split_profile(tmp_path / "split.toml", net)
     laptop = net.hosts["laptop"]
     router = laptop.popen(
-        sys.executable, "-m", "stack", "router", str(profile), "--host", "laptop",
+        sys.executable, "-m", "stack", "router", str(profile), "--host", "laptop", "--insecure",
         env=stack_env(laptop.home), stdout=(tmp_path / "laptop.log").open("w"), stderr=subprocess.STDOUT, cwd=REPO,
     )  # fmt: skip
     recording = None if realtime else tmp_path / "ground.mcap"
