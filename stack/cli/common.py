@@ -116,7 +116,7 @@ def find_stack(vehicle: str | None, endpoint: str | None) -> tuple[str, BusConfi
         except ValueError as e:
             fail(str(e), code=2)
     if endpoint:
-        return vehicle or "", BusConfig(mode="client", connect=(endpoint,), listen=())
+        return vehicle or "", endpoint_bus(endpoint)
     stacks = run_state.addressed_stacks(vehicle)
     if not stacks:
         which = f" named '{vehicle}'" if vehicle else ""
@@ -149,7 +149,7 @@ def bus_configs(endpoint: str | None) -> list[BusConfig]:
     """The buses a command on every vehicle addresses: ``endpoint``'s, else those of the stacks a command naming no
     stack addresses (the `stack up` ones, else the flights)."""
     if endpoint:
-        return [BusConfig(mode="client", connect=(endpoint,), listen=())]
+        return [endpoint_bus(endpoint)]
     endpoints = sorted({str(s["endpoint"]) for s in run_state.addressed_stacks(None)})
     if not endpoints:
         fail("no running stack found (start one with `stack up`, or pass --endpoint)")
@@ -172,11 +172,35 @@ def connect_all(endpoint: str | None, name: str = "cli") -> Iterator[list[Node]]
         yield [nodes[v] for v in sorted(nodes)]
 
 
+KEYSTORE_ENV, IDENTITY_ENV = "STACK_KEYSTORE", "STACK_IDENTITY"
+
+
+def endpoint_bus(endpoint: str) -> BusConfig:
+    """A tool's bus to the router at ``endpoint``: over mutual TLS (``tls/``) with the identity STACK_IDENTITY of
+    the keystore STACK_KEYSTORE, which must be given."""
+    if not endpoint.startswith("tls/"):
+        return BusConfig(mode="client", connect=(endpoint,), listen=())
+    keystore, identity = os.environ.get(KEYSTORE_ENV, ""), os.environ.get(IDENTITY_ENV, "")
+    if not keystore or not identity:
+        fail(f"{endpoint} admits only identities of its keystore: set {KEYSTORE_ENV} and {IDENTITY_ENV}", code=2)
+    from stack.security.keystore import KeystoreError
+    from stack.security.tls import tls_files
+
+    try:
+        tls = tls_files(Path(keystore).expanduser(), identity)
+    except KeystoreError as e:
+        fail(f"{IDENTITY_ENV}={identity}: {e}", code=2)
+    return BusConfig(mode="client", connect=(endpoint,), listen=(), tls=tls)
+
+
 def open_bus(bus: BusConfig, tool: str) -> zenoh.Session:
     try:
         return open_session(bus, tool)
     except zenoh.ZError as e:
         where = ", ".join(bus.connect)
+        if bus.tls:
+            who = Path(bus.tls["certificate"]).stem
+            fail(f"the stack at {where} did not admit identity {who} (not of its keystore?), or it is not running")
         fail(f"cannot reach the stack at {where} ({str(e).split(' at ')[0].strip()}); is it running?")
 
 

@@ -4,6 +4,8 @@ the keystore gets nothing through."""
 
 from __future__ import annotations
 
+import subprocess
+import sys
 import threading
 from pathlib import Path
 
@@ -13,8 +15,9 @@ import zenoh
 from stack.bus.config import BusConfig, open_router
 from stack.bus.ports import free_port
 from stack.security.keystore import init_keystore, issue_identity
+from stack.security.tls import tls_files
 from stack.supervisor.profile import ProfileError, load_profile
-from tests.support.harness import write_profile
+from tests.support.harness import REPO, stack_env, write_profile
 
 
 def hosts_profile(tmp_path: Path, keystore: Path, ports: dict[str, int]) -> Path:
@@ -81,6 +84,37 @@ def test_hosts_link_over_mutual_tls_and_a_router_without_an_identity_gets_nothin
         sub.undeclare()
         control.close()
         sim.close()
+
+
+def tool(home: Path, *args: str, **env: str) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
+        [sys.executable, "-m", "stack", *args], env={**stack_env(home), **env}, capture_output=True, text=True,
+        timeout=60, cwd=REPO,
+    )  # fmt: skip
+
+
+def test_a_tool_joins_a_host_over_mutual_tls_only_with_an_identity_of_its_keystore(tmp_path: Path) -> None:
+    keystore, other = tmp_path / "keys", tmp_path / "other"
+    init_keystore(keystore)
+    init_keystore(other)
+    issue_identity(keystore, "sim", "host")
+    issue_identity(keystore, "alice", "operator")
+    issue_identity(other, "mallory", "operator")
+    endpoint = f"tls/127.0.0.1:{free_port()}"
+    bus = BusConfig(mode="router", listen=(endpoint,), tls=tls_files(keystore, "sim"))
+    router = open_router(bus, "router-sim", 0)
+    try:
+        out = tool(tmp_path, "vehicles", "--endpoint", endpoint)
+        assert out.returncode == 2
+        assert out.stderr.strip() == (
+            f"error: {endpoint} admits only identities of its keystore: set STACK_KEYSTORE and STACK_IDENTITY"
+        )
+        out = tool(tmp_path, "vehicles", "--endpoint", endpoint, STACK_KEYSTORE=str(keystore), STACK_IDENTITY="alice")
+        assert "did not admit" not in out.stderr and "Traceback" not in out.stderr, out.stderr
+        out = tool(tmp_path, "vehicles", "--endpoint", endpoint, STACK_KEYSTORE=str(other), STACK_IDENTITY="mallory")
+        assert out.returncode == 1 and "did not admit identity mallory" in out.stderr, out.stderr
+    finally:
+        router.close()
 
 
 def test_a_keystore_or_an_identity_that_is_not_there_is_named_before_anything_starts(tmp_path: Path) -> None:
