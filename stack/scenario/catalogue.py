@@ -48,8 +48,15 @@ class Scenario:
     options: dict[str, str] = field(default_factory=dict)
     """What a vehicle's profile may choose for the flight, with the defaults (``[scenario.plane_mission]
     mission = "c172_rectangle"``: a mission sized for that aircraft)."""
+    choices: dict[str, tuple[str, ...]] = field(default_factory=dict)
+    """The values an option may take, for those that take few (a profile giving another is refused)."""
     swarm: Swarm | None = None
     """A scenario of several vehicles (``stack fly NAME --vehicles N``), or None for one of one vehicle."""
+
+    @property
+    def all_checks(self) -> tuple[Check, ...]:
+        """Every check a profile may set a limit of: each vehicle's and, for a swarm scenario, the swarm's."""
+        return self.checks + (self.swarm.checks if self.swarm is not None else ())
 
 
 @dataclass(frozen=True)

@@ -49,6 +49,7 @@ SCENARIO = Scenario(
     publish=(ORB_ID.offboard_control_mode, ORB_ID.trajectory_setpoint),
     timeout_s=240.0,
     options={"on_leader_loss": "hold"},
+    choices={"on_leader_loss": swarm_flight.LOSS_ACTIONS},
     swarm=Swarm(
         peers=(ORB_ID.vehicle_local_position,),
         peer_delay_s=formation.LEADER_DELAY_S,

@@ -547,7 +547,7 @@ class _Loader:
                 raise self.fail(f"scenario.{name}", unknown_scenario(name))
             if not isinstance(overrides, dict):
                 raise self.fail(f"scenario.{name}", "expected a table of check limits and options")
-            checks = {c.metric: c for c in known[name].checks}
+            checks = {c.metric: c for c in known[name].all_checks}
             choices = known[name].options
             for key, value in overrides.items():
                 where = f"scenario.{name}.{key}"
@@ -559,6 +559,9 @@ class _Loader:
                             find_mission(value)
                         except FileNotFoundError as e:
                             raise self.fail(where, str(e)) from None
+                    allowed = known[name].choices.get(key)
+                    if allowed is not None and value not in allowed:
+                        raise self.fail(where, f"{value!r} is not one of {', '.join(allowed)}")
                     options.setdefault(name, {})[key] = value
                     continue
                 if key not in checks:

@@ -92,3 +92,19 @@ def test_stack_up_refuses_a_swarm_it_cannot_start_before_starting_anything(tmp_p
     assert out.returncode == 2
     assert out.stderr.strip() == f"error: {tmp_path / 'pair.toml'}: [swarm] names 2 vehicles, not 3"
     assert not (home / "runs").exists()
+
+
+def test_a_swarm_scenarios_limits_and_choices_are_checked_with_the_profile(tmp_path):
+    good = tmp_path / "good.toml"
+    good.write_text(
+        'extends = "sitl_quad"\n[scenario.swarm_formation]\nformation_error_max_m = 0.8\n'
+        '[scenario.swarm_leader_loss]\non_leader_loss = "land"\n'
+    )
+    profile = load_profile(str(good))
+    assert profile.scenario_limits["swarm_formation"] == {"formation_error_max_m": 0.8}
+    assert profile.scenario_options["swarm_leader_loss"] == {"on_leader_loss": "land"}
+    bad = tmp_path / "bad.toml"
+    bad.write_text('extends = "sitl_quad"\n[scenario.swarm_leader_loss]\non_leader_loss = "panic"\n')
+    said = "scenario.swarm_leader_loss.on_leader_loss: 'panic' is not one of hold, land"
+    with pytest.raises(ProfileError, match=re.escape(said)):
+        load_profile(str(bad))
