@@ -104,6 +104,9 @@ def fly(
     spread_options = [o for o, v in (("--here", here), ("--listen", listen), ("--join", join)) if v]
     if spread_options and (vehicles < 2 or not here):
         fail(f"{', '.join(spread_options)}: a share of a swarm flight: give --vehicles N and --here", code=2)
+    if here and not (listen or join):
+        fail("--here: the other machines' shares reach this one with --listen ENDPOINT, or it joins one with --join",
+             code=2)
     from stack.security.exposure import exposure_problem
 
     if problem := exposure_problem("this machine's share of the swarm (its hub has no TLS)", listen, insecure):

@@ -48,6 +48,9 @@ def test_followers_that_lose_their_leader_notice_within_a_second_hold_and_land(t
         (("takeoff_land", "--vehicles", "2"), "scenario takeoff_land flies one vehicle; the swarm scenarios: "),
         (("swarm_formation",), "scenario swarm_formation flies a swarm: give --vehicles N, N at least 2"),
         (("swarm_formation", "--vehicles", "2", "--plot"), "not with --plot"),
+        (("swarm_formation", "--vehicles", "2", "--here", "v3", "--join", "tcp/127.0.0.1:1"), "--here: no vehicle v3"),
+        (("swarm_formation", "--vehicles", "2", "--here", "v1"), "--here: the other machines' shares reach this one"),
+        (("takeoff_land", "--listen", "tcp/127.0.0.1:1"), "--listen: a share of a swarm flight"),
     ],
 )
 def test_a_swarm_flight_asked_for_wrongly_is_one_clear_error(tmp_path: Path, args: tuple[str, ...], said: str) -> None:
