@@ -65,6 +65,8 @@ class BusConfig:
     extra: dict[str, object] = field(default_factory=dict)
     tls: dict[str, str] = field(default_factory=dict)
     """Mutual TLS on ``tls/`` links: ``root_ca``, ``certificate`` and ``private_key`` files (stack.security.tls)."""
+    access: dict[str, object] = field(default_factory=dict)
+    """A router's access rules, Zenoh's ``access_control`` (stack.security.acl); empty: none."""
 
     def __post_init__(self) -> None:
         if self.mode not in ("peer", "client", "router"):
@@ -85,6 +87,7 @@ class BusConfig:
             gossip=d.get("gossip", False),
             extra=d.get("extra", {}),
             tls=d.get("tls", {}),
+            access=d.get("access", {}),
         )
 
     def zenoh_config(self, name: str) -> zenoh.Config:
@@ -129,6 +132,8 @@ class BusConfig:
                 "connect_private_key": self.tls["private_key"],
             }
             conf.insert_json5("transport/link/tls", json.dumps(tls))
+        if self.access:
+            conf.insert_json5("access_control", json.dumps(self.access))
         conf.insert_json5("metadata", json.dumps({"name": name}))
         for key, value in self.extra.items():
             conf.insert_json5(key, json.dumps(value))

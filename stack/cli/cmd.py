@@ -27,6 +27,7 @@ from stack.bus.topics import MessageTooLarge, TopicPublisher
 from stack.cli.common import (
     EndpointOption,
     VehicleOption,
+    check_may_command,
     command_group,
     connect,
     connect_all,
@@ -291,6 +292,7 @@ def _send(
     ``every``, to every vehicle on the bus at once, each line its vehicle's; the exit code is the worst."""
     if limit_s is not None:
         _positive("--wait-timeout", limit_s)
+    check_may_command(endpoint)
     if every:
         if vehicle is not None:
             fail("--all addresses every vehicle: give it or --vehicle, not both; nothing sent", code=2)
@@ -560,6 +562,7 @@ def mission_(
         file = find_mission(file)
     except FileNotFoundError as e:
         fail(str(e), code=2)
+    check_may_command(endpoint)
     with connect(vehicle, endpoint) as node:
         link = _Link(node, timeout, ("mission_result", *WATCHED))
         home, origin = _vehicle_home(link)

@@ -193,6 +193,20 @@ def endpoint_bus(endpoint: str) -> BusConfig:
     return BusConfig(mode="client", connect=(endpoint,), listen=(), tls=tls)
 
 
+def check_may_command(endpoint: str | None) -> None:
+    """Refuse (exit 2) to command over mutual TLS as an identity whose role may not: its router would drop the
+    command without a word to the sender (stack.security.acl)."""
+    if not endpoint or not endpoint.startswith("tls/"):
+        return
+    endpoint_bus(endpoint)  # the identity named and valid, or one clear line
+    from stack.security.keystore import read_identity
+
+    identity = read_identity(Path(os.environ[KEYSTORE_ENV]).expanduser(), os.environ[IDENTITY_ENV])
+    if identity.role not in ("operator", "host"):
+        fail(f"identity {identity.name} is an {identity.role}: it may read the vehicle, not command it; nothing sent",
+             code=2)
+
+
 def open_bus(bus: BusConfig, tool: str) -> zenoh.Session:
     try:
         return open_session(bus, tool)

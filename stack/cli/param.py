@@ -9,7 +9,16 @@ from pathlib import Path
 
 import typer
 
-from stack.cli.common import EndpointOption, JsonOption, VehicleOption, command_group, connect, fail, print_table
+from stack.cli.common import (
+    EndpointOption,
+    JsonOption,
+    VehicleOption,
+    check_may_command,
+    command_group,
+    connect,
+    fail,
+    print_table,
+)
 from stack.params import client, qgc_file
 from stack.params.param import Param, ParamError, ParamValue
 
@@ -143,6 +152,7 @@ def set_(
     vehicle: str | None = VehicleOption,
     endpoint: str | None = EndpointOption,
 ) -> None:
+    check_may_command(endpoint)
     with connect(vehicle, endpoint) as node:
         try:
             p = client.get_param(node.session, node.vehicle, name)
@@ -223,6 +233,7 @@ def load(
         entries, problems = qgc_file.parse_file(file.read_text())
     except (OSError, UnicodeDecodeError) as e:
         fail(f"cannot read {file}: {getattr(e, 'strerror', None) or e}")
+    check_may_command(endpoint)
     with connect(vehicle, endpoint) as node:
         params = {p.name: p.param for p in client.list_params(node.session, node.vehicle)}
         report = client.set_many(node.session, node.vehicle, ((e.name, e.value, e.mav_type) for e in entries))

@@ -41,8 +41,9 @@ def router(
     loopback = f"tcp/127.0.0.1:{free_port()}"
     beyond, connect = prof.router_links(host)
     listen = (loopback, *beyond)
-    tls = prof.host_tls(host)
-    bus = BusConfig(mode="router", listen=listen, connect=connect, lease_ms=prof.router_lease_ms, tls=tls)
+    tls, access = prof.host_tls(host), prof.host_access()
+    lease = prof.router_lease_ms
+    bus = BusConfig(mode="router", listen=listen, connect=connect, lease_ms=lease, tls=tls, access=access)
     stop = threading.Event()
     for signum in (signal.SIGINT, signal.SIGTERM):
         signal.signal(signum, lambda *_: stop.set())

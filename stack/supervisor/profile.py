@@ -208,6 +208,15 @@ class Profile:
 
         return tls_endpoint(endpoint)
 
+    def host_access(self) -> dict[str, object]:
+        """The access rules of a host's router, from the keystore's identities (stack.security.acl); empty without a
+        keystore."""
+        if self.keystore is None or not self.hosts:
+            return {}
+        from stack.security.acl import access_rules
+
+        return access_rules(self.keystore)
+
     def host_tls(self, host: str) -> dict[str, str]:
         """What ``host``'s router presents and trusts on the links between hosts (stack.bus.config.BusConfig.tls):
         empty without a keystore; a ProfileError naming the file when its identity is not in the keystore."""

@@ -232,6 +232,7 @@ class Supervisor:
                 low_latency=self.profile.bus.low_latency,
                 lease_ms=self.profile.router_lease_ms,
                 tls=self.profile.host_tls(self.host) if self.profile.hosts else {},
+                access=self.profile.host_access(),
             )
             try:
                 return open_router(bus, "supervisor", self.profile.router_link_count)

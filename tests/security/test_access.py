@@ -1,0 +1,89 @@
+"""The access rules a keystore gives a host's router (stack.security.acl), on real routers over loopback: the host's
+own processes and the other hosts do everything; an operator commands and reads; an observer only reads; a
+command the router would drop is refused at the tool, saying why."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+
+import zenoh
+
+from stack.bus.config import BusConfig, open_router
+from stack.bus.ports import free_port
+from stack.security.keystore import init_keystore, issue_identity
+from stack.security.tls import tls_files
+from stack.supervisor.profile import load_profile
+from tests.security.test_host_links import hosts_profile
+from tests.support.harness import REPO, stack_env
+
+ATTITUDE, COMMAND, MOTORS = "stack/v1/vehicle_attitude/0", "stack/v1/vehicle_command/0", "stack/v1/actuator_motors/0"
+
+
+class Heard:
+    def __init__(self, session: zenoh.Session, key: str) -> None:
+        self.samples: list[str] = []
+        self.arrived = threading.Event()
+        self.sub = session.declare_subscriber(key, self._on)
+
+    def _on(self, sample: zenoh.Sample) -> None:
+        self.samples.append(sample.payload.to_string())
+        self.arrived.set()
+
+
+def client(endpoint: str, tls: dict[str, str] | None = None) -> zenoh.Session:
+    return zenoh.open(BusConfig(mode="client", connect=(endpoint,), listen=(), tls=tls or {}).zenoh_config("client"))
+
+
+def test_each_role_gets_what_it_may_and_nothing_more(tmp_path: Path) -> None:
+    keystore = tmp_path / "keys"
+    init_keystore(keystore)
+    for name, role in (("sim", "host"), ("control", "host"), ("ground", "host"), ("alice", "operator"),
+                       ("bob", "observer")):  # fmt: skip
+        issue_identity(keystore, name, role)
+    ports = {h: free_port() for h in ("sim", "control", "ground")}
+    profile = load_profile(str(hosts_profile(tmp_path, keystore, ports)))
+    local = f"tcp/127.0.0.1:{free_port()}"
+    listen = profile.router_links("sim")[0]
+    sim_bus = BusConfig(
+        mode="router", listen=(local, *listen), tls=profile.host_tls("sim"), access=profile.host_access()
+    )
+    sim = open_router(sim_bus, "router-sim", 2)
+    tls_endpoint = listen[0].partition("#")[0]
+    sessions = []
+    try:
+        module = client(local)  # a module of the simulator's host
+        alice = client(tls_endpoint, tls_files(keystore, "alice"))
+        bob = client(tls_endpoint, tls_files(keystore, "bob"))
+        sessions += [module, alice, bob]
+        commands, motors = Heard(module, COMMAND), Heard(module, MOTORS)
+        telemetry = {"alice": Heard(alice, ATTITUDE), "bob": Heard(bob, ATTITUDE)}
+        deadline = time.monotonic() + 10
+        while not all(h.arrived.is_set() for h in telemetry.values()) and time.monotonic() < deadline:
+            module.put(ATTITUDE, "attitude")  # every identity that may read hears the vehicle
+            time.sleep(0.1)
+        assert all(h.samples and h.samples[0] == "attitude" for h in telemetry.values())
+        for _ in range(5):
+            bob.put(COMMAND, "bob")  # an observer's command: dropped
+            alice.put(MOTORS, "alice")  # an operator may command, not drive the motors
+            alice.put(COMMAND, "alice")
+            time.sleep(0.1)
+        assert commands.arrived.wait(5.0)
+        time.sleep(0.3)
+        assert set(commands.samples) == {"alice"} and motors.samples == []
+        out = subprocess.run(
+            [sys.executable, "-m", "stack", "cmd", "disarm", "--force", "--endpoint", tls_endpoint],
+            env={**stack_env(tmp_path), "STACK_KEYSTORE": str(keystore), "STACK_IDENTITY": "bob"},
+            capture_output=True, text=True, timeout=60, cwd=REPO,
+        )  # fmt: skip
+        assert out.returncode == 2
+        assert out.stderr.strip() == (
+            "error: identity bob is an observer: it may read the vehicle, not command it; nothing sent"
+        )
+    finally:
+        for s in sessions:
+            s.close()
+        sim.close()
