@@ -13,6 +13,14 @@ from __future__ import annotations
 import re
 
 ROOT = "stack"
+AREAS = ("alive", "graph", "heartbeat", "lockstep", "param", "scenario", "supervisor", "synced", "world")
+"""The runtime's areas of a vehicle's keys (``stack/<vehicle>/@<area>/...``): a key expression names each one it
+covers, since no wildcard matches an ``@`` chunk (the access rules list them, stack.security.acl)."""
+
+
+def area_keys(*areas: str) -> list[str]:
+    """Key expressions covering every vehicle's ``areas`` (all of them when none is named)."""
+    return [f"{ROOT}/*/@{area}/**" for area in areas or AREAS]
 _NAME = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_\-]*$")
 
 

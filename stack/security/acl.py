@@ -10,10 +10,12 @@ as allows, never as exceptions):
 - an ``observer``: read every topic and ask for status;
 - any other identity of the keystore, or none: nothing.
 
-Reading a topic takes a subscription (and, for the tools, a token in the topic graph, so a fast-path run puts the
-topic on Zenoh for them) going in, and the samples and replies coming out: Zenoh checks both directions, and a
-message allowed in but not out toward its reader is lost as surely as one denied. A denied message is dropped
-without a word to its sender: the tools check their own role before they send (stack.cli.common).
+Key expressions name the runtime's areas (``@graph``, ``@alive``...) one by one: no wildcard matches an ``@`` chunk,
+so ``**`` covers the topics only. Reading a topic takes a subscription (and, for the tools, a token in the topic
+graph, so a fast-path run puts the topic on Zenoh for them) going in, and the samples and replies coming out: Zenoh
+checks both directions, and a message allowed in but not out toward its reader is lost as surely as one denied. A
+denied message is dropped without a word to its sender: the tools check their own role before they send
+(stack.cli.common).
 """
 
 from __future__ import annotations
@@ -21,15 +23,17 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
+from stack.bus import keys
 from stack.security.keystore import list_identities
 
 EVERY_MESSAGE = (
     "put", "delete", "declare_subscriber", "query", "reply", "declare_queryable", "liveliness_token",
     "liveliness_query", "declare_liveliness_subscriber",
 )  # fmt: skip
-COMMAND_KEYS = ("stack/*/vehicle_command/*", "stack/*/mission/*")
-STATUS_KEYS = ("stack/*/@supervisor/**",)
-PARAM_KEYS = ("stack/*/@param/**",)
+COMMAND_KEYS = ["stack/*/vehicle_command/*", "stack/*/mission/*"]
+TOPICS = ["stack/**"]
+TOOL_AREAS = keys.area_keys("graph", "alive", "heartbeat", "supervisor", "synced")
+"""What a tool reads beyond the topics: the topic graph, who is alive, heartbeats, the supervisors' status."""
 
 
 def _rule(rule_id: str, flows: list[str], messages: list[str], key_exprs: list[str]) -> dict[str, Any]:
@@ -43,14 +47,14 @@ def access_rules(keystore: Path) -> dict[str, Any]:
         if not identity.expired():
             by_role.setdefault(identity.role, []).append(identity.name)
     rules = [
-        _rule("everything", ["ingress", "egress"], list(EVERY_MESSAGE), ["**"]),
+        _rule("everything", ["ingress", "egress"], list(EVERY_MESSAGE), ["**", *keys.area_keys()]),
         _rule("read", ["ingress"], ["declare_subscriber", "liveliness_token", "liveliness_query",
-                                    "declare_liveliness_subscriber"], ["stack/**"]),
+                                    "declare_liveliness_subscriber"], [*TOPICS, *TOOL_AREAS]),
         _rule("receive", ["egress"], ["put", "delete", "reply", "liveliness_token", "declare_subscriber",
-                                      "declare_queryable"], ["stack/**"]),
-        _rule("status", ["ingress"], ["query"], list(STATUS_KEYS)),
-        _rule("command", ["ingress"], ["put"], list(COMMAND_KEYS)),
-        _rule("parameters", ["ingress"], ["query"], list(PARAM_KEYS)),
+                                      "declare_queryable"], [*TOPICS, *TOOL_AREAS, *keys.area_keys("param")]),
+        _rule("status", ["ingress"], ["query"], keys.area_keys("supervisor")),
+        _rule("command", ["ingress"], ["put"], COMMAND_KEYS),
+        _rule("parameters", ["ingress"], ["query"], keys.area_keys("param")),
     ]  # fmt: skip
     subjects: list[dict[str, Any]] = [{"id": "this_host", "interfaces": ["lo"], "link_protocols": ["tcp"]}]
     policies: list[dict[str, Any]] = [{"rules": ["everything"], "subjects": ["this_host"]}]

@@ -6,6 +6,7 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
+from collections.abc import Sequence
 from pathlib import Path
 
 from tests.flight.flights import FLY_TIMEOUT_S, Flight
@@ -15,9 +16,11 @@ from tests.support.hosts import Host, Network
 ROUTER_PORT = 7447  # inside namespaces of the test's own: nothing else listens there
 
 
-def split_profile(path: Path, net: Network, extra: str = "") -> Path:
-    """``sitl_quad_hosts`` with the endpoints of the network's hosts (those it has), and ``extra`` TOML."""
-    endpoints = "\n".join(f'[hosts.{h.name}]\nendpoint = "tcp/{h.address}:{ROUTER_PORT}"\n' for h in net.hosts.values())
+def split_profile(path: Path, net: Network, extra: str = "", hosts: Sequence[Host] | None = None) -> Path:
+    """``sitl_quad_hosts`` with the endpoints of the network's hosts (those it has, or ``hosts``), and ``extra``
+    TOML."""
+    chosen = net.hosts.values() if hosts is None else hosts
+    endpoints = "\n".join(f'[hosts.{h.name}]\nendpoint = "tcp/{h.address}:{ROUTER_PORT}"\n' for h in chosen)
     return write_profile(path, f'extends = "sitl_quad_hosts"\n\n{endpoints}\n{extra}')
 
 

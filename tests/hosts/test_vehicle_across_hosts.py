@@ -15,7 +15,8 @@ import pytest
 
 from stack.bus.node import stable_publisher_id
 from stack.record.recorder import RecordedMessage, RecordingReader
-from tests.hosts.split import TAKEOFF_TIMEOUT_S, split_profile, take_off, up_on
+from stack.security.keystore import init_keystore, issue_identity
+from tests.hosts.split import ROUTER_PORT, TAKEOFF_TIMEOUT_S, split_profile, take_off, up_on
 from tests.hosts.split import stack_on as stack
 from tests.support.harness import REPO, eventually, stack_env
 from tests.support.hosts import Host, Network
@@ -62,16 +63,89 @@ def running(report: dict | None, count: int) -> bool:
     return all(m["state"] == "running" for m in modules) and clock
 
 
-@pytest.mark.parametrize("realtime", [False, True], ids=["lockstep", "realtime"])
+RAW_DISARM = """
+import sys, time
+from stack.bus.node import Node
+from stack.bus.config import BusConfig
+from stack.msg.system import VehicleCommand
+from stack.security.tls import tls_files
+from pathlib import Path
+bus = BusConfig(mode="client", connect=(sys.argv[1],), listen=(), tls=tls_files(Path(sys.argv[2]), "bob"))
+with Node(bus, "v1", "not-a-tool") as node:
+    pub = node.publisher("vehicle_command")
+    for _ in range(20):
+        pub.publish(VehicleCommand(command=400, param1=0.0, param2=21196.0, from_external=True, target_system=0,
+                                   target_component=0))
+        time.sleep(0.05)
+"""
+"""An observer's own program (not the CLI, which refuses) forcing a disarm (MAV_CMD_COMPONENT_ARM_DISARM, 21196):
+the routers drop it."""
+
+
+def keystore_for(net: Network, root: Path) -> Path:
+    """A keystore with an identity for each host of the network (its address in it), an operator and an observer."""
+    init_keystore(root)
+    for host in net.hosts.values():
+        if host.name != "visitor":
+            issue_identity(root, host.name, "host", (host.address,))
+    issue_identity(root, "alice", "operator")
+    issue_identity(root, "bob", "observer")
+    return root
+
+
+def as_visitor(net: Network, keystore: Path, identity: str, *args: str) -> subprocess.CompletedProcess[str]:
+    """A ``stack`` command from a machine that is not a host, as ``identity`` of ``keystore``, to the ground host."""
+    visitor, ground = net.hosts["visitor"], net.hosts["ground"]
+    env = {**stack_env(visitor.home), "STACK_KEYSTORE": str(keystore), "STACK_IDENTITY": identity}
+    endpoint = f"tls/{ground.address}:{ROUTER_PORT}"
+    return visitor.run(sys.executable, "-m", "stack", *args, "--endpoint", endpoint, env=env, timeout=120, cwd=REPO)
+
+
+def visitors_see(net: Network, keystore: Path, work: Path) -> None:
+    """From the visitor's machine, the hovering vehicle: read by an observer, never disarmed by one (through the CLI
+    or a program of its own), closed to an identity of another keystore."""
+    seen = as_visitor(net, keystore, "bob", "status", "--json")
+    assert seen.returncode == 0, seen.stdout + seen.stderr
+    assert json.loads(seen.stdout)["vehicle_summary"]["armed"]
+    refused = as_visitor(net, keystore, "bob", "cmd", "disarm", "--force")
+    assert refused.returncode == 2, refused.stdout + refused.stderr
+    assert "identity bob is an observer: it may read the vehicle, not command it; nothing sent" in refused.stderr
+    visitor, ground = net.hosts["visitor"], net.hosts["ground"]
+    forced = visitor.run(
+        sys.executable, "-c", RAW_DISARM, f"tls/{ground.address}:{ROUTER_PORT}", str(keystore),
+        env=stack_env(visitor.home), timeout=60, cwd=REPO,
+    )  # fmt: skip
+    assert forced.returncode == 0, forced.stdout + forced.stderr
+    after = status(ground)
+    assert after is not None and after["vehicle_summary"]["armed"], "an observer's disarm reached the vehicle"
+    assert after["vehicle_summary"]["position"]["altitude_above_home"] > 2.0
+    stranger = work / "other-keys"
+    init_keystore(stranger)
+    issue_identity(stranger, "mallory", "operator")
+    env = {**stack_env(visitor.home), "STACK_KEYSTORE": str(stranger), "STACK_IDENTITY": "mallory"}
+    out = visitor.run(
+        sys.executable, "-m", "stack", "cmd", "disarm", "--force", "--endpoint", f"tls/{ground.address}:{ROUTER_PORT}",
+        env=env, timeout=120, cwd=REPO,
+    )  # fmt: skip
+    assert out.returncode == 1 and "did not admit identity mallory" in out.stderr, out.stdout + out.stderr
+
+
+@pytest.mark.parametrize("realtime", [False, True], ids=["lockstep, mutual TLS", "realtime"])
 def test_takeoff_hover_and_land_across_three_hosts_commanded_from_the_ground(network, tmp_path, realtime):
     """In lockstep the ground host also records the whole vehicle (in real time, three hosts' stacks and a recorder
     of every topic are more than the two cores of the test machine run on the wall clock). In real time the
     flight-control host's monotonic clock is 100 s ahead of the others', as another machine's would be: its
     modules run on the vehicle's time base (stack.bus.timebase), else they would judge every sample of the
-    simulator's host 100 s old."""
+    simulator's host 100 s old. In lockstep the links between hosts are mutual TLS from a keystore, with its
+    access rules: from a visitor's machine, an observer reads but its disarm never reaches the vehicle, an identity
+    of another keystore is not admitted, and an operator lands the vehicle."""
     ahead = {"control": 100} if realtime else None
-    net = network((*HOSTS, "laptop"), clock_ahead_s=ahead)  # a laptop the profile gives no module: its router, tools
-    profile = split_profile(tmp_path / "split.toml", net)
+    # a laptop the profile gives no module (its router, tools), and a visitor's machine that is no host at all
+    net = network((*HOSTS, "laptop", "visitor"), clock_ahead_s=ahead)
+    keystore = None if realtime else keystore_for(net, tmp_path / "keys")
+    secure = "" if keystore is None else f'[security]\nkeystore = "{keystore}"\n'
+    hosts = [h for name, h in net.hosts.items() if name != "visitor"]
+    profile = split_profile(tmp_path / "split.toml", net, secure, hosts)
     laptop = net.hosts["laptop"]
     router = laptop.popen(
         sys.executable, "-m", "stack", "router", str(profile), "--host", "laptop", "--insecure",
@@ -106,7 +180,11 @@ def test_takeoff_hover_and_land_across_three_hosts_commanded_from_the_ground(net
     assert "11.5" in stack(net.hosts["sim"], "param", "get", "MPC_XY_VEL_MAX").stdout
     echo = stack(ground, "topic", "echo", "vehicle_attitude", "--count", "3", "--json")  # from the sim host's fast path
     assert echo.returncode == 0 and len(echo.stdout.splitlines()) == 3, echo.stdout + echo.stderr
-    land = stack(ground, "cmd", "land", "--wait")
+    if keystore is None:
+        land = stack(ground, "cmd", "land", "--wait")
+    else:
+        visitors_see(net, keystore, tmp_path)
+        land = as_visitor(net, keystore, "alice", "cmd", "land", "--wait")  # an operator from afar
     assert land.returncode == 0 and "landed and disarmed" in land.stdout, land.stdout + land.stderr + logs()
 
     down = stack(ground, "down")  # from any host, the whole vehicle
