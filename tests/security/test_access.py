@@ -4,6 +4,7 @@ command the router would drop is refused at the tool, saying why."""
 
 from __future__ import annotations
 
+import re
 import subprocess
 import sys
 import threading
@@ -12,6 +13,7 @@ from pathlib import Path
 
 import zenoh
 
+from stack.bus import keys
 from stack.bus.config import BusConfig, open_router
 from stack.bus.ports import free_port
 from stack.security.keystore import init_keystore, issue_identity
@@ -87,3 +89,11 @@ def test_each_role_gets_what_it_may_and_nothing_more(tmp_path: Path) -> None:
         for s in sessions:
             s.close()
         sim.close()
+
+
+def test_the_access_rules_name_every_area_of_the_runtimes_keys() -> None:
+    """A key area the rules do not name is denied to everyone, the host's own modules too (no wildcard covers it)."""
+    used = set()
+    for path in (REPO / "stack").rglob("*.py"):
+        used |= set(re.findall(r"/@([a-z_]+)/", path.read_text()))
+    assert used <= set(keys.AREAS), used - set(keys.AREAS)
