@@ -11,7 +11,9 @@ with the other work.
    (tests/hosts/split.py ``fly_across_hosts``: the simulator, the estimators and the scenario on ``sim``, flight
    control over Zenoh on ``control``). Both record the flight (``--record``: the split flight always does), so they
    do the same work. The factor is the scenario's own (simulated over wall time from its first step to its end, the
-   report's ``realtime_factor``); the worst and the median over the seeds, and whether each flight passed.
+   report's ``realtime_factor``); the worst and the median over the seeds, and whether each flight passed. The split
+   flight is flown twice: over plain TCP, and with the links between the hosts on mutual TLS from a keystore (an
+   identity per host) with its access rules (``[security] keystore``, stack.security).
 2. One-way latency of one hop of a 64-byte message, 200 Hz for a few seconds: the publisher puts its sequence number
    and ``time.monotonic_ns()`` in the payload, the subscriber takes ``time.monotonic_ns()`` in its callback (one
    kernel clock: receive minus send is the one-way time). Both are Zenoh peers as the stack's modules are
@@ -21,7 +23,8 @@ with the other work.
    module connects to those started before it), ``via the router`` (one host, both clients of the host's router,
    as the stack's tools are: a router does not route between two of its peers, which it takes for a mesh),
    ``across hosts`` (publisher on ``sim``, subscriber on ``control``, each a peer of its own host's router, the
-   two routers connected to each other over the veth links: peer, router, router, peer). The routers are
+   two routers connected to each other over the veth links: peer, router, router, peer), and ``across, mTLS`` (the
+   same with the routers' link on mutual TLS, with access rules). The routers are
    ``stack router PROFILE --host NAME``; a peer reads its router's loopback endpoint from the router's state file.
    Printed: p50, p99, max, messages received, lost (sent minus received) and duplicates (a sequence number twice).
 3. Host-loss detection: routers on both hosts, a process on ``control`` holding a liveliness token, a liveliness
@@ -67,6 +70,7 @@ REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
 from stack.bus.host_beats import DEFAULT_LEASE_MS  # noqa: E402
+from stack.security.keystore import init_keystore, issue_identity  # noqa: E402
 from tests.hosts.split import fly_across_hosts, split_profile  # noqa: E402
 from tests.support.harness import run_cli, stack_env  # noqa: E402
 from tests.support.hosts import Host, Network  # noqa: E402
@@ -193,16 +197,20 @@ def stop(proc: subprocess.Popen[str], timeout: float = 10.0) -> None:
 
 
 class Routers:
-    """``stack router PROFILE --host NAME`` on each host of ``net``, the profile's ``[bus] lease_ms`` given."""
+    """``stack router PROFILE --host NAME`` on each host of ``net``, the profile's ``[bus] lease_ms`` given; with
+    ``keystore``, linked over mutual TLS with its access rules (else plain TCP, ``--insecure``)."""
 
-    def __init__(self, net: Network, work: Path, lease_ms: int) -> None:
-        profile = split_profile(work / f"routers-{lease_ms}.toml", net, f"\n[bus]\nlease_ms = {lease_ms}\n")
+    def __init__(self, net: Network, work: Path, lease_ms: int, keystore: Path | None = None) -> None:
+        secure = f'[security]\nkeystore = "{keystore}"\n' if keystore is not None else ""
+        tag = f"{lease_ms}{'-tls' if keystore else ''}"
+        profile = split_profile(work / f"routers-{tag}.toml", net, f"\n[bus]\nlease_ms = {lease_ms}\n{secure}")
         self.procs: dict[str, subprocess.Popen[str]] = {}
         self.endpoints: dict[str, str] = {}
+        plain = () if keystore else ("--insecure",)
         for name, host in net.hosts.items():
-            log = (work / f"router-{name}-{lease_ms}.log").open("w")
+            log = (work / f"router-{name}-{tag}.log").open("w")
             self.procs[name] = host.popen(
-                sys.executable, "-m", "stack", "router", str(profile), "--host", name,
+                sys.executable, "-m", "stack", "router", str(profile), "--host", name, *plain,
                 env=stack_env(host.home), cwd=REPO, stdout=log, stderr=subprocess.STDOUT,
             )  # fmt: skip
         for name, host in net.hosts.items():
@@ -332,22 +340,24 @@ def fly_one_host(seed: int, work: Path) -> tuple[dict, dict[str, tuple[float, fl
     return result, cpu_in_flight(sampler, result)
 
 
-def fly_split(net: Network, seed: int, work: Path) -> tuple[dict, dict[str, tuple[float, float]]]:
-    where = work / f"split-{seed}"
+def fly_split(
+    net: Network, seed: int, work: Path, keystore: Path | None = None
+) -> tuple[dict, dict[str, tuple[float, float]]]:
+    where = work / f"split-{seed}{'-tls' if keystore else ''}"
     where.mkdir()
     sampler = CpuSampler({name: namespace_members(h.netns) for name, h in net.hosts.items()})
     sampler.start()
     try:
-        flight = fly_across_hosts(net, SCENARIO, seed, where)
+        flight = fly_across_hosts(net, SCENARIO, seed, where, keystore)
     finally:
         sampler.stop()
     return flight.report, cpu_in_flight(sampler, flight.report)
 
 
-def flights(net: Network, seeds: list[int], work: Path) -> None:
-    print(f"\n1. lockstep real-time factor of {SCENARIO} (the scenario's; the recorder on in both)")
-    print(f"{'seed':>4} {'one host':>9} {'passed':>6} {'2 hosts':>8} {'passed':>6} {'split/one':>9}")
-    ones, splits, cpu_one, cpu_split = [], [], [], []
+def flights(net: Network, seeds: list[int], work: Path, keystore: Path) -> None:
+    print(f"\n1. lockstep real-time factor of {SCENARIO} (the scenario's; the recorder on in all)")
+    print(f"{'seed':>4} {'one host':>9} {'passed':>6} {'2 hosts':>8} {'passed':>6} {'mTLS':>6} {'passed':>6}")
+    ones, splits, tls, cpu_one, cpu_split = [], [], [], [], []
     for seed in seeds:
         one, cpu = fly_one_host(seed, work)
         ones.append(one["realtime_factor"])
@@ -355,13 +365,16 @@ def flights(net: Network, seeds: list[int], work: Path) -> None:
         split, cpu = fly_split(net, seed, work)
         splits.append(split["realtime_factor"])
         cpu_split.append(cpu)
+        secure, _ = fly_split(net, seed, work, keystore)
+        tls.append(secure["realtime_factor"])
         print(
             f"{seed:>4} {ones[-1]:>9.2f} {one['passed']!s:>6} {splits[-1]:>8.2f} {split['passed']!s:>6}"
-            f" {splits[-1] / ones[-1]:>9.2f}",
+            f" {tls[-1]:>6.2f} {secure['passed']!s:>6}",
             flush=True,
         )
-    print(f"{'worst':>4} {min(ones):>9.2f} {'':>6} {min(splits):>8.2f}")
-    print(f"{'med.':>4} {statistics.median(ones):>9.2f} {'':>6} {statistics.median(splits):>8.2f}")
+    print(f"{'worst':>4} {min(ones):>9.2f} {'':>6} {min(splits):>8.2f} {'':>6} {min(tls):>6.2f}")
+    print(f"{'med.':>4} {statistics.median(ones):>9.2f} {'':>6} {statistics.median(splits):>8.2f} {'':>6}"
+          f" {statistics.median(tls):>6.2f}")
     print("\n4. CPU during the flights (first to last step), CPU s per simulated s and cores; mean of seeds")
     rows = [("one host", "machine", cpu_one)] + [(f"2 hosts: {h}", h, cpu_split) for h in net.hosts]
     for label, group, per_seed in rows:
@@ -409,7 +422,7 @@ def hop(pub_host: Host, pub_cfg: dict, sub_host: Host, sub_cfg: dict, count: int
     )
 
 
-def latencies(net: Network, seconds: float, work: Path) -> None:
+def latencies(net: Network, seconds: float, work: Path, keystore: Path) -> None:
     sim, control = net.hosts["sim"], net.hosts["control"]
     count = round(seconds * HOP_RATE_HZ)
     print(f"\n2. one-way hop latency, {HOP_SIZE}-byte messages at {HOP_RATE_HZ:g} Hz, {count} sent per path (µs)")
@@ -422,6 +435,12 @@ def latencies(net: Network, seconds: float, work: Path) -> None:
             peer("bench-sub", r["sim"], 10000, direct), count, work, "peer to peer")  # fmt: skip
         hop(sim, client("bench-pub", r["sim"]), sim, client("bench-sub", r["sim"]), count, work, "via the router")
         hop(sim, peer("bench-pub", r["sim"]), control, peer("bench-sub", r["control"]), count, work, "across hosts")
+    finally:
+        routers.close()
+    routers = Routers(net, work, 10000, keystore)
+    try:
+        r = routers.endpoints
+        hop(sim, peer("bench-pub", r["sim"]), control, peer("bench-sub", r["control"]), count, work, "across, mTLS")
     finally:
         routers.close()
 
@@ -539,6 +558,14 @@ def beats(net: Network, trials: int, work: Path) -> None:
         routers.close()
 
 
+def host_keystore(net: Network, root: Path) -> Path:
+    """A keystore with an identity for each host of ``net``, valid at its address."""
+    init_keystore(root)
+    for host in net.hosts.values():
+        issue_identity(root, host.name, "host", (host.address,))
+    return root
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="one seed, 2 s latency runs, one trial of each loss")
@@ -558,8 +585,9 @@ def main() -> None:
         previous = signal.signal(signal.SIGTERM, lambda *_: sys.exit(143))
         try:
             net.start()
-            flights(net, seeds, work)
-            latencies(net, seconds, work)
+            keystore = host_keystore(net, work / "keys")
+            flights(net, seeds, work, keystore)
+            latencies(net, seconds, work, keystore)
             host_loss(net, trials, work)
         finally:
             net.close()

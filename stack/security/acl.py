@@ -5,8 +5,9 @@ as allows, never as exceptions):
 
 - the host's own processes (plain TCP on its loopback interface: its modules, its supervisor, tools run on it) and
   the other hosts of the vehicle (their routers, by the ``host`` identities' names): everything;
-- an ``operator``: send commands and missions (``vehicle_command``, ``mission``), ask for parameters (reading and
-  setting them: ``@param`` queries) and status (``@supervisor`` queries), and read every topic;
+- an ``operator``: publish what a program that is not a module of the profile may (commands, sticks, missions,
+  Offboard setpoints: stack.bus.access), ask for parameters (reading and setting them: ``@param`` queries) and
+  status (``@supervisor`` queries), and read every topic;
 - an ``observer``: read every topic and ask for status;
 - any other identity of the keystore, or none: nothing.
 
@@ -24,13 +25,16 @@ from pathlib import Path
 from typing import Any
 
 from stack.bus import keys
+from stack.bus.access import OPEN_TO_TOOLS
 from stack.security.keystore import list_identities
 
 EVERY_MESSAGE = (
     "put", "delete", "declare_subscriber", "query", "reply", "declare_queryable", "liveliness_token",
     "liveliness_query", "declare_liveliness_subscriber",
 )  # fmt: skip
-COMMAND_KEYS = ["stack/*/vehicle_command/*", "stack/*/mission/*"]
+COMMAND_KEYS = [f"{keys.ROOT}/*/{topic}/*" for topic in sorted(OPEN_TO_TOOLS)]
+"""What an operator may publish: what any program that is not a module may (stack.bus.access: commands, sticks,
+missions, Offboard setpoints)."""
 TOPICS = ["stack/**"]
 TOOL_AREAS = keys.area_keys("graph", "alive", "heartbeat", "supervisor", "synced")
 """What a tool reads beyond the topics: the topic graph, who is alive, heartbeats, the supervisors' status."""

@@ -22,7 +22,7 @@ from stack.supervisor.profile import load_profile
 from tests.security.test_host_links import hosts_profile
 from tests.support.harness import REPO, stack_env
 
-ATTITUDE, COMMAND, MOTORS = "stack/v1/vehicle_attitude/0", "stack/v1/vehicle_command/0", "stack/v1/actuator_motors/0"
+ATTITUDE, COMMAND, GYRO = "stack/v1/vehicle_attitude/0", "stack/v1/vehicle_command/0", "stack/v1/sensor_gyro/0"
 
 
 class Heard:
@@ -61,7 +61,7 @@ def test_each_role_gets_what_it_may_and_nothing_more(tmp_path: Path) -> None:
         alice = client(tls_endpoint, tls_files(keystore, "alice"))
         bob = client(tls_endpoint, tls_files(keystore, "bob"))
         sessions += [module, alice, bob]
-        commands, motors = Heard(module, COMMAND), Heard(module, MOTORS)
+        commands, gyro = Heard(module, COMMAND), Heard(module, GYRO)
         telemetry = {"alice": Heard(alice, ATTITUDE), "bob": Heard(bob, ATTITUDE)}
         deadline = time.monotonic() + 10
         while not all(h.arrived.is_set() for h in telemetry.values()) and time.monotonic() < deadline:
@@ -70,12 +70,12 @@ def test_each_role_gets_what_it_may_and_nothing_more(tmp_path: Path) -> None:
         assert all(h.samples and h.samples[0] == "attitude" for h in telemetry.values())
         for _ in range(5):
             bob.put(COMMAND, "bob")  # an observer's command: dropped
-            alice.put(MOTORS, "alice")  # an operator may command, not drive the motors
+            alice.put(GYRO, "alice")  # an operator may command, not fake the sensors
             alice.put(COMMAND, "alice")
             time.sleep(0.1)
         assert commands.arrived.wait(5.0)
         time.sleep(0.3)
-        assert set(commands.samples) == {"alice"} and motors.samples == []
+        assert set(commands.samples) == {"alice"} and gyro.samples == []
         out = subprocess.run(
             [sys.executable, "-m", "stack", "cmd", "disarm", "--force", "--endpoint", tls_endpoint],
             env={**stack_env(tmp_path), "STACK_KEYSTORE": str(keystore), "STACK_IDENTITY": "bob"},
