@@ -70,9 +70,12 @@ class World:
         self._map = mmap.mmap(self._file.fileno(), 0)
         self.slots = len(self._map) // SLOT_BYTES
         self._seqs = [ctypes.c_uint32.from_buffer(self._map, s * SLOT_BYTES + _SEQ) for s in range(self.slots)]
+        # Aligned 8-byte words, read and written whole (struct would copy them byte by byte, and a reader could see
+        # half of a step another coordinator is writing).
+        self._dones = [ctypes.c_int64.from_buffer(self._map, s * SLOT_BYTES + _DONE) for s in range(self.slots)]
 
     def done_us(self, slot: int) -> int:
-        return struct.unpack_from("=Q", self._map, slot * SLOT_BYTES + _DONE)[0]
+        return self._dones[slot].value
 
     def pid(self, slot: int) -> int:
         return struct.unpack_from("=Q", self._map, slot * SLOT_BYTES + _PID)[0]
@@ -83,7 +86,7 @@ class World:
     def finish(self, slot: int, t_us: int) -> None:
         """Slot ``slot`` has finished step ``t_us`` (LEFT: left the world): wake whoever waits for it. Only its
         vehicle's coordinator calls it, or anyone once that coordinator is gone."""
-        struct.pack_into("=Q", self._map, slot * SLOT_BYTES + _DONE, t_us)
+        self._dones[slot].value = t_us
         word = self._seqs[slot]
         word.value = (word.value + 1) & 0xFFFFFFFF
         if _FUTEX_SYSCALL is not None:
@@ -107,7 +110,7 @@ class World:
         return self._seqs[slot].value
 
     def close(self) -> None:
-        del self._seqs
+        del self._seqs, self._dones
         self._map.close()
         self._file.close()
 
