@@ -343,7 +343,9 @@ def test_pty_companion_at_921600_baud_and_the_land_failsafe(tmp_path: Path) -> N
         before, start = c.bytes_in, time.monotonic()
         c.pump(4.0)
         byte_rate = (c.bytes_in - before) / (time.monotonic() - start)
-        assert 40_000 < byte_rate < 92_160 * 1.05
+        # What the pseudo-terminal's kernel buffer held as the window opened arrives within it too: on a loaded machine
+        # (a late reader) up to 6 % more was counted; unthrottled, the streams asked are far above 120 kB/s.
+        assert 40_000 < byte_rate < 92_160 * 1.15
         for msg_id in (
             mavlink.MAVLINK_MSG_ID_ATTITUDE,
             mavlink.MAVLINK_MSG_ID_ATTITUDE_QUATERNION,
