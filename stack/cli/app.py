@@ -156,14 +156,9 @@ def up(
         raise typer.Exit(run_swarm(names, up_args, run_state.new_run_dir(prof.name, "swarm")))
     world: dict[str, Any] = {}
     if swarm_vehicle:
-        from stack.supervisor.swarm import vehicle_copy, vehicle_names
+        from stack.cli.swarm_launch import vehicle_of_swarm
 
-        try:
-            names = vehicle_names(prof, swarm_size)
-            prof = vehicle_copy(prof, swarm_vehicle, swarm_size, swarm_join)
-        except ValueError as e:
-            fail(str(e), code=2)
-        world = {"world": swarm_world, "world_slot": swarm_vehicle - 1, "world_vehicles": tuple(names)}
+        prof, _, world = vehicle_of_swarm(prof, swarm_vehicle, swarm_size, swarm_join, swarm_world)
     choose_transport(prof, transport)
     pace = _speed(prof, speed, realtime)
     extra_args = _device_args(prof, device) if device is not None else {}

@@ -129,14 +129,9 @@ def fly(
     world: dict[str, object] = {}
     role = ""
     if swarm_vehicle:
-        from stack.supervisor.swarm import vehicle_copy, vehicle_names
+        from stack.cli.swarm_launch import vehicle_of_swarm
 
-        try:
-            names = vehicle_names(prof, swarm_size)
-            prof = vehicle_copy(prof, swarm_vehicle, swarm_size, swarm_join)
-        except ValueError as e:
-            fail(str(e), code=2)
-        world = {"world": swarm_world, "world_slot": swarm_vehicle - 1, "world_vehicles": tuple(names)}
+        prof, names, world = vehicle_of_swarm(prof, swarm_vehicle, swarm_size, swarm_join, swarm_world)
         role = json.dumps({"slot": swarm_vehicle, "vehicles": names, "spacing_m": prof.swarm_spacing_m})
     prof.port = 0  # the flight's own router, on a free port
     # A flight is a stack of its own beside others: the links to the world outside (ground-station ports)

@@ -21,6 +21,7 @@ import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
 from types import FrameType
+from typing import Any
 
 import typer
 
@@ -38,6 +39,20 @@ def check_swarm(profile: Profile, count: int) -> list[str]:
     for index in range(1, count + 1):
         vehicle_copy(profile, index, count, join="tcp/127.0.0.1:1")
     return vehicle_names(profile, count)
+
+
+def vehicle_of_swarm(
+    profile: Profile, index: int, size: int, join: str, world: str
+) -> tuple[Profile, list[str], dict[str, Any]]:
+    """What a launcher's child (``--swarm-vehicle INDEX``...) runs: vehicle ``index`` of the swarm, the vehicles'
+    names, and its world clock's options (stack.supervisor.supervisor.UpOptions); one clear line if impossible."""
+    try:
+        names = vehicle_names(profile, size)
+        vehicle = vehicle_copy(profile, index, size, join)
+    except ValueError as e:
+        typer.echo(f"error: {e}", err=True)
+        raise typer.Exit(2) from None
+    return vehicle, names, {"world": world, "world_slot": index - 1, "world_vehicles": tuple(names)}
 
 
 def run_swarm(

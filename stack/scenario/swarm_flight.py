@@ -20,7 +20,10 @@ from stack.msg.registry import ORB_ID
 from stack.msg.setpoints import TrajectorySetpoint
 from stack.msg.system import OffboardControlMode
 from stack.scenario import autonomy, formation
-from stack.scenario.script import ScenarioError, ScriptContext, Wait
+from stack.scenario.catalogue import Check, Scenario, Swarm
+from stack.scenario.script import ScenarioError, Script, ScriptContext, Wait
+
+EvaluateSwarm = Callable[[list[dict[str, Any] | None], float], dict[str, Any]]
 
 ALTITUDE_M = 5.0
 ASSEMBLE_S = 4.0
@@ -226,3 +229,29 @@ def _drift(ctx: ScriptContext, t0: float, t1: float) -> float:
     start = autonomy.truth_at(truth, t0).position
     moved = [math.dist(m.position, start) for t, m in zip(truth.times, truth.values, strict=True) if t0 <= t <= t1]
     return max(moved, default=math.nan)
+
+
+def swarm_scenario(
+    name: str, description: str, script: Script, evaluate_swarm: EvaluateSwarm, checks: tuple[Check, ...]
+) -> Scenario:
+    """A scenario flown by these scripts: each vehicle's own figures from :func:`evaluate`, the swarm judged by
+    ``evaluate_swarm`` against ``checks``; the followers hear the leader's position LEADER_DELAY_S late."""
+    return Scenario(
+        name=name,
+        description=description,
+        script=script,
+        evaluate=evaluate,
+        checks=(),
+        record=autonomy.RECORD,
+        watch=autonomy.WATCH,
+        publish=(ORB_ID.offboard_control_mode, ORB_ID.trajectory_setpoint),
+        timeout_s=240.0,
+        options={"on_leader_loss": "hold"},
+        choices={"on_leader_loss": LOSS_ACTIONS},
+        swarm=Swarm(
+            peers=(ORB_ID.vehicle_local_position,),
+            peer_delay_s=formation.LEADER_DELAY_S,
+            evaluate=evaluate_swarm,
+            checks=checks,
+        ),
+    )

@@ -10,9 +10,8 @@ from __future__ import annotations
 
 from typing import Any
 
-from stack.msg.registry import ORB_ID
-from stack.scenario import autonomy, formation, swarm_flight
-from stack.scenario.catalogue import Check, Scenario, Swarm
+from stack.scenario import formation, swarm_flight
+from stack.scenario.catalogue import Check
 from stack.scenario.swarm_track import Tracks, metric, rms
 
 
@@ -38,27 +37,15 @@ def evaluate_swarm(results: list[dict[str, Any] | None], spacing_m: float) -> di
     }
 
 
-SCENARIO = Scenario(
-    name="swarm_formation",
-    description="N vehicles (--vehicles N) take off together, fly a 20 m box abreast of the leader, return and land",
-    script=swarm_flight.script,
-    evaluate=swarm_flight.evaluate,
-    checks=(),
-    record=autonomy.RECORD,
-    watch=autonomy.WATCH,
-    publish=(ORB_ID.offboard_control_mode, ORB_ID.trajectory_setpoint),
-    timeout_s=240.0,
-    options={"on_leader_loss": "hold"},
-    choices={"on_leader_loss": swarm_flight.LOSS_ACTIONS},
-    swarm=Swarm(
-        peers=(ORB_ID.vehicle_local_position,),
-        peer_delay_s=formation.LEADER_DELAY_S,
-        evaluate=evaluate_swarm,
-        checks=(
-            Check("formation_error_rms_m", 0.4),
-            Check("formation_error_max_m", 1.0),
-            Check("min_separation_m", 3.0, at_least=True),
-            Check("all_landed_and_disarmed", True),
-        ),
+SCENARIO = swarm_flight.swarm_scenario(
+    "swarm_formation",
+    "N vehicles (--vehicles N) take off together, fly a 20 m box abreast of the leader, return and land",
+    swarm_flight.script,
+    evaluate_swarm,
+    (
+        Check("formation_error_rms_m", 0.4),
+        Check("formation_error_max_m", 1.0),
+        Check("min_separation_m", 3.0, at_least=True),
+        Check("all_landed_and_disarmed", True),
     ),
 )

@@ -11,9 +11,8 @@ from __future__ import annotations
 from collections.abc import Generator
 from typing import Any
 
-from stack.msg.registry import ORB_ID
-from stack.scenario import autonomy, formation, swarm_flight
-from stack.scenario.catalogue import Check, Scenario, Swarm
+from stack.scenario import formation, swarm_flight
+from stack.scenario.catalogue import Check
 from stack.scenario.script import ScriptContext, Wait
 from stack.scenario.swarm_track import Tracks, metric
 
@@ -47,30 +46,17 @@ def evaluate_swarm(results: list[dict[str, Any] | None], spacing_m: float) -> di
     }
 
 
-SCENARIO = Scenario(
-    name="swarm_leader_loss",
-    description="The swarm_formation flight, its leader killed mid-box: the followers notice within 1 s and hold "
-    "(or land)",
-    script=script,
-    evaluate=swarm_flight.evaluate,
-    checks=(),
-    record=autonomy.RECORD,
-    watch=autonomy.WATCH,
-    publish=(ORB_ID.offboard_control_mode, ORB_ID.trajectory_setpoint),
-    timeout_s=240.0,
-    options={"on_leader_loss": "hold"},
-    choices={"on_leader_loss": swarm_flight.LOSS_ACTIONS},
-    swarm=Swarm(
-        peers=(ORB_ID.vehicle_local_position,),
-        peer_delay_s=formation.LEADER_DELAY_S,
-        evaluate=evaluate_swarm,
-        checks=(
-            Check("notice_time_max_s", 1.0),
-            Check("oldest_followed_max_s", formation.LEADER_TIMEOUT_S),
-            Check("reacted_as_chosen", True),
-            Check("hold_drift_max_m", 0.5),
-            Check("min_separation_m", 3.0, at_least=True),
-            Check("followers_landed_and_disarmed", True),
-        ),
+SCENARIO = swarm_flight.swarm_scenario(
+    "swarm_leader_loss",
+    "The swarm_formation flight, its leader killed mid-box: the followers notice within 1 s and hold (or land)",
+    script,
+    evaluate_swarm,
+    (
+        Check("notice_time_max_s", 1.0),
+        Check("oldest_followed_max_s", formation.LEADER_TIMEOUT_S),
+        Check("reacted_as_chosen", True),
+        Check("hold_drift_max_m", 0.5),
+        Check("min_separation_m", 3.0, at_least=True),
+        Check("followers_landed_and_disarmed", True),
     ),
 )
