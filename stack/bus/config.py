@@ -12,9 +12,12 @@ from __future__ import annotations
 
 import json
 import os
+from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
 
 import zenoh
+
+from stack.security.denials import Denial, watch_denials
 
 LOOPBACK_ANY_PORT = "tcp/127.0.0.1:0"
 DROP_WAIT_US = 50
@@ -140,9 +143,12 @@ class BusConfig:
         return conf
 
 
-def open_router(bus: BusConfig, name: str, links: int) -> zenoh.Session:
+def open_router(
+    bus: BusConfig, name: str, links: int, on_denial: Callable[[Denial], None] | None = None
+) -> zenoh.Session:
     """A router session whose Zenoh runtime has, beyond Zenoh's workers, a receiving and a sending worker for each of
-    the ``links`` to other routers it may hold.
+    the ``links`` to other routers it may hold; with access rules and ``on_denial``, told of each message they deny
+    (stack.security.denials: call it for the process's first session).
 
     Zenoh closes a TCP link with SO_LINGER at 10 s (zenoh-link-tcp, TCP_LINGER_TIMEOUT): dropping a link to a host
     cut off with data unsent blocks the worker thread that drops it until the link comes back or 10 s pass. With
@@ -150,6 +156,8 @@ def open_router(bus: BusConfig, name: str, links: int) -> zenoh.Session:
     message between its processes with it. The runtime reads ZENOH_RUNTIME once, as the process's first session
     opens (the router's, in a supervisor or ``stack router``); it is set for that moment only, so the processes
     started afterwards keep Zenoh's defaults, and a ZENOH_RUNTIME given by the user is left as it is."""
+    if bus.access and on_denial is not None:
+        watch_denials(on_denial)
     if not links or ZENOH_RUNTIME_ENV in os.environ:
         return zenoh.open(bus.zenoh_config(name))
     rx, tx = ZENOH_RX_WORKERS + links, ZENOH_TX_WORKERS + links

@@ -65,7 +65,8 @@ def vehicle_status(session: zenoh.Session, vehicle: str, timeout: float = 2.0) -
     """Every host's status as one: the first answer's vehicle facts, and every host's module rows in host order
     (each row names its host); None when no supervisor answers. ``silent_hosts``: the hosts of the profile that run
     modules and did not answer (``placement`` says which modules are theirs); ``lost_hosts``: host → the answering
-    hosts that count it lost (stack.bus.host_beats)."""
+    hosts that count it lost (stack.bus.host_beats); ``denied``: host → what its router's access rules refused
+    (stack.security.denials), for the hosts whose router refused anything."""
     answers = query_json(session, keys.supervisor_query(vehicle, "status"), timeout=timeout)
     return merged_status(answers) if answers else None
 
@@ -92,6 +93,7 @@ def merged_status(answers: list[dict]) -> dict:
         for h in a.get("lost_hosts", []):
             lost.setdefault(str(h), []).append(str(a.get("host", "")))
     report["lost_hosts"] = lost
+    report["denied"] = {str(a.get("host", "")): a["denied"] for a in answers if a.get("denied")}
     return report
 
 

@@ -304,6 +304,11 @@ def _print_status(report: dict[str, Any]) -> None:
     for host, seen_by in report.get("lost_hosts", {}).items():
         modules = ", ".join(report["placement"].get(host, [])) or "no modules"
         typer.echo(f"host {host}: lost to host {', '.join(seen_by)} (no beat within the lease): {modules}")
+    for host, denials in report.get("denied", {}).items():
+        total = sum(d["count"] for d in denials)
+        typer.echo(f"host {host}: its router denied {total} message{'s' if total != 1 else ''}:")
+        for d in denials:
+            typer.echo(f"  {d['count']} × {d['who']}: {d['action']} ({d['flow']}) on {d['key']}")
     for m in report["modules"]:
         drops = [f"{DROP_COUNTERS[k]} {m[k]}" for k in DROP_COUNTERS if m.get(k)]
         if drops:

@@ -20,6 +20,7 @@ import zenoh
 from stack.bus.config import BusConfig, open_router, without_link_options
 from stack.bus.ports import free_port
 from stack.cli.common import InsecureOption, KeystoreOption, check_exposure, fail
+from stack.security.denials import Denial, DenialCounts
 from stack.supervisor import state as run_state
 from stack.supervisor.profile import ProfileError, load_profile
 
@@ -47,8 +48,14 @@ def router(
     stop = threading.Event()
     for signum in (signal.SIGINT, signal.SIGTERM):
         signal.signal(signum, lambda *_: stop.set())
+    denied = DenialCounts()
+
+    def on_denial(denial: Denial) -> None:
+        if denied.add(denial, time.time()):
+            typer.echo(f"[stack] router of host {host}: {denial.describe()}")
+
     try:
-        session = open_router(bus, f"router-{host}", prof.router_link_count)
+        session = open_router(bus, f"router-{host}", prof.router_link_count, on_denial)
     except zenoh.ZError as e:
         fail(f"host {host}: cannot open its router on {', '.join(map(without_link_options, listen))}: {e}")
     client = BusConfig(mode="client", connect=(loopback,), listen=(), lease_ms=prof.bus.lease_ms)
@@ -70,4 +77,4 @@ def router(
     finally:
         run_state.remove_state(prof.vehicle, os.getpid())
         session.close()
-    typer.echo("[stack] router stopped")
+    typer.echo(f"[stack] router stopped ({denied.total} messages denied)" if denied.total else "[stack] router stopped")

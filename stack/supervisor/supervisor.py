@@ -54,6 +54,7 @@ from stack.runtime.module import LINK_SUFFIX
 from stack.runtime.pacing import MAX_SPEED
 from stack.runtime.priority import ROUTER, raise_priority
 from stack.runtime.spec import ModuleSpec
+from stack.security.denials import Denial, DenialCounts
 from stack.supervisor import state as run_state
 from stack.supervisor.profile import ModuleEntry, ProcessEntry, Profile, expand_placeholders
 
@@ -192,6 +193,7 @@ class Supervisor:
         self._alive_tokens = AliveTokens(self.vehicle, self._say)
         self._heartbeats: dict[str, ModuleHeartbeat] = {}
         self._print_lock = threading.Lock()
+        self.denied = DenialCounts()  # what this host's router's access rules refused (stack.security.denials)
         self._hb_decoder = msgspec.msgpack.Decoder(ModuleHeartbeat)
         # A vehicle over several hosts: this host's beat, and the other hosts' (stack.bus.host_beats).
         self.hosts = HostWatch(profile.placement(), self.host, profile.host_lease_ms) if profile.hosts else None
@@ -235,7 +237,7 @@ class Supervisor:
                 access=self.profile.host_access(),
             )
             try:
-                return open_router(bus, "supervisor", self.profile.router_link_count)
+                return open_router(bus, "supervisor", self.profile.router_link_count, self._on_denial)
             except zenoh.ZError as e:
                 if self.profile.port or attempt + 1 == ROUTER_PORT_ATTEMPTS or not port_taken(e):
                     raise
@@ -884,6 +886,12 @@ class Supervisor:
             self._signal = signal.SIGTERM
         self._stop.set()
 
+    def _on_denial(self, denial: Denial) -> None:
+        with self._print_lock:
+            first = self.denied.add(denial, time.time())
+        if first:
+            self._say(f"router of host {self.host}: {denial.describe()} (counted in `stack status`)")
+
     def _on_status_query(self, query: zenoh.Query) -> None:
         answer(query, self._key("status"), json.dumps(self.status()))
 
@@ -928,6 +936,7 @@ class Supervisor:
             "lockstep": self.profile.lockstep,
             "speed": self.options.speed,
             "open_topics": list(self.profile.open_topics),
+            "denied": self.denied.rows(),
             "modules": rows,
         }
 

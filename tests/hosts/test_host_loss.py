@@ -114,6 +114,7 @@ def test_losing_the_flight_control_host_in_a_hover(network, tmp_path: Path, loss
         control.link_up()
     else:
         procs["control"] = up_on(control, profile, tmp_path / "control-again.log", "--realtime")
+
     # back: every module running, the vehicle on the ground and disarmed, and it may fly again
     def down_and_disarmed() -> bool:
         report = status(ground)

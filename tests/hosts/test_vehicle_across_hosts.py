@@ -119,6 +119,11 @@ def visitors_see(net: Network, keystore: Path, work: Path) -> None:
     after = status(ground)
     assert after is not None and after["vehicle_summary"]["armed"], "an observer's disarm reached the vehicle"
     assert after["vehicle_summary"]["position"]["altitude_above_home"] > 2.0
+    # dropped without a word to bob's program, counted by the ground host's router that dropped it
+    bobs = [
+        (d["action"], d["flow"], d["key"], d["count"]) for d in after["denied"].get("ground", []) if d["who"] == "bob"
+    ]
+    assert [b[:3] for b in bobs] == [("put", "ingress", "stack/v1/vehicle_command/0")] and bobs[0][3] >= 1, bobs
     stranger = work / "other-keys"
     init_keystore(stranger)
     issue_identity(stranger, "mallory", "operator")
@@ -205,4 +210,3 @@ def test_takeoff_hover_and_land_across_three_hosts_commanded_from_the_ground(net
     heard_from = {publishers[m.publisher_id] for m in messages if m.publisher_id in publishers}
     assert heard_from == {"sim", "control"}  # the ground host's links publish on the wall clock only when used
     assert_each_message_once(messages)
-

@@ -97,3 +97,55 @@ def test_the_access_rules_name_every_area_of_the_runtimes_keys() -> None:
     for path in (REPO / "stack").rglob("*.py"):
         used |= set(re.findall(r"/@([a-z_]+)/", path.read_text()))
     assert used <= set(keys.AREAS), used - set(keys.AREAS)
+
+
+def test_a_router_counts_what_its_access_rules_deny_and_names_who_tried(tmp_path: Path) -> None:
+    """Zenoh drops a denied message without a word to its sender; the router's process counts each (from Zenoh's
+    own log, stack.security.denials) and says who tried what, once per kind, and how many at the end."""
+    keystore = tmp_path / "keys"
+    init_keystore(keystore)
+    for name, role in (("sim", "host"), ("control", "host"), ("ground", "host"), ("alice", "operator"),
+                       ("bob", "observer")):  # fmt: skip
+        issue_identity(keystore, name, role)
+    ports = {h: free_port() for h in ("sim", "control", "ground")}
+    path = hosts_profile(tmp_path, keystore, ports)
+    router = subprocess.Popen(
+        [sys.executable, "-m", "stack", "router", str(path), "--host", "sim"],
+        env=stack_env(tmp_path), stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, cwd=REPO,
+    )  # fmt: skip
+    lines: list[str] = []
+    reader = threading.Thread(target=lambda: lines.extend(iter(router.stdout.readline, "")), daemon=True)
+    reader.start()
+    sessions = []
+    try:
+        deadline = time.monotonic() + 60
+        while not any("router of host sim, vehicle" in line for line in lines) and time.monotonic() < deadline:
+            assert router.poll() is None, lines
+            time.sleep(0.05)
+        local, tls_endpoint = re.search(r": on (tcp/\S+), (tls/[^#,;\s]+)", "".join(lines)).groups()
+        module = client(local)
+        alice = client(tls_endpoint, tls_files(keystore, "alice"))
+        bob = client(tls_endpoint, tls_files(keystore, "bob"))
+        sessions += [module, alice, bob]
+        heard = Heard(bob, ATTITUDE)
+        while not heard.arrived.is_set() and time.monotonic() < deadline:
+            module.put(ATTITUDE, "attitude")
+            time.sleep(0.1)
+        assert heard.arrived.is_set()
+        for _ in range(3):
+            bob.put(COMMAND, "bob")
+            alice.put(GYRO, "alice")
+        wanted = {"denied bob a put (ingress) on stack/v1/vehicle_command/0",
+                  "denied alice a put (ingress) on stack/v1/sensor_gyro/0"}  # fmt: skip
+        while not all(any(w in line for line in lines) for w in wanted) and time.monotonic() < deadline:
+            time.sleep(0.05)
+        said = [line for line in lines if "denied" in line]
+        assert all(sum(w in line for line in said) == 1 for w in wanted), said  # once per kind
+    finally:
+        for s in sessions:
+            s.close()
+        router.terminate()
+        router.wait(30)
+        reader.join(10)
+    stopped = re.search(r"router stopped \((\d+) messages denied\)", "".join(lines))
+    assert stopped is not None and int(stopped[1]) >= 6, lines
