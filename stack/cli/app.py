@@ -32,6 +32,8 @@ from stack.cli import (
     vehicles,
 )
 from stack.cli.common import (
+    IDENTITY_ENV,
+    KEYSTORE_ENV,
     EndpointOption,
     InsecureOption,
     JsonOption,
@@ -86,8 +88,18 @@ def _root(
     version: bool = typer.Option(
         False, "--version", callback=_print_version, is_eager=True, help="Print the version and exit"
     ),
+    keystore: Path | None = typer.Option(
+        None, "--keystore", envvar=KEYSTORE_ENV, help="The keystore of the identity a tool presents on a tls/ endpoint"
+    ),
+    identity: str | None = typer.Option(
+        None, "--identity", envvar=IDENTITY_ENV, help="Who a tool is on a tls/ endpoint (stack keys issue)"
+    ),
 ) -> None:
-    pass
+    # read where a tool opens its bus (stack.cli.common.endpoint_bus), as the variables would be
+    if keystore is not None:
+        os.environ[KEYSTORE_ENV] = str(keystore)
+    if identity is not None:
+        os.environ[IDENTITY_ENV] = identity
 
 
 @app.command()

@@ -177,19 +177,23 @@ KEYSTORE_ENV, IDENTITY_ENV = "STACK_KEYSTORE", "STACK_IDENTITY"
 
 def endpoint_bus(endpoint: str) -> BusConfig:
     """A tool's bus to the router at ``endpoint``: over mutual TLS (``tls/``) with the identity STACK_IDENTITY of
-    the keystore STACK_KEYSTORE, which must be given."""
+    the keystore STACK_KEYSTORE (``stack --keystore DIR --identity NAME``), which must be given."""
     if not endpoint.startswith("tls/"):
         return BusConfig(mode="client", connect=(endpoint,), listen=())
     keystore, identity = os.environ.get(KEYSTORE_ENV, ""), os.environ.get(IDENTITY_ENV, "")
     if not keystore or not identity:
-        fail(f"{endpoint} admits only identities of its keystore: set {KEYSTORE_ENV} and {IDENTITY_ENV}", code=2)
+        fail(
+            f"{endpoint} admits only identities of its keystore: give `stack --keystore DIR --identity NAME ...` "
+            f"(or set {KEYSTORE_ENV} and {IDENTITY_ENV})",
+            code=2,
+        )
     from stack.security.keystore import KeystoreError
     from stack.security.tls import tls_files
 
     try:
         tls = tls_files(Path(keystore).expanduser(), identity)
     except KeystoreError as e:
-        fail(f"{IDENTITY_ENV}={identity}: {e}", code=2)
+        fail(f"identity {identity}: {e}", code=2)
     return BusConfig(mode="client", connect=(endpoint,), listen=(), tls=tls)
 
 

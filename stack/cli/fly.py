@@ -105,11 +105,14 @@ def fly(
     if spread_options and (vehicles < 2 or not here):
         fail(f"{', '.join(spread_options)}: a share of a swarm flight: give --vehicles N and --here", code=2)
     if here and not (listen or join):
-        fail("--here: the other machines' shares reach this one with --listen ENDPOINT, or it joins one with --join",
-             code=2)
+        fail(
+            "--here: the other machines' shares reach this one with --listen ENDPOINT, or it joins one with --join",
+            code=2,
+        )
     from stack.security.exposure import exposure_problem
 
-    if problem := exposure_problem("this machine's share of the swarm (its hub has no TLS)", listen, insecure):
+    remedy = "Listen on a tls/ endpoint, as a host of a keystore (`stack --keystore DIR --identity NAME fly ...`)"
+    if problem := exposure_problem("this machine's share of the swarm", listen, insecure, remedy):
         fail(problem, code=2)
     if vehicles > 1:
         given = [o for o, v in (("--plot", plot_), ("--web", web), ("--save", save), ("--record", record)) if v]
@@ -118,7 +121,16 @@ def fly(
             fail(f"--vehicles flies a swarm of whole vehicles: not with {', '.join(given)}", code=2)
         from stack.cli.swarm_fly import Spread, fly_swarm  # what starts the vehicles, only when it will
 
-        spread = Spread([n.strip() for n in here.split(",") if n.strip()], listen, join) if here else None
+        spread = None
+        if here:
+            from stack.cli.swarm_hub import hub_security
+            from stack.security.keystore import KeystoreError
+
+            try:
+                tls, access = hub_security(listen, join)
+            except KeystoreError as e:
+                fail(str(e), code=2)
+            spread = Spread([n.strip() for n in here.split(",") if n.strip()], listen, join, tls, access)
 
         wind_args = ["--wind-speed", str(wind_speed)] if wind_speed is not None else ["--wind"] if wind else []
         args = ["fly", scenario, *(("--profile", profile) if profile else ()), "--seed", str(prof.seed)]

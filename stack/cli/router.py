@@ -8,6 +8,7 @@ other hosts' routers, and is the local rendezvous the tools of this machine find
 from __future__ import annotations
 
 import json
+import math
 import os
 import signal
 import threading
@@ -23,6 +24,8 @@ from stack.cli.common import InsecureOption, KeystoreOption, check_exposure, fai
 from stack.security.denials import Denial, DenialCounts
 from stack.supervisor import state as run_state
 from stack.supervisor.profile import ProfileError, load_profile
+
+SIGNAL_CHECK_S = 0.2
 
 
 def router(
@@ -73,7 +76,10 @@ def router(
     try:
         others = ", ".join(connect) or "no other host"
         typer.echo(f"[stack] router of host {host}, vehicle '{prof.vehicle}': on {', '.join(listen)}; to {others}")
-        stop.wait(duration)
+        end = time.monotonic() + duration if duration is not None else math.inf
+        # in short waits: a signal that lands on one of Zenoh's threads is handled only once this one runs again
+        while not stop.is_set() and time.monotonic() < end:
+            stop.wait(min(SIGNAL_CHECK_S, end - time.monotonic()))
     finally:
         run_state.remove_state(prof.vehicle, os.getpid())
         session.close()

@@ -12,7 +12,7 @@ from __future__ import annotations
 import json
 import time
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -62,7 +62,7 @@ def fly_swarm(
         run_swarm(names, args, run_dir, own)
         heard: dict[str, dict[str, Any]] = {}
     else:
-        hub = Hub(spread.listen, spread.join)
+        hub = Hub(spread.listen, spread.join, spread.tls, spread.access)
         try:
             run_swarm(names, args, run_dir, own, here=here, hub=hub.local)
             hub.wait_results([n for n in names if n not in here])
@@ -121,11 +121,13 @@ def fly_swarm(
 @dataclass(frozen=True)
 class Spread:
     """This machine's share of a swarm spread over several: its vehicles, where its hub listens for the other
-    machines' and where it reaches theirs (stack.cli.swarm_hub)."""
+    machines' and where it reaches theirs, and over ``tls/`` what it presents and lets in (stack.cli.swarm_hub)."""
 
     here: list[str]
     listen: list[str]
     join: list[str]
+    tls: dict[str, str] = field(default_factory=dict)
+    access: dict[str, object] = field(default_factory=dict)
 
 
 def _wind_speed(args: Sequence[str]) -> float:

@@ -7,37 +7,41 @@ only trace is a log line of its access-control interceptor, at TRACE level
     <zid> on Interface(eth0)+CertCommonName(gcs)+Transport(Tls)+<zid> is unauthorized to Put (ingress) on stack/...
 
 The router's process turns that level on for that interceptor alone and passes its standard output, where Zenoh's
-log goes, through ``sed``: a denial goes to a pipe this module reads and counts, the interceptor's other lines
-nowhere, every other line to where the standard output went before, unchanged. Zenoh also logs each message it lets
-through at that level, so the filter reads one line per message the router passes (measured: about 10 µs of the
-router's CPU per message; ``benchmarks/bench_hosts.py`` gives the hop's latency with it), which is why only a router
-with access rules does it.
+log goes, through a filter of its own (stack/security/log_filter.py): a denial goes to a pipe this module reads and
+counts, the interceptor's other lines nowhere, every other line to where the standard output went before. Zenoh
+logs each message it lets through at that level too, a line per message the router passes, which is why only a
+router with access rules does it (``benchmarks/bench_hosts.py`` gives what it costs a hop).
 """
 
 from __future__ import annotations
 
+import contextlib
+import fcntl
 import os
+import queue
 import re
 import select
 import subprocess
+import sys
 import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import zenoh
 
-ACCESS_CONTROL_TARGET = "zenoh::net::routing::interceptor::access_control"
-DENIED = " is unauthorized to "
+from stack.security.log_filter import TARGET
+
 _WHAT = r"is unauthorized to (?P<action>[A-Za-z/ ]+?) \((?P<flow>ingress|egress)\) on (?P<key>\S+)"
 _EVALUATED = re.compile(r"(?P<zid>[0-9a-f]+) on (?P<subject>\S+) " + _WHAT)
 _CACHED = re.compile(r"Using cached result: (?P<zid>[0-9a-f]+) " + _WHAT)
 _COLOUR = re.compile(r"\x1b\[[0-9;]*m")
 _SUBJECT_PART = re.compile(r"(\w+)\(([^)]*)\)")
-# GNU sed, line by line (-u): a denial to its standard error, the interceptor's other lines (each message it lets
-# through) nowhere, everything else to its standard output.
-_FILTER = ["sed", "-u", "-n", "-e", f"/{DENIED}/{{w /dev/stderr", "-e", "b", "-e", "}",
-           "-e", f"/{ACCESS_CONTROL_TARGET}/b", "-e", "p"]  # fmt: skip
+_FILTER = [sys.executable, "-S", str(Path(__file__).with_name("log_filter.py"))]
+LOG_PIPE_BYTES = 1 << 20
+"""Room in the pipe to the filter for a burst of the log (a line per message passed): Zenoh's thread writing it waits
+when it is full."""
 EVALUATION_WINDOW_S = 0.05
 """How long the lines of one evaluation of a key may take to arrive (they are written together, microseconds apart)."""
 
@@ -151,16 +155,20 @@ def watch_denials(on_denial: Callable[[Denial], None]) -> None:
         if len(_watching) > 1:
             return
         user = os.environ.get("RUST_LOG", "")
-        directives = f"{user or 'off'},{ACCESS_CONTROL_TARGET}=trace"
+        directives = f"{user or 'off'},{TARGET.decode()}=trace"
         log_read, log_write = os.pipe()
         denied_read, denied_write = os.pipe()
         # its own session: Ctrl-C on the terminal must not stop it while the router still writes to it
         subprocess.Popen(_FILTER, stdin=log_read, stderr=denied_write, start_new_session=True, close_fds=True)
         os.close(log_read)
         os.close(denied_write)
+        with contextlib.suppress(OSError):  # beyond the user's share of pipe memory: the default 64 kB
+            fcntl.fcntl(log_write, fcntl.F_SETPIPE_SZ, LOG_PIPE_BYTES)
         os.dup2(log_write, 1)
         os.close(log_write)
-        threading.Thread(target=_read_denials, args=(denied_read,), name="denials", daemon=True).start()
+        told: queue.SimpleQueue[Denial | None] = queue.SimpleQueue()
+        threading.Thread(target=_read_denials, args=(denied_read, told), name="denials", daemon=True).start()
+        threading.Thread(target=_tell, args=(told,), name="denials-told", daemon=True).start()
         os.environ.pop("RUST_LOG", None)
         try:
             zenoh.init_log_from_env_or(directives)
@@ -169,26 +177,32 @@ def watch_denials(on_denial: Callable[[Denial], None]) -> None:
                 os.environ["RUST_LOG"] = user
 
 
-def _read_denials(fd: int) -> None:
+def _read_denials(fd: int, told: queue.SimpleQueue[Denial | None]) -> None:
+    """Read the filter's denials as they come, never blocking on anything else: the filter would block writing them,
+    and Zenoh's router writing its log to the filter."""
     reader = DenialReader()
     partial = b""
     while True:
         readable, _, _ = select.select([fd], [], [], EVALUATION_WINDOW_S)
         chunk = os.read(fd, 65536) if readable else b""
         if readable and not chunk:
-            _tell(reader.flush())
+            for denial in reader.flush():
+                told.put(denial)
+            told.put(None)
             return
         *lines, partial = (partial + chunk).split(b"\n")
         now = time.monotonic()
-        denials = [d for line in lines for d in reader.feed(line.decode(errors="replace"), now)]
-        _tell(denials + reader.flush(now))
+        for line in lines:
+            for denial in reader.feed(line.decode(errors="replace"), now):
+                told.put(denial)
+        for denial in reader.flush(now):
+            told.put(denial)
 
 
-def _tell(denials: list[Denial]) -> None:
-    if not denials:
-        return
-    with _lock:
-        callbacks = list(_watching)
-    for denial in denials:
+def _tell(told: queue.SimpleQueue[Denial | None]) -> None:
+    """Tell the watchers (who may print: to the standard output, through the filter) on a thread of its own."""
+    while (denial := told.get()) is not None:
+        with _lock:
+            callbacks = list(_watching)
         for on_denial in callbacks:
             on_denial(denial)

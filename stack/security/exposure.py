@@ -28,14 +28,16 @@ def beyond_loopback(endpoints: Iterable[str]) -> list[str]:
     ]
 
 
-def exposure_problem(what: str, endpoints: Iterable[str], insecure: bool) -> str:
+PROFILE_KEYSTORE = "Give the profile a [security] keystore (`stack keys init DIR`, then an identity per host)"
+
+
+def exposure_problem(what: str, endpoints: Iterable[str], insecure: bool, remedy: str = PROFILE_KEYSTORE) -> str:
     """Why ``what`` may not listen on ``endpoints`` (plain links beyond this machine, not allowed by ``insecure``),
-    or '' if it may."""
+    or '' if it may; ``remedy`` says how to secure it."""
     exposed = beyond_loopback(endpoints)
     if not exposed or insecure:
         return ""
     return (
         f"{what} would listen on {', '.join(exposed)}, beyond this machine, with no keystore: whoever reaches it could "
-        "command the vehicle. Give the profile a [security] keystore (`stack keys init DIR`, then an identity per "
-        "host) or, on a network you trust, --insecure"
+        f"command the vehicle. {remedy} or, on a network you trust, --insecure"
     )

@@ -2,8 +2,9 @@
 
 Each host runs its share, ``stack fly swarm_formation --vehicles 2 --here vN`` (each vehicle's modules grouped),
 with a STACK_HOME of its own, as separate machines would: the leader's host listens on its address, the follower's
-joins it. The world clock is kept over the bus, the follower hears the leader across the link, and each host judges
-the whole swarm from both vehicles' results: both find the same figures, those of the same flight on one machine.
+joins it, over mutual TLS, each as its identity of one keystore. The world clock is kept over the bus, the follower
+hears the leader across the link, and each host judges the whole swarm from both vehicles' results: both find the
+same figures, those of the same flight on one machine.
 """
 
 from __future__ import annotations
@@ -15,6 +16,7 @@ from pathlib import Path
 
 import pytest
 
+from stack.security.keystore import init_keystore, issue_identity
 from tests.hosts.split import ROUTER_PORT
 from tests.support.harness import REPO, stack_env
 from tests.swarm.figures import FORMATION_METRICS, FORMATION_SEED
@@ -25,17 +27,23 @@ pytestmark = [pytest.mark.timeout(600), pytest.mark.xdist_group("heavy_wall_cloc
 def test_a_swarm_over_two_hosts_flies_in_formation_in_one_world(network, tmp_path: Path) -> None:
     net = network(["lead", "follow"])
     lead, follow = net.hosts["lead"], net.hosts["follow"]
-    endpoint = f"tcp/{lead.address}:{ROUTER_PORT}"
-    fly = (sys.executable, "-m", "stack", "fly", "swarm_formation", "--vehicles", "2", "--seed", str(FORMATION_SEED))
-    # Plain links, each vehicle's lockstep modules in one process (half the CPU).
-    fly += ("--quiet", "--insecure", "--profile", "sitl_quad_grouped")
+    endpoint = f"tls/{lead.address}:{ROUTER_PORT}"
+    keystore = tmp_path / "keys"
+    init_keystore(keystore)
+    for host in (lead, follow):
+        issue_identity(keystore, host.name, "host", (host.address,))
+    fly = ("fly", "swarm_formation", "--vehicles", "2", "--seed", str(FORMATION_SEED))
+    # each vehicle's lockstep modules in one process (half the CPU)
+    fly += ("--quiet", "--profile", "sitl_quad_grouped")
     shares = {}
     for host, args in ((lead, ("--here", "v1", "--listen", endpoint)), (follow, ("--here", "v2", "--join", endpoint))):
         log = (tmp_path / f"{host.name}.log").open("w")
         report = str(tmp_path / f"{host.name}.json")
+        who = ("--keystore", str(keystore), "--identity", host.name)
         shares[host.name] = host.popen(
-            *fly, *args, "--report", report, env=stack_env(host.home), stdout=log, stderr=subprocess.STDOUT, cwd=REPO
-        )
+            sys.executable, "-m", "stack", *who, *fly, *args, "--report", report, env=stack_env(host.home), stdout=log,
+            stderr=subprocess.STDOUT, cwd=REPO,
+        )  # fmt: skip
     for name, share in shares.items():
         share.wait(timeout=540)
         log = (tmp_path / f"{name}.log").read_text()

@@ -81,6 +81,22 @@ with Node(bus, "v1", "not-a-tool") as node:
 """An observer's own program (not the CLI, which refuses) forcing a disarm (MAV_CMD_COMPONENT_ARM_DISARM, 21196):
 the routers drop it."""
 
+RAW_GARBAGE = """
+import os, sys, time, zenoh
+from pathlib import Path
+from stack.bus.config import BusConfig
+from stack.security.tls import tls_files
+bus = BusConfig(mode="client", connect=(sys.argv[1],), listen=(), tls=tls_files(Path(sys.argv[2]), "alice"))
+session = zenoh.open(bus.zenoh_config("garbage"))
+for _ in range(20):
+    for key in ("stack/v1/sensor_gyro/0", "stack/v1/vehicle_command/0"):
+        session.put(key, os.urandom(64), attachment=os.urandom(40))
+    time.sleep(0.05)
+session.close()
+"""
+"""An operator's own program putting random bytes on a sensor topic (the router drops them: not a tool's to publish)
+and on the command topic (let through to its subscribers, which drop them: no valid header)."""
+
 
 def keystore_for(net: Network, root: Path) -> Path:
     """A keystore with an identity for each host of the network (its address in it), an operator and an observer."""
@@ -124,6 +140,19 @@ def visitors_see(net: Network, keystore: Path, work: Path) -> None:
         (d["action"], d["flow"], d["key"], d["count"]) for d in after["denied"].get("ground", []) if d["who"] == "bob"
     ]
     assert [b[:3] for b in bobs] == [("put", "ingress", "stack/v1/vehicle_command/0")] and bobs[0][3] >= 1, bobs
+    garbage = visitor.run(
+        sys.executable, "-c", RAW_GARBAGE, f"tls/{ground.address}:{ROUTER_PORT}", str(keystore),
+        env=stack_env(visitor.home), timeout=60, cwd=REPO,
+    )  # fmt: skip
+    assert garbage.returncode == 0, garbage.stdout + garbage.stderr
+    after = status(ground)
+    assert after is not None and after["vehicle_summary"]["armed"], "garbage disarmed the vehicle"
+    assert after["vehicle_summary"]["position"]["altitude_above_home"] > 2.0
+    alices = {(d["action"], d["key"]) for d in after["denied"].get("ground", []) if d["who"] == "alice"}
+    assert alices == {("put", "stack/v1/sensor_gyro/0")}, after["denied"]
+    commander = next(m for m in after["modules"] if m["module"] == "commander")
+    dropped = ("decode_errors", "schema_errors", "foreign", "unauthorized", "invalid")
+    assert sum(commander.get(k, 0) for k in dropped) >= 1, commander
     stranger = work / "other-keys"
     init_keystore(stranger)
     issue_identity(stranger, "mallory", "operator")

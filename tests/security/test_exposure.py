@@ -6,6 +6,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from stack.security.exposure import beyond_loopback
+from stack.security.keystore import init_keystore, issue_identity
 from tests.support.harness import run_cli, write_profile
 
 REFUSED = "beyond this machine, with no keystore: whoever reaches it could command the vehicle"
@@ -33,3 +34,12 @@ def test_a_host_of_a_profile_on_a_network_without_a_keystore_is_refused_before_a
         assert "Traceback" not in out.stderr
     out = run_cli(tmp_path, "fly", "swarm_formation", "--vehicles", "2", "--here", "v1", "--listen", "tcp/10.77.0.1:1")
     assert out.returncode == 2 and REFUSED in out.stderr, out.stderr
+    secure = ("fly", "swarm_formation", "--vehicles", "2", "--here", "v1", "--listen", "tls/10.77.0.1:1")
+    out = run_cli(tmp_path, *secure)
+    assert out.returncode == 2 and "error: a swarm's hub links over tls/ as a host of a keystore: give `stack " \
+        "--keystore DIR --identity NAME fly ...`" in out.stderr, out.stderr  # fmt: skip
+    keystore = tmp_path / "keys"
+    init_keystore(keystore)
+    issue_identity(keystore, "alice", "operator")
+    out = run_cli(tmp_path, "--keystore", str(keystore), "--identity", "alice", *secure)
+    assert out.returncode == 2 and "identity alice is an operator, not a host" in out.stderr, out.stderr

@@ -107,9 +107,10 @@ def test_a_tool_joins_a_host_over_mutual_tls_only_with_an_identity_of_its_keysto
         out = tool(tmp_path, "vehicles", "--endpoint", endpoint)
         assert out.returncode == 2
         assert out.stderr.strip() == (
-            f"error: {endpoint} admits only identities of its keystore: set STACK_KEYSTORE and STACK_IDENTITY"
+            f"error: {endpoint} admits only identities of its keystore: "
+            "give `stack --keystore DIR --identity NAME ...` (or set STACK_KEYSTORE and STACK_IDENTITY)"
         )
-        out = tool(tmp_path, "vehicles", "--endpoint", endpoint, STACK_KEYSTORE=str(keystore), STACK_IDENTITY="alice")
+        out = tool(tmp_path, "--keystore", str(keystore), "--identity", "alice", "vehicles", "--endpoint", endpoint)
         assert "did not admit" not in out.stderr and "Traceback" not in out.stderr, out.stderr
         out = tool(tmp_path, "vehicles", "--endpoint", endpoint, STACK_KEYSTORE=str(other), STACK_IDENTITY="mallory")
         assert out.returncode == 1 and "did not admit identity mallory" in out.stderr, out.stderr
