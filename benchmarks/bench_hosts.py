@@ -12,8 +12,9 @@ with the other work.
    control over Zenoh on ``control``). Both record the flight (``--record``: the split flight always does), so they
    do the same work. The factor is the scenario's own (simulated over wall time from its first step to its end, the
    report's ``realtime_factor``); the worst and the median over the seeds, and whether each flight passed. The split
-   flight is flown twice: over plain TCP, and with the links between the hosts on mutual TLS from a keystore (an
-   identity per host) with its access rules (``[security] keystore``, stack.security).
+   flight is flown three times: over plain TCP, and with the links between the hosts on mutual TLS from a keystore
+   (an identity per host) with its access rules (``[security] keystore``, stack.security), their denials counted
+   (the default) and not (``count_denials = false``).
 2. One-way latency of one hop of a 64-byte message, 200 Hz for a few seconds: the publisher puts its sequence number
    and ``time.monotonic_ns()`` in the payload, the subscriber takes ``time.monotonic_ns()`` in its callback (one
    kernel clock: receive minus send is the one-way time). Both are Zenoh peers as the stack's modules are
@@ -24,7 +25,8 @@ with the other work.
    as the stack's tools are: a router does not route between two of its peers, which it takes for a mesh),
    ``across hosts`` (publisher on ``sim``, subscriber on ``control``, each a peer of its own host's router, the
    two routers connected to each other over the veth links: peer, router, router, peer), and ``across, mTLS`` (the
-   same with the routers' link on mutual TLS, with access rules). The routers are
+   same with the routers' link on mutual TLS, with access rules), and ``mTLS uncounted`` (their denials not counted:
+   ``count_denials = false``). The routers are
    ``stack router PROFILE --host NAME``; a peer reads its router's loopback endpoint from the router's state file.
    Printed: p50, p99, max, messages received, lost (sent minus received) and duplicates (a sequence number twice).
 3. Host-loss detection: routers on both hosts, a process on ``control`` holding a liveliness token, a liveliness
@@ -202,9 +204,12 @@ class Routers:
     """``stack router PROFILE --host NAME`` on each host of ``net``, the profile's ``[bus] lease_ms`` given; with
     ``keystore``, linked over mutual TLS with its access rules (else plain TCP, ``--insecure``)."""
 
-    def __init__(self, net: Network, work: Path, lease_ms: int, keystore: Path | None = None) -> None:
-        secure = f'[security]\nkeystore = "{keystore}"\n' if keystore is not None else ""
-        tag = f"{lease_ms}{'-tls' if keystore else ''}"
+    def __init__(
+        self, net: Network, work: Path, lease_ms: int, keystore: Path | None = None, count_denials: bool = True
+    ) -> None:
+        counting = f"count_denials = {str(count_denials).lower()}\n"
+        secure = f'[security]\nkeystore = "{keystore}"\n{counting}' if keystore is not None else ""
+        tag = f"{lease_ms}{'-tls' if keystore else ''}{'' if count_denials else '-uncounted'}"
         profile = split_profile(work / f"routers-{tag}.toml", net, f"\n[bus]\nlease_ms = {lease_ms}\n{secure}")
         self.procs: dict[str, subprocess.Popen[str]] = {}
         self.endpoints: dict[str, str] = {}
@@ -343,14 +348,14 @@ def fly_one_host(seed: int, work: Path) -> tuple[dict, dict[str, tuple[float, fl
 
 
 def fly_split(
-    net: Network, seed: int, work: Path, keystore: Path | None = None
+    net: Network, seed: int, work: Path, keystore: Path | None = None, count_denials: bool = True
 ) -> tuple[dict, dict[str, tuple[float, float]]]:
-    where = work / f"split-{seed}{'-tls' if keystore else ''}"
+    where = work / f"split-{seed}{'-tls' if keystore else ''}{'' if count_denials else '-uncounted'}"
     where.mkdir()
     sampler = CpuSampler({name: namespace_members(h.netns) for name, h in net.hosts.items()})
     sampler.start()
     try:
-        flight = fly_across_hosts(net, SCENARIO, seed, where, keystore)
+        flight = fly_across_hosts(net, SCENARIO, seed, where, keystore, count_denials)
     finally:
         sampler.stop()
     return flight.report, cpu_in_flight(sampler, flight.report)
@@ -358,8 +363,11 @@ def fly_split(
 
 def flights(net: Network, seeds: list[int], work: Path, keystore: Path) -> None:
     print(f"\n1. lockstep real-time factor of {SCENARIO} (the scenario's; the recorder on in all)")
-    print(f"{'seed':>4} {'one host':>9} {'passed':>6} {'2 hosts':>8} {'passed':>6} {'mTLS':>6} {'passed':>6}")
-    ones, splits, tls, cpu_one, cpu_split = [], [], [], [], []
+    print(
+        f"{'seed':>4} {'one host':>9} {'passed':>6} {'2 hosts':>8} {'passed':>6} {'mTLS':>6} {'passed':>6}"
+        f" {'uncounted':>9} {'passed':>6}"
+    )
+    ones, splits, tls, uncounted, cpu_one, cpu_split = [], [], [], [], [], []
     for seed in seeds:
         one, cpu = fly_one_host(seed, work)
         ones.append(one["realtime_factor"])
@@ -369,14 +377,21 @@ def flights(net: Network, seeds: list[int], work: Path, keystore: Path) -> None:
         cpu_split.append(cpu)
         secure, _ = fly_split(net, seed, work, keystore)
         tls.append(secure["realtime_factor"])
+        quiet, _ = fly_split(net, seed, work, keystore, count_denials=False)
+        uncounted.append(quiet["realtime_factor"])
         print(
             f"{seed:>4} {ones[-1]:>9.2f} {one['passed']!s:>6} {splits[-1]:>8.2f} {split['passed']!s:>6}"
-            f" {tls[-1]:>6.2f} {secure['passed']!s:>6}",
+            f" {tls[-1]:>6.2f} {secure['passed']!s:>6} {uncounted[-1]:>9.2f} {quiet['passed']!s:>6}",
             flush=True,
         )
-    print(f"{'worst':>4} {min(ones):>9.2f} {'':>6} {min(splits):>8.2f} {'':>6} {min(tls):>6.2f}")
-    print(f"{'med.':>4} {statistics.median(ones):>9.2f} {'':>6} {statistics.median(splits):>8.2f} {'':>6}"
-          f" {statistics.median(tls):>6.2f}")
+    print(
+        f"{'worst':>4} {min(ones):>9.2f} {'':>6} {min(splits):>8.2f} {'':>6} {min(tls):>6.2f} {'':>6}"
+        f" {min(uncounted):>9.2f}"
+    )
+    print(
+        f"{'med.':>4} {statistics.median(ones):>9.2f} {'':>6} {statistics.median(splits):>8.2f} {'':>6}"
+        f" {statistics.median(tls):>6.2f} {'':>6} {statistics.median(uncounted):>9.2f}"
+    )
     print("\n4. CPU during the flights (first to last step), CPU s per simulated s and cores; mean of seeds")
     rows = [("one host", "machine", cpu_one)] + [(f"2 hosts: {h}", h, cpu_split) for h in net.hosts]
     for label, group, per_seed in rows:
@@ -439,12 +454,13 @@ def latencies(net: Network, seconds: float, work: Path, keystore: Path) -> None:
         hop(sim, peer("bench-pub", r["sim"]), control, peer("bench-sub", r["control"]), count, work, "across hosts")
     finally:
         routers.close()
-    routers = Routers(net, work, 10000, keystore)
-    try:
-        r = routers.endpoints
-        hop(sim, peer("bench-pub", r["sim"]), control, peer("bench-sub", r["control"]), count, work, "across, mTLS")
-    finally:
-        routers.close()
+    for count_denials, label in ((True, "across, mTLS"), (False, "mTLS uncounted")):
+        routers = Routers(net, work, 10000, keystore, count_denials)
+        try:
+            r = routers.endpoints
+            hop(sim, peer("bench-pub", r["sim"]), control, peer("bench-sub", r["control"]), count, work, label)
+        finally:
+            routers.close()
 
 
 # --- 3: host-loss detection ----------------------------------------------------------------------------------------

@@ -130,7 +130,8 @@ def fly(
                 tls, access = hub_security(listen, join)
             except KeystoreError as e:
                 fail(str(e), code=2)
-            spread = Spread([n.strip() for n in here.split(",") if n.strip()], listen, join, tls, access)
+            vehicles_here = [n.strip() for n in here.split(",") if n.strip()]
+            spread = Spread(vehicles_here, listen, join, tls, access, prof.count_denials)
 
         wind_args = ["--wind-speed", str(wind_speed)] if wind_speed is not None else ["--wind"] if wind else []
         args = ["fly", scenario, *(("--profile", profile) if profile else ()), "--seed", str(prof.seed)]

@@ -58,7 +58,7 @@ def router(
             typer.echo(f"[stack] router of host {host}: {denial.describe()}")
 
     try:
-        session = open_router(bus, f"router-{host}", prof.router_link_count, on_denial)
+        session = open_router(bus, f"router-{host}", prof.router_link_count, on_denial if prof.count_denials else None)
     except zenoh.ZError as e:
         fail(f"host {host}: cannot open its router on {', '.join(map(without_link_options, listen))}: {e}")
     client = BusConfig(mode="client", connect=(loopback,), listen=(), lease_ms=prof.bus.lease_ms)

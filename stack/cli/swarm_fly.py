@@ -62,7 +62,7 @@ def fly_swarm(
         run_swarm(names, args, run_dir, own)
         heard: dict[str, dict[str, Any]] = {}
     else:
-        hub = Hub(spread.listen, spread.join, spread.tls, spread.access)
+        hub = Hub(spread.listen, spread.join, spread.tls, spread.access, spread.count_denials)
         try:
             run_swarm(names, args, run_dir, own, here=here, hub=hub.local)
             hub.wait_results([n for n in names if n not in here])
@@ -128,6 +128,7 @@ class Spread:
     join: list[str]
     tls: dict[str, str] = field(default_factory=dict)
     access: dict[str, object] = field(default_factory=dict)
+    count_denials: bool = True
 
 
 def _wind_speed(args: Sequence[str]) -> float:

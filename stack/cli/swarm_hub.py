@@ -54,14 +54,19 @@ def hub_security(listen: Sequence[str], join: Sequence[str]) -> tuple[dict[str, 
 
 class Hub:
     def __init__(
-        self, listen: Sequence[str], join: Sequence[str], tls: dict[str, str], access: dict[str, object]
+        self,
+        listen: Sequence[str],
+        join: Sequence[str],
+        tls: dict[str, str],
+        access: dict[str, object],
+        count_denials: bool = True,
     ) -> None:
         self.local = f"tcp/127.0.0.1:{free_port()}"
         bus = BusConfig(
             mode="router", listen=(self.local, *listen), connect=tuple(join), low_latency=False, tls=tls, access=access
         )
         self.denied = DenialCounts()
-        self.session = open_router(bus, "swarm-hub", len(join) + 1, self._on_denial)
+        self.session = open_router(bus, "swarm-hub", len(join) + 1, self._on_denial if count_denials else None)
         self.results: dict[str, dict[str, Any]] = {}
         self._arrived = threading.Condition()
         self._results = self.session.declare_subscriber(keys.scenario_result_key("*"), self._on_result)

@@ -12,6 +12,7 @@ the worst of theirs.
 
 from __future__ import annotations
 
+import os
 import re
 import signal
 import subprocess
@@ -25,11 +26,15 @@ from typing import Any
 
 import typer
 
+from stack.runtime.orphan import ask_kernel_for_sigterm
 from stack.runtime.world_clock import BUS_WORLD, create_world, leave_world
 from stack.supervisor.profile import Profile
 from stack.supervisor.swarm import vehicle_copy, vehicle_names
 
 WORLD_FILE = "world.clock"
+LAUNCHER_ENV = "STACK_SWARM_LAUNCHER"
+"""The launcher's pid, in each vehicle's environment: a vehicle stops when its launcher dies, as a module does when
+its supervisor dies (stack.runtime.orphan), so a launcher killed outright (SIGKILL) leaves no vehicle behind."""
 RENDEZVOUS = re.compile(r"\[stack\] bus rendezvous (\S+),")
 UP = re.compile(r"\[stack\] all \d+ modules up")
 
@@ -45,7 +50,14 @@ def vehicle_of_swarm(
     profile: Profile, index: int, size: int, join: str, world: str
 ) -> tuple[Profile, list[str], dict[str, Any]]:
     """What a launcher's child (``--swarm-vehicle INDEX``...) runs: vehicle ``index`` of the swarm, the vehicles'
-    names, and its world clock's options (stack.supervisor.supervisor.UpOptions); one clear line if impossible."""
+    names, and its world clock's options (stack.supervisor.supervisor.UpOptions); one clear line if impossible. A
+    vehicle started by a launcher (LAUNCHER_ENV) is stopped (SIGTERM) by the kernel when the launcher dies."""
+    launcher = os.environ.pop(LAUNCHER_ENV, "")
+    if launcher.isdigit():
+        ask_kernel_for_sigterm()
+        if os.getppid() != int(launcher):
+            typer.echo("error: the swarm's launcher is gone", err=True)
+            raise typer.Exit(1)
     try:
         names = vehicle_names(profile, size)
         vehicle = vehicle_copy(profile, index, size, join)
@@ -117,7 +129,13 @@ class _Vehicle:
         self.endpoint = ""
         self.came_up = False
         self.up = threading.Event()
-        self.child = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+        self.child = subprocess.Popen(
+            command,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.STDOUT,
+            text=True,
+            env={**os.environ, LAUNCHER_ENV: str(os.getpid())},
+        )
         self.relay = threading.Thread(target=self._relay, daemon=True)
         self.relay.start()
 

@@ -170,6 +170,9 @@ class Profile:
     keystore: Path | None = None
     """``[security] keystore``: the links between hosts on mutual TLS, each host presenting its identity there
     (stack.security.tls); None: plain TCP."""
+    count_denials: bool = True
+    """``[security] count_denials``: each host's router counts what its access rules drop (stack.security.denials),
+    at a cost per message it passes; false: dropped uncounted."""
 
     @property
     def name(self) -> str:
@@ -467,11 +470,13 @@ class _Loader:
                     self._check_placeholders(f"module ({module.name}).args.{aname}", value, allow_json=True)
         profile.scenario_limits, profile.scenario_options = self._scenario_settings(self._table(doc, "scenario"))
         profile.swarm_names, profile.swarm_spacing_m = self._swarm(self._table(doc, "swarm"))
-        profile.keystore = self._keystore(self._table(doc, "security"))
+        security = self._table(doc, "security")
+        profile.keystore = self._keystore(security)
+        profile.count_denials = bool(self._get(security, "security", "count_denials", bool, True))
         return profile
 
     def _keystore(self, table: dict) -> Path | None:
-        self._only(table, "security", {"keystore"})
+        self._only(table, "security", {"keystore", "count_denials"})
         given = self._get(table, "security", "keystore", str, "")
         if not given:
             return None

@@ -237,7 +237,8 @@ class Supervisor:
                 access=self.profile.host_access(),
             )
             try:
-                return open_router(bus, "supervisor", self.profile.router_link_count, self._on_denial)
+                counting = self._on_denial if self.profile.count_denials else None
+                return open_router(bus, "supervisor", self.profile.router_link_count, counting)
             except zenoh.ZError as e:
                 if self.profile.port or attempt + 1 == ROUTER_PORT_ATTEMPTS or not port_taken(e):
                     raise

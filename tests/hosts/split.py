@@ -62,12 +62,16 @@ host = "sim"
 """
 
 
-def fly_across_hosts(net: Network, scenario: str, seed: int, work: Path, keystore: Path | None = None) -> Flight:
+def fly_across_hosts(
+    net: Network, scenario: str, seed: int, work: Path, keystore: Path | None = None, count_denials: bool = True
+) -> Flight:
     """``stack fly SCENARIO --seed SEED --host sim`` with a report and a recording, flight control on the network's
     host ``control``; that host's stack is stopped once the flight is over. With ``keystore`` (an identity for each
-    host), the links between the hosts are mutual TLS with its access rules."""
+    host), the links between the hosts are mutual TLS with its access rules (their denials counted, unless not
+    ``count_denials``)."""
     sim, control = net.hosts["sim"], net.hosts["control"]
     secure = f'[security]\nkeystore = "{keystore}"\n' if keystore is not None else ""
+    secure += "count_denials = false\n" if keystore is not None and not count_denials else ""
     profile = split_profile(work / "split.toml", net, LINKS_BESIDE_THE_SIMULATOR + secure)
     report, recording = work / "report.json", work / "flight.mcap"
     controls = up_on(control, profile, work / "control.log")

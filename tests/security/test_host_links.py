@@ -132,3 +132,10 @@ def test_a_keystore_or_an_identity_that_is_not_there_is_named_before_anything_st
         profile.check_host("control")
     with pytest.raises(ProfileError, match=r"security\.keystore: .*no identity ground"):
         profile.check_host("ground")
+    assert profile.count_denials  # each router counts what its access rules drop, unless told not to
+    text = hosts_profile(tmp_path, keystore, ports).read_text()
+    (tmp_path / "quiet.toml").write_text(text.replace("[security]\n", "[security]\ncount_denials = false\n"))
+    assert not load_profile(str(tmp_path / "quiet.toml")).count_denials
+    (tmp_path / "wrong.toml").write_text(text.replace("[security]\n", '[security]\ncount_denials = "no"\n'))
+    with pytest.raises(ProfileError, match=r"security\.count_denials"):
+        load_profile(str(tmp_path / "wrong.toml"))
