@@ -315,6 +315,7 @@ def test_a_replay_is_a_stack_of_its_own_beside_a_live_lockstep_stack(tmp_path):
             "hosts": ["local"],
             "silent_hosts": [],
             "lost_hosts": {},
+            "denied": {},
             "profile": "replay of source.mcap",
             "lockstep": True,
             "modules": [],
