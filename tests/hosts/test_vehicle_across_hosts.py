@@ -117,6 +117,14 @@ def as_visitor(net: Network, keystore: Path, identity: str, *args: str) -> subpr
     return visitor.run(sys.executable, "-m", "stack", *args, "--endpoint", endpoint, env=env, timeout=120, cwd=REPO)
 
 
+def own_program(net: Network, script: str, keystore: Path) -> subprocess.CompletedProcess[str]:
+    """``script`` run on the visitor's machine, given the ground host's router and ``keystore``."""
+    visitor, ground = net.hosts["visitor"], net.hosts["ground"]
+    endpoint = f"tls/{ground.address}:{ROUTER_PORT}"
+    return visitor.run(sys.executable, "-c", script, endpoint, str(keystore), env=stack_env(visitor.home), timeout=60,
+                       cwd=REPO)  # fmt: skip
+
+
 def visitors_see(net: Network, keystore: Path, work: Path) -> None:
     """From the visitor's machine, the hovering vehicle: read by an observer, never disarmed by one (through the CLI
     or a program of its own), closed to an identity of another keystore."""
@@ -127,10 +135,7 @@ def visitors_see(net: Network, keystore: Path, work: Path) -> None:
     assert refused.returncode == 2, refused.stdout + refused.stderr
     assert "identity bob is an observer: it may read the vehicle, not command it; nothing sent" in refused.stderr
     visitor, ground = net.hosts["visitor"], net.hosts["ground"]
-    forced = visitor.run(
-        sys.executable, "-c", RAW_DISARM, f"tls/{ground.address}:{ROUTER_PORT}", str(keystore),
-        env=stack_env(visitor.home), timeout=60, cwd=REPO,
-    )  # fmt: skip
+    forced = own_program(net, RAW_DISARM, keystore)
     assert forced.returncode == 0, forced.stdout + forced.stderr
     after = status(ground)
     assert after is not None and after["vehicle_summary"]["armed"], "an observer's disarm reached the vehicle"
@@ -140,10 +145,7 @@ def visitors_see(net: Network, keystore: Path, work: Path) -> None:
         (d["action"], d["flow"], d["key"], d["count"]) for d in after["denied"].get("ground", []) if d["who"] == "bob"
     ]
     assert [b[:3] for b in bobs] == [("put", "ingress", "stack/v1/vehicle_command/0")] and bobs[0][3] >= 1, bobs
-    garbage = visitor.run(
-        sys.executable, "-c", RAW_GARBAGE, f"tls/{ground.address}:{ROUTER_PORT}", str(keystore),
-        env=stack_env(visitor.home), timeout=60, cwd=REPO,
-    )  # fmt: skip
+    garbage = own_program(net, RAW_GARBAGE, keystore)
     assert garbage.returncode == 0, garbage.stdout + garbage.stderr
     after = status(ground)
     assert after is not None and after["vehicle_summary"]["armed"], "garbage disarmed the vehicle"

@@ -40,12 +40,17 @@ def client(endpoint: str, tls: dict[str, str] | None = None) -> zenoh.Session:
     return zenoh.open(BusConfig(mode="client", connect=(endpoint,), listen=(), tls=tls or {}).zenoh_config("client"))
 
 
-def test_each_role_gets_what_it_may_and_nothing_more(tmp_path: Path) -> None:
-    keystore = tmp_path / "keys"
-    init_keystore(keystore)
+def roles_keystore(root: Path) -> Path:
+    """A keystore with the three hosts of the profile, an operator (alice) and an observer (bob)."""
+    init_keystore(root)
     for name, role in (("sim", "host"), ("control", "host"), ("ground", "host"), ("alice", "operator"),
                        ("bob", "observer")):  # fmt: skip
-        issue_identity(keystore, name, role)
+        issue_identity(root, name, role)
+    return root
+
+
+def test_each_role_gets_what_it_may_and_nothing_more(tmp_path: Path) -> None:
+    keystore = roles_keystore(tmp_path / "keys")
     ports = {h: free_port() for h in ("sim", "control", "ground")}
     profile = load_profile(str(hosts_profile(tmp_path, keystore, ports)))
     local = f"tcp/127.0.0.1:{free_port()}"
@@ -102,11 +107,7 @@ def test_the_access_rules_name_every_area_of_the_runtimes_keys() -> None:
 def test_a_router_counts_what_its_access_rules_deny_and_names_who_tried(tmp_path: Path) -> None:
     """Zenoh drops a denied message without a word to its sender; the router's process counts each (from Zenoh's
     own log, stack.security.denials) and says who tried what, once per kind, and how many at the end."""
-    keystore = tmp_path / "keys"
-    init_keystore(keystore)
-    for name, role in (("sim", "host"), ("control", "host"), ("ground", "host"), ("alice", "operator"),
-                       ("bob", "observer")):  # fmt: skip
-        issue_identity(keystore, name, role)
+    keystore = roles_keystore(tmp_path / "keys")
     ports = {h: free_port() for h in ("sim", "control", "ground")}
     path = hosts_profile(tmp_path, keystore, ports)
     router = subprocess.Popen(
