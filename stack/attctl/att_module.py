@@ -51,6 +51,11 @@ class MulticopterAttitudeControl(Module):
         ca.ROTOR_PARAMS,
         catalogue.params("MC_INPUT_SHAPING"),
     )
+    PUBLISHES = (
+        ORB_ID.vehicle_rates_setpoint,
+        ORB_ID.vehicle_attitude_setpoint,
+        ORB_ID.roll_pitch_yawrate_thrust_setpoint,
+    )
 
     def __init__(self, rt) -> None:
         super().__init__(rt)
@@ -62,9 +67,8 @@ class MulticopterAttitudeControl(Module):
             ORB_ID.vehicle_land_detected,
         ):
             self.subscribe(topic)
-        self.advertise(ORB_ID.vehicle_rates_setpoint)
-        self.advertise(ORB_ID.vehicle_attitude_setpoint)
-        self.advertise(ORB_ID.roll_pitch_yawrate_thrust_setpoint)
+        for topic in self.PUBLISHES:
+            self.advertise(topic)
         values = self.params.values()
         self.control = AttitudeControl(values)
         self.shaping = AttitudeSetpointShaping(values, bool(values["MC_INPUT_SHAPING"]))

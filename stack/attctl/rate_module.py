@@ -25,6 +25,7 @@ class MulticopterRateControl(Module):
     TRIGGER = Trigger(ORB_ID.vehicle_angular_velocity)
     DT_RANGE = (0.000125, 0.02)
     PARAMS = rate_control.PARAMS
+    PUBLISHES = (ORB_ID.vehicle_thrust_setpoint, ORB_ID.vehicle_torque_setpoint, ORB_ID.rate_ctrl_status)
 
     def __init__(self, rt) -> None:
         super().__init__(rt)
@@ -35,9 +36,8 @@ class MulticopterRateControl(Module):
             ORB_ID.vehicle_land_detected,
         ):
             self.subscribe(topic)
-        self.advertise(ORB_ID.vehicle_thrust_setpoint)
-        self.advertise(ORB_ID.vehicle_torque_setpoint)
-        self.advertise(ORB_ID.rate_ctrl_status)
+        for topic in self.PUBLISHES:
+            self.advertise(topic)
         self.control = RateControl(self.params.values())
         self.yaw_filter = YawTorqueLowPass(float(self.params["MC_YAW_TQ_CUTOFF"]))
 

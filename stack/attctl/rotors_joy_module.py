@@ -28,12 +28,14 @@ class RotorsJoyInterface(Module):
     TRIGGER = Timer(RATE_HZ)
     DT_RANGE = (0.001, 0.1)
     PARAMS = rotors_joy.PARAMS
+    PUBLISHES = (ORB_ID.roll_pitch_yawrate_thrust_setpoint,)
 
     def __init__(self, rt) -> None:
         super().__init__(rt)
         self.subscribe(ORB_ID.manual_control_setpoint)
         self.subscribe(ORB_ID.vehicle_control_mode)
-        self.advertise(ORB_ID.roll_pitch_yawrate_thrust_setpoint)
+        for topic in self.PUBLISHES:
+            self.advertise(topic)
         self.joy = JoyMapping(self.params.values())
 
     def on_params_changed(self, changed: set[str]) -> None:

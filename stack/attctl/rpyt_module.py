@@ -61,6 +61,12 @@ class RollPitchYawrateThrustController(Module):
     DT_RANGE = (0.0002, 0.02)
     PARAMS = combine(rpyt_control.PARAMS, stabilized.PARAMS, rate_control.ACRO_PARAMS, catalogue.params("MC_YAW_P"))
     ARGS = (Arg("vehicle", "", "Vehicle model: a name in stack/airframe/vehicles or a path to a model file"),)
+    PUBLISHES = (
+        ORB_ID.actuator_motors,
+        ORB_ID.actuator_outputs_sim,
+        ORB_ID.vehicle_thrust_setpoint,
+        ORB_ID.vehicle_attitude_setpoint,
+    )
 
     def __init__(self, rt) -> None:
         super().__init__(rt)
@@ -78,9 +84,8 @@ class RollPitchYawrateThrustController(Module):
             ORB_ID.vehicle_land_detected,
         ):
             self.subscribe(topic)
-        for topic in (ORB_ID.actuator_motors, ORB_ID.actuator_outputs_sim, ORB_ID.vehicle_thrust_setpoint):
+        for topic in self.PUBLISHES:
             self.advertise(topic)
-        self.advertise(ORB_ID.vehicle_attitude_setpoint)
         values = self.params.values()
         self.control = RollPitchYawrateThrustControl(vehicle, values)
         self.sticks = StickAttitudeSetpoint(values)

@@ -23,8 +23,9 @@ SINGLE_HOST = "local"
 
 def rosters(session: zenoh.Session, vehicle: str, timeout: float = ROSTER_TIMEOUT_S) -> list[dict]:
     """Each answering supervisor's roster: ``{"host", "leads", "run_id", "complete", "modules": {name: pid}, "seed",
-    "params": {module: {name: value}}}`` (``leads``: its host runs the lockstep's coordinator and gave the run its
-    id; its seed and parameters are the run's)."""
+    "params": {module: {name: value}}, "publishes": {module: [topic]}}`` (``leads``: its host runs the lockstep's
+    coordinator and gave the run its id; its seed and parameters are the run's; ``publishes``: what each module of
+    the vehicle publishes, as far as that host knows)."""
     out = []
     for reply in session.get(
         keys.supervisor_query(vehicle, "roster"),
@@ -45,6 +46,7 @@ def rosters(session: zenoh.Session, vehicle: str, timeout: float = ROSTER_TIMEOU
                     "modules": {str(k): int(v) for k, v in data["modules"].items()},
                     "seed": int(data["seed"]),
                     "params": {str(m): dict(p) for m, p in data["params"].items()},
+                    "publishes": {str(m): [str(t) for t in topics] for m, topics in data["publishes"].items()},
                 }
             )
         except (ValueError, KeyError, TypeError, AttributeError):

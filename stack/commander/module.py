@@ -93,6 +93,16 @@ class CommanderModule(Module):
     TRIGGER = Timer(RATE_HZ)
     DT_RANGE = (0.001, 0.1)
     PARAMS = combine(COMMANDER_PARAMS, offboard.PARAMS, land_detector.PARAMS, fw_land_detector.PARAMS)
+    PUBLISHES = (
+        ORB_ID.actuator_armed,
+        ORB_ID.vehicle_status,
+        ORB_ID.vehicle_control_mode,
+        ORB_ID.vehicle_command_ack,
+        ORB_ID.home_position,
+        ORB_ID.vehicle_land_detected,
+        ORB_ID.navigation_request,
+        ORB_ID.mavlink_log,
+    )
 
     def __init__(self, rt) -> None:
         super().__init__(rt)
@@ -120,17 +130,8 @@ class CommanderModule(Module):
         for topic in control_chain.OUTPUTS:
             if topic not in (ORB_ID.vehicle_local_position, ORB_ID.trajectory_setpoint):
                 self.subscribe(topic)
-        for topic in (
-            ORB_ID.actuator_armed,
-            ORB_ID.vehicle_status,
-            ORB_ID.vehicle_control_mode,
-            ORB_ID.vehicle_command_ack,
-        ):
+        for topic in self.PUBLISHES:
             self.advertise(topic)
-        self.advertise(ORB_ID.home_position)
-        self.advertise(ORB_ID.vehicle_land_detected)
-        self.advertise(ORB_ID.navigation_request)
-        self.advertise(ORB_ID.mavlink_log)
         self.commander = Commander(self.params.values())
         self.land = LandDetection(self.params.values(), self.commander.vehicle_type == FIXED_WING)
         self._last_publish = 0

@@ -35,6 +35,12 @@ class AttitudeEstimatorModule(Module):
     TRIGGER = Trigger(ORB_ID.sensor_gyro, every=True)
     DT_RANGE = (0.00001, 0.02)
     PARAMS = combine(ATTITUDE_PARAMS, GyroFilterParams.PARAMS, COMPENSATION_PARAMS)
+    PUBLISHES = (
+        ORB_ID.vehicle_angular_velocity,
+        ORB_ID.vehicle_attitude,
+        ORB_ID.vehicle_imu_status,
+        ORB_ID.estimator_status,
+    )
 
     def __init__(self, rt) -> None:
         super().__init__(rt)
@@ -42,10 +48,8 @@ class AttitudeEstimatorModule(Module):
         self.subscribe(ORB_ID.sensor_mag)
         self.subscribe(ORB_ID.vehicle_local_position)
         self.subscribe(ORB_ID.sensor_gps)
-        self.advertise(ORB_ID.vehicle_angular_velocity)
-        self.advertise(ORB_ID.vehicle_attitude)
-        self.advertise(ORB_ID.vehicle_imu_status)
-        self.advertise(ORB_ID.estimator_status)
+        for topic in self.PUBLISHES:
+            self.advertise(topic)
         self.imu = ImuSummary()
         self._attitude_time = 0
         self.estimator = AttitudeEstimatorQ(AttitudeEstimatorParams.from_params(self.params))

@@ -105,6 +105,7 @@ class LocalPositionEstimatorModule(Module):
     TRIGGER = Timer(1e6 / position_kf.PERIOD_US)
     DT_RANGE = (0.002, 0.05)
     PARAMS = PositionEstimatorParams.PARAMS
+    PUBLISHES = (ORB_ID.vehicle_local_position, ORB_ID.vehicle_global_position)
 
     def __init__(self, rt) -> None:
         super().__init__(rt)
@@ -115,8 +116,8 @@ class LocalPositionEstimatorModule(Module):
         self.subscribe(ORB_ID.vehicle_land_detected)
         self.subscribe(ORB_ID.airspeed_validated)
         self.subscribe(ORB_ID.wind)
-        self.advertise(ORB_ID.vehicle_local_position)
-        self.advertise(ORB_ID.vehicle_global_position)
+        for topic in self.PUBLISHES:
+            self.advertise(topic)
         self.kf = LocalPositionKF(PositionEstimatorParams.from_params(self.params))
         kept = self.kept_state()
         if kept is not None:

@@ -38,6 +38,7 @@ class AirspeedSelectorModule(Module):
     TRIGGER = Timer(RATE_HZ)
     DT_RANGE = (0.01, 1.0)
     PARAMS = AirspeedValidatorParams.PARAMS
+    PUBLISHES = (ORB_ID.airspeed_validated, ORB_ID.wind)
 
     def __init__(self, rt) -> None:
         super().__init__(rt)
@@ -49,8 +50,8 @@ class AirspeedSelectorModule(Module):
             ORB_ID.position_setpoint_triplet,
         ):
             self.subscribe(topic)
-        self.advertise(ORB_ID.airspeed_validated)
-        self.advertise(ORB_ID.wind)
+        for topic in self.PUBLISHES:
+            self.advertise(topic)
         self.validator = AirspeedValidator(AirspeedValidatorParams.from_params(self.params))
         self.in_takeoff_situation = True
 

@@ -58,6 +58,13 @@ class FixedwingAttitudeControl(Module):
     TRIGGER = Trigger(ORB_ID.vehicle_attitude)
     DT_RANGE = (0.002, 0.04)
     PARAMS = att_control.PARAMS
+    PUBLISHES = (
+        ORB_ID.vehicle_attitude_setpoint,
+        ORB_ID.vehicle_rates_setpoint,
+        ORB_ID.vehicle_torque_setpoint,
+        ORB_ID.vehicle_thrust_setpoint,
+        ORB_ID.rate_ctrl_status,
+    )
 
     def __init__(self, rt) -> None:
         super().__init__(rt)
@@ -73,13 +80,7 @@ class FixedwingAttitudeControl(Module):
             ORB_ID.actuator_armed,
         ):
             self.subscribe(topic)
-        for topic in (
-            ORB_ID.vehicle_attitude_setpoint,
-            ORB_ID.vehicle_rates_setpoint,
-            ORB_ID.vehicle_torque_setpoint,
-            ORB_ID.vehicle_thrust_setpoint,
-            ORB_ID.rate_ctrl_status,
-        ):
+        for topic in self.PUBLISHES:
             self.advertise(topic)
         values = self.params.values()
         self.control = FixedwingAttitudeController(values)

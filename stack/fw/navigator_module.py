@@ -31,6 +31,7 @@ class NavigatorModule(Module):
     TRIGGER = Trigger(ORB_ID.vehicle_local_position)
     DT_RANGE = (0.002, 0.05)
     PARAMS = PARAMS
+    PUBLISHES = (ORB_ID.position_setpoint_triplet, ORB_ID.mission_result)
 
     def __init__(self, rt) -> None:
         super().__init__(rt)
@@ -43,8 +44,8 @@ class NavigatorModule(Module):
         ):
             self.subscribe(topic)
         self.subscribe(ORB_ID.mission, queue=True, capacity=16)
-        self.advertise(ORB_ID.position_setpoint_triplet)
-        self.advertise(ORB_ID.mission_result)
+        for topic in self.PUBLISHES:
+            self.advertise(topic)
         self.navigator = FixedwingNavigator(self.params.values())
         store = self.navigator.missions
         self.results = MissionResultPublisher(

@@ -33,6 +33,7 @@ class FixedwingPositionControl(Module):
     TRIGGER = Trigger(ORB_ID.vehicle_local_position)
     DT_RANGE = (0.002, 0.1)
     PARAMS = PARAMS
+    PUBLISHES = (ORB_ID.vehicle_attitude_setpoint, ORB_ID.tecs_status, ORB_ID.position_controller_status)
 
     def __init__(self, rt) -> None:
         super().__init__(rt)
@@ -46,7 +47,7 @@ class FixedwingPositionControl(Module):
             ORB_ID.vehicle_land_detected,
         ):
             self.subscribe(topic)
-        for topic in (ORB_ID.vehicle_attitude_setpoint, ORB_ID.tecs_status, ORB_ID.position_controller_status):
+        for topic in self.PUBLISHES:
             self.advertise(topic)
         self.control = PositionController(self.params.values())
 

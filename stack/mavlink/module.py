@@ -173,6 +173,14 @@ class MavlinkModule(Module):
     DT_RANGE = (0.1, 10.0)
     OUTSIDE_LOCKSTEP = True
     PARAMS = catalogue.params("MAV_SYS_ID", "MAV_COMP_ID", "MAV_TYPE")
+    PUBLISHES = (
+        ORB_ID.vehicle_command,
+        ORB_ID.telemetry_status,
+        ORB_ID.mission,
+        ORB_ID.manual_control_setpoint,
+        ORB_ID.offboard_control_mode,
+        *offboard.SETPOINT_TOPICS.values(),
+    )
     """The vehicle's MAVLink identity: what it sends as, and which commands and messages are for it; MAV_TYPE
     is the HEARTBEAT's type, read at every heartbeat (PX4's mavlink module reads the parameter too)."""
     ARGS = (
@@ -206,14 +214,7 @@ class MavlinkModule(Module):
         key = signing.load_key(str(a["signing_key"])) if a["signing_key"] else None
         self.own = (int(self.params["MAV_SYS_ID"]), int(self.params["MAV_COMP_ID"]))
         self.clock = StampClock(rt.spec.lockstep, wall_clock_us)
-        for topic in (
-            ORB_ID.vehicle_command,
-            ORB_ID.telemetry_status,
-            ORB_ID.mission,
-            ORB_ID.manual_control_setpoint,
-            ORB_ID.offboard_control_mode,
-            *offboard.SETPOINT_TOPICS.values(),
-        ):
+        for topic in self.PUBLISHES:
             self.advertise(topic)
         self.view = telemetry.VehicleView()
         self.presence = Presence(self.own)

@@ -37,20 +37,21 @@ class ControlAllocatorModule(Module):
     TRIGGER = Trigger(ORB_ID.vehicle_torque_setpoint)
     DT_RANGE = (0.0002, 0.02)
     PARAMS = combine(effectiveness.PARAMS, allocation.PARAMS, output.PARAMS, ca.AIRFRAME_PARAMS, fixedwing.PARAMS)
+    PUBLISHES = (
+        ORB_ID.actuator_motors,
+        ORB_ID.actuator_outputs,
+        ORB_ID.actuator_outputs_sim,
+        ORB_ID.control_allocator_status,
+        ORB_ID.actuator_servos,
+    )
 
     def __init__(self, rt) -> None:
         super().__init__(rt)
         self.subscribe(ORB_ID.vehicle_thrust_setpoint)
         self.subscribe(ORB_ID.actuator_armed)
         self.subscribe(ORB_ID.vehicle_land_detected)
-        for topic in (
-            ORB_ID.actuator_motors,
-            ORB_ID.actuator_outputs,
-            ORB_ID.actuator_outputs_sim,
-            ORB_ID.control_allocator_status,
-        ):
+        for topic in self.PUBLISHES:
             self.advertise(topic)
-        self.advertise(ORB_ID.actuator_servos)
         self._build()
 
     def _build(self) -> None:

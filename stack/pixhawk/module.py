@@ -109,6 +109,22 @@ class PixhawkAdapterModule(Module):
     TRIGGER = Timer(RUN_HZ)
     DT_RANGE = (0.001, 0.1)
     PARAMS = catalogue.params("PXH_EST_SRC", "PXH_SP_TYPE")
+    PUBLISHES = (
+        ORB_ID.external_autopilot_status,
+        ORB_ID.sensor_accel,
+        ORB_ID.sensor_gyro,
+        ORB_ID.sensor_mag,
+        ORB_ID.sensor_baro,
+        ORB_ID.sensor_gps,
+        ORB_ID.battery_status,
+        ORB_ID.sim_groundtruth,
+        ORB_ID.vehicle_thrust_setpoint,
+        ORB_ID.vehicle_attitude,
+        ORB_ID.vehicle_local_position,
+        ORB_ID.vehicle_angular_velocity,
+        ORB_ID.vehicle_imu_status,
+        ORB_ID.estimator_status,
+    )
     ARGS = (
         Arg("device", "udp:127.0.0.1:14540", "MAVLink endpoint: serial:/dev/ttyACM0:921600, udp:HOST:PORT, tcp:..."),
         Arg("system_id", 1, "MAVLink system id of the vehicle (PX4 MAV_SYS_ID); the adapter is its component 191"),

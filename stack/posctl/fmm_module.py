@@ -46,6 +46,7 @@ class FlightModeManagerModule(Module):
     TRIGGER = Trigger(ORB_ID.vehicle_local_position)
     DT_RANGE = (0.002, 0.05)
     PARAMS = PARAMS
+    PUBLISHES = (ORB_ID.trajectory_setpoint, ORB_ID.mission_result)
 
     def __init__(self, rt) -> None:
         super().__init__(rt)
@@ -59,8 +60,8 @@ class FlightModeManagerModule(Module):
         ):
             self.subscribe(topic)
         self.subscribe(ORB_ID.mission, queue=True, capacity=16)
-        self.advertise(ORB_ID.trajectory_setpoint)
-        self.advertise(ORB_ID.mission_result)
+        for topic in self.PUBLISHES:
+            self.advertise(topic)
         self.manager = FlightModeManager(self.params.values())
         m = self.manager
         self.results = MissionResultPublisher(m.load_mission, m.load_mission_refused, m.mission_status)

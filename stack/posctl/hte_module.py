@@ -24,13 +24,15 @@ class HoverThrustEstimatorModule(Module):
     TRIGGER = Trigger(ORB_ID.vehicle_local_position)
     DT_RANGE = (0.002, 0.1)
     PARAMS = PARAMS
+    PUBLISHES = (ORB_ID.hover_thrust_estimate,)
 
     def __init__(self, rt) -> None:
         super().__init__(rt)
         self.subscribe(ORB_ID.vehicle_local_position_setpoint)
         self.subscribe(ORB_ID.vehicle_land_detected)
         self.subscribe(ORB_ID.actuator_armed)
-        self.advertise(ORB_ID.hover_thrust_estimate)
+        for topic in self.PUBLISHES:
+            self.advertise(topic)
         self.estimator = HoverThrustEstimator(HoverThrustEstimatorParams.from_params(self.params))
 
     def on_params_changed(self, changed: set[str]) -> None:

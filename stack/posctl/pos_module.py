@@ -35,6 +35,7 @@ class MulticopterPositionControl(Module):
     TRIGGER = Trigger(ORB_ID.vehicle_local_position)
     DT_RANGE = (0.002, 0.04)
     PARAMS = PARAMS
+    PUBLISHES = (ORB_ID.vehicle_attitude_setpoint, ORB_ID.vehicle_local_position_setpoint, ORB_ID.takeoff_status)
 
     def __init__(self, rt) -> None:
         super().__init__(rt)
@@ -45,9 +46,8 @@ class MulticopterPositionControl(Module):
             ORB_ID.hover_thrust_estimate,
         ):
             self.subscribe(topic)
-        self.advertise(ORB_ID.vehicle_attitude_setpoint)
-        self.advertise(ORB_ID.vehicle_local_position_setpoint)
-        self.advertise(ORB_ID.takeoff_status)
+        for topic in self.PUBLISHES:
+            self.advertise(topic)
         kept = self.kept_state()
         p = self.params
         self.loop = PositionLoop(

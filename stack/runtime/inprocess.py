@@ -98,7 +98,7 @@ def module_spec(profile: Profile, entry: ModuleEntry) -> ModuleSpec:
         lockstep=True,
         seed=profile.seed,
         stall_timeout_s=profile.stall_timeout_s,
-        peers=[m.name for m in profile.modules],
+        peers=profile.publishers(),
         open_topics=list(profile.open_topics),
     )
 

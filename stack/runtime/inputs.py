@@ -105,7 +105,7 @@ class InputBuffer:
             self.unauthorized += 1
             if self.unauthorized == 1 or self.unauthorized % 1000 == 0:
                 log.warning(
-                    "%s: ignored a message from publisher %08x, not a module of this vehicle (%d so far)",
+                    "%s: ignored a message from publisher %08x, no module of this vehicle publishing it (%d so far)",
                     self.sub.suffix,
                     publisher,
                     self.unauthorized,

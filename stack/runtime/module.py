@@ -8,6 +8,7 @@ it takes; the runtime does the rest (session, lockstep, parameters service, hear
         TRIGGER = Trigger(ORB_ID.vehicle_angular_velocity)
         DT_RANGE = (0.000125, 0.02)
         PARAMS = catalogue.params("MC_ROLLRATE_P", ...)   # definitions from stack.params.catalogue
+        PUBLISHES = (ORB_ID.vehicle_torque_setpoint,)     # all it may publish
 
         def __init__(self, ctx):
             super().__init__(ctx)
@@ -31,12 +32,13 @@ import json
 import logging
 import os
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, ClassVar, TypeVar
 
 from stack.msg.base import Message
+from stack.msg.registry import ORB_ID
 from stack.msg.topic import Topic, topic_name
 from stack.params.param import Param, ParamError, ParamValue, convert
 from stack.runtime.priority import WorkQueue
@@ -58,6 +60,10 @@ crash: in lockstep the kept state is at most this old when it resumes (simulated
 KEEP_WRITE_PERIOD_S = 0.2
 """And at most this often on the wall clock: a lockstep run ten times faster than real time would otherwise write
 each estimator's file 50 times a second."""
+
+
+RUNTIME_PUBLISHES = (ORB_ID.parameter_update,)
+"""What a module's runtime publishes for it: its parameters as they change (PX4's ``parameter_update``)."""
 
 
 @dataclass(frozen=True)
@@ -116,6 +122,10 @@ class Module:
     TRIGGER: ClassVar[Trigger | Timer | None] = None
     PARAMS: ClassVar[tuple[Param, ...]] = ()
     ARGS: ClassVar[tuple[Arg, ...]] = ()
+    PUBLISHES: ClassVar[tuple[Topic, ...]] = ()
+    """The topics the module may publish (any instance): :meth:`advertise` refuses any other, a module reading a topic
+    hears it from the modules declaring it only (stack.bus.access), and a vehicle's host may put on another host's
+    router only its own modules' topics (stack.security.acl)."""
     # PX4 clamps each module's dt, e.g. to 0.125–20 ms in MulticopterRateControl::Run and 0.2–20 ms in
     # MulticopterAttitudeControl::Run; (min, max) in seconds.
     DT_RANGE: ClassVar[tuple[float, float]] = (0.0002, 0.02)
@@ -145,6 +155,13 @@ class Module:
         self._kept_at_us = 0
         self._kept_at_s = 0.0
 
+    @classmethod
+    def publishes(cls, args: Mapping[str, ParamValue]) -> frozenset[str]:
+        """The names of the topics the module publishes with launch arguments ``args``: its PUBLISHES and what its
+        runtime publishes for it (a module whose outputs depend on its arguments says so here, from the arguments
+        alone, without I/O)."""
+        return frozenset(topic_name(t) for t in (*RUNTIME_PUBLISHES, *cls.PUBLISHES))
+
     # -- declarations (call from __init__) -------------------------------------------------------
 
     def subscribe(self, topic: Topic, instance: int = 0, *, queue: bool = False, capacity: int = 256) -> None:
@@ -157,7 +174,12 @@ class Module:
         self.rt.add_peer_input(vehicle, topic_name(topic), round(delay_s * 1e6))
 
     def advertise(self, topic: Topic, instance: int = 0, *, reliable: bool | None = None) -> None:
-        self.rt.add_output(topic_name(topic), instance, reliable)
+        """Publish a topic the module declares it publishes (:meth:`publishes`)."""
+        name = topic_name(topic)
+        if name not in self.publishes(self.args):
+            declared = f"{type(self).__name__}.PUBLISHES"
+            raise ValueError(f"{self.rt.name} advertises {name}, which {declared} does not declare")
+        self.rt.add_output(name, instance, reliable)
 
     # -- use (from run) ----------------------------------------------------------------------------
 

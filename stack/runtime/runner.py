@@ -194,7 +194,7 @@ class Runtime:
         """Tell ``buf`` whom it hears (:mod:`stack.bus.access`); an Offboard topic reads the control mode too."""
         if self.access is None or (rule := self.access.rule(topic)) == "anyone":
             return buf
-        buf.members = self.access.members
+        buf.members = self.access.publishers_of(topic)
         if rule == "offboard":
             self.add_input(ORB_ID.vehicle_control_mode.name, 0, False, 1)
             mode = self.inputs[(ORB_ID.vehicle_control_mode.name, 0)]

@@ -171,9 +171,10 @@ class ModuleSpec:
     # inherited file descriptor of its shared-memory region (stack.fastpath); -1 when over Zenoh.
     run_id: int = 0
     fastpath_fd: int = -1
-    # Whom the module hears (stack.bus.access): the profile's modules by name, and the topics it opens to
-    # anyone beyond those open to tools. No names: a module outside any profile hears everyone.
-    peers: list[str] = field(default_factory=list)
+    # Whom the module hears (stack.bus.access): the profile's modules by name, each with the topics it publishes, and
+    # the topics the profile opens to anyone beyond those open to tools. No modules: one outside any profile hears
+    # everyone.
+    peers: dict[str, list[str]] = field(default_factory=dict)
     open_topics: list[str] = field(default_factory=list)
     # A shared-memory run's members over Zenoh (a profile's transport = "zenoh"), whose places in the run the
     # coordinator's process serves (stack.fastpath.bridge): given to the coordinator.

@@ -10,12 +10,14 @@ from __future__ import annotations
 import json
 import math
 import time
+from collections.abc import Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from stack.bus import keys
 from stack.msg.registry import ORB_ID
 from stack.msg.topic import Topic
+from stack.params.param import ParamValue
 from stack.runtime.module import Arg, Module, Timer
 from stack.scenario.catalogue import get_scenario
 from stack.scenario.script import ScenarioError, ScriptContext
@@ -36,6 +38,17 @@ class ScenarioModule(Module):
         Arg("options", "{}", 'JSON object choosing the scenario\'s options, e.g. {"mission": "c172_rectangle"}'),
         Arg("swarm", "", 'A vehicle of a swarm flight: {"slot": 1, "vehicles": ["v1", "v2"], "spacing_m": 5.0}'),
     )
+    PUBLISHES = (ORB_ID.vehicle_command,)
+
+    @classmethod
+    def publishes(cls, args: Mapping[str, ParamValue]) -> frozenset[str]:
+        """Commands, and what its scenario's script publishes (an unknown scenario: commands only; the module
+        refuses it as it starts)."""
+        try:
+            script = get_scenario(str(args.get("name", ""))).publish
+        except KeyError:
+            script = ()
+        return super().publishes(args) | {t.name for t in script}
 
     def __init__(self, rt: Runtime) -> None:
         super().__init__(rt)
@@ -47,7 +60,7 @@ class ScenarioModule(Module):
         for topic in self.scenario.record + self.scenario.watch:
             self.subscribe(topic, queue=topic in self.scenario.record)
         self.subscribe(ORB_ID.vehicle_command_ack, queue=True)
-        for topic in (ORB_ID.vehicle_command, *self.scenario.publish):
+        for topic in (*self.PUBLISHES, *self.scenario.publish):
             self.advertise(topic)
         self._pids: dict[str, int] = {}
         self.watch_modules(self._on_module)

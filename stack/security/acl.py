@@ -3,8 +3,13 @@
 Everything is denied but what these allow (Zenoh lets a deny win over any allow, so a role's rights are spelled out
 as allows, never as exceptions):
 
-- the host's own processes (plain TCP on its loopback interface: its modules, its supervisor, tools run on it) and
-  the other hosts of the vehicle (their routers, by the ``host`` identities' names): everything;
+- the host's own processes (plain TCP on its loopback interface: its modules, its supervisor, tools run on it):
+  everything;
+- another host of the vehicle (its router, by its ``host`` identity's name): everything in the runtime's areas and
+  every topic to read, but it may publish only the topics its own modules declare (``Module.PUBLISHES``, where the
+  profile places them), what an operator may, and what a flight's script may (``stack fly --host`` runs it on the
+  host flying it): a host's certificate cannot publish another host's module's topics. A host identity of the
+  keystore that the profile does not name: nothing (a swarm's hubs, which run whole vehicles: everything);
 - an ``operator``: publish what a program that is not a module of the profile may (commands, sticks, missions,
   Offboard setpoints: stack.bus.access), ask for parameters (reading and setting them: ``@param`` queries) and
   status (``@supervisor`` queries), and read every topic;
@@ -21,6 +26,7 @@ denied message is dropped without a word to its sender: the tools check their ow
 
 from __future__ import annotations
 
+from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import Any
 
@@ -32,7 +38,16 @@ EVERY_MESSAGE = (
     "put", "delete", "declare_subscriber", "query", "reply", "declare_queryable", "liveliness_token",
     "liveliness_query", "declare_liveliness_subscriber",
 )  # fmt: skip
-COMMAND_KEYS = [f"{keys.ROOT}/*/{topic}/*" for topic in sorted(OPEN_TO_TOOLS)]
+PUBLISHING = ("put", "delete")
+ALL_BUT_PUBLISHING = tuple(m for m in EVERY_MESSAGE if m not in PUBLISHING)
+
+
+def topic_keys(topics: Iterable[str]) -> list[str]:
+    """Key expressions covering ``topics`` of every vehicle, every instance."""
+    return [f"{keys.ROOT}/*/{topic}/*" for topic in sorted(topics)]
+
+
+COMMAND_KEYS = topic_keys(OPEN_TO_TOOLS)
 """What an operator may publish: what any program that is not a module may (stack.bus.access: commands, sticks,
 missions, Offboard setpoints)."""
 TOPICS = ["stack/**"]
@@ -44,14 +59,27 @@ def _rule(rule_id: str, flows: list[str], messages: list[str], key_exprs: list[s
     return {"id": rule_id, "permission": "allow", "flows": flows, "messages": messages, "key_exprs": key_exprs}
 
 
-def access_rules(keystore: Path) -> dict[str, Any]:
-    """Zenoh's ``access_control`` for a host's router of a vehicle whose keystore is ``keystore``."""
+def flight_topics() -> frozenset[str]:
+    """What the script of any flight (``stack fly``) may publish."""
+    from stack.runtime.spec import load_module_class
+    from stack.scenario.catalogue import scenarios
+
+    scenario = load_module_class("scenario")
+    return frozenset().union(*(scenario.publishes({"name": name}) for name in scenarios()))
+
+
+def access_rules(keystore: Path, hosts: Mapping[str, Iterable[str]] | None = None) -> dict[str, Any]:
+    """Zenoh's ``access_control`` for a host's router of a vehicle whose keystore is ``keystore``; ``hosts``: each
+    host of the vehicle with the topics its modules publish (None: every host identity may do everything)."""
     by_role: dict[str, list[str]] = {}
     for identity in list_identities(keystore):
         if not identity.expired():
             by_role.setdefault(identity.role, []).append(identity.name)
     rules = [
         _rule("everything", ["ingress", "egress"], list(EVERY_MESSAGE), ["**", *keys.area_keys()]),
+        _rule("runtime", ["ingress", "egress"], list(EVERY_MESSAGE), keys.area_keys()),
+        _rule("topics", ["egress"], list(EVERY_MESSAGE), ["**"]),
+        _rule("topics_but_publishing", ["ingress"], list(ALL_BUT_PUBLISHING), ["**"]),
         _rule("read", ["ingress"], ["declare_subscriber", "liveliness_token", "liveliness_query",
                                     "declare_liveliness_subscriber"], [*TOPICS, *TOOL_AREAS]),
         _rule("receive", ["egress"], ["put", "delete", "reply", "liveliness_token", "declare_subscriber",
@@ -63,14 +91,23 @@ def access_rules(keystore: Path) -> dict[str, Any]:
     subjects: list[dict[str, Any]] = [{"id": "this_host", "interfaces": ["lo"], "link_protocols": ["tcp"]}]
     policies: list[dict[str, Any]] = [{"rules": ["everything"], "subjects": ["this_host"]}]
     rights = {
-        "host": ["everything"],
         "operator": ["read", "receive", "status", "command", "parameters"],
         "observer": ["read", "receive", "status"],
     }
+    if hosts is None:
+        rights["host"] = ["everything"]
     for role, names in by_role.items():
         if role in rights:
             subjects.append({"id": f"{role}s", "cert_common_names": sorted(names)})
             policies.append({"rules": rights[role], "subjects": [f"{role}s"]})
+    if hosts is not None:
+        beyond_modules = OPEN_TO_TOOLS | flight_topics()
+        for host in sorted(set(hosts) & set(by_role.get("host", ()))):
+            own = topic_keys({*hosts[host], *beyond_modules})
+            rules.append(_rule(f"publish_{host}", ["ingress"], list(PUBLISHING), own))
+            subjects.append({"id": f"host_{host}", "cert_common_names": [host]})
+            rights_of_host = ["runtime", "topics", "topics_but_publishing", f"publish_{host}"]
+            policies.append({"rules": rights_of_host, "subjects": [f"host_{host}"]})
     return {
         "enabled": True,
         "default_permission": "deny",

@@ -67,6 +67,16 @@ class SimulatorModule(Module):
         battery.PARAMS,
         command_loss.PARAMS,
     )
+    PUBLISHES = (
+        ORB_ID.sensor_accel,
+        ORB_ID.sensor_gyro,
+        ORB_ID.sensor_mag,
+        ORB_ID.sensor_baro,
+        ORB_ID.sensor_gps,
+        ORB_ID.sim_groundtruth,
+        ORB_ID.airspeed,
+        ORB_ID.battery_status,
+    )
 
     def __init__(self, rt) -> None:
         super().__init__(rt)
@@ -100,18 +110,9 @@ class SimulatorModule(Module):
         self.subscribe(ORB_ID.actuator_outputs_sim)
         self.subscribe(ORB_ID.actuator_armed)
         self.subscribe(ORB_ID.vehicle_command, queue=True)
-        for topic in (
-            ORB_ID.sensor_accel,
-            ORB_ID.sensor_gyro,
-            ORB_ID.sensor_mag,
-            ORB_ID.sensor_baro,
-            ORB_ID.sensor_gps,
-            ORB_ID.sim_groundtruth,
-        ):
-            self.advertise(topic)
-        if not isinstance(model, VehicleModel):
-            self.advertise(ORB_ID.airspeed)
-        self.advertise(ORB_ID.battery_status)
+        for topic in self.PUBLISHES:
+            if topic is not ORB_ID.airspeed or not isinstance(model, VehicleModel):  # a multicopter has no pitot
+                self.advertise(topic)
         self.battery = BatteryModel(self.params.values())
         self._battery_due_us = 0
         self.epoch_us: int | None = None

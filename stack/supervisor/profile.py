@@ -184,6 +184,10 @@ class Profile:
             return [SINGLE_HOST]
         return [h for h in self.hosts if any(m.host == h for m in self.modules)]
 
+    def publishers(self) -> dict[str, list[str]]:
+        """Each module by name, with the topics it publishes (its class's declaration, for its arguments)."""
+        return {e.name: sorted(e.cls.publishes(e.args)) for e in self.modules}
+
     def placement(self) -> dict[str, list[str]]:
         """Host → the names of its modules, for every host of the profile (empty without hosts)."""
         return {h: [e.name for e in self.modules if e.host == h] for h in self.hosts}
@@ -212,13 +216,15 @@ class Profile:
         return tls_endpoint(endpoint)
 
     def host_access(self) -> dict[str, object]:
-        """The access rules of a host's router, from the keystore's identities (stack.security.acl); empty without a
-        keystore."""
+        """The access rules of a host's router, from the keystore's identities and what each host's modules publish
+        (stack.security.acl); empty without a keystore."""
         if self.keystore is None or not self.hosts:
             return {}
         from stack.security.acl import access_rules
 
-        return access_rules(self.keystore)
+        publishers = self.publishers()
+        publishes = {host: {t for m in names for t in publishers[m]} for host, names in self.placement().items()}
+        return access_rules(self.keystore, publishes)
 
     def host_tls(self, host: str) -> dict[str, str]:
         """What ``host``'s router presents and trusts on the links between hosts (stack.bus.config.BusConfig.tls):

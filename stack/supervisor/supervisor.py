@@ -179,9 +179,9 @@ class Supervisor:
         }
         self.roster_complete = False
         self.failed = False
-        # The vehicle's modules, on every host, whose messages its modules accept (stack.bus.access): the
-        # profile's, and those the coordinator's host added (a flight's scenario, the observers).
-        self.vehicle_modules = {e.name for e in profile.modules}
+        # The vehicle's modules, on every host, with the topics each publishes, whose messages its modules accept
+        # (stack.bus.access): the profile's, and those the coordinator's host added (a flight's scenario, observers).
+        self.vehicle_modules = profile.publishers()
         # The lockstep run's id, and its same-host shared-memory fast path (stack.fastpath) unless the
         # profile sends lockstep traffic over Zenoh.
         self.run_id = secrets.randbits(63) | 1
@@ -332,7 +332,7 @@ class Supervisor:
                 self.profile.seed = leader["seed"]
                 for m in self.modules:
                     m.entry.params = leader["params"].get(m.entry.name, m.entry.params)
-                self.vehicle_modules.update(leader["params"])
+                self.vehicle_modules.update(leader["publishes"])
                 self._say(f"the run of host {leader['host']}: its seed {self.profile.seed} and parameters")
                 return True
             if not said:
@@ -465,7 +465,7 @@ class Supervisor:
             late_join=m.restarts > 0,
             run_id=self.run_id,
             fastpath_fd=self.fast.region.fd if self.fast is not None and not bridged else -1,
-            peers=sorted(self.vehicle_modules),
+            peers=self.vehicle_modules,
             hosts=self.profile.hosts_with_modules(),
             shm_run=self.shm_run,
             outside=[e.name for e in self.profile.modules if e.cls.OUTSIDE_LOCKSTEP or e.cls.PASSIVE],
@@ -869,6 +869,7 @@ class Supervisor:
             "run_id": self.run_id,
             "seed": self.profile.seed,
             "params": {e.name: e.params for e in self.profile.modules},  # every module of the vehicle it knows
+            "publishes": self.profile.publishers(),
             "complete": self.roster_complete,
             "modules": modules,
         }

@@ -21,6 +21,7 @@ from stack.msg.setpoints import HoverThrustEstimate, TrajectorySetpoint
 from stack.msg.system import VehicleCommand
 from stack.msg.validity import refusal
 from stack.runtime.inputs import InputBuffer
+from stack.supervisor.profile import load_profile
 
 NAN, INF = math.nan, math.inf
 
@@ -102,6 +103,18 @@ def test_an_input_keeps_the_last_good_message_and_counts_the_rest() -> None:
     assert buf.latest is good and (buf.invalid, buf.unauthorized) == (2, 2) and buf.last_index[MEMBER] == 3
 
 
+def test_a_module_of_the_vehicle_is_heard_only_on_the_topics_it_declares() -> None:
+    access = Access.of("v1", load_profile("sitl_quad").publishers())
+    assert access.publishers_of("vehicle_local_position") == {MEMBER}
+    buf = InputBuffer(_Sub(), False)
+    buf.members = access.publishers_of("vehicle_local_position")
+    estimate, rate_control = VehicleLocalPosition(z=-5.0), stable_publisher_id("v1", "mc_rate_control")
+    buf.sub.items += [Received(-1, MEMBER, 1, estimate, 1), Received(-1, rate_control, 1, VehicleLocalPosition(), 1)]
+    buf.pull()
+    buf.promote_all()
+    assert buf.latest is estimate and buf.unauthorized == 1
+
+
 def test_an_offboard_setpoint_from_a_tool_is_heard_only_in_offboard() -> None:
     offboard = [False]
     buf = InputBuffer(_Sub(), True)
@@ -118,8 +131,11 @@ def test_an_offboard_setpoint_from_a_tool_is_heard_only_in_offboard() -> None:
 
 
 def test_who_may_publish_what() -> None:
-    access = Access.of("v1", ["commander", "mc_pos_control"], ["telemetry_status"])
-    assert access.members == {stable_publisher_id("v1", "commander"), stable_publisher_id("v1", "mc_pos_control")}
+    modules = {"commander": ["vehicle_status"], "mc_pos_control": ["takeoff_status", "vehicle_attitude_setpoint"]}
+    access = Access.of("v1", modules, ["telemetry_status"])
+    assert access.publishers_of("takeoff_status") == {stable_publisher_id("v1", "mc_pos_control")}
+    assert access.publishers_of("vehicle_status") == {stable_publisher_id("v1", "commander")}
+    assert access.publishers_of("vehicle_attitude") == set()
     assert [access.rule(t) for t in ("vehicle_attitude", "vehicle_command", "trajectory_setpoint")] == [
         "members",
         "anyone",

@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import ast
+import inspect
 from pathlib import Path
 
 import pytest
@@ -53,6 +54,50 @@ def test_a_module_naming_a_topic_by_string_is_refused_when_it_is_built() -> None
         ModuleBench(ByString)
     with pytest.raises(TypeError, match="named by its handle"):
         Trigger("sensor_gyro")  # type: ignore[arg-type]
+
+
+def test_a_module_advertising_a_topic_it_does_not_declare_is_refused_when_it_is_built() -> None:
+    class Undeclared(Module):
+        NAME = "undeclared"
+        PUBLISHES = (ORB_ID.vehicle_rates_setpoint,)
+
+        def __init__(self, rt) -> None:
+            super().__init__(rt)
+            self.advertise(ORB_ID.vehicle_rates_setpoint)
+            self.advertise(ORB_ID.vehicle_attitude)
+
+    with pytest.raises(ValueError, match=r"vehicle_attitude, which Undeclared\.PUBLISHES does not declare"):
+        ModuleBench(Undeclared)
+
+
+def _advertised_handles(cls: type[Module]) -> set[str]:
+    """The topics the source of ``cls``'s file advertises by handle: ``advertise(ORB_ID.x)``, or in a loop over a
+    tuple of handles."""
+    found = set()
+    for node in ast.walk(ast.parse(inspect.getsource(inspect.getmodule(cls)))):
+        calls = [n for n in ast.walk(node) if isinstance(n, ast.Call) and getattr(n.func, "attr", "") == "advertise"]
+        if isinstance(node, ast.Call) and node in calls and node.args:
+            handles = [node.args[0]]
+        elif isinstance(node, ast.For) and isinstance(node.iter, ast.Tuple) and calls:
+            handles = list(node.iter.elts)
+        else:
+            continue
+        found |= {h.attr for h in handles if isinstance(h, ast.Attribute) and getattr(h.value, "id", "") == "ORB_ID"}
+    return found
+
+
+@pytest.mark.parametrize("module", sorted(MODULES))
+def test_each_module_declares_every_topic_it_advertises(module: str) -> None:
+    cls = load_module_class(module)
+    assert _advertised_handles(cls) <= {t.name for t in cls.PUBLISHES}
+
+
+def test_a_flight_script_publishes_what_its_scenario_names() -> None:
+    scenario = load_module_class("scenario")
+    assert scenario.publishes({"name": "attitude_step"}) == {
+        "vehicle_command", "vehicle_attitude_setpoint", "offboard_control_mode", "telemetry_status", "parameter_update",
+    }  # fmt: skip
+    assert scenario.publishes({"name": "no_such_scenario"}) == {"vehicle_command", "parameter_update"}
 
 
 def test_what_may_be_dropped_and_who_may_publish_come_from_the_catalogue() -> None:

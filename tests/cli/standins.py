@@ -18,6 +18,7 @@ class MissionResponder(Module):
     reason. Appends each mission it receives to ``out``, one line of hexadecimal msgpack each."""
 
     NAME = "mission_responder"
+    PUBLISHES = (ORB_ID.mission_result,)
     TRIGGER = Timer(20.0)
     DT_RANGE = (0.001, 0.1)
     ARGS = (Arg("out", ""),)
@@ -50,6 +51,7 @@ class FixedPosition(Module):
     """A valid local position estimate at the origin, about the geodetic reference given as arguments."""
 
     NAME = "fixed_position"
+    PUBLISHES = (ORB_ID.vehicle_local_position,)
     TRIGGER = Timer(50.0)
     ARGS = (Arg("lat", 47.0), Arg("lon", 8.0), Arg("alt", 400.0))
 

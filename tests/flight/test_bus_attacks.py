@@ -1,6 +1,7 @@
 """Attacks on a hovering vehicle's bus, each from a process of its own (tests/support/attack.py), none of which
 may move it: a forged ``vehicle_attitude`` rolled 30° at 200 Hz and a forged ``vehicle_local_position`` 10 m
-up (before, the first flew the vehicle 500 m away and the second into the ground), and NaN and infinity in
+up (before, the first flew the vehicle 500 m away and the second into the ground), the same attitude under the
+publisher id of ``mc_rate_control``, a module of the vehicle that does not publish it, and NaN and infinity in
 every float of every topic, sent by an outsider. Every sample is counted where it was refused (``stack status``).
 NaN and infinity under a module's own publisher id, which the fast path never takes from outside, are refused by
 every input on any transport (tests/backbone/test_input_gate.py)."""
@@ -62,10 +63,10 @@ def still_holding(stack: RunningStack) -> None:
     assert (status["nav_state"], status["arming_state"], status["failsafe"]) == (4, 2, False), status
 
 
-@pytest.mark.parametrize("kind", ["attitude", "position"])
-def test_a_forged_state_moves_nothing(shm_stack: RunningStack, kind: str) -> None:
+@pytest.mark.parametrize(("kind", "pretending"), [("attitude", ""), ("position", ""), ("attitude", "mc_rate_control")])
+def test_a_forged_state_moves_nothing(shm_stack: RunningStack, kind: str, pretending: str) -> None:
     before = {name: m.get("unauthorized", 0) for name, m in counters(shm_stack).items()}
-    moved = attack(shm_stack, kind)
+    moved = attack(shm_stack, kind, *(("--as", pretending) if pretending else ()))
     assert moved["sent"] > 100
     assert moved["horizontal_m"] < HOVER_M and moved["vertical_m"] < HOVER_M, moved
     still_holding(shm_stack)

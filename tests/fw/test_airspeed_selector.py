@@ -121,6 +121,7 @@ class CircleFlight(Module):
     sensor that stops at ``dropout_s``; records what airspeed_selector publishes."""
 
     NAME = "circle_flight"
+    PUBLISHES = (ORB_ID.airspeed, ORB_ID.vehicle_local_position, ORB_ID.vehicle_attitude, ORB_ID.vehicle_land_detected)
     LOCKSTEP_COORDINATOR = True
     ARGS = (Arg("dropout_s", 0.0), Arg("takeoff_s", 0.0), Arg("steps", 0))
 

@@ -98,6 +98,22 @@ session.close()
 and on the command topic (let through to its subscribers, which drop them: no valid header)."""
 
 
+FORGED_GYRO = """
+import time
+from stack.bus.node import Node
+from stack.cli.common import find_stack
+from stack.msg.sensors import SensorGyro
+vehicle, bus = find_stack(None, None)
+with Node(bus, vehicle, "simulator") as node:
+    pub = node.publisher("sensor_gyro", announce=False)
+    for _ in range(20):
+        pub.publish(SensorGyro(x=3.0, y=3.0, z=3.0))
+        time.sleep(0.05)
+"""
+"""A program on the flight-control host sending the simulator's topic under the simulator's publisher id, through its
+own host's router (which lets its host's processes do anything) to the simulator's host."""
+
+
 def keystore_for(net: Network, root: Path) -> Path:
     """A keystore with an identity for each host of the network (its address in it), an operator and an observer."""
     init_keystore(root)
@@ -166,6 +182,23 @@ def visitors_see(net: Network, keystore: Path, work: Path) -> None:
     assert out.returncode == 1 and "did not admit identity mallory" in out.stderr, out.stdout + out.stderr
 
 
+def hosts_keep_to_their_topics(net: Network) -> None:
+    """The flight-control host's certificate does not carry another host's module's topic: the simulator's host drops
+    the forged gyro, counted under the control host's name, and the vehicle hovers on."""
+    control, ground = net.hosts["control"], net.hosts["ground"]
+    forged = control.run(sys.executable, "-c", FORGED_GYRO, env=stack_env(control.home), timeout=60, cwd=REPO)
+    assert forged.returncode == 0, forged.stdout + forged.stderr
+
+    def denied_on_sim() -> set[tuple[str, str, str]]:
+        report = status(ground)
+        return {(d["who"], d["action"], d["key"]) for d in (report or {}).get("denied", {}).get("sim", [])}
+
+    eventually(lambda: ("control", "put", "stack/v1/sensor_gyro/0") in denied_on_sim(), 30.0, "the forgery counted")
+    after = status(ground)
+    assert after is not None and after["vehicle_summary"]["armed"]
+    assert after["vehicle_summary"]["position"]["altitude_above_home"] > 2.0
+
+
 @pytest.mark.parametrize("realtime", [False, True], ids=["lockstep, mutual TLS", "realtime"])
 def test_takeoff_hover_and_land_across_three_hosts_commanded_from_the_ground(network, tmp_path, realtime):
     """In lockstep the ground host also records the whole vehicle (in real time, three hosts' stacks and a recorder
@@ -174,7 +207,8 @@ def test_takeoff_hover_and_land_across_three_hosts_commanded_from_the_ground(net
     modules run on the vehicle's time base (stack.bus.timebase), else they would judge every sample of the
     simulator's host 100 s old. In lockstep the links between hosts are mutual TLS from a keystore, with its
     access rules: from a visitor's machine, an observer reads but its disarm never reaches the vehicle, an identity
-    of another keystore is not admitted, and an operator lands the vehicle."""
+    of another keystore is not admitted, and an operator lands the vehicle; a host publishes only its modules'
+    topics."""
     ahead = {"control": 100} if realtime else None
     # a laptop the profile gives no module (its router, tools), and a visitor's machine that is no host at all
     net = network((*HOSTS, "laptop", "visitor"), clock_ahead_s=ahead)
@@ -220,6 +254,7 @@ def test_takeoff_hover_and_land_across_three_hosts_commanded_from_the_ground(net
         land = stack(ground, "cmd", "land", "--wait")
     else:
         visitors_see(net, keystore, tmp_path)
+        hosts_keep_to_their_topics(net)
         land = as_visitor(net, keystore, "alice", "cmd", "land", "--wait")  # an operator from afar
     assert land.returncode == 0 and "landed and disarmed" in land.stdout, land.stdout + land.stderr + logs()
 

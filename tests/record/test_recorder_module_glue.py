@@ -31,7 +31,7 @@ class Sample:
 
 def recorder(tmp_path, **args) -> tuple[ModuleBench, object]:
     bench = ModuleBench(RecorderModule, args={"path": str(tmp_path / "run" / "r.mcap"), **args},
-                        vehicle="v7", peers=["commander", "simulator"])
+                        vehicle="v7", peers={"commander": [], "simulator": []})
     return bench, bench.node.session.channels["stack/v7/*/*"]
 
 

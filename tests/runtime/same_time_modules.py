@@ -11,6 +11,7 @@ class AccelThenGyro(Module):
     """A 250 Hz lockstep clock publishing an accelerometer sample, then a gyro sample, each step."""
 
     NAME = "accel_then_gyro"
+    PUBLISHES = (ORB_ID.sensor_accel, ORB_ID.sensor_gyro)
     LOCKSTEP_COORDINATOR = True
 
     def __init__(self, rt) -> None:

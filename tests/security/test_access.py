@@ -1,6 +1,6 @@
 """The access rules a keystore gives a host's router (stack.security.acl), on real routers over loopback: the host's
-own processes and the other hosts do everything; an operator commands and reads; an observer only reads; a
-command the router would drop is refused at the tool, saying why."""
+own processes do everything; another host publishes its own modules' topics, not another's; an operator commands
+and reads; an observer only reads; a command the router would drop is refused at the tool, saying why."""
 
 from __future__ import annotations
 
@@ -23,6 +23,7 @@ from tests.security.test_host_links import hosts_profile
 from tests.support.harness import REPO, stack_env
 
 ATTITUDE, COMMAND, GYRO = "stack/v1/vehicle_attitude/0", "stack/v1/vehicle_command/0", "stack/v1/sensor_gyro/0"
+STATUS = "stack/v1/vehicle_status/0"
 
 
 class Heard:
@@ -65,8 +66,9 @@ def test_each_role_gets_what_it_may_and_nothing_more(tmp_path: Path) -> None:
         module = client(local)  # a module of the simulator's host
         alice = client(tls_endpoint, tls_files(keystore, "alice"))
         bob = client(tls_endpoint, tls_files(keystore, "bob"))
-        sessions += [module, alice, bob]
-        commands, gyro = Heard(module, COMMAND), Heard(module, GYRO)
+        control = client(tls_endpoint, tls_files(keystore, "control"))  # the flight-control host
+        sessions += [module, alice, bob, control]
+        commands, gyro, states = Heard(module, COMMAND), Heard(module, GYRO), Heard(module, STATUS)
         telemetry = {"alice": Heard(alice, ATTITUDE), "bob": Heard(bob, ATTITUDE)}
         deadline = time.monotonic() + 10
         while not all(h.arrived.is_set() for h in telemetry.values()) and time.monotonic() < deadline:
@@ -77,10 +79,12 @@ def test_each_role_gets_what_it_may_and_nothing_more(tmp_path: Path) -> None:
             bob.put(COMMAND, "bob")  # an observer's command: dropped
             alice.put(GYRO, "alice")  # an operator may command, not fake the sensors
             alice.put(COMMAND, "alice")
+            control.put(STATUS, "control")  # its commander's
+            control.put(GYRO, "control")  # the simulator's, on the simulator's host
             time.sleep(0.1)
-        assert commands.arrived.wait(5.0)
+        assert commands.arrived.wait(5.0) and states.arrived.wait(5.0)
         time.sleep(0.3)
-        assert set(commands.samples) == {"alice"} and gyro.samples == []
+        assert set(commands.samples) == {"alice"} and set(states.samples) == {"control"} and gyro.samples == []
         out = subprocess.run(
             [sys.executable, "-m", "stack", "cmd", "disarm", "--force", "--endpoint", tls_endpoint],
             env={**stack_env(tmp_path), "STACK_KEYSTORE": str(keystore), "STACK_IDENTITY": "bob"},

@@ -98,8 +98,10 @@ def main() -> None:
     parser.add_argument("--watch", type=float, default=None, help="seconds to watch after (default: SECONDS)")
     args = parser.parse_args()
     vehicle, bus = find_stack(None, None)
-    name = args.as_module or "attacker"
-    with Node(bus, vehicle, name, stable_id=bool(args.as_module)) as node:
+    # It watches under a name of its own: a module's name would tell the fast path its reads are served there.
+    with Node(bus, vehicle, "attacker", stable_id=False) as node, Node(
+        bus, vehicle, args.as_module or "attacker", stable_id=bool(args.as_module)
+    ) as sender:
         truth = node.subscriber("sim_groundtruth", keep_last=True, announce=True)
         status = node.subscriber("vehicle_status", keep_last=True, announce=True)
         said = node.subscriber("mavlink_log", callback=True, announce=True)
@@ -134,7 +136,7 @@ def main() -> None:
             if time.monotonic() - began > args.seconds:
                 break
             if topic not in publishers:
-                publishers[topic] = node.publisher(topic, announce=False)
+                publishers[topic] = sender.publisher(topic, announce=False)
             publishers[topic].publish(msg)
             sent += 1
             look()

@@ -28,6 +28,7 @@ class TickSource(Module):
     """Drives lockstep (or a wall-clock timer) and publishes a seeded pseudo-random 'gyro' each step."""
 
     NAME = "tick_source"
+    PUBLISHES = (ORB_ID.sensor_gyro,)
     LOCKSTEP_COORDINATOR = True
     ARGS = (Arg("rate_hz", 250.0), Arg("trace", ""), Arg("crash_at_step", 0), Arg("steps", 0))
     PARAMS = (Param("TEST_GAIN", 1.0, -10.0, 10.0, doc="Scale of the generated signal"),)
@@ -70,6 +71,7 @@ class Doubler(Module):
     """Triggered by sensor_gyro: publishes twice the gyro plus the latest rates setpoint it can see."""
 
     NAME = "doubler"
+    PUBLISHES = (ORB_ID.vehicle_angular_velocity,)
     TRIGGER = Trigger(ORB_ID.sensor_gyro)
     PARAMS = (Param("TEST_OFFSET", 0.0, -100.0, 100.0),)
 
@@ -99,6 +101,7 @@ class Summer(Module):
     """Triggered by vehicle_angular_velocity: torque = rate + the pacer's latest setpoint."""
 
     NAME = "summer"
+    PUBLISHES = (ORB_ID.vehicle_torque_setpoint,)
     TRIGGER = Trigger(ORB_ID.vehicle_angular_velocity)
 
     def __init__(self, rt) -> None:
@@ -120,6 +123,7 @@ class Pacer(Module):
     """A timer module: every period, a setpoint derived from the latest angular velocity it sees."""
 
     NAME = "pacer"
+    PUBLISHES = (ORB_ID.vehicle_rates_setpoint,)
     TRIGGER = Timer(50.0)
 
     def __init__(self, rt) -> None:
@@ -139,6 +143,7 @@ class CommandCounter(Module):
     """A timer module that answers every vehicle_command (queue input) with an ack counting them."""
 
     NAME = "command_counter"
+    PUBLISHES = (ORB_ID.vehicle_command_ack,)
     TRIGGER = Timer(20.0)
 
     def __init__(self, rt) -> None:
@@ -174,6 +179,7 @@ class Crasher(Module):
     """Exits with an error after a number of wall-clock ticks (restart-policy tests)."""
 
     NAME = "crasher"
+    PUBLISHES = (ORB_ID.vehicle_command,)
     TRIGGER = Timer(20.0)
     ARGS = (Arg("ticks", 10), Arg("marker", ""))
 
