@@ -6,8 +6,9 @@ tests that share a stack kept together.
 - The tests of a file that share a module-scoped fixture (a running stack) run on one worker, which starts it
   once (``--dist loadgroup`` groups them); the flights shared across files (``fly``, ``fly_here``) are flown
   once per run by whichever worker asks first (tests/support/once.py), so their tests spread freely.
-- The flight tests are handed out first: the long ones start while the short ones fill the gaps, and no worker
-  is left with a long flight at the end.
+- The flight tests are handed out first, the wall-clock ones that must not run beside each other (one worker
+  flies them in turn, the ``heavy_wall_clock`` group) before all: the long ones start while the short ones fill
+  the gaps, and no worker is left with a long flight at the end.
 - Python caches its bytecode even where the environment asks it not to (``PYTHONDONTWRITEBYTECODE``, set on
   some CI machines): the suite starts thousands of processes that import the package from this checkout, and
   each would otherwise compile it from source again (about 0.3 s of CPU a process).
@@ -22,6 +23,7 @@ from pathlib import Path
 import pytest
 
 SHARED_ACROSS_WORKERS = {"fly", "fly_here"}
+HEAVY_WALL_CLOCK = "heavy_wall_clock"
 
 
 def pytest_configure(config: pytest.Config) -> None:
@@ -54,4 +56,8 @@ def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item
     for item in items:
         if shares_a_fixture(item):
             item.add_marker(pytest.mark.xdist_group(item.nodeid.split("::")[0]))
-    items.sort(key=lambda item: item.get_closest_marker("flight") is None)
+    items.sort(key=lambda item: (not in_group(item, HEAVY_WALL_CLOCK), item.get_closest_marker("flight") is None))
+
+
+def in_group(item: pytest.Item, group: str) -> bool:
+    return any(mark.args == (group,) for mark in item.iter_markers("xdist_group"))

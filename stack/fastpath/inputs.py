@@ -83,9 +83,9 @@ class FastInput(InputBuffer):
 
     # -- topology ----------------------------------------------------------------------------------
 
-    def resolve(self, sources: list[Source], since: int) -> None:
-        """Read from ``sources`` too; their publishers' Zenoh samples of the topic are duplicates of their records (a
-        member's sample of a topic it has no ring of is not: it is heard, and judged, as from outside).
+    def resolve(self, sources: list[Source], inside: frozenset[int], since: int) -> None:
+        """Read from ``sources`` too; ``inside`` are the publisher ids whose Zenoh samples are duplicates (the topic's
+        publishers in the run: a member's sample of a topic it has no ring of is heard, and judged, as from outside).
 
         A reader kept from before keeps its place, including one of a publisher that has left (its last
         records are still messages); a new queue reader starts with the records published at or after
@@ -99,7 +99,7 @@ class FastInput(InputBuffer):
             if self.queue_mode:
                 reader.taken = first_at_or_after(reader, since) - 1
             self.readers.append(reader)
-        self._inside = frozenset(publisher_id for _, _, publisher_id in sources)
+        self._inside = inside
 
     def from_inside(self, item: Received) -> bool:
         """Whether a Zenoh sample is one of the run's own records, put on Zenoh for an outside subscriber (a

@@ -82,6 +82,10 @@ class Topology:
             if topic in p.pubs and p.slot != exclude_slot
         ]
 
+    def publishers_of(self, topic: int) -> frozenset[int]:
+        """The publisher ids of the run's members that publish ``topic``."""
+        return frozenset(p.publisher_id for p in self.participants if topic in p.pubs)
+
     def read_by_anyone(self, topic: int, publisher_slot: int) -> bool:
         return any(p.reads(topic) for p in self.participants if p.slot != publisher_slot)
 

@@ -80,11 +80,11 @@ class FastDriver:
         me, since = self.att.slot, int(self.w[self.region.slot_word(self.att.slot, S_ADMIT_TIME)])
         for buf in self.rt.data:
             assert isinstance(buf, FastInput)
-            buf.resolve(topo.sources(buf.hash), since)
+            buf.resolve(topo.sources(buf.hash), topo.publishers_of(buf.hash), since)
         if self.trigger is not None:
             # Trigger records count only from the publishers admitted now (so does the coordinator).
             self.trigger.readers = []
-            self.trigger.resolve(topo.sources(self.trigger.hash, me), since)
+            self.trigger.resolve(topo.sources(self.trigger.hash, me), topo.publishers_of(self.trigger.hash), since)
             for r in self.trigger.readers:
                 consumed = int(self.w[self.member.consumed_word(r.slot)])
                 r.taken = max(r.taken, consumed, self.member.base(r.slot))

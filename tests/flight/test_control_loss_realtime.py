@@ -23,7 +23,9 @@ from stack.msg.system import VehicleStatus as NS
 from tests.support.harness import RunningStack, takeoff_when_ready, wait_no_processes
 from tests.support.hover import echo, kill, restarted, start_hovering, truth, wait
 
-pytestmark = pytest.mark.flight
+# A real-time stack at real-time priority: never beside the multi-host real-time flights (tests/hosts), each of
+# which it would starve, as they would it.
+pytestmark = [pytest.mark.flight, pytest.mark.xdist_group("heavy_wall_clock")]
 
 ALTITUDE_M = 5.0
 
