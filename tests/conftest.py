@@ -9,6 +9,11 @@ tests that share a stack kept together.
 - The flight tests are handed out first, the wall-clock ones that must not run beside each other (one worker
   flies them in turn, the ``heavy_wall_clock`` group) before all: the long ones start while the short ones fill
   the gaps, and no worker is left with a long flight at the end.
+- Beside them the other tests yield: on a worker, every test outside the ``heavy_wall_clock`` group runs at
+  niceness BESIDE_WALL_CLOCK_NICENESS (its stacks inherit it). The real-time stacks of that group take most of both
+  cores themselves (three hosts' stacks: 70-100 %), and the parts of them that are not at real-time priority (the
+  tools that watch them, the kernel's network work between the hosts) starved beside a flight of the other worker:
+  the split vehicle's takeoff sank, its motor commands arrived late.
 - Python caches its bytecode even where the environment asks it not to (``PYTHONDONTWRITEBYTECODE``, set on
   some CI machines): the suite starts thousands of processes that import the package from this checkout, and
   each would otherwise compile it from source again (about 0.3 s of CPU a process).
@@ -16,6 +21,7 @@ tests that share a stack kept together.
 
 from __future__ import annotations
 
+import contextlib
 import os
 import sys
 from pathlib import Path
@@ -24,6 +30,7 @@ import pytest
 
 SHARED_ACROSS_WORKERS = {"fly", "fly_here"}
 HEAVY_WALL_CLOCK = "heavy_wall_clock"
+BESIDE_WALL_CLOCK_NICENESS = 10
 
 
 def pytest_configure(config: pytest.Config) -> None:
@@ -57,6 +64,14 @@ def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item
         if shares_a_fixture(item):
             item.add_marker(pytest.mark.xdist_group(item.nodeid.split("::")[0]))
     items.sort(key=lambda item: (not in_group(item, HEAVY_WALL_CLOCK), item.get_closest_marker("flight") is None))
+
+
+def pytest_runtest_setup(item: pytest.Item) -> None:
+    if "PYTEST_XDIST_WORKER" not in os.environ:
+        return
+    niceness = 0 if in_group(item, HEAVY_WALL_CLOCK) else BESIDE_WALL_CLOCK_NICENESS
+    with contextlib.suppress(PermissionError):  # back to 0 needs the privilege; without it the worker stays nicer
+        os.setpriority(os.PRIO_PROCESS, 0, niceness)
 
 
 def in_group(item: pytest.Item, group: str) -> bool:
