@@ -408,7 +408,7 @@ def flights(net: Network, seeds: list[int], work: Path, keystore: Path) -> None:
 def hop(pub_host: Host, pub_cfg: dict, sub_host: Host, sub_cfg: dict, count: int, work: Path, label: str) -> None:
     tag = label.replace(" ", "-")
     out, done = work / f"hop-{tag}.json", work / f"hop-{tag}.done"
-    key = f"bench/hop/{tag}"
+    key = f"stack/bench/sensor_gyro/{tag}"  # a topic of the simulator's host, which its access rules let it publish
     sub = script_on(sub_host, SUBSCRIBER, {**sub_cfg, "key": key, "out": str(out), "done": str(done)},
                     stdout=subprocess.PIPE)  # fmt: skip
     try:
