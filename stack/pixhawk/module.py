@@ -103,28 +103,30 @@ class _WakingSubscriber(TopicSubscriber):
         self._wake()
 
 
+ALWAYS_PUBLISHED = (
+    ORB_ID.external_autopilot_status,
+    ORB_ID.sensor_accel,
+    ORB_ID.sensor_gyro,
+    ORB_ID.sensor_mag,
+    ORB_ID.sensor_baro,
+    ORB_ID.sensor_gps,
+    ORB_ID.battery_status,
+    ORB_ID.sim_groundtruth,
+    ORB_ID.vehicle_thrust_setpoint,
+)
+ESTIMATE = (ORB_ID.vehicle_attitude, ORB_ID.vehicle_local_position)
+"""The Pixhawk's estimate: instance 0 when the stack flies on it (PXH_EST_SRC), else 1 beside the stack's own."""
+OWN_ESTIMATE_ONLY = (ORB_ID.vehicle_angular_velocity, ORB_ID.vehicle_imu_status, ORB_ID.estimator_status)
+"""What the stack's estimators would publish, published instead when it flies on the Pixhawk's estimate."""
+
+
 class PixhawkAdapterModule(Module):
     NAME = "pixhawk"
     DESCRIPTION = "A PX4 Pixhawk over MAVLink as the plant: its sensors in, the stack's setpoints out in Offboard"
     TRIGGER = Timer(RUN_HZ)
     DT_RANGE = (0.001, 0.1)
     PARAMS = catalogue.params("PXH_EST_SRC", "PXH_SP_TYPE")
-    PUBLISHES = (
-        ORB_ID.external_autopilot_status,
-        ORB_ID.sensor_accel,
-        ORB_ID.sensor_gyro,
-        ORB_ID.sensor_mag,
-        ORB_ID.sensor_baro,
-        ORB_ID.sensor_gps,
-        ORB_ID.battery_status,
-        ORB_ID.sim_groundtruth,
-        ORB_ID.vehicle_thrust_setpoint,
-        ORB_ID.vehicle_attitude,
-        ORB_ID.vehicle_local_position,
-        ORB_ID.vehicle_angular_velocity,
-        ORB_ID.vehicle_imu_status,
-        ORB_ID.estimator_status,
-    )
+    PUBLISHES = (*ALWAYS_PUBLISHED, *ESTIMATE, *OWN_ESTIMATE_ONLY)
     ARGS = (
         Arg("device", "udp:127.0.0.1:14540", "MAVLink endpoint: serial:/dev/ttyACM0:921600, udp:HOST:PORT, tcp:..."),
         Arg("system_id", 1, "MAVLink system id of the vehicle (PX4 MAV_SYS_ID); the adapter is its component 191"),
@@ -145,22 +147,12 @@ class PixhawkAdapterModule(Module):
         self.baud = endpoint.baud or None
         self.subscribe(ORB_ID.actuator_armed)
         self.subscribe(ORB_ID.vehicle_command_ack, queue=True)
-        self.advertise(ORB_ID.external_autopilot_status)
-        for topic in (
-            ORB_ID.sensor_accel,
-            ORB_ID.sensor_gyro,
-            ORB_ID.sensor_mag,
-            ORB_ID.sensor_baro,
-            ORB_ID.sensor_gps,
-            ORB_ID.battery_status,
-        ):
+        for topic in ALWAYS_PUBLISHED:
             self.advertise(topic)
-        self.advertise(ORB_ID.sim_groundtruth)
-        self.advertise(ORB_ID.vehicle_thrust_setpoint)
-        self.advertise(ORB_ID.vehicle_attitude, self.estimate_instance)
-        self.advertise(ORB_ID.vehicle_local_position, self.estimate_instance)
+        for topic in ESTIMATE:
+            self.advertise(topic, self.estimate_instance)
         if self.own_estimate:
-            for topic in (ORB_ID.vehicle_angular_velocity, ORB_ID.vehicle_imu_status, ORB_ID.estimator_status):
+            for topic in OWN_ESTIMATE_ONLY:
                 self.advertise(topic)
         self._lock = threading.Lock()
         self._stop = threading.Event()
