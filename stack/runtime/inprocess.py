@@ -36,7 +36,7 @@ from stack.bus.topics import Received
 from stack.msg.registry import ORB_ID
 from stack.runtime.inputs import InputBuffer
 from stack.runtime.ledger import timer_due
-from stack.runtime.membus import MemoryBus, MemorySubscription, PublishedMessage
+from stack.runtime.membus import MemoryBus, MemoryInput, PublishedMessage
 from stack.runtime.module import Timer, Trigger
 from stack.runtime.runner import Runtime
 from stack.runtime.spec import ModuleSpec
@@ -46,17 +46,23 @@ log = logging.getLogger("stack.runtime")
 
 
 class InProcessRuntime(Runtime):
-    """One module of an in-process run: what its module uses of a :class:`Runtime`, on the memory bus."""
+    """One module of an in-process run: what its module uses of a :class:`Runtime`, on the memory bus. Each message
+    on its trigger topic goes to ``on_trigger`` (the run schedules the module's runs)."""
 
-    def __init__(self, spec: ModuleSpec, bus: MemoryBus, critical: bool) -> None:
+    def __init__(
+        self,
+        spec: ModuleSpec,
+        bus: MemoryBus,
+        critical: bool,
+        on_trigger: Callable[[InProcessRuntime, Received], None],
+    ) -> None:
         super().__init__(spec)
         self.bus = bus
         self.critical = critical
         self.publisher_id = stable_publisher_id(spec.vehicle, spec.name)
         self.seq = 0  # the publisher sequence, shared by all the module's topics
         self.last_fire: int | None = None
-        self.trigger_sub: MemorySubscription | None = None
-        self._declare_trigger()
+        self._subscribe_trigger(functools.partial(on_trigger, self))
         self.module = self.module_cls(self)
         self._param_pub = bus.publisher(self, ORB_ID.parameter_update.name, 0)
         self.data = self._data_inputs()
@@ -72,17 +78,17 @@ class InProcessRuntime(Runtime):
 
     def add_input(self, topic: str, instance: int, queue: bool, capacity: int) -> None:
         if (topic, instance) not in self.inputs:
-            buf = InputBuffer(self.bus.subscribe(self, topic, instance), queue)
+            buf = MemoryInput(self.bus, self, topic, instance, queue)
             self.inputs[(topic, instance)] = self.guard(buf, topic)
 
     def add_output(self, topic: str, instance: int, reliable: bool | None) -> None:
         self.outputs[(topic, instance)] = self.bus.publisher(self, topic, instance)
 
-    def _declare_trigger(self) -> None:
+    def _subscribe_trigger(self, sink: Callable[[Received], None]) -> None:
         trigger = self.module_cls.TRIGGER
         if isinstance(trigger, Trigger) and not self.module_cls.LOCKSTEP_COORDINATOR:
-            self.trigger_sub = self.bus.subscribe(self, trigger.name, trigger.instance)
-            self._trigger_buf = self.guard(InputBuffer(self.trigger_sub, False), trigger.name)
+            sub = self.bus.subscribe(self, trigger.name, trigger.instance, sink)
+            self._trigger_buf = self.guard(InputBuffer(sub, False), trigger.name)  # type: ignore[arg-type]
             self.inputs[(trigger.name, trigger.instance)] = self._trigger_buf
 
 
@@ -119,9 +125,7 @@ class InProcessStack:
         for entry in profile.modules:
             if entry.cls.PASSIVE or entry.cls.OUTSIDE_LOCKSTEP:
                 continue
-            rt = InProcessRuntime(module_spec(profile, entry), self.bus, entry.critical)
-            if rt.trigger_sub is not None:
-                rt.trigger_sub.sink = functools.partial(self._queue_trigger, rt)
+            rt = InProcessRuntime(module_spec(profile, entry), self.bus, entry.critical, self._queue_trigger)
             self.runtimes[entry.name] = rt
         coordinators = [rt for rt in self.runtimes.values() if rt.module_cls.LOCKSTEP_COORDINATOR]
         if len(coordinators) != 1:

@@ -165,8 +165,9 @@ class InputBuffer:
         """Lockstep: make visible exactly the messages the rules in the module docstring allow."""
         if not self._pending:
             return
+        pending = self._pending
         waiting: list[Received] = []
-        for item in self._pending:
+        for item in pending:
             t, pub, seq = item.time_us, item.publisher, item.seq
             if pub not in members:
                 self._accept((now, pub, seq), item.msg)
@@ -174,7 +175,7 @@ class InputBuffer:
                 self._accept((t, pub, seq), item.msg)
             else:
                 waiting.append(item)
-        self._pending = waiting
+        pending[:] = waiting  # the same list: the memory bus appends to it (stack.runtime.membus.MemoryInput)
 
     def _accept(self, key: tuple[int, int, int], msg: Any) -> None:
         if not self.admits(msg, key[1]):

@@ -11,7 +11,6 @@ bytes, as a subscriber process does (a message that does not decode is counted a
 from __future__ import annotations
 
 import logging
-from collections import deque
 from collections.abc import Callable
 from typing import TYPE_CHECKING
 
@@ -21,6 +20,7 @@ from stack.bus import keys
 from stack.bus.topics import FLAG_LOCKSTEP_TIME, Received
 from stack.msg.base import Message
 from stack.msg.registry import message_type
+from stack.runtime.inputs import InputBuffer
 
 if TYPE_CHECKING:
     from stack.runtime.inprocess import InProcessRuntime
@@ -41,30 +41,25 @@ class PublishedMessage(msgspec.Struct, frozen=True, gc=False):
 
 
 class MemorySubscription:
-    """One input's share of the bus: what was delivered to it, for its InputBuffer to ``poll`` (a
-    :class:`stack.bus.topics.TopicSubscriber`'s place). ``sink``, when set, takes each delivery instead
-    (a module's trigger input: its runs are scheduled by the run, not pulled)."""
+    """One input's share of the bus (a :class:`stack.bus.topics.TopicSubscriber`'s place): each delivery goes to
+    its ``sink`` at once, a data input's pending list (:class:`MemoryInput`) or the run's queue of triggered runs."""
 
-    __slots__ = ("_decode", "_items", "decode_errors", "owner", "received", "sink", "suffix")
+    __slots__ = ("_decode", "decode_errors", "owner", "received", "sink", "suffix")
 
     foreign = 0
     schema_errors = 0
 
-    def __init__(self, owner: InProcessRuntime, topic: str, instance: int) -> None:
+    def __init__(self, owner: InProcessRuntime, topic: str, instance: int, sink: Callable[[Received], None]) -> None:
         self.owner = owner
         self.suffix = keys.topic_suffix(topic, instance)
         self._decode = msgspec.msgpack.Decoder(message_type(topic)).decode
-        self._items: deque[Received] = deque()
-        self.sink: Callable[[Received], None] | None = None
+        self.sink = sink
         self.received = 0
         self.decode_errors = 0
 
     def deliver(self, item: Received) -> None:
         self.received += 1
-        if self.sink is None:
-            self._items.append(item)
-        else:
-            self.sink(item)
+        self.sink(item)
 
     def deliver_encoded(self, t: int, publisher_id: int, seq: int, data: bytes, index: int) -> None:
         try:
@@ -76,8 +71,26 @@ class MemorySubscription:
             return
         self.deliver(Received(t, publisher_id, seq, msg, index))
 
-    def poll(self) -> Received | None:
-        return self._items.popleft() if self._items else None
+
+class MemoryInput(InputBuffer):
+    """A module's input on the memory bus: each delivery lands in its pending list at once, so there is nothing to
+    pull, and refreshing an input that received nothing costs one test."""
+
+    __slots__ = ()
+
+    def __init__(self, bus: MemoryBus, owner: InProcessRuntime, topic: str, instance: int, queue_mode: bool) -> None:
+        pending: list[Received] = []
+        super().__init__(bus.subscribe(owner, topic, instance, pending.append), queue_mode)  # type: ignore[arg-type]
+        self._pending = pending
+
+    def pull(self) -> None:
+        """Deliveries are already in the pending list."""
+
+    def refresh(
+        self, now: int, members: frozenset[int], trigger_publisher: int = -1, trigger_seq: int = 0
+    ) -> None:
+        if self._pending:
+            self.promote_visible(now, trigger_publisher, trigger_seq, members)
 
 
 class MemoryPublisher:
@@ -129,8 +142,10 @@ class MemoryBus:
         """The live list of a topic's subscriptions (a publisher keeps it: later subscribers join it)."""
         return self._subscriptions.setdefault((topic, instance), [])
 
-    def subscribe(self, owner: InProcessRuntime, topic: str, instance: int) -> MemorySubscription:
-        sub = MemorySubscription(owner, topic, instance)
+    def subscribe(
+        self, owner: InProcessRuntime, topic: str, instance: int, sink: Callable[[Received], None]
+    ) -> MemorySubscription:
+        sub = MemorySubscription(owner, topic, instance, sink)
         self.subscriptions(topic, instance).append(sub)
         return sub
 

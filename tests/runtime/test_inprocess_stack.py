@@ -17,6 +17,7 @@ from typing import cast
 import pytest
 
 from stack.bus.node import stable_publisher_id
+from stack.bus.topics import Received
 from stack.msg.sensors import SensorAccel, SensorGyro
 from stack.runtime.inprocess import InProcessRuntime, InProcessStack
 from stack.runtime.membus import MemoryBus
@@ -89,12 +90,14 @@ def publishing_module(name: str) -> InProcessRuntime:
 def test_messages_carry_the_bus_header_and_subscribers_get_a_copy_on_the_wire(wire: bool) -> None:
     bus = MemoryBus(wire=wire, record=True)
     sim = publishing_module("sim")
-    first, second = bus.subscribe(sim, "sensor_gyro", 0), bus.subscribe(sim, "sensor_gyro", 0)
+    first: list[Received] = []
+    second: list[Received] = []
+    bus.subscribe(sim, "sensor_gyro", 0, first.append), bus.subscribe(sim, "sensor_gyro", 0, second.append)
     sent = SensorGyro(x=1.5, temperature=20.0)
     bus.publisher(sim, "sensor_accel", 0).publish(SensorAccel(), 4000)  # nobody subscribes
     bus.publisher(sim, "sensor_gyro", 0).publish(sent, 4000)
-    a, b = first.poll(), second.poll()
-    assert a is not None and b is not None and first.poll() is None
+    assert len(first) == len(second) == 1
+    a, b = first[0], second[0]
     assert (a.time_us, a.publisher, a.seq, a.index) == (4000, sim.publisher_id, 2, 1)  # one sequence, all topics
     assert a.msg == sent == b.msg and sent.timestamp == 4000  # stamped as TopicPublisher.publish does
     # On the wire each subscriber decodes its own copy; shared, all get the publisher's object.
@@ -108,9 +111,10 @@ def test_messages_carry_the_bus_header_and_subscribers_get_a_copy_on_the_wire(wi
 def test_a_message_that_does_not_decode_is_counted_and_dropped() -> None:
     bus = MemoryBus(wire=True, record=False)
     sim = publishing_module("sim")
-    sub = bus.subscribe(sim, "sensor_gyro", 0)
+    delivered: list[Received] = []
+    sub = bus.subscribe(sim, "sensor_gyro", 0, delivered.append)
     bus.publisher(sim, "sensor_gyro", 0).publish(SensorGyro(x="fast"), 4000)  # type: ignore[arg-type]
-    assert sub.poll() is None
+    assert delivered == []
     assert sub.decode_errors == 1
 
 
