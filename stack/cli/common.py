@@ -33,10 +33,10 @@ def command_group(**settings: object) -> typer.Typer:
 
 def name_value_placeholders(command: Any) -> None:
     """Each value's placeholder in the help is its name (``--seed SEED``), as Click and argparse print them, not its
-    Python type (``<int>``); a choice keeps its choices."""
+    Python type (``<int>``)."""
     for param in command.params:
         takes_value = not getattr(param, "is_flag", False) and not getattr(param, "count", False)
-        if param.metavar is None and takes_value and not param.type_descriptor.is_choice and param.name:
+        if param.metavar is None and takes_value and param.name:
             param.metavar = param.name.upper()
             if param.param_type_name == "argument":  # Typer prints an argument's type after its name
                 param.display_type_rich = lambda ctx: None

@@ -1,6 +1,6 @@
 """Every package the code imports is declared in pyproject.toml, by itself, not through another package.
 
-A package that only comes along with another one (click with typer before 0.29, pyarrow with rerun-sdk)
+A package that only comes along with another one (click with typer before 0.26, pyarrow with rerun-sdk)
 is gone the day that one stops needing it, and with it every test that imports it. The stack's code may
 import what ``dependencies`` declares; the tests and benchmarks also what the ``test`` extra declares.
 """
