@@ -26,12 +26,18 @@ LINK_ARGS = re.compile(r'device = "udp:127\.0\.0\.1:\d+", remote = "127\.0\.0\.1
 
 
 def eventually(ok: Callable[[], object], timeout: float = 30.0, what: str = "the condition", poll: float = 0.1) -> None:
-    """Wait until ``ok()`` is true (a condition, never a fixed time); fail naming ``what`` after ``timeout``."""
+    """Wait until ``ok()`` is true (a condition, never a fixed time); fail naming ``what`` after ``timeout``. Between
+    two looks it waits ``poll``, or as long as the last look took if that is longer: looks that run a command (a
+    ``stack status``, a process of its own) then take at most half the time, not all of it."""
     deadline = time.monotonic() + timeout
-    while not ok():
-        if time.monotonic() > deadline:
+    while True:
+        looked = time.monotonic()
+        if ok():
+            return
+        now = time.monotonic()
+        if now > deadline:
             raise AssertionError(f"{what}: not within {timeout:g} s")
-        time.sleep(poll)
+        time.sleep(max(poll, now - looked))
 
 
 def stack_env(home: Path) -> dict[str, str]:
