@@ -477,8 +477,9 @@ class Watcher:
     def _read(self) -> None:
         assert self.proc.stdout is not None
         for line in self.proc.stdout:
-            kind, ns, *_ = line.split()
-            self.events.put((kind, int(ns)))
+            fields = line.split()
+            if len(fields) >= 2 and fields[1].isdigit():  # anything else it prints (a warning) is no event
+                self.events.put((fields[0], int(fields[1])))
 
     def wait_for(self, kind: str, timeout: float) -> int | None:
         deadline = time.monotonic() + timeout
