@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import re
@@ -65,7 +66,7 @@ def run_cli(home: Path, *args: str, timeout: float = 60.0) -> subprocess.Complet
 def cli_in_its_own_session(home: Path, *args: str) -> subprocess.Popen[str]:
     """``stack ARGS`` started as a terminal starts it, in a process group of its own (so a Ctrl-C can be sent
     to the whole group with ``os.killpg``), its output piped."""
-    return subprocess.Popen(
+    process = subprocess.Popen(
         [sys.executable, "-m", "stack", *args],
         env=stack_env(home),
         stdout=subprocess.PIPE,
@@ -74,6 +75,20 @@ def cli_in_its_own_session(home: Path, *args: str) -> subprocess.Popen[str]:
         cwd=REPO,
         start_new_session=True,
     )
+    session_as_nice_as_this_process(process.pid)
+    return process
+
+
+def session_as_nice_as_this_process(pid: int) -> None:
+    """Give the session that ``pid`` leads the niceness of this process. Linux's autogroup scheduling (on unless
+    ``/proc/sys/kernel/sched_autogroup_enabled`` says 0) shares the CPU between sessions first, and a niceness counts
+    only among the processes of one session: a stack in a session of its own would otherwise take an equal share
+    beside the heavy_wall_clock group's stacks, whatever the niceness of the test that started it
+    (tests/conftest.py)."""
+    nice = os.getpriority(os.PRIO_PROCESS, 0)
+    if nice > 0:
+        with contextlib.suppress(OSError):  # no autogroups in this kernel: the niceness itself is all there is
+            Path(f"/proc/{pid}/autogroup").write_text(str(nice))
 
 
 class RunningStack:

@@ -31,6 +31,8 @@ from typing import Any
 import psutil
 import pytest
 
+from tests.support.harness import session_as_nice_as_this_process
+
 SUBNET = "10.88.0"
 HOST_IFACE = "eth0"
 BRIDGE = "br0"
@@ -113,6 +115,7 @@ class Host:
         process = subprocess.Popen(
             self.command(*args), env=self.environment(env), start_new_session=True, text=True, **kw
         )
+        session_as_nice_as_this_process(process.pid)
         self.processes.append(process)
         return process
 
