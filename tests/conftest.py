@@ -11,7 +11,7 @@ tests that share a stack kept together.
   the gaps, and no worker is left with a long flight at the end.
 - Beside them the other tests yield: on a worker, every test outside the ``heavy_wall_clock`` group runs at
   niceness BESIDE_WALL_CLOCK_NICENESS (its stacks inherit it, and a stack in a session of its own gets it for the
-  session's scheduling group: tests/support/harness.py ``session_as_nice_as_this_process``). The real-time stacks
+  session's scheduling group: tests/support/harness.py ``nice_session``). The real-time stacks
   of that group take most of both cores themselves (three hosts' stacks: 70-100 %), and the parts of them that
   are not at real-time priority (the tools that watch them, the kernel's network work between the hosts) starved
   beside a flight of the other worker: the split vehicle's takeoff sank, its motor commands arrived late.

@@ -75,17 +75,17 @@ def cli_in_its_own_session(home: Path, *args: str) -> subprocess.Popen[str]:
         cwd=REPO,
         start_new_session=True,
     )
-    session_as_nice_as_this_process(process.pid)
+    nice_session(process.pid)
     return process
 
 
-def session_as_nice_as_this_process(pid: int) -> None:
-    """Give the session that ``pid`` leads the niceness of this process. Linux's autogroup scheduling (on unless
-    ``/proc/sys/kernel/sched_autogroup_enabled`` says 0) shares the CPU between sessions first, and a niceness counts
-    only among the processes of one session: a stack in a session of its own would otherwise take an equal share
-    beside the heavy_wall_clock group's stacks, whatever the niceness of the test that started it
-    (tests/conftest.py)."""
-    nice = os.getpriority(os.PRIO_PROCESS, 0)
+def nice_session(pid: int, niceness: int | None = None) -> None:
+    """Give the session that ``pid`` leads ``niceness`` (by default this process's). Linux's autogroup scheduling (on
+    unless ``/proc/sys/kernel/sched_autogroup_enabled`` says 0) shares the CPU between sessions first, and a niceness
+    counts only among the processes of one session: a stack in a session of its own would otherwise take an equal
+    share beside the heavy_wall_clock group's stacks, whatever the niceness of the test that started it
+    (tests/conftest.py), and ``nice -n 19`` before a command in a session of its own would change nothing."""
+    nice = os.getpriority(os.PRIO_PROCESS, 0) if niceness is None else niceness
     if nice > 0:
         with contextlib.suppress(OSError):  # no autogroups in this kernel: the niceness itself is all there is
             Path(f"/proc/{pid}/autogroup").write_text(str(nice))

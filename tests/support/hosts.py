@@ -31,7 +31,7 @@ from typing import Any
 import psutil
 import pytest
 
-from tests.support.harness import session_as_nice_as_this_process
+from tests.support.harness import nice_session
 
 SUBNET = "10.88.0"
 HOST_IFACE = "eth0"
@@ -115,7 +115,7 @@ class Host:
         process = subprocess.Popen(
             self.command(*args), env=self.environment(env), start_new_session=True, text=True, **kw
         )
-        session_as_nice_as_this_process(process.pid)
+        nice_session(process.pid)
         self.processes.append(process)
         return process
 
