@@ -10,11 +10,10 @@ tests that share a stack kept together.
   flies them in turn, the ``heavy_wall_clock`` group) before all: the long ones start while the short ones fill
   the gaps, and no worker is left with a long flight at the end.
 - Beside them the other tests yield: on a worker, every test outside the ``heavy_wall_clock`` group runs at
-  niceness BESIDE_WALL_CLOCK_NICENESS (its stacks inherit it, and a stack in a session of its own gets it for the
-  session's scheduling group: tests/support/harness.py ``nice_session``). The real-time stacks
-  of that group take most of both cores themselves (three hosts' stacks: 70-100 %), and the parts of them that
-  are not at real-time priority (the tools that watch them, the kernel's network work between the hosts) starved
-  beside a flight of the other worker: the split vehicle's takeoff sank, its motor commands arrived late.
+  niceness BESIDE_WALL_CLOCK_NICENESS (its stacks inherit it). The real-time stacks of that group take most of both
+  cores themselves (three hosts' stacks: 70-100 %), and the parts of them that are not at real-time priority (the
+  tools that watch them, the kernel's network work between the hosts) starved beside a flight of the other worker:
+  the split vehicle's takeoff sank, its motor commands arrived late.
 - Python caches its bytecode even where the environment asks it not to (``PYTHONDONTWRITEBYTECODE``, set on
   some CI machines): the suite starts thousands of processes that import the package from this checkout, and
   each would otherwise compile it from source again (about 0.3 s of CPU a process).

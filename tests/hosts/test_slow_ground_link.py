@@ -19,7 +19,7 @@ from tests.hosts.split import TAKEOFF_TIMEOUT_S, split_profile, take_off
 from tests.hosts.split import stack_on as stack
 from tests.hosts.test_host_loss import truth
 from tests.hosts.test_vehicle_across_hosts import HOSTS, START_TIMEOUT_S, bring_up, running, status
-from tests.support.harness import REPO, eventually, nice_session, stack_env
+from tests.support.harness import REPO, eventually, stack_env
 from tests.support.hosts import Host
 
 pytestmark = [pytest.mark.timeout(500), pytest.mark.xdist_group("heavy_wall_clock")]
@@ -43,14 +43,11 @@ def figures(probe: subprocess.Popen[str], log: Path) -> list[dict]:
 
 def ground_tool(ground: Host, *args: str, log: Path) -> subprocess.Popen[str]:
     """A ``stack`` command on the ground host, at the lowest CPU priority: the test's hosts share two cores, and the
-    point is the link, not the CPU (forty of them starting at once beside the hosts' stacks delayed the hosts' beats
-    past their lease)."""
-    tool = ground.popen(
+    point is the link, not the CPU."""
+    return ground.popen(
         "nice", "-n", "19", sys.executable, "-m", "stack", *args,
         env=stack_env(ground.home), stdout=subprocess.DEVNULL, stderr=log.open("w"), cwd=REPO,
     )  # fmt: skip
-    nice_session(tool.pid, 19)
-    return tool
 
 
 def test_a_ground_host_behind_a_slow_link_never_slows_the_vehicle(network, tmp_path: Path) -> None:

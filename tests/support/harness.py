@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import contextlib
 import json
 import os
 import re
@@ -66,7 +65,7 @@ def run_cli(home: Path, *args: str, timeout: float = 60.0) -> subprocess.Complet
 def cli_in_its_own_session(home: Path, *args: str) -> subprocess.Popen[str]:
     """``stack ARGS`` started as a terminal starts it, in a process group of its own (so a Ctrl-C can be sent
     to the whole group with ``os.killpg``), its output piped."""
-    process = subprocess.Popen(
+    return subprocess.Popen(
         [sys.executable, "-m", "stack", *args],
         env=stack_env(home),
         stdout=subprocess.PIPE,
@@ -75,20 +74,6 @@ def cli_in_its_own_session(home: Path, *args: str) -> subprocess.Popen[str]:
         cwd=REPO,
         start_new_session=True,
     )
-    nice_session(process.pid)
-    return process
-
-
-def nice_session(pid: int, niceness: int | None = None) -> None:
-    """Give the session that ``pid`` leads ``niceness`` (by default this process's). Linux's autogroup scheduling (on
-    unless ``/proc/sys/kernel/sched_autogroup_enabled`` says 0) shares the CPU between sessions first, and a niceness
-    counts only among the processes of one session: a stack in a session of its own would otherwise take an equal
-    share beside the heavy_wall_clock group's stacks, whatever the niceness of the test that started it
-    (tests/conftest.py), and ``nice -n 19`` before a command in a session of its own would change nothing."""
-    nice = os.getpriority(os.PRIO_PROCESS, 0) if niceness is None else niceness
-    if nice > 0:
-        with contextlib.suppress(OSError):  # no autogroups in this kernel: the niceness itself is all there is
-            Path(f"/proc/{pid}/autogroup").write_text(str(nice))
 
 
 class RunningStack:

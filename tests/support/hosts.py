@@ -31,8 +31,6 @@ from typing import Any
 import psutil
 import pytest
 
-from tests.support.harness import nice_session
-
 SUBNET = "10.88.0"
 HOST_IFACE = "eth0"
 BRIDGE = "br0"
@@ -115,7 +113,6 @@ class Host:
         process = subprocess.Popen(
             self.command(*args), env=self.environment(env), start_new_session=True, text=True, **kw
         )
-        nice_session(process.pid)
         self.processes.append(process)
         return process
 
