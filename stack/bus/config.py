@@ -70,6 +70,9 @@ class BusConfig:
     """Mutual TLS on ``tls/`` links: ``root_ca``, ``certificate`` and ``private_key`` files (stack.security.tls)."""
     access: dict[str, object] = field(default_factory=dict)
     """A router's access rules, Zenoh's ``access_control`` (stack.security.acl); empty: none."""
+    mesh: tuple[str, ...] = ()
+    """The endpoints of every module process of the stack (a module's own and those it does not connect to as
+    well): a module that cannot listen on its own endpoint connects to all the others (stack.bus.node)."""
 
     def __post_init__(self) -> None:
         if self.mode not in ("peer", "client", "router"):
@@ -91,6 +94,7 @@ class BusConfig:
             extra=d.get("extra", {}),
             tls=d.get("tls", {}),
             access=d.get("access", {}),
+            mesh=tuple(d.get("mesh", ())),
         )
 
     def zenoh_config(self, name: str) -> zenoh.Config:

@@ -155,16 +155,22 @@ class Node:
 
 
 def open_session(bus: BusConfig, name: str) -> zenoh.Session:
-    """A session; a loopback port taken since the supervisor picked it (a stack starting beside this one
-    took it first) is replaced by any free port: the others still reach this module through the router."""
+    """A session; a loopback port taken since the supervisor picked it (some other process bound it first) is
+    replaced by any free port. The modules started later connect to the endpoint they were given, not to this
+    one, and peers reach each other only over links of their own (a router does not relay between two peers),
+    so this module then connects to every module of the stack, as a restarted one does."""
     try:
         return zenoh.open(bus.zenoh_config(name))
     except zenoh.ZError as e:
         loopback = bus.listen and all(ep.startswith("tcp/127.0.0.1:") for ep in bus.listen)
         if not (loopback and port_taken(e)):
             raise
-        logging.getLogger("stack.bus").warning("%s: %s taken, listening on another port", name, ", ".join(bus.listen))
-        return zenoh.open(dataclasses.replace(bus, listen=(LOOPBACK_ANY_PORT,)).zenoh_config(name))
+        logging.getLogger("stack.bus").warning(
+            "%s: %s taken, listening on another port and connecting to every module", name, ", ".join(bus.listen)
+        )
+        connect = dict.fromkeys(ep for ep in (*bus.connect, *bus.mesh) if ep not in bus.listen)
+        moved = dataclasses.replace(bus, listen=(LOOPBACK_ANY_PORT,), connect=tuple(connect))
+        return zenoh.open(moved.zenoh_config(name))
 
 
 def pid_tag() -> str:

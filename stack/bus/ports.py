@@ -3,6 +3,10 @@
 A port is picked outside the kernel's ephemeral range: the local ports of outgoing connections come
 from that range, so a port picked there (for example by binding port 0) can be taken by one of the
 many connections modules open to each other before the module that was given it binds it.
+
+A port picked for a listener that starts later is held (:func:`hold_port`: a socket bound to it, not
+listening) until just before its listener binds it: a stack starting beside this one then cannot pick
+it meanwhile, as it could pick a port that was merely free when looked at.
 """
 
 from __future__ import annotations
@@ -30,29 +34,33 @@ def ephemeral_range() -> tuple[int, int]:
         return _DEFAULT_EPHEMERAL
 
 
-def free_port(host: str = "127.0.0.1", kind: socket.SocketKind = socket.SOCK_STREAM) -> int:
-    """A port nobody listens on now (TCP, or UDP with ``kind=SOCK_DGRAM``), below the ephemeral range and
-    not given out before by this process."""
+def hold_port(host: str = "127.0.0.1", kind: socket.SocketKind = socket.SOCK_STREAM) -> socket.socket:
+    """A socket bound to a port nobody else had bound (TCP, or UDP with ``kind=SOCK_DGRAM``), below the
+    ephemeral range and not given out before by this process. While it is open no other process can bind
+    the port; close it right before the listener it was picked for binds it. Not inherited by children."""
     low, high = ephemeral_range()
     candidates = (_LOWEST, low) if low - _LOWEST >= 1000 else (high + 1, 65536)
     for _ in range(_ATTEMPTS):
         port = _random.randrange(*candidates)
-        if port in _given or not _bindable(host, port, kind):
+        if port in _given:
+            continue
+        held = socket.socket(socket.AF_INET, kind)
+        try:
+            held.bind((host, port))
+        except OSError:
+            held.close()
             continue
         _given.add(port)
-        return port
-    with socket.socket(socket.AF_INET, kind) as s:
-        s.bind((host, 0))
-        return int(s.getsockname()[1])
+        return held
+    held = socket.socket(socket.AF_INET, kind)
+    held.bind((host, 0))
+    return held
 
 
-def _bindable(host: str, port: int, kind: socket.SocketKind = socket.SOCK_STREAM) -> bool:
-    with socket.socket(socket.AF_INET, kind) as s:
-        try:
-            s.bind((host, port))
-        except OSError:
-            return False
-    return True
+def free_port(host: str = "127.0.0.1", kind: socket.SocketKind = socket.SOCK_STREAM) -> int:
+    """A port nobody has bound now, picked as :func:`hold_port` picks one, for a listener that binds it at once."""
+    with hold_port(host, kind) as held:
+        return int(held.getsockname()[1])
 
 
 def port_taken(error: zenoh.ZError) -> bool:

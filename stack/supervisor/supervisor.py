@@ -34,7 +34,7 @@ from stack.bus import keys
 from stack.bus.alive import AliveTokens
 from stack.bus.config import LOOPBACK_ANY_PORT, BusConfig, open_router, without_link_options
 from stack.bus.host_beats import BEAT_PERIOD_S, STOPPING, HostWatch, beat_host, beat_key, beats_key
-from stack.bus.ports import free_port, port_taken
+from stack.bus.ports import free_port, hold_port, port_taken
 from stack.bus.query import answer
 from stack.bus.supervisors import SINGLE_HOST, complete_roster, rosters
 from stack.bus.timebase import (
@@ -163,7 +163,9 @@ class Supervisor:
         for m in self.modules:
             self.groups.setdefault(m.process, []).append(m)
         local_mesh = profile.bus.mode == "peer" and profile.bus.listen == (LOOPBACK_ANY_PORT,)
-        endpoints = {process: f"tcp/127.0.0.1:{free_port()}" for process in self.groups} if local_mesh else {}
+        # Held until each process is let go (_go): a stack starting meanwhile cannot take a later module's port.
+        self._port_holds = {process: hold_port() for process in self.groups} if local_mesh else {}
+        endpoints = {process: f"tcp/127.0.0.1:{held.getsockname()[1]}" for process, held in self._port_holds.items()}
         self.module_endpoints = {m.entry.name: endpoints[m.process] for m in self.modules} if local_mesh else {}
         self.programs = [
             ProgramProcess(e, run_dir / f"{e.name}.log")
@@ -307,6 +309,8 @@ class Supervisor:
                 self.fast.close()
             if self.clock is not None:
                 self.clock.close()
+            for held in self._port_holds.values():
+                held.close()
             session.close()
             run_state.remove_state(self.vehicle, os.getpid())
         if self._signal is not None and not self.roster_complete:
@@ -441,6 +445,7 @@ class Supervisor:
             listen=(own,),
             low_latency=bus.low_latency,
             lease_ms=bus.lease_ms,
+            mesh=tuple(dict.fromkeys(self.module_endpoints.values())),
         )
 
     def _spec(self, m: ModuleProcess) -> ModuleSpec:
@@ -521,6 +526,9 @@ class Supervisor:
         """Let the module's process open its session and start (if it already died, _wait_ready says so)."""
         assert m.proc is not None and m.proc.stdin is not None
         m.state = "starting"
+        held = self._port_holds.pop(m.process, None)
+        if held is not None:
+            held.close()
         self._say(f"starting {m.entry.name} (pid {m.proc.pid})")
         if m.proc.stdin.closed:
             return  # a process shared with a module started before

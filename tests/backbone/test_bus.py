@@ -3,6 +3,7 @@
 import contextlib
 import json
 import os
+import socket
 import subprocess
 import sys
 
@@ -13,7 +14,7 @@ import zenoh
 from stack.bus import config, keys
 from stack.bus.alive import AliveTokens, parse_alive_token
 from stack.bus.config import BusConfig
-from stack.bus.node import Node, stable_publisher_id
+from stack.bus.node import Node, open_session, stable_publisher_id
 from stack.bus.ports import free_port
 from stack.bus.topics import HEADER, MAX_SAMPLE_BYTES, MessageTooLarge
 from stack.msg.navigation import Mission
@@ -161,3 +162,36 @@ def test_a_routers_zenoh_runtime_has_a_worker_for_each_link_to_another_router(mo
     monkeypatch.setenv("ZENOH_RUNTIME", "(rx: (worker_threads: 3))")
     config.open_router(router, "router", links=2)
     assert seen[-1] == os.environ["ZENOH_RUNTIME"] == "(rx: (worker_threads: 3))"
+
+
+def test_a_module_whose_port_was_taken_connects_to_the_modules_started_after_it():
+    """Peers reach each other only over links of their own (the router relays nothing between two peers): a module
+    that found its endpoint taken listens elsewhere, so the modules started after it, connecting to the endpoint it
+    was given, miss it; it connects to them itself."""
+    router_ep, later_ep = (f"tcp/127.0.0.1:{free_port()}" for _ in range(2))
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as taken:
+        taken.bind(("127.0.0.1", 0))
+        taken.listen()  # another process's listener on the module's port
+        own = f"tcp/127.0.0.1:{taken.getsockname()[1]}"
+        router = zenoh.open(BusConfig(mode="router", listen=(router_ep,)).zenoh_config("router"))
+        moved = open_session(BusConfig(connect=(router_ep,), listen=(own,), mesh=(own, later_ep)), "moved")
+        later = open_session(BusConfig(connect=(router_ep, own), listen=(later_ep,), mesh=(own, later_ep)), "later")
+        heard: dict[str, int] = {"moved": 0, "later": 0}
+        subs = [
+            moved.declare_subscriber("test/to_moved", lambda _: heard.__setitem__("moved", heard["moved"] + 1)),
+            later.declare_subscriber("test/to_later", lambda _: heard.__setitem__("later", heard["later"] + 1)),
+        ]
+        pubs = [later.declare_publisher("test/to_moved"), moved.declare_publisher("test/to_later")]
+        try:
+
+            def both_heard() -> bool:
+                for pub in pubs:
+                    pub.put(b"x")
+                return heard["moved"] > 0 and heard["later"] > 0
+
+            eventually(both_heard, timeout=20.0, what="messages both ways between the moved module and a later one")
+        finally:
+            for entity in (*subs, *pubs):
+                entity.undeclare()
+            for session in (later, moved, router):
+                session.close()

@@ -1,5 +1,7 @@
 import socket
 
+import pytest
+
 from stack.bus import ports
 from stack.bus.ports import ephemeral_range, free_port
 
@@ -25,3 +27,12 @@ def test_a_port_someone_listens_on_is_skipped(monkeypatch):
         picks = iter([candidate, candidate, candidate + 1 if candidate < 29999 else candidate - 1])
         monkeypatch.setattr(ports._random, "randrange", lambda *_: next(picks))
         assert free_port() != candidate
+
+
+def test_a_held_port_cannot_be_bound_until_it_is_released():
+    held = ports.hold_port()
+    port = held.getsockname()[1]
+    with held, socket.socket(socket.AF_INET, socket.SOCK_STREAM) as other, pytest.raises(OSError):
+        other.bind(("127.0.0.1", port))  # what free_port and a listener elsewhere try
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
+        s.bind(("127.0.0.1", port))

@@ -36,6 +36,7 @@ def test_duration_and_logs_per_module(tmp_path):
     for name in ("tick_source", "doubler", "summer", "pacer"):
         text = (run_dir / f"{name}.log").read_text()
         assert f"{name} ready" in text and "stopped (SIGTERM)" in text
+        assert "taken, listening on another port" not in text  # its port was held for it until it started
         assert (run_dir / f"{name}.spec.json").exists()
     assert "[doubler] INFO    doubler ready" in stack.output
     assert not wait_no_processes(home)
