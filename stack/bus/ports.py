@@ -57,6 +57,21 @@ def hold_port(host: str = "127.0.0.1", kind: socket.SocketKind = socket.SOCK_STR
     return held
 
 
+def hold_again(port: int, host: str = "127.0.0.1") -> socket.socket | None:
+    """Hold the TCP ``port`` a listener of ours left (its process exited, to be restarted), or None if another
+    process has bound it since. Bound with SO_REUSEADDR, as Zenoh's listeners are: the connections the old
+    listener left in TIME_WAIT do not keep it from being held, and the new listener binds beside it, while
+    another process's plain bind (:func:`hold_port`, :func:`free_port`) is refused."""
+    held = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
+    held.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+    try:
+        held.bind((host, port))
+    except OSError:
+        held.close()
+        return None
+    return held
+
+
 def free_port(host: str = "127.0.0.1", kind: socket.SocketKind = socket.SOCK_STREAM) -> int:
     """A port nobody has bound now, picked as :func:`hold_port` picks one, for a listener that binds it at once."""
     with hold_port(host, kind) as held:

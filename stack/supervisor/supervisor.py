@@ -34,7 +34,7 @@ from stack.bus import keys
 from stack.bus.alive import AliveTokens
 from stack.bus.config import LOOPBACK_ANY_PORT, BusConfig, open_router, without_link_options
 from stack.bus.host_beats import BEAT_PERIOD_S, STOPPING, HostWatch, beat_host, beat_key, beats_key
-from stack.bus.ports import free_port, hold_port, port_taken
+from stack.bus.ports import free_port, hold_again, hold_port, port_taken
 from stack.bus.query import answer
 from stack.bus.supervisors import SINGLE_HOST, complete_roster, rosters
 from stack.bus.timebase import (
@@ -807,6 +807,12 @@ class Supervisor:
             return
         delay = min(0.5 * 2**restarts, BACKOFF_MAX_S)
         restart_at = time.monotonic() + delay
+        process = members[0].process
+        if self.module_endpoints and process not in self._port_holds:
+            port = int(self.module_endpoints[members[0].entry.name].rpartition(":")[2])
+            held = hold_again(port)
+            if held is not None:
+                self._port_holds[process] = held
         for m in members:
             m.state = "restarting"
             m.restart_at = restart_at

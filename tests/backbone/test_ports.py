@@ -36,3 +36,17 @@ def test_a_held_port_cannot_be_bound_until_it_is_released():
         other.bind(("127.0.0.1", port))  # what free_port and a listener elsewhere try
     with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
         s.bind(("127.0.0.1", port))
+
+
+def test_a_port_held_again_for_a_restart_refuses_strangers_and_admits_the_restarted_listener():
+    port = free_port()
+    held = ports.hold_again(port)
+    assert held is not None
+    with held:
+        with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as stranger, pytest.raises(OSError):
+            stranger.bind(("127.0.0.1", port))
+        with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as restarted:  # as Zenoh's listener binds
+            restarted.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+            restarted.bind(("127.0.0.1", port))
+            restarted.listen()
+            assert ports.hold_again(port) is None  # someone listens there now

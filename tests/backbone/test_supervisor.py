@@ -1,9 +1,12 @@
 """The supervisor: start order, restarts, clean stops with no orphans, exit codes, status."""
 
+import json
 import re
 import signal
+import socket
 
 import psutil
+import pytest
 
 from tests.support.harness import RunningStack, chain_profile, eventually, run_cli, wait_no_processes, write_profile
 
@@ -59,16 +62,24 @@ module = "tests.support.modules:CommandCounter"
 module = "tests.support.modules:Crasher"
 args = {{ ticks = 4, marker = "{marker}" }}
 restart = "on-failure"
-max_restarts = 2
+max_restarts = 3
 """,
     )
     stack = RunningStack(home, profile)
     try:
-        stack.wait_for(r"crasher: giving up after 2 restarts", timeout=90)
-        assert len(marker.read_text().split()) == 3
-        for n in (1, 2):
+        stack.wait_for(r"starting crasher")
+        listen = json.loads((stack.run_dir() / "crasher.spec.json").read_text())["bus"]["listen"][0]
+        port = int(listen.rpartition(":")[2])
+        stack.wait_for(r"crasher: restart in 0.5 s", timeout=90)
+        # Until it is given up (3.5 s of backoff on), the crasher's port is held for its restarts or listened on.
+        with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as stranger, pytest.raises(OSError):
+            stranger.bind(("127.0.0.1", port))
+        stack.wait_for(r"crasher: giving up after 3 restarts", timeout=90)
+        assert "taken" not in (stack.run_dir() / "crasher.log").read_text()
+        assert len(marker.read_text().split()) == 4
+        for n in (1, 2, 3):
             assert f"restarting crasher (restart {n})" in stack.output
-        assert "crasher: restart in 0.5 s" in stack.output and "crasher: restart in 1.0 s" in stack.output
+        assert all(f"crasher: restart in {delay} s" in stack.output for delay in ("0.5", "1.0", "2.0"))
         assert "crasher failed with exit code 4" in stack.output
         assert stack.status()["modules"][0]["state"] == "running"
     finally:
