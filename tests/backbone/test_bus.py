@@ -169,29 +169,30 @@ def test_a_module_whose_port_was_taken_connects_to_the_modules_started_after_it(
     that found its endpoint taken listens elsewhere, so the modules started after it, connecting to the endpoint it
     was given, miss it; it connects to them itself."""
     router_ep, later_ep = (f"tcp/127.0.0.1:{free_port()}" for _ in range(2))
-    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as taken:
-        taken.bind(("127.0.0.1", 0))
-        taken.listen()  # another process's listener on the module's port
-        own = f"tcp/127.0.0.1:{taken.getsockname()[1]}"
-        router = zenoh.open(BusConfig(mode="router", listen=(router_ep,)).zenoh_config("router"))
-        moved = open_session(BusConfig(connect=(router_ep,), listen=(own,), mesh=(own, later_ep)), "moved")
-        later = open_session(BusConfig(connect=(router_ep, own), listen=(later_ep,), mesh=(own, later_ep)), "later")
-        heard: dict[str, int] = {"moved": 0, "later": 0}
-        subs = [
-            moved.declare_subscriber("test/to_moved", lambda _: heard.__setitem__("moved", heard["moved"] + 1)),
-            later.declare_subscriber("test/to_later", lambda _: heard.__setitem__("later", heard["later"] + 1)),
-        ]
-        pubs = [later.declare_publisher("test/to_moved"), moved.declare_publisher("test/to_later")]
-        try:
+    taken = socket.socket(socket.AF_INET, socket.SOCK_STREAM)  # another process's listener on the module's port
+    taken.bind(("127.0.0.1", 0))
+    taken.listen()
+    own = f"tcp/127.0.0.1:{taken.getsockname()[1]}"
+    router = zenoh.open(BusConfig(mode="router", listen=(router_ep,)).zenoh_config("router"))
+    moved = open_session(BusConfig(connect=(router_ep,), listen=(own,), mesh=(own, later_ep)), "moved")
+    later = open_session(BusConfig(connect=(router_ep, own), listen=(later_ep,), mesh=(own, later_ep)), "later")
+    heard: dict[str, int] = {"moved": 0, "later": 0}
+    subs = [
+        moved.declare_subscriber("test/to_moved", lambda _: heard.__setitem__("moved", heard["moved"] + 1)),
+        later.declare_subscriber("test/to_later", lambda _: heard.__setitem__("later", heard["later"] + 1)),
+    ]
+    pubs = [later.declare_publisher("test/to_moved"), moved.declare_publisher("test/to_later")]
+    try:
 
-            def both_heard() -> bool:
-                for pub in pubs:
-                    pub.put(b"x")
-                return heard["moved"] > 0 and heard["later"] > 0
+        def both_heard() -> bool:
+            for pub in pubs:
+                pub.put(b"x")
+            return heard["moved"] > 0 and heard["later"] > 0
 
-            eventually(both_heard, timeout=20.0, what="messages both ways between the moved module and a later one")
-        finally:
-            for entity in (*subs, *pubs):
-                entity.undeclare()
-            for session in (later, moved, router):
-                session.close()
+        eventually(both_heard, timeout=20.0, what="messages both ways between the moved module and a later one")
+    finally:
+        for entity in (*subs, *pubs):
+            entity.undeclare()
+        taken.close()  # first: a session closes only once its handshake with that listener has failed
+        for session in (later, moved, router):
+            session.close()
