@@ -42,16 +42,10 @@ def hold_port(host: str = "127.0.0.1", kind: socket.SocketKind = socket.SOCK_STR
     candidates = (_LOWEST, low) if low - _LOWEST >= 1000 else (high + 1, 65536)
     for _ in range(_ATTEMPTS):
         port = _random.randrange(*candidates)
-        if port in _given:
-            continue
-        held = socket.socket(socket.AF_INET, kind)
-        try:
-            held.bind((host, port))
-        except OSError:
-            held.close()
-            continue
-        _given.add(port)
-        return held
+        held = None if port in _given else _bound(host, port, kind)
+        if held is not None:
+            _given.add(port)
+            return held
     held = socket.socket(socket.AF_INET, kind)
     held.bind((host, 0))
     return held
@@ -62,14 +56,20 @@ def hold_again(port: int, host: str = "127.0.0.1") -> socket.socket | None:
     process has bound it since. Bound with SO_REUSEADDR, as Zenoh's listeners are: the connections the old
     listener left in TIME_WAIT do not keep it from being held, and the new listener binds beside it, while
     another process's plain bind (:func:`hold_port`, :func:`free_port`) is refused."""
-    held = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
-    held.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+    return _bound(host, port, socket.SOCK_STREAM, reuse_address=True)
+
+
+def _bound(host: str, port: int, kind: socket.SocketKind, reuse_address: bool = False) -> socket.socket | None:
+    """A socket bound to ``port``, or None if it cannot be bound."""
+    s = socket.socket(socket.AF_INET, kind)
+    if reuse_address:
+        s.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
     try:
-        held.bind((host, port))
+        s.bind((host, port))
     except OSError:
-        held.close()
+        s.close()
         return None
-    return held
+    return s
 
 
 def free_port(host: str = "127.0.0.1", kind: socket.SocketKind = socket.SOCK_STREAM) -> int:

@@ -165,8 +165,9 @@ class Supervisor:
         local_mesh = profile.bus.mode == "peer" and profile.bus.listen == (LOOPBACK_ANY_PORT,)
         # Held until each process is let go (_go): a stack starting meanwhile cannot take a later module's port.
         self._port_holds = {process: hold_port() for process in self.groups} if local_mesh else {}
-        endpoints = {process: f"tcp/127.0.0.1:{held.getsockname()[1]}" for process, held in self._port_holds.items()}
-        self.module_endpoints = {m.entry.name: endpoints[m.process] for m in self.modules} if local_mesh else {}
+        self._process_ports = {process: int(held.getsockname()[1]) for process, held in self._port_holds.items()}
+        ports = self._process_ports
+        self.module_endpoints = {m.entry.name: f"tcp/127.0.0.1:{ports[m.process]}" for m in self.modules if ports}
         self.programs = [
             ProgramProcess(e, run_dir / f"{e.name}.log")
             for e in profile.processes
@@ -808,9 +809,8 @@ class Supervisor:
         delay = min(0.5 * 2**restarts, BACKOFF_MAX_S)
         restart_at = time.monotonic() + delay
         process = members[0].process
-        if self.module_endpoints and process not in self._port_holds:
-            port = int(self.module_endpoints[members[0].entry.name].rpartition(":")[2])
-            held = hold_again(port)
+        if process in self._process_ports and process not in self._port_holds:
+            held = hold_again(self._process_ports[process])
             if held is not None:
                 self._port_holds[process] = held
         for m in members:
