@@ -12,6 +12,7 @@ from stack.mavlink import px4_modes
 from stack.mavlink.framing import FrameParser
 from stack.mavlink.inspect import Inspection, NoHeartbeat, firmware, format_summary, inspect_endpoint, mode_name
 from stack.mavlink.link import LinkCounters
+from tests.support.harness import udp_port
 
 LOITER = px4_modes.encode(px4_modes.Px4Mode.AUTO_LOITER)
 ARMED = mavlink2.MAV_MODE_FLAG_SAFETY_ARMED | mavlink2.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED
@@ -93,12 +94,6 @@ class FakeAutopilot:
             )
 
 
-def free_udp_port() -> int:
-    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
 def received(msg: mavlink2.MAVLink_message, system: int = 1, component: int = 1) -> mavlink2.MAVLink_message:
     mav = mavlink2.MAVLink(None, srcSystem=system, srcComponent=component)
     return FrameParser(mavlink2.MAVLink(None)).feed(msg.pack(mav))[0]
@@ -158,7 +153,7 @@ def test_summary_rates_and_other_components() -> None:
 
 
 def test_inspects_a_fake_autopilot_over_udp_as_json() -> None:
-    port = free_udp_port()
+    port = udp_port()
     with FakeAutopilot(port):
         result = CliRunner().invoke(app, ["mavlink", "inspect", f"udp:127.0.0.1:{port}", "--seconds", "3", "--json"])
     assert result.exit_code == 0, result.output
@@ -174,7 +169,7 @@ def test_inspects_a_fake_autopilot_over_udp_as_json() -> None:
 
 
 def test_falls_back_to_request_autopilot_capabilities() -> None:
-    port = free_udp_port()
+    port = udp_port()
     with FakeAutopilot(port, request_message_supported=False):
         summary = inspect_endpoint(f"udp:127.0.0.1:{port}", seconds=4.0)
     assert summary["firmware"]["version"] == "1.14.3-official"
@@ -182,7 +177,7 @@ def test_falls_back_to_request_autopilot_capabilities() -> None:
 
 def test_exit_codes_without_heartbeat_and_for_a_bad_endpoint() -> None:
     runner = CliRunner()
-    silent = runner.invoke(app, ["mavlink", "inspect", f"udp:127.0.0.1:{free_udp_port()}", "--seconds", "0.5"])
+    silent = runner.invoke(app, ["mavlink", "inspect", f"udp:127.0.0.1:{udp_port()}", "--seconds", "0.5"])
     assert silent.exit_code == 1 and "no autopilot heartbeat" in silent.output and "nothing received" in silent.output
     bad = runner.invoke(app, ["mavlink", "inspect", "serial:"])
     assert bad.exit_code == 2 and "expected serial:DEVICE" in bad.output

@@ -10,14 +10,9 @@ from pymavlink.dialects.v20 import common as mavlink2
 
 from stack.mavlink.framing import FrameParser
 from stack.mavlink.link import MavlinkLink, monotonic_us
+from tests.support.harness import udp_port
 
 PATIENCE_S = 30.0  # generous: the test machine may be heavily loaded
-
-
-def free_udp_port() -> int:
-    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
 
 
 def autopilot_heartbeat() -> dict:
@@ -50,7 +45,7 @@ def pump(
 
 
 def udp_pair(**companion_options) -> tuple[MavlinkLink, MavlinkLink]:
-    port = free_udp_port()
+    port = udp_port()
     autopilot = MavlinkLink(f"udpin:127.0.0.1:{port}", system_id=1, component_id=1, heartbeat=autopilot_heartbeat)
     companion = MavlinkLink(f"udpout:127.0.0.1:{port}", system_id=1, component_id=191, **companion_options)
     return autopilot, companion
@@ -100,7 +95,7 @@ def test_timesync_maps_the_autopilot_clock_onto_ours() -> None:
     def autopilot_clock() -> int:
         return monotonic_us() + autopilot_offset_us
 
-    port = free_udp_port()
+    port = udp_port()
     autopilot = MavlinkLink(
         f"udpin:127.0.0.1:{port}",
         system_id=1,
@@ -150,7 +145,7 @@ def test_send_on_a_dead_link_is_counted_not_raised(tmp_path: Path) -> None:
 
 
 def test_garbage_is_counted_and_dropped() -> None:
-    port = free_udp_port()
+    port = udp_port()
     link = MavlinkLink(f"udpin:127.0.0.1:{port}", system_id=1, component_id=191)
     mav = mavlink2.MAVLink(None, srcSystem=1, srcComponent=1)
     heartbeat = mav.heartbeat_encode(2, 12, 1, 0, 3)
