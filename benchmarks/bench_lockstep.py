@@ -23,7 +23,8 @@ interleaved, ``--runs`` times:
   same modules chained in this one process with no bus (what the algorithms cost by themselves).
 
 First it measures the round trip of a wake-up between two processes sleeping in poll() on eventfds, as lockstep
-members do: what each hop of a message from one module process to another costs the machine by itself.
+members do: what each hop of a message from one module process to another costs the machine by itself, once where
+the scheduler puts them and once with both held on one CPU (the difference is what waking an idle CPU costs).
 
 While a stack runs, this script joins its bus as a client and listens to the module heartbeats (1 Hz
 wall, each with the module's simulated time, runs and mean time inside ``run()``). On each heartbeat of
@@ -332,7 +333,8 @@ def main() -> None:
     load_profile(args.profile)  # refused here, in one line, if broken
     load = os.getloadavg()
     print(f"load average {load[0]:.2f} {load[1]:.2f} {load[2]:.2f} on {os.cpu_count()} CPUs; profile {args.profile}")
-    print(f"wake-up round trip between two processes (eventfd, poll): {wake_round_trip_us():.1f} µs")
+    across, one_cpu = wake_round_trip_us(), wake_round_trip_us(cpu=min(os.sched_getaffinity(0)))
+    print(f"wake-up round trip between two processes (eventfd, poll): {across:.1f} µs, {one_cpu:.1f} µs on one CPU")
     kinds = ["fast", "zenoh", "mixed", "observed", "up", "paced", *GROUPINGS, *(f"paced {g}" for g in GROUPINGS)]
     runs: dict[str, list[Run]] = {kind: [] for kind in kinds}
     with tempfile.TemporaryDirectory(prefix="bench_lockstep") as tmp:
@@ -380,6 +382,8 @@ def main() -> None:
 WAKE_ECHO = """
 import os, select, sys
 ping, pong, n = int(sys.argv[1]), int(sys.argv[2]), int(sys.argv[3])
+if len(sys.argv) > 4:
+    os.sched_setaffinity(0, {int(sys.argv[4])})
 poll = select.poll()
 poll.register(ping, select.POLLIN)
 for _ in range(n):
@@ -389,22 +393,31 @@ for _ in range(n):
 """
 
 
-def wake_round_trip_us(rounds: int = 20_000) -> float:
+def wake_round_trip_us(rounds: int = 20_000, cpu: int | None = None) -> float:
     """Mean round trip of a wake-up between two processes that sleep in poll() on eventfds, as lockstep members do:
-    what each hop of a message between module processes costs the machine by itself."""
+    what each hop of a message between module processes costs the machine by itself. With ``cpu``, both processes
+    are held on that one CPU: the wakee then runs where its waker is about to sleep, and no idle CPU has to be woken
+    (on a virtual machine whose idle CPUs halt, that wake-up is most of the cost of a hop)."""
     ping, pong = os.eventfd(0), os.eventfd(0)
-    echo = subprocess.Popen([sys.executable, "-c", WAKE_ECHO, str(ping), str(pong), str(rounds)], pass_fds=(ping, pong))
+    args = [sys.executable, "-c", WAKE_ECHO, str(ping), str(pong), str(rounds)]
+    echo = subprocess.Popen(args if cpu is None else [*args, str(cpu)], pass_fds=(ping, pong))
+    allowed = os.sched_getaffinity(0)
+    if cpu is not None:
+        os.sched_setaffinity(0, {cpu})
     poll = select.poll()
     poll.register(pong, select.POLLIN)
-    start = time.perf_counter()
-    for _ in range(rounds):
-        os.eventfd_write(ping, 1)
-        poll.poll()
-        os.eventfd_read(pong)
-    elapsed = time.perf_counter() - start
-    echo.wait()
-    os.close(ping)
-    os.close(pong)
+    try:
+        start = time.perf_counter()
+        for _ in range(rounds):
+            os.eventfd_write(ping, 1)
+            poll.poll()
+            os.eventfd_read(pong)
+        elapsed = time.perf_counter() - start
+    finally:
+        os.sched_setaffinity(0, allowed)
+        echo.wait()
+        os.close(ping)
+        os.close(pong)
     return elapsed / rounds * 1e6
 
 
