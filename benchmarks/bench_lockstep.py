@@ -382,8 +382,6 @@ def main() -> None:
 WAKE_ECHO = """
 import os, select, sys
 ping, pong, n = int(sys.argv[1]), int(sys.argv[2]), int(sys.argv[3])
-if len(sys.argv) > 4:
-    os.sched_setaffinity(0, {int(sys.argv[4])})
 poll = select.poll()
 poll.register(ping, select.POLLIN)
 for _ in range(n):
@@ -399,11 +397,10 @@ def wake_round_trip_us(rounds: int = 20_000, cpu: int | None = None) -> float:
     are held on that one CPU: the wakee then runs where its waker is about to sleep, and no idle CPU has to be woken
     (on a virtual machine whose idle CPUs halt, that wake-up is most of the cost of a hop)."""
     ping, pong = os.eventfd(0), os.eventfd(0)
-    args = [sys.executable, "-c", WAKE_ECHO, str(ping), str(pong), str(rounds)]
-    echo = subprocess.Popen(args if cpu is None else [*args, str(cpu)], pass_fds=(ping, pong))
     allowed = os.sched_getaffinity(0)
     if cpu is not None:
-        os.sched_setaffinity(0, {cpu})
+        os.sched_setaffinity(0, {cpu})  # the echo process inherits it
+    echo = subprocess.Popen([sys.executable, "-c", WAKE_ECHO, str(ping), str(pong), str(rounds)], pass_fds=(ping, pong))
     poll = select.poll()
     poll.register(pong, select.POLLIN)
     try:
