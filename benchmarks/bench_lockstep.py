@@ -24,7 +24,9 @@ interleaved, ``--runs`` times:
 
 First it measures the round trip of a wake-up between two processes sleeping in poll() on eventfds, as lockstep
 members do: what each hop of a message from one module process to another costs the machine by itself, once where
-the scheduler puts them and once with both held on one CPU (the difference is what waking an idle CPU costs).
+the scheduler puts them, once with both held on one CPU (the difference is what waking an idle CPU costs) and once
+with idle CPUs kept awake, as the supervisor keeps them for a lockstep run at full speed where it may
+(:mod:`stack.runtime.cpu_wake`).
 
 While a stack runs, this script joins its bus as a client and listens to the module heartbeats (1 Hz
 wall, each with the module's simulated time, runs and mean time inside ``run()``). On each heartbeat of
@@ -59,6 +61,7 @@ import psutil
 from stack.bus import keys
 from stack.cli.common import connect
 from stack.msg.internal import ModuleHeartbeat
+from stack.runtime.cpu_wake import AwakeCpus
 from stack.scenario.inprocess import fly_in_process
 from stack.supervisor import state as run_state
 from stack.supervisor.profile import load_profile
@@ -334,7 +337,17 @@ def main() -> None:
     load = os.getloadavg()
     print(f"load average {load[0]:.2f} {load[1]:.2f} {load[2]:.2f} on {os.cpu_count()} CPUs; profile {args.profile}")
     across, one_cpu = wake_round_trip_us(), wake_round_trip_us(cpu=min(os.sched_getaffinity(0)))
-    print(f"wake-up round trip between two processes (eventfd, poll): {across:.1f} µs, {one_cpu:.1f} µs on one CPU")
+    awake = AwakeCpus()
+    kept_awake = wake_round_trip_us() if awake.held else 0.0
+    awake.close()
+    print(
+        f"wake-up round trip between two processes (eventfd, poll): {across:.1f} µs, {one_cpu:.1f} µs on one CPU, "
+        + (
+            f"{kept_awake:.1f} µs with idle CPUs kept awake (as full-speed lockstep runs keep them)"
+            if kept_awake
+            else f"idle CPUs cannot be kept awake here ({awake.refusal}): full-speed lockstep runs wait on them"
+        )
+    )
     kinds = ["fast", "zenoh", "mixed", "observed", "up", "paced", *GROUPINGS, *(f"paced {g}" for g in GROUPINGS)]
     runs: dict[str, list[Run]] = {kind: [] for kind in kinds}
     with tempfile.TemporaryDirectory(prefix="bench_lockstep") as tmp:

@@ -50,6 +50,7 @@ from stack.bus.timebase import (
 )
 from stack.fastpath.host import FastPathHost
 from stack.msg.internal import ModuleHeartbeat
+from stack.runtime.cpu_wake import AwakeCpus
 from stack.runtime.module import LINK_SUFFIX
 from stack.runtime.pacing import MAX_SPEED
 from stack.runtime.priority import ROUTER, raise_priority
@@ -258,6 +259,7 @@ class Supervisor:
             done = raise_priority(f"router of host {self.host}", ROUTER, reset_on_fork=True)
             self._say(f"router of host {self.host}: scheduling {done}")
         session = self._open_router()
+        awake = self._keep_cpus_awake()
         entities = []
         beating: threading.Thread | None = None
         if self.shm_run and self.leads:
@@ -312,6 +314,8 @@ class Supervisor:
                 self.clock.close()
             for held in self._port_holds.values():
                 held.close()
+            if awake is not None:
+                awake.close()
             session.close()
             run_state.remove_state(self.vehicle, os.getpid())
         if self._signal is not None and not self.roster_complete:
@@ -320,6 +324,18 @@ class Supervisor:
         code = 1 if self.failed or any(r.failures for r in (*self.modules, *self.programs)) else 0
         self._say("stopped" + (" with failures" if code else ""))
         return code
+
+    def _keep_cpus_awake(self) -> AwakeCpus | None:
+        """For a lockstep run as fast as it can go, idle CPUs kept from sleeping (stack.runtime.cpu_wake) until it
+        ends; None for any other run."""
+        if not (self.profile.lockstep and self.options.speed == MAX_SPEED):
+            return None
+        awake = AwakeCpus()
+        if awake.held:
+            self._say("idle CPUs kept awake for the run (PM QoS CPU latency 0 µs): no wake-up delay between steps")
+        else:
+            self._say(f"idle CPUs may sleep between steps ({awake.refusal}): a lockstep step waits for them to wake")
+        return awake
 
     def _key(self, what: str) -> str:
         return keys.supervisor_key(self.vehicle, self.host, what)
