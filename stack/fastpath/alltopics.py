@@ -8,7 +8,6 @@ read yet.
 
 from __future__ import annotations
 
-import heapq
 from collections.abc import Callable
 from operator import attrgetter
 
@@ -36,6 +35,7 @@ class RingRecord(msgspec.Struct, frozen=True, gc=False):
 
 
 RecordSink = Callable[[RingRecord], None]
+_publication_time = attrgetter("time_us")
 
 
 class AllTopicsReader:
@@ -73,13 +73,14 @@ class AllTopicsReader:
         w = self.region.words
         now = int(w[H_NOW])
         horizon = 1 << 63 if final else now
-        batches = [self._take(r, suffix, horizon) for r, suffix in self._readers]
-        taken = 0
-        for record in heapq.merge(*batches, key=attrgetter("time_us")):
+        records: list[RingRecord] = []
+        for r, suffix in self._readers:
+            records += self._take(r, suffix, horizon)
+        records.sort(key=_publication_time)  # stable: a merge of the rings, each in order already
+        for record in records:
             sink(record)
-            taken += 1
         w[self.region.slot_word(self.att.slot, S_READ_TIME)] = now
-        return taken
+        return len(records)
 
     def _take(self, r: RingReader, suffix: str, horizon: int) -> list[RingRecord]:
         taken = r.take_new(horizon)

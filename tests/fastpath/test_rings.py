@@ -76,6 +76,25 @@ def test_a_message_larger_than_its_record_moves_the_ring_and_keeps_the_older_rec
     assert len(decode(reader.payload(reader.header(2).offset)).items) == 500
 
 
+def test_a_reader_takes_each_record_once_up_to_its_horizon_across_a_moved_ring_and_counts_what_it_missed(host):
+    sim = Attachment(host.region, "sim", publisher_id=11)
+    small = encode(Mission(items=[]))
+    writer = sim.publication("mission/0", 5, len(small))
+    reader = RingReader(host.region, sim.slot, 0, 11)
+    for n in range(1, 4):
+        writer.write(small, n, 1000 * n, n)
+    assert [(h.index, h.time_us, h.seq) for h, _ in reader.take_new(horizon=3000)] == [(1, 1000, 1), (2, 2000, 2)]
+    big = encode(Mission(items=[MissionItemEntry(north=float(i)) for i in range(500)]))
+    writer.write(big, 4, 4000, 4)  # the ring moves to larger records, carrying record 3 over
+    taken = reader.take_new()
+    assert [h.index for h, _ in taken] == [3, 4] and [p for _, p in taken] == [small, big]
+    assert reader.take_new() == [] and reader.lost == 0
+    for n in range(5, 5 + writer.records + 2):
+        writer.write(small, n, 1000 * n, n)
+    taken = reader.take_new()
+    assert reader.lost == 2 and [h.index for h, _ in taken] == list(range(7, 5 + writer.records + 2))
+
+
 def test_a_restarted_module_keeps_its_rings_and_their_counts(host):
     first = Attachment(host.region, "sim", publisher_id=11)
     first.publication("sensor_gyro/0", 5, 20).write(gyro(1.0), 1, 4000, 1)
