@@ -11,7 +11,6 @@ import json
 import math
 import os
 import signal
-import threading
 import time
 from pathlib import Path
 
@@ -21,6 +20,7 @@ import zenoh
 from stack.bus.config import BusConfig, open_router, without_link_options
 from stack.bus.ports import free_port
 from stack.cli.common import InsecureOption, KeystoreOption, check_exposure, fail
+from stack.runtime.stop_event import StopEvent
 from stack.security.denials import Denial, DenialCounts
 from stack.supervisor import state as run_state
 from stack.supervisor.profile import ProfileError, load_profile
@@ -48,7 +48,7 @@ def router(
     tls, access = prof.host_tls(host), prof.host_access()
     lease = prof.router_lease_ms
     bus = BusConfig(mode="router", listen=listen, connect=connect, lease_ms=lease, tls=tls, access=access)
-    stop = threading.Event()
+    stop = StopEvent()
     for signum in (signal.SIGINT, signal.SIGTERM):
         signal.signal(signum, lambda *_: stop.set())
     denied = DenialCounts()

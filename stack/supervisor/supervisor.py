@@ -55,6 +55,7 @@ from stack.runtime.module import LINK_SUFFIX
 from stack.runtime.pacing import MAX_SPEED
 from stack.runtime.priority import ROUTER, raise_priority
 from stack.runtime.spec import ModuleSpec
+from stack.runtime.stop_event import StopEvent
 from stack.security.denials import Denial, DenialCounts
 from stack.supervisor import state as run_state
 from stack.supervisor.profile import ModuleEntry, ProcessEntry, Profile, expand_placeholders
@@ -190,7 +191,7 @@ class Supervisor:
         # profile sends lockstep traffic over Zenoh.
         self.run_id = secrets.randbits(63) | 1
         self.fast: FastPathHost | None = None
-        self._stop = threading.Event()
+        self._stop = StopEvent()  # set by the signal handler
         self._signal: int | None = None  # the signal that stopped the stack, if one did
         self._alive: dict[str, int] = {}
         self._alive_changed = threading.Condition()
@@ -420,7 +421,7 @@ class Supervisor:
         }
 
     def _on_signal(self, signum: int, frame: object) -> None:
-        # No printing here: the handler may interrupt this thread inside _say, which holds the print lock.
+        # No printing or lock here: the handler may interrupt this thread inside _say, which holds the print lock.
         if not self._stop.is_set():
             self._signal = signum
         self._stop.set()
