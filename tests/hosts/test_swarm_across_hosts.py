@@ -52,5 +52,7 @@ def test_a_swarm_over_two_hosts_flies_in_formation_in_one_world(network, tmp_pat
     reports = {name: json.loads((tmp_path / f"{name}.json").read_text()) for name in shares}
     assert reports["lead"]["metrics"] == reports["follow"]["metrics"]
     assert reports["lead"]["by_vehicle"] == reports["follow"]["by_vehicle"]
-    assert reports["lead"]["metrics"] == FORMATION_METRICS
+    # the figures of one machine: bit for bit on the CPU they were taken on, within rounding on another (CPython's
+    # libm and numpy choose their code by the CPU's instructions)
+    assert reports["lead"]["metrics"] == pytest.approx(FORMATION_METRICS, rel=1e-9, abs=0)
     assert "v2: [scenario] INFO    t=24.99 s: in formation" in (tmp_path / "follow.log").read_text()
