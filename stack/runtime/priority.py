@@ -41,9 +41,10 @@ INS = WorkQueue("INS0", -14)
 COMMANDER = WorkQueue("commander", -10)
 """PX4 starts its commander task at SCHED_PRIORITY_DEFAULT + 40 (``src/modules/commander/Commander.cpp``)."""
 HP_DEFAULT = WorkQueue("hp_default", -18)
-ROUTER = WorkQueue("router", -13)
-"""A host's Zenoh router, in a vehicle spread over several: the flight's messages between hosts pass through it, so
-it runs beside the controllers that read them (``wq:nav_and_controllers``)."""
+ROUTER = WorkQueue("router", -15)
+"""A host's Zenoh router, in a vehicle spread over several: the flight's messages between hosts pass through it, so it
+runs above everything at normal priority, but just below the host's own flight modules (``wq:INS0``): it also fans
+the vehicle's telemetry out to the ground, and that work, heavy behind a slow link, must not delay an estimator."""
 
 
 def raise_priority(module: str, queue: WorkQueue, reset_on_fork: bool = False) -> str:
