@@ -1,7 +1,6 @@
 """`stack cmd` flying the default profile from the command line as the README shows it: take off, go somewhere,
 fly a mission, return, land, with --wait and its default timeouts (sized to each action, simulated time);
-`stack status`'s vehicle summary; and --wait failing when a failsafe takes over. The stack flies as fast as the
-machine goes (`stack up --speed max`): every wait and timeout the commands take is in simulated time."""
+`stack status`'s vehicle summary; and --wait failing when a failsafe takes over."""
 
 import json
 
@@ -15,8 +14,7 @@ pytestmark = pytest.mark.flight
 @pytest.fixture(scope="module")
 def stack(tmp_path_factory):
     # The link-loss test stands in for a ground station's heartbeat on telemetry_status, the MAVLink link's topic.
-    home = tmp_path_factory.mktemp("cmd_flight") / "home"
-    yield from default_stack(home, open_topics=("telemetry_status",), speed="max")
+    yield from default_stack(tmp_path_factory.mktemp("cmd_flight") / "home", open_topics=("telemetry_status",))
 
 
 def local_position(stack) -> dict:
