@@ -41,19 +41,13 @@ INS = WorkQueue("INS0", -14)
 COMMANDER = WorkQueue("commander", -10)
 """PX4 starts its commander task at SCHED_PRIORITY_DEFAULT + 40 (``src/modules/commander/Commander.cpp``)."""
 HP_DEFAULT = WorkQueue("hp_default", -18)
-ROUTER = WorkQueue("router", -15)
-"""A host's Zenoh router, in a vehicle spread over several: the flight's messages between hosts pass through it, so it
-runs above everything at normal priority, but just below the host's own flight modules (``wq:INS0``): it also fans
-the vehicle's telemetry out to the ground, and that work, heavy behind a slow link, must not delay an estimator."""
 
 
-def raise_priority(module: str, queue: WorkQueue, reset_on_fork: bool = False) -> str:
-    """Put this process (and the threads it starts later) at ``queue``'s priority; returns what was done.
-    ``reset_on_fork``: the processes it starts do not inherit the real-time priority (SCHED_RESET_ON_FORK)."""
+def raise_priority(module: str, queue: WorkQueue) -> str:
+    """Put this process (and the threads it starts later) at ``queue``'s priority; returns what was done."""
     try:
         top = os.sched_get_priority_max(os.SCHED_FIFO)
-        policy = os.SCHED_FIFO | (os.SCHED_RESET_ON_FORK if reset_on_fork else 0)
-        os.sched_setscheduler(0, policy, os.sched_param(top + queue.relative_priority))
+        os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(top + queue.relative_priority))
         done = f"SCHED_FIFO {top + queue.relative_priority} (wq:{queue.name})"
     except (PermissionError, AttributeError, OSError) as fifo_refused:
         try:

@@ -53,7 +53,6 @@ from stack.msg.internal import ModuleHeartbeat
 from stack.runtime.cpu_wake import AwakeCpus
 from stack.runtime.module import LINK_SUFFIX
 from stack.runtime.pacing import MAX_SPEED
-from stack.runtime.priority import ROUTER, raise_priority
 from stack.runtime.spec import ModuleSpec
 from stack.runtime.stop_event import StopEvent
 from stack.security.denials import Denial, DenialCounts
@@ -228,18 +227,6 @@ class Supervisor:
         """Whether the module takes part in the same-host fast path (a module outside the lockstep does not)."""
         return not m.entry.cls.OUTSIDE_LOCKSTEP
 
-    def _raise_router(self) -> None:
-        """A host's router carries its flight modules' messages to the other hosts, so it runs at a work queue's
-        priority beside them; on a host of none (a ground station's links, its tools) it stays at normal priority,
-        as they do: raised, fanning the vehicle's telemetry out to the tools, it would take the CPU from the flight
-        modules of any host sharing it. Called before the router's threads start, which inherit it; the module
-        processes start at normal priority."""
-        if not any(m.entry.cls.WORK_QUEUE is not None for m in self.modules):
-            self._say(f"router of host {self.host}: normal priority (no flight module on this host)")
-            return
-        done = raise_priority(f"router of host {self.host}", ROUTER, reset_on_fork=True)
-        self._say(f"router of host {self.host}: scheduling {done}")
-
     def _open_router(self) -> zenoh.Session:
         """The rendezvous router; a port taken since it was picked (another stack starting at the same
         moment) is picked again, unless the profile fixed it."""
@@ -267,8 +254,6 @@ class Supervisor:
     def run(self) -> int:
         signal.signal(signal.SIGINT, self._on_signal)
         signal.signal(signal.SIGTERM, self._on_signal)
-        if self.profile.hosts and not self.profile.lockstep:
-            self._raise_router()
         session = self._open_router()
         awake = self._keep_cpus_awake()
         entities = []

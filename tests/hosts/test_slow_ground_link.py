@@ -141,9 +141,3 @@ def test_a_ground_host_behind_a_slow_link_never_slows_the_vehicle(network, tmp_p
     assert stack(ground, "down").returncode == 0
     codes = {name: p.wait(timeout=60) for name, p in procs.items()}
     assert codes == dict.fromkeys(HOSTS, 0), f"{codes}\n{logs()}"
-    # The ground's router, fanning the telemetry out to the tools, never ran above the vehicle's modules.
-    assert (
-        "router of host ground: normal priority (no flight module on this host)"
-        in (tmp_path / "ground.log").read_text()
-    )
-    assert "router of host sim: scheduling SCHED_FIFO" in (tmp_path / "sim.log").read_text()
