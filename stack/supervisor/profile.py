@@ -16,7 +16,8 @@ all its modules in one): each stays a module with its topics, parameters, heartb
 crash restarts the process if every one of its modules' policies asks (a module that may not restart, such as
 the simulator, keeps the process down: a crash of any module of it is then that module's crash). Only
 lockstep modules can share a process, and only in a shared-memory lockstep run; otherwise (``--realtime``,
-lockstep over Zenoh) each module runs in its own process.
+lockstep over Zenoh) each module runs in its own process. Over ``[hosts]``, the modules of a process are on the
+simulator's host, whose shared memory they share.
 
 A lockstep member given ``transport = "zenoh"`` takes part in a shared-memory lockstep run over Zenoh, as a
 module on another host must: it keeps its place in the run, which the simulator's process serves for it
@@ -464,12 +465,12 @@ class _Loader:
             ):
                 continue
             profile.processes.append(process)
-        self._check_process_groups(profile)
         if profile.hosts and "low_latency" not in bus_table:
             # Zenoh's low-latency transport writes straight to the socket: behind a slow link between hosts a router
             # would wait for room, holding up everything else it forwards. With queues, a full one drops instead.
             profile.bus = dataclasses.replace(profile.bus, low_latency=False)
         self._check_placement(profile)
+        self._check_process_groups(profile)
         for module in profile.modules:
             for aname, value in module.args.items():
                 if isinstance(value, str):
@@ -544,15 +545,31 @@ class _Loader:
                     raise self.fail(where, f"'{entry.host}' is not a host of this profile{hint}")
 
     def _check_process_groups(self, profile: Profile) -> None:
-        """A process group's name is not another module's or a ``[[process]]``'s."""
+        """A process group's name is not another module's or a ``[[process]]``'s, and its modules are on one host:
+        the lockstep coordinator's, whose shared memory they share (a module on another host takes part over Zenoh,
+        in a process of its own)."""
+        coordinator = next((m for m in profile.modules if m.cls.LOCKSTEP_COORDINATOR), None)
+        first: dict[str, ModuleEntry] = {}
         for module in profile.modules:
             group = module.process
             if not group:
                 continue
+            where = f"module ({module.name}).process"
             clash = [m.name for m in profile.modules if m.name == group and m.process != group]
             clash += [p.name for p in profile.processes if p.name == group]
             if clash:
-                raise self.fail(f"module ({module.name}).process", f"'{group}' is also the name of {clash[0]}")
+                raise self.fail(where, f"'{group}' is also the name of {clash[0]}")
+            other = first.setdefault(group, module)
+            if other.host != module.host:
+                raise self.fail(
+                    where, f"'{group}' also holds {other.name}, on host {other.host}; a process runs on one host"
+                )
+            if coordinator is not None and module.host != coordinator.host:
+                raise self.fail(
+                    where,
+                    f"{module.name} on host {module.host} takes part over Zenoh (the lockstep's shared memory is on "
+                    f"host {coordinator.host}), in a process of its own (drop 'process')",
+                )
 
     def _scenario_settings(self, table: dict) -> tuple[dict[str, dict[str, float | bool]], dict[str, dict[str, str]]]:
         """Per-scenario check limits and options for this vehicle (``[scenario.attitude_step] yaw_rise_time_s =

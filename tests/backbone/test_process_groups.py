@@ -147,3 +147,31 @@ def test_a_process_no_module_can_share_is_refused_naming_the_key(tmp_path, entry
     assert f"{path}: module[1]" in str(refused.value) or f"{path}: module (" in str(refused.value)
     assert ".process: " in str(refused.value) and problem in str(refused.value)
 
+
+@pytest.mark.parametrize(
+    ("grouped", "problem"),
+    [
+        (("simulator", "commander"), "module (commander).process: 'both' also holds simulator, on host sim; a process"),
+        (
+            ("commander", "mc_rate_control"),
+            "module (commander).process: commander on host control takes part over Zenoh",
+        ),
+    ],
+)
+def test_a_process_over_two_hosts_or_off_the_simulators_host_is_refused(tmp_path, grouped, problem):
+    entries = "".join(f'[[module]]\nname = "{name}"\nprocess = "both"\n' for name in grouped)
+    path = write_profile(tmp_path / "split.toml", f'extends = "sitl_quad_hosts"\n{entries}')
+    with pytest.raises(ProfileError) as refused:
+        load_profile(path)
+    assert f"{path} (extends " in str(refused.value) and problem in str(refused.value)
+
+
+def test_a_process_on_the_simulators_host_of_a_split_vehicle_is_taken(tmp_path):
+    entries = "".join(
+        f'[[module]]\nname = "{name}"\nprocess = "inner"\n' for name in ("simulator", "attitude_estimator_q")
+    )
+    profile = load_profile(write_profile(tmp_path / "split.toml", f'extends = "sitl_quad_hosts"\n{entries}'))
+    assert {m.name: m.host for m in profile.modules if m.process == "inner"} == {
+        "simulator": "sim",
+        "attitude_estimator_q": "sim",
+    }
