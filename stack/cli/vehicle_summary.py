@@ -110,7 +110,6 @@ def lines(s: dict[str, Any]) -> list[str]:
         )
     if (b := s.get("battery")) is not None:
         remaining = f"{b['remaining'] * 100:.0f} %" if b["remaining"] >= 0 else "unknown"
-        out.append(
-            f"battery: {b['voltage_v']:.2f} V, {b['current_a']:.1f} A, {remaining} remaining, warning {b['warning']}"
-        )
+        current = f"{b['current_a']:.1f} A" if b["current_a"] >= 0 else "current unknown"
+        out.append(f"battery: {b['voltage_v']:.2f} V, {current}, {remaining} remaining, warning {b['warning']}")
     return out

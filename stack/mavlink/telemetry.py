@@ -315,6 +315,21 @@ def battery_status(view: VehicleView, now_us: int) -> mavlink2.MAVLink_battery_s
     bat = view.battery
     if bat is None or not bat.connected:
         return None
+    return battery_status_message(bat)
+
+
+def battery_current_ca(current_a: float) -> int:
+    """A pack's current in MAVLink's cA, -1 when no sensor measures it (a negative current_a)."""
+    return _clamp_int(current_a * 100.0, -1, INT16_MAX) if current_a >= 0.0 else -1
+
+
+def battery_remaining_pct(remaining: float) -> int:
+    """A pack's remaining charge in MAVLink's %, -1 when unknown (a negative remaining)."""
+    return _clamp_int(math.ceil(remaining * 100.0), 0, 100) if remaining >= 0.0 else -1
+
+
+def battery_status_message(bat: BatteryStatus) -> mavlink2.MAVLink_battery_status_message:
+    """BATTERY_STATUS of a connected pack."""
     cells = [UINT16_MAX] * 10
     if 0 < bat.cell_count <= 10:
         cells[: bat.cell_count] = [_clamp_int(bat.voltage_v / bat.cell_count * 1000.0, 0, UINT16_MAX - 1)] * (
@@ -331,10 +346,10 @@ def battery_status(view: VehicleView, now_us: int) -> mavlink2.MAVLink_battery_s
         mavlink2.MAV_BATTERY_TYPE_LIPO,
         temperature,
         cells,
-        _clamp_int(bat.current_a * 100.0, -1, INT16_MAX) if bat.current_a >= 0.0 else -1,
+        battery_current_ca(bat.current_a),
         _clamp_int(bat.discharged_mah, -1, INT32_MAX) if bat.discharged_mah >= 0.0 else -1,
         -1,
-        _clamp_int(math.ceil(bat.remaining * 100.0), 0, 100) if bat.remaining >= 0.0 else -1,
+        battery_remaining_pct(bat.remaining),
         _clamp_int(bat.time_remaining_s, 0, INT32_MAX) if math.isfinite(bat.time_remaining_s) else 0,
         CHARGE_STATE.get(bat.warning, mavlink2.MAV_BATTERY_CHARGE_STATE_UNDEFINED),
         [0, 0, 0, 0],
@@ -408,8 +423,8 @@ def sys_status(
         health,
         0,
         _clamp_int(bat.voltage_v * 1000.0, 0, UINT16_MAX - 1) if connected else UINT16_MAX,
-        _clamp_int(bat.current_a * 100.0, -1, INT16_MAX) if connected and bat.current_a >= 0.0 else -1,
-        _clamp_int(math.ceil(bat.remaining * 100.0), 0, 100) if connected and bat.remaining >= 0.0 else -1,
+        battery_current_ca(bat.current_a) if connected else -1,
+        battery_remaining_pct(bat.remaining) if connected else -1,
         _clamp_int(drop_rate_comm * 10000.0, 0, 10000),
         min(errors_comm, UINT16_MAX),
         0,

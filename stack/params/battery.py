@@ -7,7 +7,6 @@ PARAMS: tuple[Param, ...] = (
     Param("BAT1_CAPACITY", 5000.0, 1.0, 100000.0, "mAh", "Pack capacity"),
     Param("BAT1_V_EMPTY", 3.6, 2.5, 4.5, "V", "Cell voltage when empty (open circuit)"),
     Param("BAT1_V_CHARGED", 4.05, 3.0, 5.0, "V", "Cell voltage when full (open circuit)"),
-    Param("BAT1_R_INTERNAL", 0.005, 0.0, 0.2, "Ohm", "Internal resistance per cell"),
     Param("BAT_LOW_THR", 0.15, 0.12, 0.5, "norm", "Remaining charge below which the warning is LOW"),
     Param("BAT_CRIT_THR", 0.07, 0.05, 0.5, "norm", "Remaining charge below which the warning is CRITICAL"),
     Param("BAT_EMERGEN_THR", 0.05, 0.03, 0.5, "norm", "Remaining charge below which the warning is EMERGENCY"),

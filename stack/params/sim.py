@@ -21,7 +21,7 @@ PARAMS: tuple[Param, ...] = (
         "Height the wind figures hold at; below it the wind falls off logarithmically to the ground (0: the same "
         "wind at every height)",
     ),
-    # PX4's bound in src/modules/simulator/simulator_params.c (a day); 0 is the stack's (drain from current).
-    Param("SIM_BAT_DRAIN", 60.0, 0.0, 86400.0, "s", "Timed drain: full to empty while armed (0 = drain from current)"),
+    # PX4's bound in src/modules/simulator/simulator_params.c (a day); 0 is the stack's (the charge kept).
+    Param("SIM_BAT_DRAIN", 60.0, 0.0, 86400.0, "s", "Timed drain: full to empty while armed (0: no drain)"),
     Param("SIM_BAT_MIN_PCT", 50.0, 0.0, 100.0, "%", "The simulated charge never falls below this"),
 )

@@ -27,6 +27,9 @@ from stack.mavlink import px4_modes
 from stack.mavlink.telemetry import (
     attitude_message,
     attitude_quaternion_message,
+    battery_current_ca,
+    battery_remaining_pct,
+    battery_status_message,
     cdeg,
     deg_e7,
     extended_sys_state_message,
@@ -34,6 +37,7 @@ from stack.mavlink.telemetry import (
     local_position_ned_message,
     time_boot_ms,
 )
+from stack.msg.system import BatteryStatus
 from stack.pixhawk_sim.vehicle import SimulatedPixhawk
 from stack.sim.sensors import BaroSample, GpsSample, ImuSample, MagSample
 
@@ -77,7 +81,6 @@ _BARO_FIELDS = (
     | mavlink.HIGHRES_IMU_UPDATED_TEMPERATURE
 )
 UINT16_UNKNOWN = 65535
-INT16_UNKNOWN = 32767
 
 
 class Telemetry:
@@ -349,8 +352,8 @@ class Telemetry:
             onboard_control_sensors_health=health,
             load=0,
             voltage_battery=round(battery.voltage_v * 1000.0),
-            current_battery=round(battery.current_a * 100.0),
-            battery_remaining=round(battery.remaining * 100.0),
+            current_battery=battery_current_ca(battery.current_a),
+            battery_remaining=battery_remaining_pct(battery.remaining),
             drop_rate_comm=0,
             errors_comm=0,
             errors_count1=0,
@@ -363,27 +366,7 @@ class Telemetry:
         )
 
     def battery_status(self) -> Message:
-        b = self.vehicle.battery_state
-        cells = max(b.cell_count, 1)
-        cell_mv = min(round(b.voltage_v * 1000.0 / cells), UINT16_UNKNOWN - 1)
-        voltages = [cell_mv if i < cells else UINT16_UNKNOWN for i in range(10)]
-        time_remaining = round(b.time_remaining_s) if math.isfinite(b.time_remaining_s) else 0
-        return mavlink.MAVLink_battery_status_message(
-            id=0,
-            battery_function=mavlink.MAV_BATTERY_FUNCTION_ALL,
-            type=mavlink.MAV_BATTERY_TYPE_LIPO,
-            temperature=INT16_UNKNOWN,
-            voltages=voltages,
-            current_battery=round(b.current_a * 100.0),
-            current_consumed=round(b.discharged_mah),
-            energy_consumed=-1,
-            battery_remaining=round(b.remaining * 100.0),
-            time_remaining=time_remaining,
-            charge_state=0,
-            voltages_ext=(0, 0, 0, 0),
-            mode=0,
-            fault_bitmask=0,
-        )
+        return battery_status_message(BatteryStatus(**self.vehicle.battery_state._asdict()))
 
     def extended_sys_state(self) -> Message:
         v = self.vehicle

@@ -25,6 +25,13 @@ def test_mode_armed_failsafe_position_battery():
     ]
 
 
+def test_a_pack_without_a_current_sensor_says_so():
+    # The simulated pack, as PX4's, measures no current (-1).
+    latest = {"vehicle_status": NS(), "battery_status": BatteryStatus(voltage_v=16.2, current_a=-1.0, remaining=1.0)}
+    s = summary(latest, {"failsafe_action": "none", "failsafe_cause": ""})
+    assert lines(s)[-1] == "battery: 16.20 V, current unknown, 100 % remaining, warning none"
+
+
 def test_a_quiet_vehicle_and_no_vehicle():
     s = summary({"vehicle_status": NS()}, {"failsafe_action": "none", "failsafe_cause": ""})
     assert lines(s) == ["vehicle: Manual, disarmed, failsafe: no"]

@@ -216,6 +216,18 @@ def test_highres_imu_carries_the_sensors_with_the_boot_time_of_the_sample() -> N
     assert 950.0 < imus[-1].abs_pressure < 970.0  # hPa at SIH's 489 m home
 
 
+def test_the_battery_is_px4s_simulated_pack_with_no_current_sensor() -> None:
+    bench = Bench()
+    bench.run(1.0)
+    status = bench.take(mavlink.MAVLINK_MSG_ID_SYS_STATUS)[-1]
+    battery = bench.take(mavlink.MAVLINK_MSG_ID_BATTERY_STATUS)[-1]
+    # Full and at rest: 4 cells at BAT1_V_CHARGED; the current and the charge drawn unknown (-1), as PX4 sends them.
+    assert (status.voltage_battery, status.current_battery, status.battery_remaining) == (16200, -1, 100)
+    assert battery.voltages[:5] == [4050] * 4 + [65535]
+    assert (battery.current_battery, battery.current_consumed, battery.battery_remaining) == (-1, -1, 100)
+    assert battery.charge_state == mavlink.MAV_BATTERY_CHARGE_STATE_OK
+
+
 def test_sim_state_gives_the_truth_and_the_ned_position_about_the_origin() -> None:
     bench = Bench()
     bench.ack(mavlink.MAV_CMD_SET_MESSAGE_INTERVAL, mavlink.MAVLINK_MSG_ID_SIM_STATE, 4000)
