@@ -47,6 +47,7 @@ from stack.cli.common import (
     connect_all,
     fail,
     name_value_placeholders,
+    number,
     print_table,
     to_jsonable,
 )
@@ -105,7 +106,9 @@ def _root(
 @app.command()
 def up(
     profile: str = typer.Argument(DEFAULT_PROFILE, help="Launch profile: a name in launch/ or a path"),
-    duration: float | None = typer.Option(None, "--duration", "-d", help="Stop after this many seconds"),
+    duration: float | None = typer.Option(
+        None, "--duration", "-d", callback=number(0), help="Stop after this many seconds"
+    ),
     speed: str | None = typer.Option(
         None,
         "--speed",

@@ -32,6 +32,7 @@ from stack.cli.common import (
     connect,
     connect_all,
     fail,
+    number,
     wait_until_sent,
 )
 from stack.cli.follow import (
@@ -90,13 +91,16 @@ NO_COMMANDER = "no commander is running (nothing subscribes to vehicle_command)"
 NO_NAVIGATOR = "no answer from the navigator (is flight_mode_manager running?)"
 WATCHED = ("vehicle_status", "vehicle_local_position", "home_position", "mavlink_log")
 
-TimeoutOption = typer.Option(5.0, "--timeout", "-t", help="Seconds to wait for the acknowledgement")
+TimeoutOption = typer.Option(
+    5.0, "--timeout", "-t", callback=number(above=0), help="Seconds to wait for the acknowledgement"
+)
 WaitOption = typer.Option(
     False, "--wait", "-w", help="Follow the action until it completes, printing progress; exit 1 if it fails"
 )
 WaitTimeoutOption = typer.Option(
     None,
     "--wait-timeout",
+    callback=number(above=0),
     help="With --wait: seconds the action may take, simulated in lockstep (default: sized to the action "
     "from its distances and the vehicle's speed parameters)",
     show_default=False,
@@ -290,8 +294,6 @@ def _send(
 ) -> None:
     """Send ``cmd``; with an ``action``, follow it (``limit_s``: the time it may take, else sized to it). With
     ``every``, to every vehicle on the bus at once, each line its vehicle's; the exit code is the worst."""
-    if limit_s is not None:
-        _positive("--wait-timeout", limit_s)
     check_may_command(endpoint)
     if every:
         if vehicle is not None:
@@ -336,12 +338,6 @@ def _finite(name: str, value: float) -> float:
 def _optional(name: str, value: float | None) -> float:
     """A number the user may leave out (NaN to the commander)."""
     return math.nan if value is None else _finite(name, value)
-
-
-def _positive(name: str, value: float) -> float:
-    if not (math.isfinite(value) and value > 0):
-        fail(f"{name} must be a finite number of seconds above 0, got {value:g}; nothing sent", code=2)
-    return value
 
 
 @app.command()
@@ -556,8 +552,6 @@ def mission_(
     endpoint: str | None = EndpointOption,
 ) -> None:
     """Upload a mission (global positions placed about the vehicle's home) and start it."""
-    if wait_timeout is not None:
-        _positive("--wait-timeout", wait_timeout)
     try:
         file = find_mission(file)
     except FileNotFoundError as e:

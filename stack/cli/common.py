@@ -7,7 +7,7 @@ import math
 import os
 import sys
 import time
-from collections.abc import Iterable, Iterator, Sequence
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from contextlib import ExitStack, contextmanager
 from pathlib import Path
 from typing import Any, NoReturn
@@ -44,6 +44,33 @@ def name_value_placeholders(command: Any) -> None:
         name_value_placeholders(sub)
 
 
+def number(
+    low: float | None = None, high: float | None = None, *, above: float | None = None
+) -> Callable[[float | None], float | None]:
+    """An option's check (``callback=``): a finite number, at least ``low`` (or above ``above``) and at most
+    ``high``. Anything else is a usage error naming the option before the command does anything (Click's ranges
+    let NaN and infinity through); an option left out (None) passes."""
+    if high is None:
+        text = f"x>={low:g}" if low is not None else f"x>{above:g}" if above is not None else ""
+    else:
+        floor = f"{low:g}<=" if low is not None else f"{above:g}<" if above is not None else ""
+        text = f"{floor}x<={high:g}"
+
+    def check(value: float | None) -> float | None:
+        if value is None:
+            return None
+        if (
+            not math.isfinite(value)
+            or (low is not None and value < low)
+            or (above is not None and value <= above)
+            or (high is not None and value > high)
+        ):
+            raise typer.BadParameter(f"{value:g} is not a finite number{' in the range ' + text if text else ''}.")
+        return value
+
+    return check
+
+
 VehicleOption = typer.Option(
     None,
     "--vehicle",
@@ -54,6 +81,7 @@ EndpointOption = typer.Option(
     None, "--endpoint", "-e", envvar="STACK_ENDPOINT", help="Zenoh endpoint of the stack (default: from stack up)"
 )
 JsonOption = typer.Option(False, "--json", help="Machine-readable JSON output")
+InstanceOption = typer.Option(0, "--instance", "-i", min=0, help="The topic's instance (PX4's multi-instance index)")
 TransportOption = typer.Option(
     None,
     "--lockstep-transport",
@@ -207,8 +235,10 @@ def check_may_command(endpoint: str | None) -> None:
 
     identity = read_identity(Path(os.environ[KEYSTORE_ENV]).expanduser(), os.environ[IDENTITY_ENV])
     if identity.role not in ("operator", "host"):
-        fail(f"identity {identity.name} is an {identity.role}: it may read the vehicle, not command it; nothing sent",
-             code=2)
+        fail(
+            f"identity {identity.name} is an {identity.role}: it may read the vehicle, not command it; nothing sent",
+            code=2,
+        )
 
 
 def open_bus(bus: BusConfig, tool: str) -> zenoh.Session:

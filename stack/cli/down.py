@@ -17,7 +17,7 @@ from stack.bus.config import BusConfig
 from stack.bus.node import Node
 from stack.bus.query import query_json
 from stack.bus.supervisors import SINGLE_HOST, rosters
-from stack.cli.common import VehicleOption, fail
+from stack.cli.common import VehicleOption, fail, number
 from stack.supervisor import state as run_state
 
 POLL_S = 0.05
@@ -28,7 +28,7 @@ def down(
     host: str | None = typer.Option(
         None, "--host", help="Of a vehicle spread over machines: stop only this host's share (default: every host's)"
     ),
-    timeout: float = typer.Option(30.0, help="Seconds to wait for the stack to stop"),
+    timeout: float = typer.Option(30.0, callback=number(0), help="Seconds to wait for the stack to stop"),
 ) -> None:
     """Stop the running `stack up` stacks, or the flights if none runs, or the one named (its supervisor
     stops the modules in reverse order); a vehicle spread over machines is stopped on every host."""

@@ -15,6 +15,7 @@ from stack.cli.common import (
     check_exposure,
     choose_transport,
     fail,
+    number,
     print_table,
 )
 from stack.cli.observers import add_observers
@@ -45,7 +46,7 @@ def fly(
         False, "--wind", help=f"Fly in {WIND_SPEED:g} m/s wind with gusts; the limits are doubled"
     ),
     wind_speed: float | None = typer.Option(
-        None, "--wind-speed", min=0.0, max=30.0, help="Fly in this wind (m/s) instead of --wind's; implies --wind"
+        None, "--wind-speed", callback=number(0, 30), help="Fly in this wind (m/s) instead of --wind's; implies --wind"
     ),
     transport: str | None = TransportOption,
     host: str | None = typer.Option(

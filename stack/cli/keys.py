@@ -35,7 +35,7 @@ def issue(
     address: list[str] = typer.Option(
         [], "--address", help="A host name or IP address it is reached at (again for more); loopback is always in"
     ),
-    days: int = typer.Option(365, "--days", help="Days it is valid"),
+    days: int = typer.Option(365, "--days", min=1, help="Days it is valid"),
 ) -> None:
     """Issue an identity: identities/NAME.pem and NAME.key (owner-only), signed by the keystore's authority."""
     from stack.security.keystore import KeystoreError, issue_identity

@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING
 
 import typer
 
-from stack.cli.common import JsonOption, command_group, fail, print_table, to_jsonable
+from stack.cli.common import JsonOption, command_group, fail, number, print_table, to_jsonable
 from stack.record.selection import TopicSelection
 from stack.runtime.pacing import Pacer, describe_speed, parse_speed
 
@@ -180,7 +180,10 @@ def replay(
     loop: bool = typer.Option(False, "--loop", help="Start over at the end, until Ctrl-C"),
     topics: list[str] = TopicsOption,
     wait_subscribers: float = typer.Option(
-        1.0, "--wait-subscribers", help="Seconds to wait for a subscriber (stack topic echo, stack plot) first"
+        1.0,
+        "--wait-subscribers",
+        callback=number(0),
+        help="Seconds to wait for a subscriber (stack topic echo, stack plot) first",
     ),
 ) -> None:
     """Republish a recording on a bus of its own, the stack <vehicle>-replay-<pid>, which `stack topic`,

@@ -6,7 +6,7 @@ import json
 
 import typer
 
-from stack.cli.common import JsonOption, command_group, fail
+from stack.cli.common import JsonOption, command_group, fail, number
 
 app = command_group(help="Tools for a MAVLink autopilot (a Pixhawk, a simulated one, any MAVLink system).")
 
@@ -16,7 +16,7 @@ def inspect(
     endpoint: str = typer.Argument(
         ..., help="serial:/dev/ttyACM0:921600, udp:HOST:PORT (listen), udpout:HOST:PORT, tcp:HOST:PORT, tcpin:HOST:PORT"
     ),
-    seconds: float = typer.Option(5.0, "--seconds", "-s", min=0.5, help="How long to listen"),
+    seconds: float = typer.Option(5.0, "--seconds", "-s", callback=number(0.5), help="How long to listen"),
     as_json: bool = JsonOption,
 ) -> None:
     """Connect to an autopilot and print its ids, type, firmware, armed state and mode, message rates and link

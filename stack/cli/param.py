@@ -201,7 +201,9 @@ def reset(
 )
 def save(
     file: Path = typer.Argument(..., help="The .params file to write (QGroundControl's format)"),
-    system_id: int = typer.Option(1, "--system-id", help="Vehicle-Id column: the vehicle's MAVLink system id"),
+    system_id: int = typer.Option(
+        1, "--system-id", min=1, max=255, help="Vehicle-Id column: the vehicle's MAVLink system id"
+    ),
     vehicle: str | None = VehicleOption,
     endpoint: str | None = EndpointOption,
 ) -> None:

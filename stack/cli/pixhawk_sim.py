@@ -7,7 +7,7 @@ from pathlib import Path
 
 import typer
 
-from stack.cli.common import fail
+from stack.cli.common import fail, number
 from stack.mavlink.endpoint import DEFAULT_BAUD
 
 
@@ -34,7 +34,7 @@ def pixhawk_sim(
         help="Serve a UART (--baud) on a pseudo-terminal and symlink this path to it "
         "(the stack opens serial:PATH:BAUD)",
     ),
-    baud: int = typer.Option(DEFAULT_BAUD, "--baud", help="UART baud rate of the pty link (10 bits per byte)"),
+    baud: int = typer.Option(DEFAULT_BAUD, "--baud", min=1, help="UART baud rate of the pty link (10 bits per byte)"),
     vehicle: str = typer.Option("sih_quad", "--vehicle", help="Vehicle model (stack/airframe/vehicles) or a path"),
     system_id: int = typer.Option(1, "--sysid", min=1, max=255, help="MAVLink system id (PX4 MAV_SYS_ID)"),
     component_id: int = typer.Option(1, "--compid", min=1, max=255, help="MAVLink component id (autopilot: 1)"),
@@ -50,13 +50,21 @@ def pixhawk_sim(
     corrupt: float = typer.Option(0.0, "--corrupt", help="Probability per byte of a flipped bit"),
     latency_ms: float = typer.Option(0.0, "--latency-ms", help="Added one-way latency"),
     jitter_ms: float = typer.Option(0.0, "--jitter-ms", help="Latency varies by ± this much (uniform)"),
-    cut_at: float | None = typer.Option(None, "--cut-at", help="Cut the link this many seconds after start"),
-    cut_for: float = typer.Option(2.0, "--cut-for", help="Length of the --cut-at cut [s]"),
-    control_port: int | None = typer.Option(
-        None, "--control-port", help="Serve the JSON control channel on this 127.0.0.1 UDP port (0: any free port)"
+    cut_at: float | None = typer.Option(
+        None, "--cut-at", callback=number(0), help="Cut the link this many seconds after start"
     ),
-    duration: float | None = typer.Option(None, "--duration", help="Stop after this many seconds"),
-    stats_period: float = typer.Option(0.0, "--stats-period", help="Print timing and link stats to stderr every N s"),
+    cut_for: float = typer.Option(2.0, "--cut-for", callback=number(0), help="Length of the --cut-at cut [s]"),
+    control_port: int | None = typer.Option(
+        None,
+        "--control-port",
+        min=0,
+        max=65535,
+        help="Serve the JSON control channel on this 127.0.0.1 UDP port (0: any free port)",
+    ),
+    duration: float | None = typer.Option(None, "--duration", callback=number(0), help="Stop after this many seconds"),
+    stats_period: float = typer.Option(
+        0.0, "--stats-period", callback=number(0), help="Print timing and link stats to stderr every N s"
+    ),
     report: Path | None = typer.Option(None, "--report", help="Write the final report (JSON) here"),
 ) -> None:
     """A simulated PX4 Pixhawk: the stack's simulator with PX4's rate controller and allocator, paced to the wall

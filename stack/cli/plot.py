@@ -18,7 +18,7 @@ import typer
 
 from stack.bus.config import BusConfig
 from stack.bus.supervisors import vehicle_status
-from stack.cli.common import EndpointOption, VehicleOption, fail, find_stack, open_bus, vehicle_on_bus
+from stack.cli.common import EndpointOption, VehicleOption, fail, find_stack, number, open_bus, vehicle_on_bus
 from stack.runtime.spec import ModuleSpec
 from stack.viz.display import DEFAULT_GRPC_PORT, has_display
 
@@ -55,14 +55,26 @@ def _stop_on_signals() -> None:
 def plot(
     web: bool = typer.Option(False, "--web", help="Serve the web viewer (on 127.0.0.1) instead of a native viewer"),
     save: str = typer.Option("", "--save", help="Also write the plots to this .rrd file"),
-    plot_rate: float = typer.Option(50.0, "--plot-rate", help="Most rows per second per topic (0: every message)"),
-    window: float = typer.Option(30.0, "--window", help="Seconds of data the time series show (0: all)"),
+    plot_rate: float = typer.Option(
+        50.0, "--plot-rate", callback=number(0), help="Most rows per second per topic (0: every message)"
+    ),
+    window: float = typer.Option(
+        30.0, "--window", callback=number(0), help="Seconds of data the time series show (0: all)"
+    ),
     bind: str = typer.Option("127.0.0.1", "--bind", help="Address the viewer servers listen on"),
     grpc_port: int | None = typer.Option(
-        None, "--grpc-port", help=f"Viewer data port (0: any free port; default: {DEFAULT_GRPC_PORT}, any with --web)"
+        None,
+        "--grpc-port",
+        min=0,
+        max=65535,
+        help=f"Viewer data port (0: any free port; default: {DEFAULT_GRPC_PORT}, any with --web)",
     ),
-    web_port: int | None = typer.Option(None, "--web-port", help="Web viewer page port (default: any free port)"),
-    duration: float = typer.Option(0.0, "--duration", "-d", help="Seconds of plotting, then stop (0: until Ctrl-C)"),
+    web_port: int | None = typer.Option(
+        None, "--web-port", min=0, max=65535, help="Web viewer page port (default: any free port)"
+    ),
+    duration: float = typer.Option(
+        0.0, "--duration", "-d", callback=number(0), help="Seconds of plotting, then stop (0: until Ctrl-C)"
+    ),
     vehicle: str | None = VehicleOption,
     endpoint: str | None = EndpointOption,
     all_: bool = typer.Option(

@@ -19,7 +19,7 @@ import zenoh
 
 from stack.bus.config import BusConfig, open_router, without_link_options
 from stack.bus.ports import free_port
-from stack.cli.common import InsecureOption, KeystoreOption, check_exposure, fail
+from stack.cli.common import InsecureOption, KeystoreOption, check_exposure, fail, number
 from stack.runtime.stop_event import StopEvent
 from stack.security.denials import Denial, DenialCounts
 from stack.supervisor import state as run_state
@@ -31,7 +31,9 @@ SIGNAL_CHECK_S = 0.2
 def router(
     profile: str = typer.Argument(..., help="Launch profile that spreads the vehicle over [hosts]"),
     host: str = typer.Option(..., "--host", help="The host of the profile this machine is"),
-    duration: float | None = typer.Option(None, "--duration", "-d", help="Stop after this many seconds"),
+    duration: float | None = typer.Option(
+        None, "--duration", "-d", callback=number(0), help="Stop after this many seconds"
+    ),
     insecure: bool = InsecureOption,
     keystore: Path | None = KeystoreOption,
 ) -> None:

@@ -22,12 +22,14 @@ from stack.bus.supervisors import vehicle_status
 from stack.bus.topics import HEADER, Received
 from stack.cli.common import (
     EndpointOption,
+    InstanceOption,
     JsonOption,
     VehicleOption,
     command_group,
     connect,
     fail,
     format_value,
+    number,
     print_table,
     to_jsonable,
     wait_until_sent,
@@ -79,7 +81,7 @@ def _ask_for(node: Node, topics: list[tuple[str, int]]) -> None:
 
 @app.command("list")
 def list_topics(
-    window: float = typer.Option(1.0, help="Seconds to measure rates over"),
+    window: float = typer.Option(1.0, callback=number(above=0), help="Seconds to measure rates over"),
     all_: bool = typer.Option(False, "--all", "-a", help="Also list catalogue topics nobody uses"),
     vehicle: str | None = VehicleOption,
     endpoint: str | None = EndpointOption,
@@ -170,8 +172,8 @@ def _subscribe(node: Node, topic: str, instance: int, capacity: int) -> tuple[ze
 @app.command()
 def echo(
     topic: str,
-    count: int = typer.Option(0, "-n", "--count", help="Print N messages then exit (0: until Ctrl-C)"),
-    instance: int = typer.Option(0, "--instance", "-i"),
+    count: int = typer.Option(0, "-n", "--count", min=0, help="Print N messages then exit (0: until Ctrl-C)"),
+    instance: int = InstanceOption,
     field: list[str] = typer.Option(
         [],
         "--field",
@@ -179,11 +181,15 @@ def echo(
         help="Print only this field; repeat or separate with commas for several; dotted paths and list "
         "indexes reach into nested fields (q.0, items.1.north)",
     ),
-    rate: float = typer.Option(0.0, "--rate", "-r", help="At most this many messages a second, the newest (0: all)"),
-    capacity: int = typer.Option(
-        ECHO_QUEUE, "--queue", help="Messages kept waiting for a slow reader (beyond it the oldest are dropped)"
+    rate: float = typer.Option(
+        0.0, "--rate", "-r", callback=number(0), help="At most this many messages a second, the newest (0: all)"
     ),
-    timeout: float = typer.Option(5.0, help="Give up after this many seconds without a message"),
+    capacity: int = typer.Option(
+        ECHO_QUEUE, "--queue", min=1, help="Messages kept waiting for a slow reader (beyond it the oldest are dropped)"
+    ),
+    timeout: float = typer.Option(
+        5.0, callback=number(above=0), help="Give up after this many seconds without a message"
+    ),
     vehicle: str | None = VehicleOption,
     endpoint: str | None = EndpointOption,
     as_json: bool = JsonOption,
@@ -196,10 +202,6 @@ def echo(
     for path in paths:
         if path.split(".")[0] not in fields:
             fail(f"{msg_type.__name__} has no field '{path.split('.')[0]}' (fields: {', '.join(fields)})")
-    if not math.isfinite(rate) or rate < 0:
-        fail(f"--rate must be a finite number of messages a second ≥ 0, got {rate:g}", code=2)
-    if capacity < 1:
-        fail(f"--queue must be at least 1, got {capacity}", code=2)
     period = 1.0 / rate if rate > 0 else 0.0
     with connect(vehicle, endpoint) as node:
         # With --rate only the newest waiting message matters: the inbox keeps just that one.
@@ -251,9 +253,9 @@ def _print_message(topic: str, instance: int, msg: Message, paths: list[str], as
 @app.command()
 def hz(
     topic: str,
-    window: int = typer.Option(100, help="Number of most recent intervals the statistics use"),
-    duration: float = typer.Option(0.0, help="Stop after this many seconds (0: until Ctrl-C)"),
-    instance: int = typer.Option(0, "--instance", "-i"),
+    window: int = typer.Option(100, min=1, help="Number of most recent intervals the statistics use"),
+    duration: float = typer.Option(0.0, callback=number(0), help="Stop after this many seconds (0: until Ctrl-C)"),
+    instance: int = InstanceOption,
     vehicle: str | None = VehicleOption,
     endpoint: str | None = EndpointOption,
     as_json: bool = JsonOption,
@@ -311,10 +313,12 @@ def _print_rate(topic: str, arrivals: list[float], stamps: list[int], as_json: b
 def pub(
     topic: str,
     values: str = typer.Argument(..., help="Field values as JSON, e.g. '{\"roll\": 0.1}'"),
-    rate: float = typer.Option(0.0, "--rate", "-r", help="Publish repeatedly at this rate [Hz] until Ctrl-C"),
-    count: int = typer.Option(0, "--count", "-n", help="With --rate: stop after N messages"),
-    instance: int = typer.Option(0, "--instance", "-i"),
-    wait: float = typer.Option(1.0, help="Seconds to wait for a subscriber before publishing"),
+    rate: float = typer.Option(
+        0.0, "--rate", "-r", callback=number(0), help="Publish repeatedly at this rate [Hz] until Ctrl-C"
+    ),
+    count: int = typer.Option(0, "--count", "-n", min=0, help="With --rate: stop after N messages"),
+    instance: int = InstanceOption,
+    wait: float = typer.Option(1.0, callback=number(0), help="Seconds to wait for a subscriber before publishing"),
     vehicle: str | None = VehicleOption,
     endpoint: str | None = EndpointOption,
 ) -> None:

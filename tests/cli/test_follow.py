@@ -172,7 +172,19 @@ def test_a_mission_that_fails_or_is_left():
 
 def test_progress_is_printed_when_it_changes_and_now_and_then_when_it_does_not():
     progress = Progress(heartbeat_s=10.0)
-    printed = [t for t, line in ((0, "item 1/8"), (1, "item 1/8"), (2, "item 2/8"), (3, "item 2/8"), (11, "item 2/8"),
-                                 (12, "item 2/8"), (21, "item 2/8"), (22, "item 3/8")) if progress.due(line, t)]
+    printed = [
+        t
+        for t, line in (
+            (0, "item 1/8"),
+            (1, "item 1/8"),
+            (2, "item 2/8"),
+            (3, "item 2/8"),
+            (11, "item 2/8"),
+            (12, "item 2/8"),
+            (21, "item 2/8"),
+            (22, "item 3/8"),
+        )
+        if progress.due(line, t)
+    ]
     assert printed == [0, 2, 12, 22]  # the heartbeat counts from the last line printed
     assert progress.line == "item 3/8"

@@ -58,7 +58,7 @@ def test_echo_rate_prints_at_most_that_many_messages_a_second(stack):
     assert len(stamps) == 4 and all(b - a > 0.25e6 for a, b in itertools.pairwise(stamps))
     bad = stack.cli("topic", "echo", "sensor_gyro", "--rate", "-1")
     assert bad.returncode == 2
-    assert bad.stderr.strip() == "error: --rate must be a finite number of messages a second ≥ 0, got -1"
+    assert "Invalid value for '--rate' / '-r': -1 is not a finite number in the range x>=0." in bad.stderr
 
 
 def test_echo_several_fields(stack):
