@@ -48,6 +48,7 @@ from stack.cli.common import (
     fail,
     name_value_placeholders,
     number,
+    output_file,
     print_table,
     to_jsonable,
 )
@@ -122,8 +123,12 @@ def up(
     quiet: bool = typer.Option(False, "--quiet", "-q", help="Do not echo module logs (they are still written)"),
     plot_: bool = typer.Option(False, "--plot", help="Live Rerun plots (a viewer where a display exists)"),
     web: bool = typer.Option(False, "--web", help="Serve the Rerun web viewer on 127.0.0.1 and print its URL"),
-    save: str | None = typer.Option(None, "--save", help="Write the live plots to this .rrd file"),
-    record: Path | None = typer.Option(None, "--record", help="Record every topic to this MCAP file"),
+    save: str | None = typer.Option(
+        None, "--save", callback=output_file, help="Write the live plots to this .rrd file"
+    ),
+    record: Path | None = typer.Option(
+        None, "--record", callback=output_file, help="Record every topic to this MCAP file"
+    ),
     transport: str | None = TransportOption,
     device: str | None = typer.Option(
         None,

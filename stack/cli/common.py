@@ -71,6 +71,24 @@ def number(
     return check
 
 
+def output_file(value: str | Path | None) -> str | Path | None:
+    """An option's check (``callback=``) for a file the command will write: that it can be written, tried before
+    the command does anything (a flight flown, a stack started), so that a wrong path is not found at the end. A
+    file made by the try is removed; an option left out (None or "") passes."""
+    if not value:
+        return value
+    path = Path(value)
+    existed = path.exists()
+    try:
+        with path.open("ab"):
+            pass
+    except OSError as e:
+        raise typer.BadParameter(f"cannot write {path}: {e.strerror or e}") from None
+    if not existed:
+        path.unlink()
+    return value
+
+
 VehicleOption = typer.Option(
     None,
     "--vehicle",

@@ -16,6 +16,7 @@ from stack.cli.common import (
     choose_transport,
     fail,
     number,
+    output_file,
     print_table,
 )
 from stack.cli.observers import add_observers
@@ -34,14 +35,20 @@ def fly(
         help=f"Launch profile: a name in launch/ or a path (default: the scenario's own, or {DEFAULT_PROFILE})",
     ),
     seed: int | None = typer.Option(None, "--seed", "-s", help="Override the profile's seed"),
-    report: Path | None = typer.Option(None, "--report", "-r", help="Where to write the JSON report"),
+    report: Path | None = typer.Option(
+        None, "--report", "-r", callback=output_file, help="Where to write the JSON report"
+    ),
     list_: bool = typer.Option(False, "--list", help="List the scenarios and exit"),
     log_level: str = typer.Option("INFO", help="Log level of the modules"),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="Only the scenario's progress and the result"),
     plot_: bool = typer.Option(False, "--plot", help="Live Rerun plots of the flight"),
     web: bool = typer.Option(False, "--web", help="Serve the Rerun web viewer on 127.0.0.1 and print its URL"),
-    save: str | None = typer.Option(None, "--save", help="Write the flight's plots to this .rrd file"),
-    record: Path | None = typer.Option(None, "--record", help="Record every topic to this MCAP file"),
+    save: str | None = typer.Option(
+        None, "--save", callback=output_file, help="Write the flight's plots to this .rrd file"
+    ),
+    record: Path | None = typer.Option(
+        None, "--record", callback=output_file, help="Record every topic to this MCAP file"
+    ),
     wind: bool = typer.Option(
         False, "--wind", help=f"Fly in {WIND_SPEED:g} m/s wind with gusts; the limits are doubled"
     ),

@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING
 
 import typer
 
-from stack.cli.common import JsonOption, command_group, fail, number, print_table, to_jsonable
+from stack.cli.common import JsonOption, command_group, fail, number, output_file, print_table, to_jsonable
 from stack.record.selection import TopicSelection
 from stack.runtime.pacing import Pacer, describe_speed, parse_speed
 
@@ -121,7 +121,9 @@ def info(file: Path = FileArgument, as_json: bool = JsonOption) -> None:
 def export(
     file: Path = FileArgument,
     csv_dir: Path | None = typer.Option(None, "--csv", help="Write one CSV per topic instance into this directory"),
-    rrd: Path | None = typer.Option(None, "--rrd", help="Write a Rerun file (.rrd) with the live plots' layout"),
+    rrd: Path | None = typer.Option(
+        None, "--rrd", callback=output_file, help="Write a Rerun file (.rrd) with the live plots' layout"
+    ),
     topics: list[str] = TopicsOption,
 ) -> None:
     """Convert a recording: --csv DIR (one file per topic instance), --rrd OUT.rrd (Rerun). --topics: CSV only."""

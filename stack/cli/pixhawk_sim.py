@@ -7,7 +7,7 @@ from pathlib import Path
 
 import typer
 
-from stack.cli.common import fail, number
+from stack.cli.common import fail, number, output_file
 from stack.mavlink.endpoint import DEFAULT_BAUD
 
 
@@ -65,7 +65,9 @@ def pixhawk_sim(
     stats_period: float = typer.Option(
         0.0, "--stats-period", callback=number(0), help="Print timing and link stats to stderr every N s"
     ),
-    report: Path | None = typer.Option(None, "--report", help="Write the final report (JSON) here"),
+    report: Path | None = typer.Option(
+        None, "--report", callback=output_file, help="Write the final report (JSON) here"
+    ),
 ) -> None:
     """A simulated PX4 Pixhawk: the stack's simulator with PX4's rate controller and allocator, paced to the wall
     clock behind a MAVLink endpoint that behaves as PX4 firmware does (streams, commands, Offboard, failsafes).

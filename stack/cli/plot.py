@@ -18,7 +18,16 @@ import typer
 
 from stack.bus.config import BusConfig
 from stack.bus.supervisors import vehicle_status
-from stack.cli.common import EndpointOption, VehicleOption, fail, find_stack, number, open_bus, vehicle_on_bus
+from stack.cli.common import (
+    EndpointOption,
+    VehicleOption,
+    fail,
+    find_stack,
+    number,
+    open_bus,
+    output_file,
+    vehicle_on_bus,
+)
 from stack.runtime.spec import ModuleSpec
 from stack.viz.display import DEFAULT_GRPC_PORT, has_display
 
@@ -54,7 +63,7 @@ def _stop_on_signals() -> None:
 
 def plot(
     web: bool = typer.Option(False, "--web", help="Serve the web viewer (on 127.0.0.1) instead of a native viewer"),
-    save: str = typer.Option("", "--save", help="Also write the plots to this .rrd file"),
+    save: str = typer.Option("", "--save", callback=output_file, help="Also write the plots to this .rrd file"),
     plot_rate: float = typer.Option(
         50.0, "--plot-rate", callback=number(0), help="Most rows per second per topic (0: every message)"
     ),

@@ -31,6 +31,9 @@ def vehicle_names(profile: Profile, count: int) -> list[str]:
     """The names of a swarm of ``count`` vehicles of ``profile``; a ValueError when the profile names fewer."""
     if count < 1:
         raise ValueError(f"a swarm has at least one vehicle, not {count}")
+    most = int(catalogue.get("MAV_SYS_ID").max)
+    if count > most:
+        raise ValueError(f"a swarm has at most {most} vehicles, each its own MAVLink system (MAV_SYS_ID), not {count}")
     if not profile.swarm_names:
         return [f"v{i}" for i in range(1, count + 1)]
     if len(profile.swarm_names) < count:

@@ -10,6 +10,7 @@ import typer
 from typer.testing import CliRunner
 
 from stack.cli.app import app
+from stack.cli.common import output_file
 
 # Numbers any value of which means something, or which the command checks itself with its own message: seeds,
 # coordinates and angles (cmd goto and takeoff refuse NaN, the commander the rest), the first mission item (the
@@ -112,3 +113,33 @@ def test_a_number_out_of_its_range_is_a_usage_error_naming_the_option(args, opti
     assert result.exit_code == 2, result.output
     assert f"Invalid value for {option}: {value} is not " in result.output, result.output
     assert result.exception is None or isinstance(result.exception, SystemExit)
+
+
+@pytest.mark.parametrize(
+    "args",
+    [
+        ["fly", "takeoff_land", "--report", "{missing}/report.json"],
+        ["fly", "takeoff_land", "--record", "{missing}/flight.mcap"],
+        ["up", "--save", "{dir}"],
+        ["up", "--record", "{missing}/flight.mcap"],
+        ["log", "export", "flight.mcap", "--rrd", "{missing}/flight.rrd"],
+        ["pixhawk-sim", "--report", "{dir}"],
+        ["plot", "--save", "{missing}/plots.rrd"],
+    ],
+)
+def test_a_file_that_cannot_be_written_is_refused_before_anything_starts(tmp_path, args):
+    args = [a.format(missing=tmp_path / "missing", dir=tmp_path) for a in args]
+    result = CliRunner().invoke(app, args)
+    assert result.exit_code == 2, result.output
+    assert "cannot write " in result.output and (
+        "No such file or directory" in result.output or "Is a directory" in result.output
+    ), result.output
+    assert sorted(tmp_path.iterdir()) == []  # nothing made, not even the missing directory
+
+
+def test_trying_a_file_leaves_a_new_one_absent_and_an_old_one_as_it_was(tmp_path):
+    new, old = tmp_path / "new.json", tmp_path / "old.json"
+    old.write_text("kept")
+    assert output_file(new) == new and output_file(str(old)) == str(old)
+    assert not new.exists() and old.read_text() == "kept"
+    assert output_file(None) is None and output_file("") == ""

@@ -52,6 +52,10 @@ def test_a_profile_names_its_vehicles_and_their_spacing(tmp_path):
     assert profile.swarm_spacing_m == 12.0
     with pytest.raises(ValueError, match=r"\[swarm\] names 2 vehicles, not 3"):
         vehicle_names(profile, 3)
+    # Each vehicle is a MAVLink system of its own: MAV_SYS_ID 1…250, as PX4's parameter allows.
+    assert len(vehicle_names(load_profile("sitl_quad"), 250)) == 250
+    with pytest.raises(ValueError, match=r"at most 250 vehicles, each its own MAVLink system \(MAV_SYS_ID\), not 251"):
+        vehicle_names(load_profile("sitl_quad"), 251)
 
 
 @pytest.mark.parametrize(
