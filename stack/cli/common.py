@@ -6,6 +6,7 @@ import json
 import math
 import os
 import sys
+import tempfile
 import time
 from collections.abc import Callable, Iterable, Iterator, Sequence
 from contextlib import ExitStack, contextmanager
@@ -86,6 +87,23 @@ def output_file(value: str | Path | None) -> str | Path | None:
         raise typer.BadParameter(f"cannot write {path}: {e.strerror or e}") from None
     if not existed:
         path.unlink()
+    return value
+
+
+def output_directory(value: Path | None) -> Path | None:
+    """An option's check (``callback=``) for a directory the command will write files into, made if missing:
+    that it can be, tried (a file made and removed in it, or in the nearest directory above it that exists)
+    before the command does anything."""
+    if value is None:
+        return None
+    existing = next((p for p in (value, *value.absolute().parents) if p.exists()), Path("/"))
+    if existing == value and not value.is_dir():
+        raise typer.BadParameter(f"{value} is not a directory")
+    try:
+        with tempfile.TemporaryFile(dir=existing):
+            pass
+    except OSError as e:
+        raise typer.BadParameter(f"cannot write in {existing}: {e.strerror or e}") from None
     return value
 
 

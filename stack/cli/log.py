@@ -17,7 +17,16 @@ from typing import TYPE_CHECKING
 
 import typer
 
-from stack.cli.common import JsonOption, command_group, fail, number, output_file, print_table, to_jsonable
+from stack.cli.common import (
+    JsonOption,
+    command_group,
+    fail,
+    number,
+    output_directory,
+    output_file,
+    print_table,
+    to_jsonable,
+)
 from stack.record.selection import TopicSelection
 from stack.runtime.pacing import Pacer, describe_speed, parse_speed
 
@@ -120,7 +129,9 @@ def info(file: Path = FileArgument, as_json: bool = JsonOption) -> None:
 @app.command()
 def export(
     file: Path = FileArgument,
-    csv_dir: Path | None = typer.Option(None, "--csv", help="Write one CSV per topic instance into this directory"),
+    csv_dir: Path | None = typer.Option(
+        None, "--csv", callback=output_directory, help="Write one CSV per topic instance into this directory"
+    ),
     rrd: Path | None = typer.Option(
         None, "--rrd", callback=output_file, help="Write a Rerun file (.rrd) with the live plots' layout"
     ),

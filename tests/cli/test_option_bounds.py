@@ -10,7 +10,7 @@ import typer
 from typer.testing import CliRunner
 
 from stack.cli.app import app
-from stack.cli.common import output_file
+from stack.cli.common import output_directory, output_file
 
 # Numbers any value of which means something, or which the command checks itself with its own message: seeds,
 # coordinates and angles (cmd goto and takeoff refuse NaN, the commander the rest), the first mission item (the
@@ -143,3 +143,13 @@ def test_trying_a_file_leaves_a_new_one_absent_and_an_old_one_as_it_was(tmp_path
     assert output_file(new) == new and output_file(str(old)) == str(old)
     assert not new.exists() and old.read_text() == "kept"
     assert output_file(None) is None and output_file("") == ""
+
+
+def test_a_directory_that_cannot_be_written_in_is_refused_before_anything_starts(tmp_path):
+    afile = tmp_path / "flight.mcap"
+    afile.write_bytes(b"")
+    for csv, why in ((afile, f"{afile} is not a directory"), (afile / "out", f"cannot write in {afile}: ")):
+        result = CliRunner().invoke(app, ["log", "export", str(afile), "--csv", str(csv)])
+        assert result.exit_code == 2 and f"Invalid value for '--csv': {why}" in result.output, result.output
+    assert output_directory(tmp_path / "new" / "deeper") == tmp_path / "new" / "deeper"
+    assert sorted(tmp_path.iterdir()) == [afile]  # the check makes nothing: the export makes the directory
