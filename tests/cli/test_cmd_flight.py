@@ -14,9 +14,7 @@ pytestmark = pytest.mark.flight
 @pytest.fixture(scope="module")
 def stack(tmp_path_factory):
     # The link-loss test stands in for a ground station's heartbeat on telemetry_status, the MAVLink link's topic.
-    # Simulated time runs at four times the wall clock: the same flights (--wait's limits are simulated time), sooner.
-    home = tmp_path_factory.mktemp("cmd_flight") / "home"
-    yield from default_stack(home, open_topics=("telemetry_status",), speed=4)
+    yield from default_stack(tmp_path_factory.mktemp("cmd_flight") / "home", open_topics=("telemetry_status",))
 
 
 def local_position(stack) -> dict:

@@ -243,15 +243,15 @@ def takeoff_when_ready(stack: RunningStack, *args: str) -> subprocess.CompletedP
         time.sleep(1.0)
 
 
-def default_stack(home: Path, open_topics: tuple[str, ...] = (), speed: int = 1) -> Iterator[RunningStack]:
+def default_stack(home: Path, open_topics: tuple[str, ...] = ()) -> Iterator[RunningStack]:
     """`stack up` of the default profile for a module-scoped fixture: yields it running, then stops it
     and checks it stopped cleanly and left no process behind. ``open_topics``: topics the test publishes
-    by hand although a module owns them (the profile's ``[stack] open_topics``); ``speed``: `stack up --speed`."""
+    by hand although a module owns them (the profile's ``[stack] open_topics``)."""
     profile = launch_profile(home.parent / "profile")
     if open_topics:
         text = profile.read_text().replace("[stack]\n", f"[stack]\nopen_topics = {json.dumps(list(open_topics))}\n", 1)
         profile.write_text(text)
-    running = RunningStack(home, profile, "--quiet", "--speed", str(speed))
+    running = RunningStack(home, profile, "--quiet")
     running.wait_up()
     yield running
     assert running.stop() == 0
