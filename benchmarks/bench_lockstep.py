@@ -389,7 +389,7 @@ def main() -> None:
     for kind, target in TARGETS.items():
         print(f"  {kind:<9} real-time factor {means[kind]:5.2f} >= {target:g}: {verdict(means[kind], target)}")
     ratio = ratios["fast"]
-    print(f"  ratio to the ceiling     {ratio:5.2f} >= {RATIO_TARGET:g}: {verdict(ratio, RATIO_TARGET)}")
+    print(f"  ratio to the ceiling     {ratio:5.3f} >= {RATIO_TARGET:g}: {verdict(ratio, RATIO_TARGET)}")
 
 
 WAKE_ECHO = """
