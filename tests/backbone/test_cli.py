@@ -52,7 +52,7 @@ def test_topic_echo_prints_n_messages(stack):
 
 
 def test_topic_hz_measures_rate(stack):
-    out = stack.cli("topic", "hz", "sensor_gyro", "--duration", "2.5", "--json")
+    out = stack.cli("topic", "hz", "sensor_gyro", "--duration", "3.5", "--json")
     assert out.returncode == 0, out.stderr
     reports = [json.loads(line) for line in out.stdout.splitlines()]
     assert len(reports) >= 2
