@@ -19,7 +19,7 @@ from stack.cli.common import (
     fail,
     print_table,
 )
-from stack.params import client, qgc_file
+from stack.params import catalogue, client, qgc_file
 from stack.params.param import Param, ParamError, ParamValue
 
 app = command_group(
@@ -27,6 +27,8 @@ app = command_group(
     "a set reaches every module that reads it, or none.",
     no_args_is_help=True,
 )
+
+SYSTEM_ID = "MAV_SYS_ID"
 
 
 def _n(value: object) -> str:
@@ -132,6 +134,12 @@ def get(
     typer.echo("  " + "; ".join(facts))
 
 
+def _system_id(listed: list[client.StackParam]) -> int:
+    """The vehicle's MAVLink system id: its modules' MAV_SYS_ID, or the parameter's default if none reads it."""
+    found = next((p for p in listed if p.name == SYSTEM_ID), None)
+    return int(found.value if found is not None else catalogue.get(SYSTEM_ID).default)
+
+
 def _report_set(result: client.SetResult, p: Param) -> None:
     by_old: dict[ParamValue, list[str]] = defaultdict(list)
     for owner, old in result.old.items():
@@ -201,8 +209,8 @@ def reset(
 )
 def save(
     file: Path = typer.Argument(..., help="The .params file to write (QGroundControl's format)"),
-    system_id: int = typer.Option(
-        1, "--system-id", min=1, max=255, help="Vehicle-Id column: the vehicle's MAVLink system id"
+    system_id: int | None = typer.Option(
+        None, "--system-id", min=1, max=255, help="Vehicle-Id column (default: the vehicle's MAV_SYS_ID)"
     ),
     vehicle: str | None = VehicleOption,
     endpoint: str | None = EndpointOption,
@@ -210,6 +218,8 @@ def save(
     with connect(vehicle, endpoint) as node:
         params = client.list_params(node.session, node.vehicle)
         name = node.vehicle
+    if system_id is None:
+        system_id = _system_id(params)
     for p in params:
         if not p.consistent:
             typer.echo(f"warning: {p.name} differs between modules ({_values(p)}); saving {p.value}", err=True)
@@ -237,7 +247,10 @@ def load(
         fail(f"cannot read {file}: {getattr(e, 'strerror', None) or e}")
     check_may_command(endpoint)
     with connect(vehicle, endpoint) as node:
-        params = {p.name: p.param for p in client.list_params(node.session, node.vehicle)}
+        listed = client.list_params(node.session, node.vehicle)
+        if (why := qgc_file.other_vehicle(entries, _system_id(listed))) is not None:
+            fail(f"{file}: {why}; nothing set (save the file from this vehicle, or change its Vehicle-Id column)")
+        params = {p.name: p.param for p in listed}
         report = client.set_many(node.session, node.vehicle, ((e.name, e.value, e.mav_type) for e in entries))
     for result in report.changed:
         _report_set(result, params[result.name])

@@ -39,12 +39,14 @@ _NAME = re.compile(r"[A-Za-z0-9_]{1,16}")
 
 
 class Entry(NamedTuple):
-    """One parameter line: the name, the value as its type says, and the MAV_PARAM_TYPE."""
+    """One parameter line: the name, the value as its type says, the MAV_PARAM_TYPE, and the vehicle's MAVLink
+    system id (the Vehicle-Id column)."""
 
     line: int
     name: str
     value: int | float
     mav_type: int
+    system_id: int = 1
 
 
 def format_file(
@@ -99,9 +101,19 @@ def _parse_line(number: int, line: str) -> Entry:
     except ValueError:
         kind = "an integer" if mav_type in _INTEGER_TYPES else "a number"
         raise ValueError(f"{name}: value {value!r} is not {kind} ({MAV_PARAM_TYPE_NAMES[mav_type]})") from None
-    return Entry(number, name, number_value, mav_type)
+    return Entry(number, name, number_value, mav_type, int(vehicle_id))
+
+
+def other_vehicle(entries: Iterable[Entry], system_id: int) -> str | None:
+    """Why the file is not this vehicle's (MAVLink system ``system_id``), or None. As QGroundControl refuses a file
+    saved from another system id (``ParameterManager::readParametersFromStream``), before setting anything: in a
+    swarm, another vehicle's file would also set this one's MAV_SYS_ID to the other's."""
+    others = sorted({e.system_id for e in entries} - {system_id})
+    if not others:
+        return None
+    saved = ", ".join(str(i) for i in others)
+    return f"the parameters were saved from system id {saved}, but this vehicle's is {system_id} (MAV_SYS_ID)"
 
 
 def type_name(mav_type: int) -> str:
     return MAV_PARAM_TYPE_NAMES.get(mav_type, str(mav_type))
-

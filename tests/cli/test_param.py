@@ -123,6 +123,19 @@ def test_save_then_change_then_load_restores(stack, tmp_path):
     assert {n: p["module_values"] for n, p in after.items()} == {n: p["module_values"] for n, p in before.items()}
 
 
+def test_a_file_saved_from_another_vehicle_sets_nothing(stack, tmp_path):
+    # As QGroundControl refuses it: in a swarm, vehicle 2's file would give this one MAV_SYS_ID 2.
+    other = tmp_path / "v2.params"
+    other.write_text("2\t1\tMAV_SYS_ID\t2\t6\n2\t1\tNAV_DLL_ACT\t3\t6\n")
+    out = stack.cli("param", "load", str(other))
+    assert out.returncode == 1 and out.stdout == ""
+    assert out.stderr.strip() == (
+        f"error: {other}: the parameters were saved from system id 2, but this vehicle's is 1 (MAV_SYS_ID); nothing "
+        "set (save the file from this vehicle, or change its Vehicle-Id column)"
+    )
+    assert module_values(stack, "NAV_DLL_ACT") == {"commander": 2}
+
+
 def test_load_reports_every_bad_line_and_applies_the_others(stack, tmp_path):
     bad = tmp_path / "bad.params"
     bad.write_text(

@@ -1,7 +1,7 @@
 """QGroundControl's .params files: what `stack param save` writes loads back exactly; bad lines are reported."""
 
 from stack.params.catalogue import CATALOGUE
-from stack.params.qgc_file import Entry, format_file, parse_file
+from stack.params.qgc_file import Entry, format_file, other_vehicle, parse_file
 
 
 def test_a_saved_file_loads_back_exactly():
@@ -57,3 +57,14 @@ def test_lines_that_are_not_parameters_are_reported_with_their_number_and_the_re
     assert "type 11 is not a MAV_PARAM_TYPE" in problems[4]
     assert "'2.5' is not an integer (INT32)" in problems[5]
     assert "'fast' is not a number (REAL32)" in problems[6]
+
+
+def test_a_file_of_another_vehicle_is_named_as_such():
+    text = format_file([("NAV_DLL_ACT", 2, 6), ("MAV_SYS_ID", 1, 6)], "v1", system_id=1)
+    entries, _ = parse_file(text)
+    assert [e.system_id for e in entries] == [1, 1] and other_vehicle(entries, 1) is None
+    assert other_vehicle(entries, 2) == (
+        "the parameters were saved from system id 1, but this vehicle's is 2 (MAV_SYS_ID)"
+    )
+    mixed, _ = parse_file(text + "3\t1\tNAV_DLL_ACT\t3\t6\n")
+    assert other_vehicle(mixed, 1) == "the parameters were saved from system id 3, but this vehicle's is 1 (MAV_SYS_ID)"
