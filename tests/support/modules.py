@@ -20,6 +20,7 @@ from stack.msg.setpoints import VehicleRatesSetpoint, VehicleTorqueSetpoint
 from stack.msg.system import VehicleCommand, VehicleCommandAck
 from stack.params.param import Param
 from stack.runtime.module import Arg, Module, Timer, Trigger
+from stack.runtime.priority import PLANT
 
 log = logging.getLogger("tests.support.modules")
 
@@ -30,6 +31,8 @@ class TickSource(Module):
     NAME = "tick_source"
     PUBLISHES = (ORB_ID.sensor_gyro,)
     LOCKSTEP_COORDINATOR = True
+    # It stands for the simulator, and on the wall clock keeps its rate as the simulator does beside a busy machine.
+    WORK_QUEUE = PLANT
     ARGS = (Arg("rate_hz", 250.0), Arg("trace", ""), Arg("crash_at_step", 0), Arg("steps", 0))
     PARAMS = (Param("TEST_GAIN", 1.0, -10.0, 10.0, doc="Scale of the generated signal"),)
 
