@@ -3,9 +3,10 @@
 Every module in the chain publishes an output each control cycle while its loop runs, so that output is its
 heartbeat at the control rate: a module whose output stopped for SILENCE_US while the loop should run is
 *silent* (measured against the chain's newest output, so that a simulator or bus that pauses the whole chain
-silences no module); one whose process is gone (its liveliness token withdrawn, see the commander's glue) is
-*dead*, known at once. PX4 runs these loops in one process and has no such failure; its matching actions are
-those of the estimate and control failures (``src/modules/commander/failsafe/failsafe.cpp``):
+silences no module, and from the chain's resumption after such a pause: its outputs then come back in the chain's
+order, the rate loop's before the attitude loop's); one whose process is gone (its liveliness token withdrawn, see
+the commander's glue) is *dead*, known at once. PX4 runs these loops in one process and has no such failure; its
+matching actions are those of the estimate and control failures (``src/modules/commander/failsafe/failsafe.cpp``):
 
 * losing an attitude estimate, attitude, rate control or the allocator is a loss of **attitude control**:
   flight termination in the air, disarm on the ground;
@@ -56,6 +57,12 @@ STALE_US = 30_000
 """An output older than this (more than the slowest loop's period, 20 ms) is late: the commander then sends its
 state at once and on every cycle, so that a module restarted after a crash, which knows nothing yet, learns the
 control mode and the land state long before it would count as silent."""
+
+
+PAUSE_US = 100_000
+"""No output of the chain for this long is a pause of the whole chain (a stalled bus or machine, in real time): each
+module then gets the silence limit to speak again from the first output after it. In lockstep the chain never
+pauses in simulated time."""
 
 
 CONTROL_PERIOD_US = 20_000
@@ -175,6 +182,10 @@ class ControlChainMonitor:
         self.silence_us = silence_us
         self._seen: dict[Topic, int] = {}
         """Each output's last arrival on the commander's clock (outputs never seen are absent)."""
+        self._heard_us: int | None = None
+        """The last arrival of any output."""
+        self._resumed_us = 0
+        """The first arrival after the chain's last pause."""
         self._watch_since: dict[str, int] = {}
         """When each watched module's watch began."""
         self._dead: set[str] = set()
@@ -198,6 +209,9 @@ class ControlChainMonitor:
         self._watch_since.clear()
 
     def output_seen(self, topic: Topic, now_us: int) -> None:
+        if self._heard_us is not None and now_us - self._heard_us > PAUSE_US:
+            self._resumed_us = now_us
+        self._heard_us = now_us
         self._seen[topic] = now_us
 
     def module_died(self, module: str) -> None:
@@ -224,7 +238,7 @@ class ControlChainMonitor:
                 self._watch_since.pop(link.module, None)
                 continue
             since = self._watch_since.setdefault(link.module, now_us)
-            watched.append((link, max(self._seen[link.output], since)))
+            watched.append((link, max(self._seen[link.output], since, self._resumed_us)))
         newest = max((heard for _, heard in watched), default=now_us)
         for link, heard in watched:
             stretch = max(link.period_us / CONTROL_PERIOD_US, 1.0)

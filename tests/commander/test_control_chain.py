@@ -3,7 +3,16 @@
 import pytest
 
 from stack.commander import commands as C
-from stack.commander.control_chain import CHAIN, OUTPUTS, SILENCE_US, STALE_US, ControlChainMonitor, Loss
+from stack.commander.control_chain import (
+    CHAIN,
+    OUTPUTS,
+    PAUSE_US,
+    REALTIME_SILENCE_US,
+    SILENCE_US,
+    STALE_US,
+    ControlChainMonitor,
+    Loss,
+)
 from stack.commander.land_detector import MulticopterLandDetector
 from stack.commander.modes import control_mode
 from stack.commander.state_machine import Commander
@@ -17,6 +26,13 @@ HOLD = control_mode(NS.NAVIGATION_STATE_AUTO_LOITER, True)
 def _all_seen(monitor: ControlChainMonitor, t: int) -> None:
     for topic in OUTPUTS:
         monitor.output_seen(topic, t)
+
+
+def _going_on(monitor: ControlChainMonitor, topics: tuple, start: int, end: int) -> None:
+    """``topics`` arriving every 10 ms from ``start`` to ``end``: the chain never pauses."""
+    for t in range(start, end + 1, 10_000):
+        for topic in topics:
+            monitor.output_seen(topic, t)
 
 
 def test_a_module_is_silent_once_its_output_is_older_than_the_silence_limit():
@@ -67,6 +83,35 @@ def test_a_pause_of_the_whole_chain_silences_no_module():
     assert monitor.update(10 * SILENCE_US, True, HOLD) == [] and monitor.late
 
 
+def test_after_a_pause_of_the_whole_chain_each_module_gets_the_silence_limit_to_speak_again():
+    """In real time a stalled bus delivers nothing for a while, then the chain's outputs come back in its order: the
+    rate loop's (on the estimator's first angular velocity) before the attitude loop's, which waits for the CPU."""
+    monitor = ControlChainMonitor(silence_us=REALTIME_SILENCE_US)
+    _all_seen(monitor, 0)
+    assert monitor.update(0, True, HOLD) == []
+    back = REALTIME_SILENCE_US + 100_000
+    first = (ORB_ID.vehicle_attitude, ORB_ID.vehicle_local_position, ORB_ID.vehicle_torque_setpoint)
+    for topic in (*first, ORB_ID.actuator_motors):
+        monitor.output_seen(topic, back)
+    assert monitor.update(back, True, HOLD) == []
+    others = (*first, ORB_ID.actuator_motors, ORB_ID.trajectory_setpoint, ORB_ID.vehicle_attitude_setpoint)
+    end = back + REALTIME_SILENCE_US + 10_000
+    _going_on(monitor, others, back, end)  # then mc_att_control stays silent
+    faults = monitor.update(end, True, HOLD)
+    assert [f.describe() for f in faults] == ["mc_att_control silent: attitude control lost"]
+
+
+def test_a_gap_shorter_than_a_pause_keeps_counting_a_silent_module():
+    monitor = ControlChainMonitor()
+    _all_seen(monitor, 0)
+    monitor.update(0, True, HOLD)
+    t = PAUSE_US  # every output a pause long but mc_rate_control's came back; its stays away
+    for topic in OUTPUTS:
+        if topic != ORB_ID.vehicle_torque_setpoint:
+            monitor.output_seen(topic, t)
+    assert [f.module for f in monitor.update(t, True, HOLD)] == ["mc_rate_control"]
+
+
 def test_a_loop_switched_on_gets_the_silence_limit_to_speak():
     monitor = ControlChainMonitor()
     _all_seen(monitor, 0)
@@ -100,7 +145,7 @@ def test_offboard_watches_only_the_estimators_rate_control_and_allocation():
     offboard.flag_control_attitude_enabled = offboard.flag_multicopter_position_control_enabled = True
     _all_seen(monitor, 0)
     monitor.update(0, True, offboard)
-    monitor.output_seen(ORB_ID.vehicle_attitude, 10 * SILENCE_US)
+    _going_on(monitor, (ORB_ID.vehicle_attitude,), 0, 10 * SILENCE_US)
     modules = {f.module for f in monitor.update(10 * SILENCE_US, True, offboard)}
     assert modules == {"local_position_estimator", "mc_rate_control", "control_allocator"}
 

@@ -22,9 +22,11 @@ def _monitor() -> ControlChainMonitor:
 
 
 def _faults(monitor: ControlChainMonitor, now: int, silent: str, mode=HOLD) -> list[tuple[str, Loss]]:
-    for link in FW_CHAIN:
-        if link.module != silent:
-            monitor.output_seen(link.output, now)
+    """The faults at ``now``, every output but ``silent``'s arriving every 10 ms until then."""
+    for t in (*range(0, now, 10_000), now):
+        for link in FW_CHAIN:
+            if link.module != silent:
+                monitor.output_seen(link.output, t)
     return [(f.module, f.loss) for f in monitor.update(now, True, mode)]
 
 
@@ -71,7 +73,8 @@ def test_which_modules_each_mode_watches(nav_state, watched):
         monitor.output_seen(link.output, 0)
     monitor.update(0, True, mode)
     late = 10 * 450_000
-    monitor.output_seen(ORB_ID.vehicle_attitude, late)  # the attitude estimator alone goes on: every other is silent
+    for t in range(0, late + 1, 10_000):  # the attitude estimator alone goes on: every other is silent
+        monitor.output_seen(ORB_ID.vehicle_attitude, t)
     assert {f.module for f in monitor.update(late, True, mode)} == (watched | always) - {"attitude_estimator_q"}
 
 
