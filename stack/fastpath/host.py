@@ -45,6 +45,9 @@ class FastPathHost:
         self._subscribers: dict[str, set[str]] = {}  # topic suffix → modules subscribing, from the graph
         self._lock = threading.Lock()
         self._flags_lock = threading.Lock()
+        self._closed = False
+        """Set under ``_flags_lock`` before the region is closed: a graph change Zenoh's thread delivers while the
+        host closes (undeclaring the subscriber does not wait for a callback already running) flags nothing."""
         self._graph: zenoh.Subscriber | None = None
 
     def pass_fds(self) -> tuple[int, ...]:
@@ -106,6 +109,8 @@ class FastPathHost:
         outside = set(self.outside_topics()) - relayed
         region, w = self.region, self.region.words
         with self._flags_lock:
+            if self._closed:
+                return
             for slot in range(region.slots):
                 for j in range(int(w[region.slot_word(slot, S_NPUBS)])):
                     flag = int(region.read_text(region.pub_word(slot, j, P_NAME)) in outside)
@@ -116,6 +121,8 @@ class FastPathHost:
     def close(self) -> None:
         if self._graph is not None:
             self._graph.undeclare()
+        with self._flags_lock:
+            self._closed = True
         self.region.close()
         os.close(self.region.fd)
         for fd in self.eventfds:

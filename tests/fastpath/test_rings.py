@@ -132,3 +132,12 @@ def test_the_members_of_a_lost_host_are_away_until_it_is_back(host):
     assert (away("sim"), away("est"), away("rec")) == (0, 1, 0)
     host.host_away(("est",), False)
     assert away("est") == 0
+
+
+def test_a_graph_change_delivered_while_the_host_closes_flags_nothing():
+    """Zenoh's thread may deliver a withdrawn subscriber (a module stopping) after the graph subscriber was undeclared
+    and while the region closes; it raised on the released memory and printed a traceback at every ``stack down``."""
+    h = FastPathHost(["sim", "est"], run_id=78)
+    Attachment(h.region, "sim", publisher_id=11).publication("sensor_gyro/0", 0, 64)
+    h.close()
+    h.update_outside()
