@@ -37,7 +37,7 @@ allocator are watched there.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Collection
 from dataclasses import dataclass
 from enum import IntEnum
 
@@ -213,6 +213,11 @@ class ControlChainMonitor:
             self._resumed_us = now_us
         self._heard_us = now_us
         self._seen[topic] = now_us
+
+    def last_output_us(self, modules: Collection[str]) -> int | None:
+        """The last arrival of an output of the chain's ``modules`` (None: none seen yet)."""
+        outputs = {link.output for link in self._chain if link.module in modules}
+        return max((t for topic, t in self._seen.items() if topic in outputs), default=None)
 
     def module_died(self, module: str) -> None:
         self._running.add(module)

@@ -14,6 +14,12 @@ Pixhawk. The commander acts as the surviving side of that pair:
   the host, and the plant's side flies the vehicle on its own (the simulator and a Pixhawk land on Offboard loss).
   Flight termination on what a lost host took away would cut the motors the moment the host returns; PX4 likewise
   terminates only on a failure of its own board;
+* a flight host that still beats but from which no output of the control chain has arrived for LATE_US (its link
+  stalled: its router's messages held up behind others while its own beats pass) holds the checks too, as a late
+  host does, for at most CONVERGE_LIMIT_US after its last output: the commander cannot tell its estimates' silence
+  from the link's, and a termination on it would cut the motors of a vehicle whose estimators fly on the other
+  side (if they truly hung, the rate loop starves of them, the motor commands stop and the plant's own failsafe
+  lands);
 * a module of another flight host whose liveliness ends may have gone with its whole host: a killed host's links
   close at once, before its beats are late. The checks are held DEATH_GRACE_US, until its host would be late;
   if the host still beats, the module alone died and the chain check acts on it then;
@@ -54,6 +60,12 @@ class HostLoss:
         self._flight_hosts = frozenset(
             h for h, modules in self.watch.placement.items() if any(m not in outside for m in modules)
         )
+        self.remote_flight_hosts: dict[str, frozenset[str]] = {
+            h: frozenset(modules) - frozenset(outside)
+            for h, modules in self.watch.placement.items()
+            if h != own and h in self._flight_hosts
+        }
+        """The other hosts carrying flight modules, with those modules."""
         self.lost: list[str] = []
         """The lost hosts, in the profile's order."""
         self._held_until_us = 0
@@ -67,10 +79,15 @@ class HostLoss:
         if module in self._remote_flight_modules:
             self._held_until_us = max(self._held_until_us, now_us + DEATH_GRACE_US)
 
-    def update(self, now_us: int) -> list[str]:
-        """The events of this cycle (hosts lost and back)."""
+    def update(self, now_us: int, outputs_heard_us: Mapping[str, int | None] | None = None) -> list[str]:
+        """The events of this cycle (hosts lost and back). ``outputs_heard_us``: for each of
+        :attr:`remote_flight_hosts`, the last arrival of an output of its modules (None: none yet)."""
         events = [change.describe() for change in self.watch.update(now_us)]
         self.lost = self.watch.lost
+        for heard in (outputs_heard_us or {}).values():
+            if heard is not None and LATE_US < now_us - heard < CONVERGE_LIMIT_US:
+                held = min(now_us + RETURN_GRACE_US, heard + CONVERGE_LIMIT_US)
+                self._held_until_us = max(self._held_until_us, held)
         if any(h in self._flight_hosts for h in self.watch.late(now_us)):
             self._held_until_us = now_us + RETURN_GRACE_US
             self._converging_until_us = now_us + CONVERGE_LIMIT_US

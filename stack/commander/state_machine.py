@@ -146,6 +146,7 @@ EXTERNAL_LINK_GRACE_US = 1_500_000
 """After the external autopilot's link comes back, its sensors have this long to make the estimates valid."""
 _POSITION_AND_ALTITUDE = int(Requirement.LOCAL_POSITION | Requirement.LOCAL_ALT)
 
+
 class CommanderParams(ParamSet):
     """What the state machine reads itself (the health checks' among them), and its failsafe's and geofence's."""
 
@@ -181,6 +182,7 @@ OWN_STALL_US = 250_000
 been reading its inputs either: what they tell is not judged until it has caught up."""
 CATCH_UP_US = 300_000
 """How long after such a stall the commander takes its inputs' age and the chain's silence as its own."""
+
 
 class ArmDisarmReason(IntEnum):
     """``vehicle_status.latest_arming_reason`` / ``latest_disarming_reason`` (PX4 ``arm_disarm_reason_t``)."""
@@ -464,7 +466,8 @@ class Commander:
         self._update_manual_control(now_us)
         hosts_held = False
         if self.hosts is not None:
-            self._events.extend(self.hosts.update(now_us))
+            heard = {h: self.chain.last_output_us(modules) for h, modules in self.hosts.remote_flight_hosts.items()}
+            self._events.extend(self.hosts.update(now_us, heard))
             hosts_held = armed and self.hosts.holding(now_us, estimates_valid=not self._failing & _ESTIMATES)
         if self._p.com_ext_ap:
             self._follow_external_autopilot(now_us)

@@ -197,6 +197,31 @@ def test_a_host_late_for_less_than_the_lease_is_no_failsafe():
     assert not [e for e in vehicle.clock.events if "host" in e.lower()]
 
 
+def test_a_stalled_link_from_a_host_that_still_beats_holds_the_checks_and_never_terminates():
+    """Its estimates and outputs stop arriving for 1.5 s while its beats pass (a router's messages held up behind
+    others): the estimates would time out after 1 s and terminate. They come back, and the vehicle holds on."""
+    vehicle = SplitVehicle()
+    vehicle.lose("sim")
+    vehicle.beating.add("sim")
+    for _ in range(150):
+        vehicle.step()
+        assert vehicle.status.nav_state == NS.NAVIGATION_STATE_AUTO_LOITER
+    vehicle.regain("sim")
+    vehicle.step(RETURN_GRACE_US / 1e6 + 1.0)
+    assert vehicle.status.nav_state == NS.NAVIGATION_STATE_AUTO_LOITER
+    assert not [e for e in vehicle.clock.events if "Failsafe" in e or "host" in e.lower()]
+
+
+def test_outputs_missing_from_a_host_that_still_beats_are_acted_on_once_they_could_have_converged():
+    vehicle = SplitVehicle()
+    vehicle.lose("sim")
+    vehicle.beating.add("sim")
+    vehicle.step(CONVERGE_LIMIT_US / 1e6 - 1.0)
+    assert vehicle.status.nav_state == NS.NAVIGATION_STATE_AUTO_LOITER
+    vehicle.step(2.0)
+    assert vehicle.status.nav_state == NS.NAVIGATION_STATE_TERMINATION  # its estimators hung: PX4's answer
+
+
 def test_losing_the_ground_host_only_names_it():
     vehicle = SplitVehicle()
     vehicle.lose("ground")
