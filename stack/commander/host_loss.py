@@ -54,18 +54,13 @@ class HostLoss:
         self, placement: Mapping[str, Sequence[str]], own: str, lease_ms: int, outside: Collection[str]
     ) -> None:
         self.watch = HostWatch(placement, own, lease_ms)
-        self._remote_flight_modules = frozenset(
-            m for h, modules in self.watch.placement.items() if h != own for m in modules if m not in outside
-        )
-        self._flight_hosts = frozenset(
-            h for h, modules in self.watch.placement.items() if any(m not in outside for m in modules)
-        )
+        flight = {h: frozenset(modules) - frozenset(outside) for h, modules in self.watch.placement.items()}
+        self._flight_hosts = frozenset(h for h, modules in flight.items() if modules)
         self.remote_flight_hosts: dict[str, frozenset[str]] = {
-            h: frozenset(modules) - frozenset(outside)
-            for h, modules in self.watch.placement.items()
-            if h != own and h in self._flight_hosts
+            h: modules for h, modules in flight.items() if h != own and modules
         }
         """The other hosts carrying flight modules, with those modules."""
+        self._remote_flight_modules = frozenset().union(*self.remote_flight_hosts.values())
         self.lost: list[str] = []
         """The lost hosts, in the profile's order."""
         self._held_until_us = 0
