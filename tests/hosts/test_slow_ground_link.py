@@ -1,8 +1,8 @@
 """Ground tools behind a slow link never slow the vehicle: in a real-time hover over three hosts, the ground host's
-link limited to 1 Mbit/s, with ``stack plot`` and a ``stack topic echo`` of every topic running there. The gyro
-samples still reach the flight-control host and the motor commands the simulator's host at their full rate with no
-stall (a message that may not be dropped, queued behind telemetry for the ground, used to hold up the simulator's
-router for 5 s and the vehicle landed on a lost host); the ground receives less, but what it receives is recent."""
+link limited to 512 kbit/s, with ``stack topic echo`` of the fastest topics running there. The gyro samples still
+reach the flight-control host and the motor commands the simulator's host at their full rate with no stall (a
+message that may not be dropped, queued behind telemetry for the ground, used to hold up the simulator's router for
+5 s and the vehicle landed on a lost host); the ground receives less, but what it receives is recent."""
 
 from __future__ import annotations
 
@@ -10,7 +10,6 @@ import json
 import statistics
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import pytest
@@ -25,7 +24,9 @@ from tests.support.hosts import Host
 pytestmark = [pytest.mark.timeout(500), pytest.mark.xdist_group("heavy_wall_clock"), pytest.mark.machine_to_itself]
 
 MEASURE_S = 12
-SLOW_LINK = "1mbit"
+SLOW_LINK = "512kbit"
+ECHOED = ("sensor_gyro", "sensor_accel", "vehicle_attitude", "actuator_motors")
+"""Topics at 250 Hz from each flight host: their echoes want about 1 Mbit/s, twice what the link carries."""
 
 
 def measure(host: Host, topic: str, seconds: float, log: Path) -> subprocess.Popen[str]:
@@ -41,12 +42,20 @@ def figures(probe: subprocess.Popen[str], log: Path) -> list[dict]:
     return [json.loads(line) for line in log.read_text().splitlines()]
 
 
+def link_full(ground: Host, full_rate: float, log: Path) -> bool:
+    """Whether the ground now receives the gyro at under 0.8 of its full rate: the tools subscribed, and the
+    telemetry they asked for fills the link."""
+    windows = figures(measure(ground, "sensor_gyro", 2, log), log)
+    return sum(w["received"] for w in windows) < 0.8 * full_rate * len(windows)
+
+
 def ground_tool(ground: Host, *args: str, log: Path) -> subprocess.Popen[str]:
     """A ``stack`` command on the ground host, at the lowest CPU priority: the test's hosts share two cores, and the
-    point is the link, not the CPU."""
+    point is the link, not the CPU (the tools starting beside the hosts' routers, at their weight, delayed the gyro
+    and the motor commands between the hosts and the hover tumbled)."""
     return ground.popen(
-        "nice", "-n", "19", sys.executable, "-m", "stack", *args,
-        env=stack_env(ground.home), stdout=subprocess.DEVNULL, stderr=log.open("w"), cwd=REPO,
+        sys.executable, "-m", "stack", *args,
+        env=stack_env(ground.home), niceness=19, stdout=subprocess.DEVNULL, stderr=log.open("w"), cwd=REPO,
     )  # fmt: skip
 
 
@@ -77,21 +86,22 @@ def test_a_ground_host_behind_a_slow_link_never_slows_the_vehicle(network, tmp_p
 
     listed = stack(ground, "topic", "list", "--json")
     assert listed.returncode == 0, listed.stdout + listed.stderr
-    rows = [row for row in json.loads(listed.stdout) if row["publishers"]]
-    assert len(rows) > 20
-    # An echo of each topic published at 50 Hz or more (with the plot, which reads every topic, far more than the
-    # link carries): forty processes starting at once beside other tests starved the controllers past COM_OF_LOSS_T.
-    topics = [(row["topic"], row["instance"]) for row in rows if row["rate_hz"] >= 50.0]
-
+    published = {row["topic"] for row in json.loads(listed.stdout) if row["publishers"]}
+    assert published.issuperset(ECHOED), published
     baseline = measure(control, "sensor_gyro", 5, tmp_path / "baseline.jsonl")
     full_rate = statistics.median(w["received"] for w in figures(baseline, tmp_path / "baseline.jsonl"))
 
     ground.limit_rate(SLOW_LINK)
-    tools = [ground_tool(ground, "plot", "--save", str(tmp_path / "ground.rrd"), log=tmp_path / "plot.err")]
-    for topic, instance in topics:
-        echo = ("topic", "echo", topic, "--instance", str(instance), "--json", "--timeout", "600")
-        tools.append(ground_tool(ground, *echo, log=tmp_path / f"echo-{topic}-{instance}.err"))
-    time.sleep(10)  # the tools started and subscribed: the link to the ground is full
+    # Each topic the ground reads costs the other hosts' routers a forward per message, whether the link takes it or
+    # drops it: the three hosts here share two cores, which the vehicle's real-time stacks take most of. With a plot
+    # (every topic) and an echo of each topic at 50 Hz or more, the routers' forwards starved the control loops
+    # between the hosts and the hover tumbled; without the limit too, so the CPU, not the link. A few fast topics
+    # fill a slower link as well.
+    tools = [
+        ground_tool(ground, "topic", "echo", topic, "--json", "--timeout", "600", log=tmp_path / f"echo-{topic}.err")
+        for topic in ECHOED
+    ]
+    eventually(lambda: link_full(ground, full_rate, tmp_path / "filling.jsonl"), 60, "the link to the ground full")
     probes = {
         "gyro on the control host": (control, "sensor_gyro", "gyro"),
         "motors on the simulator's host": (sim, "actuator_motors", "motors"),

@@ -108,8 +108,15 @@ class Host:
         kw.setdefault("capture_output", True)
         return subprocess.run(self.command(*args), env=self.environment(env), timeout=timeout, text=True, **kw)
 
-    def popen(self, *args: str, env: Mapping[str, str] | None = None, **kw: Any) -> subprocess.Popen[str]:
-        """Start ``args`` on this host in a session of its own; the network's clean-up ends it."""
+    def popen(
+        self, *args: str, env: Mapping[str, str] | None = None, niceness: int = 0, **kw: Any
+    ) -> subprocess.Popen[str]:
+        """Start ``args`` on this host in a session of its own; the network's clean-up ends it. A ``niceness`` is
+        the whole session's: where Linux's autogroups are on, the scheduler weighs each session as one against the
+        others, so a niceness within a session of one process alone would change nothing (sched(7))."""
+        if niceness:
+            nice = f'{{ echo {niceness} > /proc/self/autogroup; }} 2>/dev/null; exec nice -n {niceness} "$@"'
+            args = ("sh", "-c", nice, "sh", *args)
         process = subprocess.Popen(
             self.command(*args), env=self.environment(env), start_new_session=True, text=True, **kw
         )
