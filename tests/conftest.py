@@ -14,8 +14,6 @@ tests that share a stack kept together.
   cores themselves (three hosts' stacks: 70-100 %), and the parts of them that are not at real-time priority (the
   tools that watch them, the kernel's network work between the hosts) starved beside a flight of the other worker:
   the split vehicle's takeoff sank, its motor commands arrived late.
-- The tests marked ``machine_to_itself`` (three hosts' real-time stacks, which take what three machines would give
-  them) run while the other worker waits between its tests (tests/support/machine.py); they go first.
 - Python caches its bytecode even where the environment asks it not to (``PYTHONDONTWRITEBYTECODE``, set on
   some CI machines): the suite starts thousands of processes that import the package from this checkout, and
   each would otherwise compile it from source again (about 0.3 s of CPU a process).
@@ -30,12 +28,9 @@ from pathlib import Path
 
 import pytest
 
-from tests.support import machine
-
 SHARED_ACROSS_WORKERS = {"fly", "fly_here"}
 HEAVY_WALL_CLOCK = "heavy_wall_clock"
 BESIDE_WALL_CLOCK_NICENESS = 10
-MACHINE = pytest.StashKey[machine.Machine]()
 
 
 def pytest_configure(config: pytest.Config) -> None:
@@ -69,36 +64,7 @@ def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item
         # A test already in a group keeps it: a second mark would make a group of its own (xdist joins the names).
         if shares_a_fixture(item) and item.get_closest_marker("xdist_group") is None:
             item.add_marker(pytest.mark.xdist_group(item.nodeid.split("::")[0]))
-        if machine.marked(item) and not in_group(item, HEAVY_WALL_CLOCK):
-            raise pytest.UsageError(f"{item.nodeid}: a {machine.MARK} test must be in the {HEAVY_WALL_CLOCK} group")
-    items.sort(
-        key=lambda item: (
-            not in_group(item, HEAVY_WALL_CLOCK),
-            not machine.marked(item),
-            item.get_closest_marker("flight") is None,
-        )
-    )
-
-
-def pytest_collection_finish(session: pytest.Session) -> None:
-    worker = os.environ.get("PYTEST_XDIST_WORKER")
-    if worker is not None and session.config.option.basetemp:
-        shared = Path(session.config.option.basetemp).parent  # each worker's is a directory of the run's
-        pending = any(machine.marked(item) for item in session.items)
-        session.config.stash[MACHINE] = machine.Machine(shared, worker, pending)
-
-
-@pytest.hookimpl(hookwrapper=True, tryfirst=True)
-def pytest_runtest_protocol(item: pytest.Item, nextitem: pytest.Item | None):
-    """Outside the test's timeout: the wait for the machine is not the test's."""
-    share = item.config.stash.get(MACHINE, None)
-    if share is not None:
-        share.before(machine.marked(item))
-    try:
-        yield
-    finally:
-        if share is not None:
-            share.release()
+    items.sort(key=lambda item: (not in_group(item, HEAVY_WALL_CLOCK), item.get_closest_marker("flight") is None))
 
 
 def pytest_runtest_setup(item: pytest.Item) -> None:

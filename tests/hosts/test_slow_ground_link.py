@@ -21,7 +21,7 @@ from tests.hosts.test_vehicle_across_hosts import HOSTS, START_TIMEOUT_S, bring_
 from tests.support.harness import REPO, eventually, stack_env
 from tests.support.hosts import Host
 
-pytestmark = [pytest.mark.timeout(500), pytest.mark.xdist_group("heavy_wall_clock"), pytest.mark.machine_to_itself]
+pytestmark = [pytest.mark.timeout(500), pytest.mark.xdist_group("heavy_wall_clock")]
 
 MEASURE_S = 12
 SLOW_LINK = "512kbit"

@@ -199,13 +199,7 @@ def hosts_keep_to_their_topics(net: Network) -> None:
     assert after["vehicle_summary"]["position"]["altitude_above_home"] > 2.0
 
 
-@pytest.mark.parametrize(
-    "realtime",
-    [
-        pytest.param(False, id="lockstep, mutual TLS"),
-        pytest.param(True, id="realtime", marks=pytest.mark.machine_to_itself),
-    ],
-)
+@pytest.mark.parametrize("realtime", [False, True], ids=["lockstep, mutual TLS", "realtime"])
 def test_takeoff_hover_and_land_across_three_hosts_commanded_from_the_ground(network, tmp_path, realtime):
     """In lockstep the ground host also records the whole vehicle (in real time, three hosts' stacks and a recorder
     of every topic are more than the two cores of the test machine run on the wall clock). In real time the
