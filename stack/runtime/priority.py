@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import logging
 import os
+from collections.abc import Iterable
 from dataclasses import dataclass
 
 log = logging.getLogger("stack.runtime")
@@ -44,7 +45,8 @@ HP_DEFAULT = WorkQueue("hp_default", -18)
 
 
 def raise_priority(module: str, queue: WorkQueue) -> str:
-    """Put this process (and the threads it starts later) at ``queue``'s priority; returns what was done."""
+    """Put the calling thread (and the threads it starts later: in a module's process, before its session opens, the
+    whole process) at ``queue``'s priority; returns what was done."""
     try:
         top = os.sched_get_priority_max(os.SCHED_FIFO)
         os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(top + queue.relative_priority))
@@ -57,3 +59,9 @@ def raise_priority(module: str, queue: WorkQueue) -> str:
             done = f"normal priority (neither SCHED_FIFO nor a raised niceness allowed: {nice_refused})"
     log.info("%s: scheduling %s", module, done)
     return done
+
+
+def highest_queue(queues: Iterable[WorkQueue | None]) -> WorkQueue | None:
+    """The work queue of highest priority among ``queues`` (None if none has one)."""
+    chosen = [q for q in queues if q is not None]
+    return max(chosen, key=lambda q: q.relative_priority) if chosen else None

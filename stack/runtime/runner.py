@@ -21,7 +21,7 @@ from stack.bus.access import Access
 from stack.bus.alive import AliveTokens
 from stack.bus.host_beats import beat_host, beats_key
 from stack.bus.node import Node, wall_clock_us
-from stack.bus.topics import FLAG_LOCKSTEP_TIME, Received, TopicPublisher
+from stack.bus.topics import FLAG_LOCKSTEP_TIME, Received, TopicPublisher, TopicSubscriber
 from stack.fastpath.attach import Attachment
 from stack.fastpath.bridge import ZenohBridge
 from stack.fastpath.inputs import FastInput
@@ -36,10 +36,12 @@ from stack.runtime.lockstep import TIMER, LockstepCoordinator, LockstepMember
 from stack.runtime.module import TRIGGER_BACKLOG, Module, Timer, Trigger
 from stack.runtime.pacing import Pacer
 from stack.runtime.peers import PeerInput
-from stack.runtime.priority import raise_priority
+from stack.runtime.priority import highest_queue, raise_priority
+from stack.runtime.realtime_group import serve_real_time_group
 from stack.runtime.services import Heartbeat, ParamService
 from stack.runtime.spec import ModuleSpec, load_module_class, resolve_args
 from stack.runtime.start_deadline import StartDeadline
+from stack.runtime.wall_timer import WallTimer
 from stack.runtime.world_clock import world_clock
 
 log = logging.getLogger("stack.runtime")
@@ -72,23 +74,33 @@ def shutdown_behind(error: BaseException) -> Shutdown | None:
 
 
 def run_together(specs: list[ModuleSpec]) -> None:
-    """Run several lockstep modules of a fast-path run in this process (a profile's ``process = "NAME"``) until
-    it is stopped: each is a module of its own, on one Zenoh session, served by one thread
-    (:class:`stack.runtime.fastrun.ProcessGroup`)."""
+    """Run several modules in this process (a profile's ``process = "NAME"``) until it is stopped: each is a module
+    of its own, on one Zenoh session. Lockstep members of a fast-path run are served by one thread
+    (:class:`stack.runtime.fastrun.ProcessGroup`), and so are the modules of a real-time run
+    (:mod:`stack.runtime.realtime_group`)."""
     runtimes = [Runtime(spec) for spec in specs]
+    real_time = not specs[0].lockstep
     for rt in runtimes:
-        if not (rt.lockstep and rt.spec.fastpath_fd >= 0):
+        if not real_time and not (rt.lockstep and rt.spec.fastpath_fd >= 0):
             raise ValueError(f"{rt.name}: only lockstep modules on the shared-memory fast path can share a process")
+    queue = highest_queue(rt.module_cls.WORK_QUEUE for rt in runtimes)
+    if real_time and queue is not None:
+        # Before the session opens: its threads, which deliver every member's inputs, take the highest priority.
+        raise_priority("+".join(rt.name for rt in runtimes), queue)
     with ExitStack() as stack:
         session: zenoh.Session | None = None
         for rt in runtimes:
             spec = rt.spec
-            node = Node(spec.bus, spec.vehicle, rt.name, clock=rt.now_us, run_id=spec.run_id, session=session)
+            run_id = spec.run_id if spec.lockstep else 0
+            node = Node(spec.bus, spec.vehicle, rt.name, clock=rt.now_us, run_id=run_id, session=session)
             session = node.session
             stack.callback(node.close)
             stack.callback(rt.close)
             rt.open(node)
-        serve_group([rt.fast_driver() for rt in runtimes])
+        if real_time:
+            serve_real_time_group(runtimes)
+        else:
+            serve_group([rt.fast_driver() for rt in runtimes])
 
 
 class Runtime:
@@ -116,6 +128,8 @@ class Runtime:
         self._trigger_buf: InputBuffer | None = None
         self.data: list[InputBuffer] = []
         """The inputs other than the trigger, once the module has declared them."""
+        self._wall_data: list[InputBuffer] = []
+        """The inputs a real-time run pulls, in that order (:meth:`_wall_inputs`), once the module has started."""
         self._last_sample = 0
         # The same-host fast path (stack.fastpath), when the supervisor gave this process its region.
         self.fast: Attachment | None = None
@@ -169,8 +183,9 @@ class Runtime:
         if vehicle == self.spec.vehicle:
             raise ValueError(f"{self.name}: {topic} of vehicle {vehicle} is this vehicle's own topic, not a peer's")
         if (vehicle, topic) not in self.peer_inputs:
-            self.peer_inputs[(vehicle, topic)] = PeerInput(self.node, self.spec.bus, vehicle, topic, delay_us,
-                                                           self.lockstep)
+            self.peer_inputs[(vehicle, topic)] = PeerInput(
+                self.node, self.spec.bus, vehicle, topic, delay_us, self.lockstep
+            )
 
     def add_input(self, topic: str, instance: int, queue: bool, capacity: int) -> None:
         if (topic, instance) in self.inputs:
@@ -265,10 +280,16 @@ class Runtime:
     def serve(self, on_ready: Callable[[], None] | None = None) -> None:
         """Say the module is up, then run it until it stops (on the fast path, on Zenoh's lockstep, or on the wall
         clock)."""
-        node, spec = self.node, self.spec
         if self.fast is not None:
             self.fast_driver(on_ready).run()
             return
+        self._loop(self.start(on_ready))
+
+    def start(self, on_ready: Callable[[], None] | None = None) -> LockstepMember | LockstepCoordinator | None:
+        """Take the module's part in the lockstep, if any, and say it is up; returns that part, which its loop
+        follows."""
+        node, spec = self.node, self.spec
+        self._wall_data = self._wall_inputs()
         lockstep_part = self._lockstep = self._make_lockstep()
         node.declare_token(keys.alive_token(node.vehicle, self.name, os.getpid()))
         # Over Zenoh the simulator starts once every module of the roster has synced; in a shared-memory run
@@ -288,7 +309,7 @@ class Runtime:
         log.info("%s ready (%s)", self.name, self.describe_trigger())
         if on_ready is not None:
             on_ready()
-        self._loop(lockstep_part)
+        return lockstep_part
 
     def fast_driver(self, on_ready: Callable[[], None] | None = None) -> FastDriver:
         """The module's loop on the fast path; ``on_ready`` is called once it has taken its role."""
@@ -396,32 +417,51 @@ class Runtime:
     def _loop_wall_trigger(self) -> None:
         buf = self._trigger_buf
         assert buf is not None
-        data = self._wall_inputs()
-        last_sample = 0
         while True:
-            item = buf.sub.recv()
-            if not self._take_trigger(buf, item):
-                continue
-            self.behind = bool(buf.sub.arrived)
-            for d in data:
-                d.take_in_everything()
-            last_sample = self._run(item.msg, sample_time(item.msg), last_sample)
+            self.wall_trigger(buf.sub.recv())
 
     def _loop_wall_timer(self, period_us: int) -> None:
-        data = self._wall_inputs()
-        next_due = wall_clock_us()
-        last = 0
+        timer = WallTimer(period_us, wall_clock_us())
         while True:
-            delay = next_due - wall_clock_us()
+            delay = timer.next_due - wall_clock_us()
             if delay > 0:
                 time.sleep(delay / 1e6)
-            next_due += period_us
-            now = wall_clock_us()
-            if next_due < now:
-                next_due = now + period_us  # overran: skip missed ticks instead of bursting
-            for d in data:
-                d.take_in_everything()
-            last = self._run(None, now, last)
+            self.wall_tick(timer.fire(wall_clock_us()))
+
+    # -- one run on the wall clock (its own loop's, or its process group's: stack.runtime.realtime_group) ------
+
+    def wall_period_us(self) -> int | None:
+        """How often the module runs on the wall clock; None if a trigger topic runs it."""
+        cls = self.module_cls
+        if cls.LOCKSTEP_COORDINATOR:
+            return self.module.step_period_us()
+        if isinstance(cls.TRIGGER, Timer):
+            return cls.TRIGGER.period_us
+        if isinstance(cls.TRIGGER, Trigger):
+            return None
+        raise RuntimeError(f"{cls.__name__} declares neither a trigger nor a timer")
+
+    @property
+    def trigger_subscriber(self) -> TopicSubscriber:
+        assert self._trigger_buf is not None
+        return self._trigger_buf.sub
+
+    def wall_trigger(self, item: Received) -> None:
+        """Run on a trigger message, with the newest of every input (real time)."""
+        buf = self._trigger_buf
+        assert buf is not None
+        if not self._take_trigger(buf, item):
+            return
+        self.behind = bool(buf.sub.arrived)
+        for d in self._wall_data:
+            d.take_in_everything()
+        self._last_sample = self._run(item.msg, sample_time(item.msg), self._last_sample)
+
+    def wall_tick(self, now_us: int) -> None:
+        """Run on a timer tick at ``now_us``, with the newest of every input (real time)."""
+        for d in self._wall_data:
+            d.take_in_everything()
+        self._last_sample = self._run(None, now_us, self._last_sample)
 
     def _loop_lockstep_trigger(self, member: LockstepMember) -> None:
         buf = self._trigger_buf

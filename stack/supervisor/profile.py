@@ -15,9 +15,10 @@ Modules given the same ``process = "NAME"`` share one OS process (as ROS 2 compo
 all its modules in one): each stays a module with its topics, parameters, heartbeat and status row, and a
 crash restarts the process if every one of its modules' policies asks (a module that may not restart, such as
 the simulator, keeps the process down: a crash of any module of it is then that module's crash). Only
-lockstep modules can share a process, and only in a shared-memory lockstep run; otherwise (``--realtime``,
-lockstep over Zenoh) each module runs in its own process. Over ``[hosts]``, the modules of a process are on the
-simulator's host, whose shared memory they share.
+lockstep modules can share a process: in real time (``--realtime``) each in a thread of its own
+(:mod:`stack.runtime.realtime_group`), and in a shared-memory lockstep run on the shared memory; a lockstep
+over Zenoh runs each module in its own process, as a host without the lockstep's shared memory does. Over
+``[hosts]``, the modules of a process are on one host.
 
 A lockstep member given ``transport = "zenoh"`` takes part in a shared-memory lockstep run over Zenoh, as a
 module on another host must: it keeps its place in the run, which the simulator's process serves for it
@@ -545,10 +546,7 @@ class _Loader:
                     raise self.fail(where, f"'{entry.host}' is not a host of this profile{hint}")
 
     def _check_process_groups(self, profile: Profile) -> None:
-        """A process group's name is not another module's or a ``[[process]]``'s, and its modules are on one host:
-        the lockstep coordinator's, whose shared memory they share (a module on another host takes part over Zenoh,
-        in a process of its own)."""
-        coordinator = next((m for m in profile.modules if m.cls.LOCKSTEP_COORDINATOR), None)
+        """A process group's name is not another module's or a ``[[process]]``'s, and its modules are on one host."""
         first: dict[str, ModuleEntry] = {}
         for module in profile.modules:
             group = module.process
@@ -563,12 +561,6 @@ class _Loader:
             if other.host != module.host:
                 raise self.fail(
                     where, f"'{group}' also holds {other.name}, on host {other.host}; a process runs on one host"
-                )
-            if coordinator is not None and module.host != coordinator.host:
-                raise self.fail(
-                    where,
-                    f"{module.name} on host {module.host} takes part over Zenoh (the lockstep's shared memory is on "
-                    f"host {coordinator.host}), in a process of its own (drop 'process')",
                 )
 
     def _scenario_settings(self, table: dict) -> tuple[dict[str, dict[str, float | bool]], dict[str, dict[str, str]]]:

@@ -147,10 +147,11 @@ class Supervisor:
         self.leads = coordinator is None or any(e is coordinator for e in here)
         # Whose clock is the vehicle's time base across hosts (stack.bus.timebase): the coordinator's host.
         self.leader = coordinator.host if coordinator is not None and profile.hosts else self.host
-        # A shared-memory lockstep run: modules share a process only in one (see stack.supervisor.profile), and a
-        # member may take part over Zenoh (stack.fastpath.bridge), as every member on another host does.
+        # A shared-memory lockstep run, in which a member may take part over Zenoh (stack.fastpath.bridge), as every
+        # member on another host does. Modules share a process in real time, or on this shared memory (see
+        # stack.supervisor.profile).
         self.shm_run = profile.lockstep and profile.lockstep_transport == "shm"
-        self.grouping = self.shm_run and self.leads
+        self.grouping = not profile.lockstep or (self.shm_run and self.leads)
         self.bridged = []
         if self.shm_run and coordinator is not None:
             over_zenoh = [e for e in profile.modules if e.transport == "zenoh" or e.host != coordinator.host]
@@ -163,6 +164,9 @@ class Supervisor:
         self.groups: dict[str, list[ModuleProcess]] = {}
         for m in self.modules:
             self.groups.setdefault(m.process, []).append(m)
+            if m.process != m.entry.name:
+                # Where a module's log is looked for (<module>.log), its process's.
+                (run_dir / f"{m.entry.name}.log").symlink_to(m.log_path.name)
         local_mesh = profile.bus.mode == "peer" and profile.bus.listen == (LOOPBACK_ANY_PORT,)
         # Held until each process is let go (_go): a stack starting meanwhile cannot take a later module's port.
         self._port_holds = {process: hold_port() for process in self.groups} if local_mesh else {}
@@ -388,8 +392,9 @@ class Supervisor:
             if len(members) > 1:
                 self._say(f"process {process}: {', '.join(m.entry.name for m in members)}")
         if not self.grouping and any(m.entry.process for m in self.modules):
-            how = "--realtime" if not self.profile.lockstep else "lockstep over Zenoh"
-            self._say(f"{how}: each module in its own process (modules share one only in a shared-memory lockstep)")
+            how = "lockstep over Zenoh" if not self.shm_run else f"host {self.host} in the lockstep over Zenoh"
+            shared = "modules share one in real time, or in the lockstep's shared memory"
+            self._say(f"{how}: each module in its own process ({shared})")
         if self.bridged:
             self._say(f"over Zenoh in the shared-memory lockstep: {', '.join(self.bridged)}")
 

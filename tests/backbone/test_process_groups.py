@@ -4,7 +4,8 @@ The test chain (tests.support.modules) with the tick source and the doubler in o
 coordinator runs its member while it waits for the step to end) and the summer and the pacer in another (two
 members served by one thread), against the chain with every module its own process. Each module of a shared
 process keeps its status row, heartbeat and parameters; the process's death is every module's, and a restart
-brings them all back into the lockstep.
+brings them all back into the lockstep. In real time the process's thread runs each module on its own timer or
+trigger, and a crash restarts them all as well.
 """
 
 import json
@@ -115,17 +116,42 @@ def sim_time(stack: RunningStack) -> int:
     return max(m.get("sim_time_us", 0) for m in stack.status()["modules"])
 
 
-def test_a_real_time_run_gives_each_module_its_own_process(tmp_path):
+def test_in_real_time_the_modules_of_a_process_all_run_and_a_crash_restarts_them_all(tmp_path):
+    """In real time the chain in two processes, with a crasher beside the summer and the pacer: every module runs
+    (the summer on the doubler's messages from the other process, the pacer on its timer), then the crasher's exit
+    ends its process, which comes back with all three."""
     home = tmp_path / "home"
-    profile = chain_profile(tmp_path / "chain.toml", lockstep=False, entries=TWO_PROCESSES)
+    marker = tmp_path / "crasher-pids"
+    chain = f'{RESTARTS}\nprocess = "chain"'
+    crasher = f'[[module]]\nmodule = "tests.support.modules:Crasher"\nargs = {{ ticks = 60, marker = "{marker}" }}\n'
+    profile = chain_profile(
+        tmp_path / "chain.toml",
+        lockstep=False,
+        entries={**TWO_PROCESSES, "Summer": chain, "Pacer": chain},
+        extra=f"{crasher}{chain}\n",
+    )
     stack = RunningStack(home, profile)
     try:
         stack.wait_up()
-        assert "--realtime: each module in its own process" in stack.output
+        assert "process clock: tick_source, doubler" in stack.output
+        assert "process chain: summer, pacer, crasher" in stack.output
         pids = stack.module_pids()
-        assert len(set(pids.values())) == len(pids) == 4
+        assert pids["tick_source"] == pids["doubler"] != pids["summer"] == pids["pacer"] == pids["crasher"]
+
+        def runs() -> dict[str, int]:
+            return {m["module"]: m.get("runs", 0) for m in stack.status()["modules"]}
+
+        eventually(lambda: min(runs().values()) > 20, what="every module running")
+        stack.wait_for(r"process chain \(summer, pacer, crasher\) failed with exit code 4", timeout=30)
+        stack.wait_for(r"restarting process chain \(summer, pacer, crasher\) \(restart 1\)", timeout=30)
+        eventually(lambda: stack.module_pids()["summer"] != pids["summer"], what="the chain's process started again")
+        again = stack.module_pids()
+        assert again["summer"] == again["pacer"] == again["crasher"]
+        assert again["doubler"] == pids["doubler"]
+        assert len(set(marker.read_text().split())) == 2  # the crasher started twice
+        eventually(lambda: runs()["summer"] > 20 and runs()["pacer"] > 20, what="the chain running again")
     finally:
-        stack.stop()
+        assert stack.stop() == 1  # the chain's process failed
     assert not wait_no_processes(home)
 
 
@@ -148,30 +174,30 @@ def test_a_process_no_module_can_share_is_refused_naming_the_key(tmp_path, entry
     assert ".process: " in str(refused.value) and problem in str(refused.value)
 
 
-@pytest.mark.parametrize(
-    ("grouped", "problem"),
-    [
-        (("simulator", "commander"), "module (commander).process: 'both' also holds simulator, on host sim; a process"),
-        (
-            ("commander", "mc_rate_control"),
-            "module (commander).process: commander on host control takes part over Zenoh",
-        ),
-    ],
-)
-def test_a_process_over_two_hosts_or_off_the_simulators_host_is_refused(tmp_path, grouped, problem):
-    entries = "".join(f'[[module]]\nname = "{name}"\nprocess = "both"\n' for name in grouped)
+def test_a_process_over_two_hosts_is_refused(tmp_path):
+    entries = "".join(f'[[module]]\nname = "{name}"\nprocess = "both"\n' for name in ("simulator", "commander"))
     path = write_profile(tmp_path / "split.toml", f'extends = "sitl_quad_hosts"\n{entries}')
     with pytest.raises(ProfileError) as refused:
         load_profile(path)
+    problem = "module (commander).process: 'both' also holds simulator, on host sim; a process runs on one host"
     assert f"{path} (extends " in str(refused.value) and problem in str(refused.value)
 
 
-def test_a_process_on_the_simulators_host_of_a_split_vehicle_is_taken(tmp_path):
-    entries = "".join(
-        f'[[module]]\nname = "{name}"\nprocess = "inner"\n' for name in ("simulator", "attitude_estimator_q")
-    )
-    profile = load_profile(write_profile(tmp_path / "split.toml", f'extends = "sitl_quad_hosts"\n{entries}'))
-    assert {m.name: m.host for m in profile.modules if m.process == "inner"} == {
-        "simulator": "sim",
-        "attitude_estimator_q": "sim",
+def test_the_split_vehicle_shares_a_process_on_each_host(tmp_path):
+    profile = load_profile("sitl_quad_hosts")
+    groups: dict[str, set[str]] = {}
+    for m in profile.modules:
+        if m.process:
+            groups.setdefault(f"{m.host}/{m.process}", set()).add(m.name)
+    assert groups == {
+        "sim/simulation": {"simulator", "attitude_estimator_q", "local_position_estimator"},
+        "control/flight_control": {
+            "commander",
+            "control_allocator",
+            "mc_rate_control",
+            "mc_att_control",
+            "mc_hover_thrust_estimator",
+            "flight_mode_manager",
+            "mc_pos_control",
+        },
     }
