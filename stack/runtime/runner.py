@@ -396,23 +396,17 @@ class Runtime:
     # -- loops -----------------------------------------------------------------------------------------
 
     def _loop(self, part: LockstepMember | LockstepCoordinator | None) -> None:
-        cls = self.module_cls
         if isinstance(part, LockstepCoordinator):
             self._loop_coordinator(part)
-        elif cls.LOCKSTEP_COORDINATOR:
-            self._loop_wall_timer(self.module.step_period_us())
-        elif isinstance(cls.TRIGGER, Trigger):
-            if isinstance(part, LockstepMember):
+        elif isinstance(part, LockstepMember):
+            if isinstance(self.module_cls.TRIGGER, Trigger):
                 self._loop_lockstep_trigger(part)
             else:
-                self._loop_wall_trigger()
-        elif isinstance(cls.TRIGGER, Timer):
-            if isinstance(part, LockstepMember):
                 self._loop_lockstep_timer(part)
-            else:
-                self._loop_wall_timer(cls.TRIGGER.period_us)
+        elif (period_us := self.wall_period_us()) is None:
+            self._loop_wall_trigger()
         else:
-            raise RuntimeError(f"{cls.__name__} declares neither a trigger nor a timer")
+            self._loop_wall_timer(period_us)
 
     def _loop_wall_trigger(self) -> None:
         buf = self._trigger_buf
