@@ -6,8 +6,8 @@ lockstep modules in processes (``own``: every module its own, as the default pro
 temporary ``STACK_HOME``, waits for every module to run, then samples all of the stack's processes (psutil): their
 count, resident and unique memory, the CPU they take in ``--idle`` seconds on the ground (``--settle`` seconds after
 the start), then, after ``stack cmd takeoff --alt 3 --wait`` and ``--settle`` seconds, in ``--hover`` seconds of the
-hover. CPU is in cores (1.0: one
-core busy all the time); each figure is the highest over the runs, the kinds interleaved.
+hover. CPU is in cores (1.0: one core busy all the time); each figure is the highest over the runs, the kinds
+interleaved.
 """
 
 from __future__ import annotations
