@@ -3,9 +3,9 @@
 plane_mission (runway takeoff, a 300–400 m rectangle at 40 m, two loiter circles, return and landing) on L1, and
 plane_loiter_wind (three circles in an 8 m/s wind with gusts) on NPFG, each on its own seed, judged by the
 scenarios' limits (doubled in wind); and plane_mission on JSBSim's Cessna 172P with the mission its profile
-chooses (legs of 1.5–1.8 km), judged as the SIH airplane's but for its loiter and touchdown. These fly in one
-process (the ``stack fly`` flight, message for message). plane_gps_loss flies through the real CLI, every module
-its own process, recorded: 20 s without GPS while circling, the position estimate dead-reckoning on the airspeed.
+chooses (legs of 1.5–1.8 km), judged as the SIH airplane's but for its loiter and touchdown; and plane_gps_loss:
+20 s without GPS while circling, the position estimate dead-reckoning on the airspeed. These fly in one process
+(the ``stack fly`` flight, message for message).
 benchmarks/sweep.py flies 20 seeds of each on either guidance, calm and in 8 m/s wind.
 """
 
@@ -16,7 +16,7 @@ from collections.abc import Callable
 import pytest
 
 from stack.msg.fixedwing import PositionSetpoint
-from tests.flight.flights import InProcessFlight, fly_scenario
+from tests.flight.flights import InProcessFlight
 
 pytestmark = pytest.mark.flight
 
@@ -41,14 +41,14 @@ def test_the_plane_flies_its_scenarios_within_their_limits(
     assert abs(metrics["landing_offset_m"]) <= 10.0
 
 
-def test_without_gps_the_plane_dead_reckons_on_its_airspeed_and_its_flight_is_recorded(tmp_path):
-    flight = fly_scenario(tmp_path, "plane_gps_loss", 4, "sitl_plane")
+def test_without_gps_the_plane_dead_reckons_on_its_airspeed(fly_here: Callable[..., InProcessFlight]) -> None:
+    flight = fly_here("plane_gps_loss", 4, "sitl_plane")
     report = flight.report
-    assert report["error"] is None, flight.output
-    assert report["passed"] is True and flight.returncode == 0, flight.output
+    assert report["error"] is None, report
+    assert report["passed"] is True, report
     positions = flight.messages("vehicle_local_position")
     assert any(m.msg.dead_reckoning for m in positions) and not positions[-1].msg.dead_reckoning
-    # The plane's own topics are in the recording, nested setpoints included.
+    # The plane's own topics are published, nested setpoints included.
     triplets = flight.messages("position_setpoint_triplet")
     assert any(m.msg.current.type == PositionSetpoint.SETPOINT_TYPE_LOITER for m in triplets)
     assert flight.messages("airspeed_validated") and flight.messages("wind")
