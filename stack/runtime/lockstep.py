@@ -66,7 +66,7 @@ TIMER = "@timer"
 # arrive and only valid ones are queued, the oldest dropped beyond CLOCK_QUEUE: garbage on the key never pushes a
 # clock out, and a member that is not triggered for minutes (the allocator of a disarmed vehicle) never fills a
 # queue that would block the session's receiving thread and, through it, the coordinator's clock.
-CLOCK_QUEUE = 1 << 14
+CLOCK_QUEUE = 1 << 11  # 8 s of the SIH quad's 4 ms steps
 _WAKE = "@wake"
 _encoder = msgspec.msgpack.Encoder()
 
