@@ -53,6 +53,9 @@ log = logging.getLogger("stack.bus")
 
 # How long a blocking receive waits between looks at its queue (a signal handler runs in between).
 RECV_WAKE_S = 0.5
+# The samples a keep-last subscription's ring holds until its owner decodes them: a burst of garbage this long
+# between two looks is still counted in full.
+RING_SAMPLES = 1024
 
 
 class Received(msgspec.Struct, frozen=True, gc=False):
@@ -156,10 +159,21 @@ class TopicPublisher:
 class TopicSubscriber:
     """A subscription drained by the owner's loop: ``recv`` blocks (GIL released), ``poll`` never does.
 
-    With ``callback`` or ``keep_last``, Zenoh's thread decodes each sample as it arrives and queues the valid
-    ones in ``arrived`` (at most ``capacity``, the oldest dropped): a loop that polls many inputs which almost
-    never receive anything (a fast-path module's outside messages) then only looks at an empty deque, and a
-    keep-last subscription counts every malformed sample, where a ring of Zenoh's would push some out unread.
+    Three ways to queue what arrives:
+
+    - FIFO (the default): Zenoh queues up to ``capacity`` samples (its receiving thread waits when they are
+      full); the owner's thread decodes them as it takes them.
+    - ``callback``: Zenoh's thread decodes each sample as it arrives and queues the valid ones in ``arrived``
+      (at most ``capacity``, the oldest dropped) and sets an event a thread can wait on with others: a loop
+      that polls many inputs which almost never receive anything (a fast-path module's outside messages) then
+      only looks at an empty deque, and every malformed sample is counted, however many arrive between two
+      looks.
+    - ``keep_last``: Zenoh's thread queues the samples in a ring of RING_SAMPLES (the oldest dropped) and never
+      takes the GIL; the owner's thread decodes them into ``arrived`` (the newest ``capacity`` valid ones) as
+      it polls, and its ``recv`` waits on Zenoh's channel. For a real-time module that waits on one trigger
+      alone: decoded in Zenoh's thread, each message took the GIL there, then woke the module's thread, which
+      waited for the GIL in turn (a fifth of an idle real-time stack's CPU).
+
     Counters of a withdrawn subscriber stay in its node's (:meth:`stack.bus.node.Node.drop_counts`).
     """
 
@@ -167,6 +181,7 @@ class TopicSubscriber:
         "_arrival",
         "_decoder",
         "_node",
+        "_ring",
         "_run_id",
         "_sub",
         "_warned",
@@ -210,15 +225,19 @@ class TopicSubscriber:
         self._warned = False
         self.arrived: collections.deque[Received] | None = None
         self._arrival = threading.Event()
+        self._ring = keep_last and not callback
         self._node = node
         node.live_subscribers.add(self)
-        if callback or keep_last:
+        if callback:
             self.arrived = collections.deque(maxlen=capacity)
             # In Zenoh's receiving thread (a message from this process's session: in the publishing thread), not in a
             # Python thread of the subscription's own (zenoh-python's default), which each message would wake: with
             # that, the modules of a real-time hover in two shared processes took a quarter more CPU.
             on_sample = zenoh.handlers.Callback(self._on_sample, indirect=False)
             self._sub = node.session.declare_subscriber(self.key, on_sample)
+        elif keep_last:
+            self.arrived = collections.deque(maxlen=capacity)
+            self._sub = node.session.declare_subscriber(self.key, zenoh.handlers.RingChannel(RING_SAMPLES))
         else:
             self._sub = node.session.declare_subscriber(self.key, zenoh.handlers.FifoChannel(capacity))
 
@@ -266,8 +285,21 @@ class TopicSubscriber:
             self._warned = True
             log.error("%s: schema mismatch, dropped (%d so far): %s", self.key, self.schema_errors, why)
 
+    def _take_ring(self) -> None:
+        """Decode what the ring holds into ``arrived`` (keep-last)."""
+        arrived, sub = self.arrived, self._sub
+        assert arrived is not None
+        sample = sub.try_recv()
+        while sample is not None:
+            item = self._decode(sample)
+            if item is not None:
+                arrived.append(item)
+            sample = sub.try_recv()
+
     def poll(self) -> Received | None:
         """Next valid message, or None if none is waiting."""
+        if self._ring:
+            self._take_ring()
         if self.arrived is not None:
             return self.arrived.popleft() if self.arrived else None
         sub = self._sub
@@ -282,6 +314,15 @@ class TopicSubscriber:
     def recv(self) -> Received:
         """Block until the next valid message (Ctrl-C and signal handlers still run)."""
         arrived = self.arrived
+        if self._ring:
+            assert arrived is not None
+            self._take_ring()
+            while not arrived:
+                item = self._decode(self._sub.recv())
+                if item is not None:
+                    arrived.append(item)
+                    self._take_ring()
+            return arrived.popleft()
         if arrived is not None:
             while True:
                 if arrived:
@@ -297,15 +338,15 @@ class TopicSubscriber:
 
     def share_arrival(self, event: threading.Event) -> None:
         """Set ``event`` on each message queued, in place of this subscriber's own: one event for the subscriptions
-        that a thread waits on together (a ``callback`` or ``keep_last`` one; it is then drained with ``poll``)."""
-        if self.arrived is None:
-            raise TypeError(f"{self.key}: only a subscriber that queues its messages itself can share its arrivals")
+        that a thread waits on together (a ``callback`` one; it is then drained with ``poll``)."""
+        if self.arrived is None or self._ring:
+            raise TypeError(f"{self.key}: only a callback subscriber can share its arrivals")
         self._arrival = event
 
     def wait(self, timeout: float) -> None:
-        """Block until a message has arrived or ``timeout`` (s) has passed (a ``callback`` or ``keep_last`` one)."""
-        if self.arrived is None:
-            raise TypeError(f"{self.key}: only a subscriber that queues its messages itself can wait for one")
+        """Block until a message has arrived or ``timeout`` (s) has passed (a ``callback`` one)."""
+        if self.arrived is None or self._ring:
+            raise TypeError(f"{self.key}: only a callback subscriber can wait for a message with a timeout")
         self._arrival.clear()
         if not self.arrived:
             self._arrival.wait(timeout)

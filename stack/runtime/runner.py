@@ -78,7 +78,7 @@ def run_together(specs: list[ModuleSpec]) -> None:
     of its own, on one Zenoh session. Lockstep members of a fast-path run are served by one thread
     (:class:`stack.runtime.fastrun.ProcessGroup`), and so are the modules of a real-time run
     (:mod:`stack.runtime.realtime_group`)."""
-    runtimes = [Runtime(spec) for spec in specs]
+    runtimes = [Runtime(spec, shares_process=True) for spec in specs]
     real_time = not specs[0].lockstep
     for rt in runtimes:
         if not real_time and not (rt.lockstep and rt.spec.fastpath_fd >= 0):
@@ -104,9 +104,11 @@ def run_together(specs: list[ModuleSpec]) -> None:
 
 
 class Runtime:
-    def __init__(self, spec: ModuleSpec) -> None:
+    def __init__(self, spec: ModuleSpec, shares_process: bool = False) -> None:
         self.spec = spec
         self.name = spec.name
+        self.shares_process = shares_process
+        """Other modules run in this process (:func:`run_together`), on the same thread in real time."""
         self.module_cls = load_module_class(spec.module)
         self.params = ParamStore(self.module_cls.PARAMS, spec.params)
         self.args = resolve_args(self.module_cls.ARGS, spec.args)
@@ -201,8 +203,9 @@ class Runtime:
             # dropped garbage push out the message the barrier waits for.
             sub = self.node.subscriber(topic, instance, capacity=max(capacity, LOCKSTEP_QUEUE if self.lockstep else 0))
         else:
-            # Real time: the last few messages only; the newest is all a latest-value input needs.
-            sub = self.node.subscriber(topic, instance, capacity=LATEST_RING, keep_last=True)
+            # Real time: the last few messages only; the newest is all a latest-value input needs. Decoded as they
+            # arrive, so that a burst of garbage between two runs is counted in full.
+            sub = self.node.subscriber(topic, instance, capacity=LATEST_RING, callback=True)
         self.inputs[(topic, instance)] = self.guard(InputBuffer(sub, queue, repeats=not self.lockstep), topic)
 
     def guard(self, buf: InputBuffer, topic: str) -> InputBuffer:
@@ -364,8 +367,13 @@ class Runtime:
         if self.lockstep:
             sub = self.node.subscriber(trigger.name, trigger.instance, capacity=LOCKSTEP_QUEUE)
         else:
+            # A module alone in its process waits on its trigger only: on Zenoh's ring. In a group one thread waits
+            # for the triggers of all (stack.runtime.realtime_group): each sets the group's event.
             backlog = TRIGGER_BACKLOG if trigger.every else 4
-            sub = self.node.subscriber(trigger.name, trigger.instance, capacity=backlog, keep_last=True)
+            alone = not self.shares_process
+            sub = self.node.subscriber(
+                trigger.name, trigger.instance, capacity=backlog, keep_last=alone, callback=not alone
+            )
         self._trigger_buf = self.guard(InputBuffer(sub, False), trigger.name)
         self.inputs[(trigger.name, trigger.instance)] = self._trigger_buf
 

@@ -6,6 +6,7 @@ import os
 import socket
 import subprocess
 import sys
+import threading
 
 import msgspec
 import pytest
@@ -16,8 +17,9 @@ from stack.bus.alive import AliveTokens, parse_alive_token
 from stack.bus.config import BusConfig
 from stack.bus.node import Node, open_session, stable_publisher_id
 from stack.bus.ports import free_port
-from stack.bus.topics import HEADER, MAX_SAMPLE_BYTES, MessageTooLarge
+from stack.bus.topics import HEADER, MAX_SAMPLE_BYTES, RING_SAMPLES, MessageTooLarge
 from stack.msg.navigation import Mission
+from stack.msg.sensors import SensorGyro
 from stack.runtime.startup import alive_modules
 from tests.support.harness import REPO, RunningStack, chain_profile, eventually, stack_env, wait_no_processes
 
@@ -120,6 +122,45 @@ def test_lockstep_start_up_reads_the_alive_tokens_past_malformed_ones():
         assert parse_alive_token(key, "t1") is None
 
 
+def test_a_keep_last_subscription_counts_a_burst_of_garbage_and_keeps_the_newest_valid_messages():
+    """Its samples wait in Zenoh's ring, undecoded, until its owner polls or receives: a burst of garbage as long as
+    the ring is counted in full, the newest valid messages are kept; ``recv`` waits for a valid one; the owner's
+    thread alone takes the messages, so no other thread can wait on them."""
+    endpoint = f"tcp/127.0.0.1:{free_port()}"
+    with (
+        Node(BusConfig(listen=(endpoint,)), "t1", "gyro_publisher") as sender,
+        Node(BusConfig(connect=(endpoint,)), "t1", "gyro_reader") as receiver,
+    ):
+        sub = receiver.subscriber("sensor_gyro", capacity=4, keep_last=True)
+        pub = sender.publisher("sensor_gyro")
+        raw = sender.session.declare_publisher(keys.topic_key("t1", "sensor_gyro", 0))
+        got: list = []
+
+        def taken_up_to(index: int) -> bool:
+            got.extend(iter(sub.poll, None))
+            return bool(got) and got[-1].index == index
+
+        eventually(pub.matching, what="the subscriber known to the publisher")
+        burst = RING_SAMPLES - 2
+        for _ in range(burst):
+            raw.put(b"\xc1")  # no stack header
+        for i in range(1, 11):
+            pub.publish(SensorGyro(timestamp=i, x=float(i)), now_us=i)
+        eventually(lambda: taken_up_to(10), what="the burst and the gyro messages taken in")
+        assert sub.schema_errors == burst and sub.received == 10
+        indices = [r.index for r in got]
+        assert indices == sorted(indices) and len(indices) >= 4 and indices[-4:] == [7, 8, 9, 10]
+        raw.put(b"\xc1\xc1", attachment=HEADER.pack(sub.fingerprint, 7, 1, 1, 0, 0, 0))  # does not decode
+        threading.Timer(0.2, lambda: pub.publish(SensorGyro(timestamp=11, x=11.0), now_us=11)).start()
+        received = sub.recv()
+        assert (received.index, received.msg.x, sub.decode_errors) == (11, 11.0, 1)
+        with pytest.raises(TypeError, match="only a callback subscriber"):
+            sub.wait(0.1)
+        with pytest.raises(TypeError, match="only a callback subscriber"):
+            sub.share_arrival(threading.Event())
+        raw.undeclare()
+
+
 def test_a_message_larger_than_the_bus_carries_is_refused_not_lost():
     endpoint = f"tcp/127.0.0.1:{free_port()}"
     with (
@@ -145,7 +186,6 @@ def test_a_message_larger_than_the_bus_carries_is_refused_not_lost():
         first = next(r for r in got if r is not None)
         msg, index = first.msg, first.index
         assert len(msg.source) > 47_000 and index == 1  # the refused one was not counted: no gap
-
 
 
 def test_a_routers_zenoh_runtime_has_a_worker_for_each_link_to_another_router(monkeypatch):
