@@ -40,6 +40,16 @@ QUEUE_PRIORITIES = (
 ZENOH_RUNTIME_ENV = "ZENOH_RUNTIME"
 ZENOH_RX_WORKERS, ZENOH_TX_WORKERS = 2, 1
 """Zenoh 1.10's worker threads for receiving and for sending (zenoh-runtime's ZRuntime defaults)."""
+MODULE_ZENOH_RUNTIME = "(rx: (worker_threads: 1))"
+"""A module process's Zenoh runtime: one receiving worker. Its links are all on its own host (the router and the
+modules of the mesh), and with Zenoh's two workers every message woke both (tokio hands a woken task's queue to an
+idle worker to steal from): about a tenth of an idle real-time stack's CPU."""
+
+
+def use_module_runtime() -> None:
+    """Before a module process opens its session: :data:`MODULE_ZENOH_RUNTIME`, unless the user gave a
+    ZENOH_RUNTIME (the runtime reads it once, as the process's first session opens)."""
+    os.environ.setdefault(ZENOH_RUNTIME_ENV, MODULE_ZENOH_RUNTIME)
 
 
 def between_hosts(endpoint: str) -> str:
