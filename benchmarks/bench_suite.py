@@ -4,8 +4,8 @@ Run with ``python benchmarks/bench_suite.py`` (the suite as the README runs it, 
 machine), or give pytest's arguments after ``--`` (``python benchmarks/bench_suite.py -- tests/cli -n 2``). It puts
 a ``sitecustomize`` of its own on ``PYTHONPATH`` (the tests' commands keep it: tests/support/harness.py's
 ``stack_env`` adds the repository in front of it), so every interpreter the suite starts, test workers, supervisors,
-module processes and CLI commands, writes its CPU (user + system, all its threads) and lifetime to one log when it
-exits. The table sums them by kind:
+module processes and CLI commands, writes its CPU (user + system, all its threads) to one log when it exits. The
+table sums them by kind:
 
 - ``test workers``: pytest's workers (unit tests, in-process flights) and the main pytest process;
 - ``module NAME``: one module process (``stack.runtime.main``, a process group's name for modules sharing one);
@@ -13,9 +13,9 @@ exits. The table sums them by kind:
 - ``cli …``: every other ``stack`` command (a test's ``stack status``, ``stack topic echo``…);
 - ``other python``: interpreters started otherwise (``python -c``, MAVSDK's helpers…).
 
-A process killed by SIGKILL (a test's killed module, the orphan tests) never gets to write its line; the machine's
-busy CPU over the run (``/proc/stat``) shows how much was counted. An environment with a ``sitecustomize`` of its
-own loses it for the run.
+A process ended by a signal it does not handle (SIGKILL: a test's killed module, the orphan tests) never writes
+its line; the machine's busy CPU over the run (``/proc/stat``) shows how much was counted. An environment with a
+``sitecustomize`` of its own loses it for the run.
 """
 
 from __future__ import annotations
@@ -34,15 +34,14 @@ from stack.cli.common import print_table
 REPO = Path(__file__).resolve().parent.parent
 LOG_ENV = "STACK_BENCH_SUITE_LOG"
 HOOK = """
-import atexit, os, sys, time
+import atexit, os, sys
 
 _argv = list(getattr(sys, "orig_argv", ()))
-_born = time.monotonic()
 
 
 def _bench_suite_log():
     t = os.times()
-    line = "%s\\t%.3f\\t%.3f\\n" % ("\\x1f".join(_argv), t.user + t.system, time.monotonic() - _born)
+    line = "%s\\t%.3f\\n" % ("\\x1f".join(_argv), t.user + t.system)
     fd = os.open(os.environ["{log}"], os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o600)
     try:
         os.write(fd, line.encode())
@@ -103,7 +102,7 @@ def main() -> None:
     cpu: dict[str, float] = defaultdict(float)
     count: dict[str, int] = defaultdict(int)
     for line in lines:
-        argv, seconds, _ = line.split("\t")
+        argv, seconds = line.split("\t")
         k = kind(argv.split("\x1f"))
         cpu[k] += float(seconds)
         count[k] += 1
