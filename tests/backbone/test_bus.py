@@ -205,9 +205,8 @@ def test_a_routers_zenoh_runtime_has_a_worker_for_each_link_to_another_router(mo
 
 
 def zenoh_receiving_threads(env: dict[str, str]) -> list[str]:
-    """The workers of the receiving runtime of Zenoh that a module process's start-up chooses (in a process of its own,
-    with two sessions linked to each other: the workers start with the first link); none when the network runtime's
-    threads, which read the links, receive too."""
+    """The receiving workers of the Zenoh runtime a module process's start-up chooses (in a process of its own, with
+    two sessions linked to each other: the workers start with the first link)."""
     endpoint = f"tcp/127.0.0.1:{free_port()}"
     code = (
         "import pathlib, zenoh\n"
@@ -224,9 +223,9 @@ def zenoh_receiving_threads(env: dict[str, str]) -> list[str]:
     return sorted(name for name in out.stdout.split() if name.startswith("rx-"))
 
 
-def test_a_module_process_receives_in_the_thread_that_reads_its_links_unless_the_user_says_otherwise():
+def test_a_module_process_receives_in_one_zenoh_worker_unless_the_user_says_otherwise():
     env = {k: v for k, v in os.environ.items() if k != "ZENOH_RUNTIME"}
-    assert zenoh_receiving_threads(env) == []
+    assert zenoh_receiving_threads(env) == ["rx-0"]
     assert zenoh_receiving_threads({**env, "ZENOH_RUNTIME": "(rx: (worker_threads: 3))"}) == ["rx-0", "rx-1", "rx-2"]
 
 
