@@ -40,19 +40,6 @@ QUEUE_PRIORITIES = (
 ZENOH_RUNTIME_ENV = "ZENOH_RUNTIME"
 ZENOH_RX_WORKERS, ZENOH_TX_WORKERS = 2, 1
 """Zenoh 1.10's worker threads for receiving and for sending (zenoh-runtime's ZRuntime defaults)."""
-MODULE_ZENOH_RUNTIME = "(rx: (worker_threads: 1))"
-"""A module process's Zenoh runtime: one receiving worker. Its links are all on its own host (the router and the
-modules of the mesh), and with Zenoh's two workers every message woke both (tokio hands a woken task's queue to an
-idle worker to steal from): about a tenth of an idle real-time stack's CPU. Handing the receiving runtime over to the
-network runtime (``(rx: (handover: net))``, one thread woken per message instead of two: 5-8 % less CPU in a lockstep
-over Zenoh) once left a module hung in its start-up, before its first log line, in one of the suite's ~640 module
-starts (Zenoh 1.10.2)."""
-
-
-def use_module_runtime() -> None:
-    """Before a module process opens its session: :data:`MODULE_ZENOH_RUNTIME`, unless the user gave a
-    ZENOH_RUNTIME (the runtime reads it once, as the process's first session opens)."""
-    os.environ.setdefault(ZENOH_RUNTIME_ENV, MODULE_ZENOH_RUNTIME)
 
 
 def between_hosts(endpoint: str) -> str:

@@ -22,7 +22,6 @@ import time
 from pathlib import Path
 from types import FrameType
 
-from stack.bus.config import use_module_runtime
 from stack.params.param import ParamError
 from stack.runtime.ledger import LockstepError
 from stack.runtime.orphan import watch_supervisor
@@ -69,7 +68,6 @@ def main(argv: list[str] | None = None) -> int:
         sys.stdin.buffer.readline()
         if profiler is not None:
             profiler.enable()
-        use_module_runtime()
         if len(specs) == 1:
             Runtime(spec).run()
         else:

@@ -204,31 +204,6 @@ def test_a_routers_zenoh_runtime_has_a_worker_for_each_link_to_another_router(mo
     assert seen[-1] == os.environ["ZENOH_RUNTIME"] == "(rx: (worker_threads: 3))"
 
 
-def zenoh_receiving_threads(env: dict[str, str]) -> list[str]:
-    """The receiving workers of the Zenoh runtime a module process's start-up chooses (in a process of its own, with
-    two sessions linked to each other: the workers start with the first link)."""
-    endpoint = f"tcp/127.0.0.1:{free_port()}"
-    code = (
-        "import pathlib, zenoh\n"
-        "from stack.bus.config import BusConfig, use_module_runtime\n"
-        "from tests.support.harness import eventually\n"
-        "use_module_runtime()\n"
-        f"with zenoh.open(BusConfig(listen=('{endpoint}',)).zenoh_config('a')) as a, "
-        f"zenoh.open(BusConfig(connect=('{endpoint}',)).zenoh_config('b')):\n"
-        "    eventually(lambda: list(a.info.peers_zid()), what='a link')\n"
-        "    print(' '.join(p.read_text().strip() for p in pathlib.Path('/proc/self/task').glob('*/comm')))\n"
-    )
-    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, timeout=60, cwd=REPO)
-    assert out.returncode == 0, out.stderr
-    return sorted(name for name in out.stdout.split() if name.startswith("rx-"))
-
-
-def test_a_module_process_receives_in_one_zenoh_worker_unless_the_user_says_otherwise():
-    env = {k: v for k, v in os.environ.items() if k != "ZENOH_RUNTIME"}
-    assert zenoh_receiving_threads(env) == ["rx-0"]
-    assert zenoh_receiving_threads({**env, "ZENOH_RUNTIME": "(rx: (worker_threads: 3))"}) == ["rx-0", "rx-1", "rx-2"]
-
-
 def test_a_module_whose_port_was_taken_connects_to_the_modules_started_after_it():
     """Peers reach each other only over links of their own (the router relays nothing between two peers): a module
     that found its endpoint taken listens elsewhere, so the modules started after it, connecting to the endpoint it
