@@ -14,7 +14,7 @@ table sums them by kind:
 - ``other python``: interpreters started otherwise (``python -c``, MAVSDK's helpers…).
 
 A process ended by a signal it does not handle (SIGKILL: a test's killed module, the orphan tests) never writes
-its line; the machine's busy CPU over the run (``/proc/stat``) shows how much was counted. An environment with a
+its line; the machine's busy CPU over the run (psutil's ``cpu_times``) shows how much was counted. An environment with a
 ``sitecustomize`` of its own loses it for the run.
 """
 
@@ -28,6 +28,8 @@ import tempfile
 import time
 from collections import defaultdict
 from pathlib import Path
+
+import psutil
 
 from stack.cli.common import print_table
 
@@ -79,8 +81,8 @@ def kind(argv: list[str]) -> str:
 
 def busy_seconds() -> float:
     """The machine's CPU time spent on anything but idle and I/O wait since boot, in seconds."""
-    fields = [int(v) for v in Path("/proc/stat").read_text().split("\n", 1)[0].split()[1:]]
-    return (sum(fields[:8]) - fields[3] - fields[4]) / os.sysconf("SC_CLK_TCK")
+    t = psutil.cpu_times()
+    return t.user + t.nice + t.system + t.irq + t.softirq + t.steal
 
 
 def main() -> None:
